@@ -1,0 +1,204 @@
+"""One control tick of a swarm, vectorised over runs × robots × dimensions.
+
+Stages (DESIGN.md): bests → coefficients → velocity → move → record. Each run draws
+from its own generator spawned from one ``SeedSequence``, so run ``i`` is the same
+whether it is simulated alone or in a batch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from .bests import global_best, update_personal
+from .coeffs import CoefficientPolicy
+from .laws import Law
+from .objectives import Objective
+
+Attractors = Literal["literal", "ahead"]
+PbestOrder = Literal["before_velocity", "after_velocity"]
+
+ACTIVE = 0
+
+
+@dataclass
+class SwarmState:
+    """The whole swarm of every run at step ``k``."""
+
+    x: np.ndarray  # (R, N, d) position
+    u: np.ndarray  # (R, N, d) velocity
+    a: np.ndarray  # (R, N, d) acceleration (u[k] − u[k−1])/Δt [3.22]
+    y: np.ndarray  # (R, N, d) personal best
+    f_y: np.ndarray  # (R, N)
+    yg: np.ndarray  # (R, d) global best
+    f_yg: np.ndarray  # (R,)
+    f: np.ndarray  # (R, N) fitness at x
+    heading: np.ndarray  # (R, N) direction of motion, kept when the robot stops
+    status: np.ndarray  # (R, N) int, 0 = active
+    k: int = 0
+
+    def copy(self) -> "SwarmState":
+        return SwarmState(**{k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in vars(self).items()})
+
+
+@dataclass
+class StepInfo:
+    """Per-run scalars of one tick, for metrics and plots."""
+
+    t: float
+    omega: np.ndarray | float
+    c: np.ndarray
+    best_fitness: np.ndarray  # (R,)
+    max_speed: np.ndarray  # (R,) highest |u| in the swarm
+    max_component: np.ndarray  # (R,) highest |u_j|
+
+
+class Simulation:
+    """A seeded swarm: positions, velocities and bests of ``runs`` independent runs."""
+
+    def __init__(
+        self,
+        *,
+        robots: int,
+        d: int = 2,
+        dt: float = 0.1,
+        law: Law | None = None,
+        policy: CoefficientPolicy,
+        objective: Objective | None = None,
+        runs: int = 1,
+        seed: int = 0,
+        attractors: Attractors = "literal",
+        pbest_order: PbestOrder = "before_velocity",
+        ahead_direction: np.ndarray | None = None,
+        init_center: np.ndarray | None = None,
+        init_spread: float = 1.0,
+        init_speed: float = 0.0,
+    ) -> None:
+        if robots < 1 or runs < 1 or d < 1:
+            raise ValueError("robots, runs and d must be >= 1")
+        if dt <= 0:
+            raise ValueError(f"dt must be > 0, got {dt}")
+        self.d, self.dt, self.runs, self.seed = d, float(dt), runs, seed
+        self.law = law or Law()
+        self.policy = policy
+        self.objective = objective or Objective()
+        self.attractors: Attractors = attractors
+        self.pbest_order: PbestOrder = pbest_order
+        direction = np.zeros(d) if ahead_direction is None else np.asarray(ahead_direction, float)[:d]
+        if ahead_direction is None:
+            direction[0] = 1.0
+        self.ahead_direction = direction
+        self.init_center = np.zeros(d) if init_center is None else np.asarray(init_center, float)[:d]
+        self.init_spread, self.init_speed = float(init_spread), float(init_speed)
+        self._robots = robots
+        self.reset(seed)
+
+    # ------------------------------------------------------------------ state
+    @property
+    def robots(self) -> int:
+        return self.state.x.shape[1]
+
+    @property
+    def t(self) -> float:
+        return self.state.k * self.dt
+
+    def reset(self, seed: int | None = None) -> None:
+        """Start again from step 0 with ``seed`` (or the current seed)."""
+        if seed is not None:
+            self.seed = int(seed)
+        self.rngs = [np.random.Generator(np.random.PCG64(s)) for s in np.random.SeedSequence(self.seed).spawn(self.runs)]
+        x, u = self._spawn(self._robots)
+        self.state = self._fresh_state(x, u)
+
+    def _spawn(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        shape = (n, self.d)
+        x = np.stack([self.init_center + self.init_spread * (g.random(shape) - 0.5) for g in self.rngs])
+        u = np.stack([self.init_speed * (2.0 * g.random(shape) - 1.0) for g in self.rngs])
+        return x, u
+
+    def _fresh_state(self, x: np.ndarray, u: np.ndarray) -> SwarmState:
+        f = self.objective(x)
+        yg, f_yg = global_best(x, f, self.objective)
+        return SwarmState(
+            x=x, u=u, a=np.zeros_like(u), y=x.copy(), f_y=f.copy(), yg=yg, f_yg=f_yg, f=f,
+            heading=_heading(u, np.zeros(x.shape[:2])), status=np.full(x.shape[:2], ACTIVE, dtype=np.int8),
+        )
+
+    def set_robots(self, n: int) -> None:
+        """Grow or shrink the swarm in place: new robots spawn in the start region."""
+        if n < 1:
+            raise ValueError(f"need at least one robot, got {n}")
+        s, cur = self.state, self.robots
+        self._robots = n
+        if n == cur:
+            return
+        if n < cur:
+            for name in ("x", "u", "a", "y", "f_y", "f", "heading", "status"):
+                setattr(s, name, getattr(s, name)[:, :n].copy())
+        else:
+            x, u = self._spawn(n - cur)
+            new = self._fresh_state(x, u)
+            for name in ("x", "u", "a", "y", "f_y", "f", "heading", "status"):
+                setattr(s, name, np.concatenate([getattr(s, name), getattr(new, name)], axis=1))
+        s.yg, s.f_yg = global_best(s.y, s.f_y, self.objective)
+
+    def set_objective(self, objective: Objective) -> None:
+        """Swap the objective and re-score the bests at the current positions."""
+        self.objective = objective
+        s = self.state
+        s.f = objective(s.x)
+        s.y, s.f_y = s.x.copy(), s.f.copy()
+        s.yg, s.f_yg = global_best(s.y, s.f_y, objective)
+
+    # ------------------------------------------------------------------ tick
+    def _update_bests(self) -> None:
+        s = self.state
+        s.f = self.objective(s.x)
+        s.y, s.f_y = update_personal(s.x, s.f, s.y, s.f_y, self.objective)
+        s.yg, s.f_yg = global_best(s.y, s.f_y, self.objective)
+
+    def _directions(self) -> np.ndarray:
+        """Direction inputs g_n of the accelerating terms, (2, R, N, d)."""
+        s = self.state
+        if self.attractors == "ahead":  # spec §22: both attractors always ahead
+            g = np.broadcast_to(self.ahead_direction, s.x.shape)
+            return np.stack([g, g])
+        return np.stack([s.y - s.x, s.yg[:, None, :] - s.x])
+
+    def _draw(self, n_terms: int) -> np.ndarray:
+        """Fresh U(0,1) draws per term, robot and component [3.1]/[3.37], (n, R, N, d)."""
+        shape = (n_terms, self.robots, self.d)
+        return np.stack([g.random(shape) for g in self.rngs], axis=1)
+
+    def step(self) -> StepInfo:
+        """Advance every run by one control tick Δt."""
+        s = self.state
+        if self.pbest_order == "before_velocity":  # Algorithm 1 phase A first
+            self._update_bests()
+        omega, c = self.policy.coefficients(self.t, self.dt, self.d)
+        g = self._directions()
+        u_new = self.law.velocity(s.u, g, c, omega, self._draw(g.shape[0]))
+        if self.pbest_order == "after_velocity":  # the velocity saw last tick's bests
+            self._update_bests()
+        s.a = (u_new - s.u) / self.dt  # [3.22]
+        s.x = self.law.position(s.x, u_new, self.dt)
+        s.u = u_new
+        s.heading = _heading(u_new, s.heading)
+        s.k += 1
+        speed = np.linalg.norm(u_new, axis=-1)
+        return StepInfo(
+            t=self.t, omega=omega, c=np.asarray(c),
+            best_fitness=s.f_yg.copy(), max_speed=speed.max(axis=1), max_component=np.abs(u_new).max(axis=(1, 2)),
+        )
+
+
+def _heading(u: np.ndarray, previous: np.ndarray) -> np.ndarray:
+    """Direction of motion atan2(u_2, u_1); kept from before while the robot is at rest."""
+    if u.shape[-1] < 2:
+        h = np.where(u[..., 0] < 0, np.pi, 0.0)
+    else:
+        h = np.arctan2(u[..., 1], u[..., 0])
+    moving = np.any(u != 0, axis=-1)
+    return np.where(moving, h, previous)

@@ -1,0 +1,141 @@
+"""Reading, writing, listing and overriding presets."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import tomli_w
+from pydantic import ValidationError
+
+from .models import Scenario
+
+
+class PresetError(ValueError):
+    """A preset could not be read or validated; ``messages`` name each bad field."""
+
+    def __init__(self, messages: list[str]) -> None:
+        self.messages = messages
+        super().__init__("\n".join(messages))
+
+
+def format_errors(err: ValidationError) -> list[str]:
+    """One line per error: ``dotted.field: message (got value)``."""
+    lines = []
+    for e in err.errors(include_url=False):
+        loc = ".".join(str(p) for p in e["loc"])
+        msg = e["msg"].removeprefix("Value error, ")
+        got = "" if e["type"] in ("missing",) or isinstance(e.get("input"), dict) else f" (got {e.get('input')!r})"
+        lines.append(f"{loc}: {msg}{got}" if loc else f"{msg}{got}")
+    return lines
+
+
+def validate(data: dict[str, Any]) -> Scenario:
+    try:
+        return Scenario.model_validate(data)
+    except ValidationError as err:
+        raise PresetError(format_errors(err)) from None
+
+
+def _files() -> Any:
+    return resources.files("shoal.presets").joinpath("files")
+
+
+def list_presets() -> dict[str, str]:
+    """Shipped preset names with their one-line descriptions."""
+    out = {}
+    for f in sorted(_files().iterdir(), key=lambda p: p.name):
+        if f.name.endswith(".toml"):
+            data = tomllib.loads(f.read_text(encoding="utf-8"))
+            out[f.name.removesuffix(".toml")] = str(data.get("description", "")).split("\n")[0]
+    return out
+
+
+def parse_text(text: str, fmt: str = "toml") -> dict[str, Any]:
+    """Parse TOML or JSON text into a dict, syntax errors as :class:`PresetError`."""
+    try:
+        data = json.loads(text) if fmt == "json" else tomllib.loads(text)
+    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as err:
+        raise PresetError([f"{fmt.upper()} syntax: {err}"]) from None
+    if not isinstance(data, dict):
+        raise PresetError(["a preset must be a table of fields"])
+    return data
+
+
+def read_raw(name_or_path: str | Path) -> dict[str, Any]:
+    """The unvalidated dict of a shipped preset name or a TOML/JSON file path."""
+    path = Path(name_or_path)
+    if path.suffix in (".toml", ".json") and path.exists():
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as err:
+            raise PresetError([f"cannot read {path.name}: {err}"]) from None
+        return parse_text(text, "json" if path.suffix == ".json" else "toml")
+    shipped = _files().joinpath(f"{name_or_path}.toml")
+    if shipped.is_file():
+        return parse_text(shipped.read_text(encoding="utf-8"))
+    names = ", ".join(list_presets())
+    raise PresetError([f"no preset or file named {str(name_or_path)!r} (shipped presets: {names})"])
+
+
+def parse_value(text: str) -> Any:
+    """A ``--set`` value: a TOML literal (number, bool, array, quoted string) or a bare string."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
+    """Set ``data[a][b][c] = value`` for ``key = "a.b.c"`` (list items by index)."""
+    parts = key.split(".")
+    if not all(parts):
+        raise PresetError([f"{key}: not a dotted field path"])
+    node: Any = data
+    for i, part in enumerate(parts[:-1]):
+        where = ".".join(parts[: i + 1])
+        if isinstance(node, list):
+            if not part.isdigit() or int(part) >= len(node):
+                raise PresetError([f"{where}: no such list item"])
+            node = node[int(part)]
+        elif isinstance(node, dict):
+            child = node.setdefault(part, {})
+            if not isinstance(child, (dict, list)):
+                raise PresetError([f"{where}: is a value, not a table, so {key} does not exist"])
+            node = child
+        else:
+            raise PresetError([f"{where}: cannot be indexed"])
+    last = parts[-1]
+    if isinstance(node, list):
+        if not last.isdigit() or int(last) >= len(node):
+            raise PresetError([f"{key}: no such list item"])
+        node[int(last)] = value
+    else:
+        node[last] = value
+
+
+def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any]:
+    """Apply ``dotted.key=value`` strings to a copy of ``data`` (validated later, by the model)."""
+    out = json.loads(json.dumps(data))
+    for item in overrides:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise PresetError([f"--set {item!r}: expected dotted.key=value"])
+        set_dotted(out, key.strip(), parse_value(value.strip()))
+    return out
+
+
+def load(name_or_path: str | Path, overrides: list[str] | None = None) -> Scenario:
+    """Load a shipped preset or a file, apply ``--set`` overrides, validate."""
+    return validate(apply_overrides(read_raw(name_or_path), overrides or []))
+
+
+def to_toml(scenario: Scenario) -> str:
+    return tomli_w.dumps(scenario.model_dump(mode="json"))
+
+
+def to_json(scenario: Scenario) -> str:
+    return scenario.model_dump_json(indent=2)

@@ -1,0 +1,3 @@
+from shoal.app.cli import main
+
+raise SystemExit(main())
