@@ -1,8 +1,8 @@
 """One control tick of a swarm, vectorised over runs × robots × dimensions.
 
-Stages (DESIGN.md): bests → coefficients → velocity → move → record. Each run draws
-from its own generator spawned from one ``SeedSequence``, so run ``i`` is the same
-whether it is simulated alone or in a batch.
+Stages (DESIGN.md): bests → coefficients → velocity → move → record. Run ``i`` draws
+from child ``i`` of one ``SeedSequence(seed)``, so it is the same whether it is simulated
+alone (``first_run=i, runs=1``) or inside a batch.
 """
 
 from __future__ import annotations
@@ -69,6 +69,7 @@ class Simulation:
         objective: Objective | None = None,
         runs: int = 1,
         seed: int = 0,
+        first_run: int = 0,
         attractors: Attractors = "literal",
         pbest_order: PbestOrder = "before_velocity",
         ahead_direction: np.ndarray | None = None,
@@ -80,7 +81,7 @@ class Simulation:
             raise ValueError("robots, runs and d must be >= 1")
         if dt <= 0:
             raise ValueError(f"dt must be > 0, got {dt}")
-        self.d, self.dt, self.runs, self.seed = d, float(dt), runs, seed
+        self.d, self.dt, self.runs, self.seed, self.first_run = d, float(dt), runs, seed, first_run
         self.law = law or Law()
         self.policy = policy
         self.objective = objective or Objective()
@@ -108,7 +109,9 @@ class Simulation:
         """Start again from step 0 with ``seed`` (or the current seed)."""
         if seed is not None:
             self.seed = int(seed)
-        self.rngs = [np.random.Generator(np.random.PCG64(s)) for s in np.random.SeedSequence(self.seed).spawn(self.runs)]
+        # run i draws from child i of SeedSequence(seed), wherever it is simulated
+        children = range(self.first_run, self.first_run + self.runs)
+        self.rngs = [np.random.Generator(np.random.PCG64(np.random.SeedSequence(self.seed, spawn_key=(i,)))) for i in children]
         x, u = self._spawn(self._robots)
         self.state = self._fresh_state(x, u)
 

@@ -69,8 +69,8 @@ class Controller(_Model):
         if self.mode == "physical":
             if not adapted:
                 raise ValueError("mode 'physical' needs an Adapted law (standard PSO has no speed limit)")
-            for where, U, A in [("U/A_plus", self.U, self.A_plus)] + [
-                (f"schedule.{i}", s.U, s.A_plus) for i, s in enumerate(self.schedule)
+            for where, U, A in [("A_plus", self.U, self.A_plus)] + [
+                (f"schedule.{i}.A_plus", s.U, s.A_plus) for i, s in enumerate(self.schedule)
             ]:
                 beta = A * self.dt / U
                 if beta > 1.0 + 1e-12:

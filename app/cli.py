@@ -1,0 +1,153 @@
+"""The ``shoal`` command: serve, run, reproduce, presets (DESIGN.md contract)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from shoal import __version__
+
+EXIT_USAGE = 2
+
+
+def _err(msg: str) -> int:
+    print(f"shoal: error: {msg}", file=sys.stderr)
+    return EXIT_USAGE
+
+
+def _cmd_serve(args: argparse.Namespace) -> int:
+    from shoal.presets.io import PresetError, load
+
+    try:
+        load(args.preset)
+    except PresetError as e:
+        return _err("bad preset:\n  " + "\n  ".join(e.messages))
+    from shoal.app.server import serve
+
+    try:
+        serve(preset=args.preset, host=args.host, port=args.port)
+    except OSError as e:
+        return _err(str(e))
+    return 0
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from shoal.engine.runs import run_to_dir
+    from shoal.presets.build import build_simulation
+    from shoal.presets.io import PresetError, load
+
+    overrides = list(args.set or [])
+    for flag, key in ((args.runs, "sim.runs"), (args.seed, "sim.seed"), (args.steps, "sim.steps")):
+        if flag is not None:
+            overrides.append(f"{key}={flag}")
+    try:
+        scenario = load(args.preset, overrides)
+    except PresetError as e:
+        return _err("bad preset:\n  " + "\n  ".join(e.messages))
+    sim = build_simulation(scenario)
+    out = Path(args.out or f"out/{scenario.name}-seed{scenario.sim.seed}")
+    meta = {
+        "shoal_version": __version__,
+        "preset": scenario.model_dump(mode="json"),
+        "seed": scenario.sim.seed,
+        "runs": scenario.sim.runs,
+        "steps": scenario.sim.steps,
+    }
+    steps = scenario.sim.steps
+    with tqdm(total=steps, desc=f"run {scenario.name}", unit="step", disable=steps < 200 or None) as bar:
+        run_to_dir(sim, steps, out, meta, on_step=lambda _k: bar.update())
+    print(f"wrote {out}/run.json, trajectories.csv, metrics.csv")
+    return 0
+
+
+def _cmd_reproduce(args: argparse.Namespace) -> int:
+    from shoal.engine.experiments import TARGETS, reproduce
+
+    if args.list or not args.target:
+        for name, target in TARGETS.items():
+            print(f"{name:12s} {target.description}")
+        return 0 if args.list else _err("name a TARGET (see --list)")
+    if args.target not in TARGETS:
+        return _err(f"unknown target {args.target!r}; known: {', '.join(TARGETS)}")
+    if args.scheduler:
+        return _err("--scheduler (Dask cluster) is not supported yet; run locally with --workers")
+    if args.runs is not None and args.runs < 1:
+        return _err("--runs must be >= 1")
+    if args.workers < 1:
+        return _err("--workers must be >= 1")
+    out = Path(args.out or f"out/{args.target}")
+    summary = reproduce(args.target, out, runs=args.runs, workers=args.workers, progress=True)
+    failed = [c["name"] for c in summary["checks"] if not c["pass"]]
+    print(f"wrote {out}/summary.json ({len(summary['checks'])} checks, {len(failed)} not passed)")
+    for name in failed:
+        print(f"  not passed: {name}")
+    return 0
+
+
+def _cmd_presets(args: argparse.Namespace) -> int:
+    from shoal.presets.io import PresetError, list_presets, load, to_toml
+
+    if args.action == "list":
+        for name, desc in list_presets().items():
+            print(f"{name:14s} {desc}")
+        return 0
+    if not args.name:
+        return _err(f"presets {args.action} needs a NAME or FILE")
+    try:
+        scenario = load(args.name)
+    except PresetError as e:
+        print("\n".join(e.messages), file=sys.stderr)
+        return 1 if args.action == "validate" else EXIT_USAGE
+    if args.action == "show":
+        print(to_toml(scenario), end="")
+    else:
+        print(f"{args.name}: valid ({scenario.name})")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="shoal", description="PSO control of robot swarms: sandbox and research tool")
+    p.add_argument("--version", action="version", version=f"shoal {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    s = sub.add_parser("serve", help="start the browser app")
+    s.add_argument("--host", default="127.0.0.1", help="bind address (default loopback)")
+    s.add_argument("--port", type=int, default=8080)
+    s.add_argument("--preset", default="default", help="preset name or TOML/JSON file")
+    s.set_defaults(func=_cmd_serve)
+
+    r = sub.add_parser("run", help="headless seeded runs")
+    r.add_argument("preset", help="preset name or TOML/JSON file")
+    r.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field by dotted path")
+    r.add_argument("--runs", type=int)
+    r.add_argument("--seed", type=int)
+    r.add_argument("--steps", type=int)
+    r.add_argument("--out", help="output folder")
+    r.set_defaults(func=_cmd_run)
+
+    q = sub.add_parser("reproduce", help="regenerate a thesis figure or table")
+    q.add_argument("target", nargs="?")
+    q.add_argument("--list", action="store_true", help="list the targets")
+    q.add_argument("--runs", type=int)
+    q.add_argument("--out")
+    q.add_argument("--workers", type=int, default=1)
+    q.add_argument("--scheduler", help="Dask scheduler address (tcp://HOST:PORT)")
+    q.set_defaults(func=_cmd_reproduce)
+
+    ps = sub.add_parser("presets", help="list, show or validate presets")
+    ps.add_argument("action", choices=["list", "show", "validate"])
+    ps.add_argument("name", nargs="?")
+    ps.set_defaults(func=_cmd_presets)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
