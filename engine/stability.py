@@ -65,14 +65,14 @@ def a1(u: np.ndarray | float, omega: float, dt: float) -> np.ndarray:
     Undefined at ω = 0, where the locus is the vertical line u = 0 (spec §20 item 7);
     use :func:`line_a1` for drawing. Raises ``ValueError`` at ω = 0.
     """
-    if omega == 0:
+    if omega * dt == 0:  # also catches subnormal ω
         raise ValueError("a1 is the vertical line u = 0 when omega = 0; use line_a1()")
     return (omega - 1.0) / (omega * dt) * np.asarray(u, dtype=float)
 
 
 def line_a1(omega: float, dt: float, u_lim: float, a_lim: float) -> np.ndarray:
     """Two end points ((u0, a0), (u1, a1)) of the a1 locus clipped to |u| ≤ u_lim, |a| ≤ a_lim."""
-    if omega == 0:
+    if omega * dt == 0 or abs((omega - 1.0) / (omega * dt)) > 1e12:
         return np.array([[0.0, -a_lim], [0.0, a_lim]])
     slope = (omega - 1.0) / (omega * dt)
     u_end = u_lim if slope == 0 else min(u_lim, a_lim / abs(slope))
