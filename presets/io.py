@@ -134,7 +134,7 @@ def load(name_or_path: str | Path, overrides: list[str] | None = None) -> Scenar
 
 
 def to_toml(scenario: Scenario) -> str:
-    return tomli_w.dumps(scenario.model_dump(mode="json"))
+    return tomli_w.dumps(scenario.model_dump(mode="json", exclude_none=True))
 
 
 def to_json(scenario: Scenario) -> str:

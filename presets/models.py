@@ -11,6 +11,9 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from shoal.engine.laws import LawName
+
+RobotLawName = Literal["rpso", "adapted-rpso", "robot-centred", "nonomni"]
+ROBOT_LAWS = ("rpso", "adapted-rpso", "robot-centred", "nonomni")
 from shoal.engine.objectives import ObjectiveName
 
 Coefficient = Annotated[float, Field(ge=0.0, le=100.0)]
@@ -49,12 +52,21 @@ class StepChange(_Model):
 class Controller(_Model):
     """Velocity law and its coefficients, raw (ω, c1, c2) or physical (U, A+, Δt)."""
 
-    law: LawName = "adapted-sgn"
-    mode: Literal["raw", "physical"] = "physical"
+    law: Literal[LawName, RobotLawName] = "adapted-sgn"
+    mode: Literal["raw", "physical", "dvc"] = "physical"
     dt: Annotated[float, Field(gt=0.0, le=10.0, description="controller period Δt [s]")] = 0.1
     omega: Annotated[float, Field(ge=-1.0, le=1.2, description="inertia weight ω (raw mode)")] = 0.5
     c1: Annotated[Coefficient, Field(description="cognitive coefficient (raw mode)")] = 0.5
     c2: Annotated[Coefficient, Field(description="social coefficient (raw mode)")] = 0.5
+    c3: Annotated[Coefficient, Field(description="obstacle coefficient c3 (raw mode, RPSO laws)")] = 0.0
+    alpha: Annotated[float, Field(gt=0.0, lt=1.0, description="DVC safety factor α [4.14]")] = 0.9
+    beta: Annotated[float, Field(gt=0.0, le=1.0, description="DVC sensitivity β [4.15]")] = 0.9
+    gamma: Annotated[float, Field(gt=0.0, le=1e3, description="avoidance sensitivity γ [4.4]")] = 1.0
+    r_min: Annotated[float, Field(ge=0.0, le=100.0, description="minimum turning radius [m] (0 = off, §5.4)")] = 0.0
+    s_min: Annotated[float, Field(ge=0.0, le=100.0, description="minimum obstacle clearance [m] (§5.4)")] = 0.0
+    rotational_energy: Literal["pi", "disc"] = Field(
+        "pi", description="[5.12] as printed (π w²/4) or a disc of the robot's radius (R_b² w²/4)"
+    )
     U: Annotated[float, Field(gt=0.0, le=1e3, description="top speed U [m/s] (physical mode)")] = 3.0
     A_plus: Annotated[float, Field(gt=0.0, le=1e5, description="top acceleration A+ [m/s²] (physical mode)")] = 15.0
     c1_share: Annotated[float, Field(ge=0.0, le=1.0, description="c1/(c1+c2) split of ĉ (physical mode)")] = 0.5
@@ -63,6 +75,13 @@ class Controller(_Model):
 
     @model_validator(mode="after")
     def _consistent(self) -> "Controller":
+        robot_law = self.law in ROBOT_LAWS
+        if robot_law and self.mode == "physical":
+            raise ValueError(f"law {self.law!r} takes mode 'raw' (constant c1..c3, omega) or 'dvc'")
+        if self.mode == "dvc" and self.law not in ("adapted-rpso", "nonomni"):
+            raise ValueError("mode 'dvc' needs law 'adapted-rpso' or 'nonomni'")
+        if robot_law:
+            return self
         adapted = self.law != "standard"
         if self.mode == "raw" and adapted and not (0.0 <= self.omega < 1.0):
             raise ValueError(f"omega = {self.omega:g}: an Adapted law needs 0 <= omega < 1 [3.14]")
@@ -82,6 +101,33 @@ class Controller(_Model):
         if times != sorted(times):
             raise ValueError("schedule: t_start values must increase")
         return self
+
+
+class WorldModel(_Model):
+    """The obstacle world of Chapters 4–5 (pymunk hosts it)."""
+
+    kind: Literal["obstacle-course", "empty", "forest"] = "obstacle-course"
+    seed: Annotated[int, Field(ge=0, le=2**31 - 1)] = 0
+    layers: Annotated[int, Field(ge=1, le=30, description="obstacle layers (course)")] = 6
+    length: Annotated[float, Field(gt=5.0, le=1000.0, description="course length along x [m]")] = 60.0
+    width: Annotated[float, Field(gt=5.0, le=1000.0, description="course/arena width [m]")] = 30.0
+    density: Annotated[float, Field(gt=0.0, le=0.5, description="forest area fraction")] = 0.05
+
+
+class Robot(_Model):
+    """Body, drive and motion model of every robot."""
+
+    radius: Annotated[float, Field(gt=0.0, le=10.0, description="robot radius [m] (1 m diameter default)")] = 0.5
+    v_max: Annotated[float, Field(gt=0.0, le=100.0, description="top speed [m/s]")] = 3.0
+    a_max: Annotated[float, Field(gt=0.0, le=1e3, description="actuator acceleration (physics) [m/s²]")] = 10.0
+    motion: Literal["kinematic", "physics"] = "kinematic"
+    drive: Literal["holonomic", "mecanum", "differential"] = "holonomic"
+
+
+class Sensing(_Model):
+    """Six-sector range sensing (Figs. 4-3, 5-3)."""
+
+    range: Annotated[float, Field(gt=0.0, le=100.0, description="sensing range R [m]")] = 3.0
 
 
 class Bests(_Model):
@@ -124,4 +170,17 @@ class Scenario(_Model):
     bests: Bests = Field(default_factory=Bests)
     objective: ObjectiveModel = Field(default_factory=ObjectiveModel)
     arena: Arena = Field(default_factory=Arena)
+    world: WorldModel | None = None
+    robot: Robot = Field(default_factory=Robot)
+    sensing: Sensing = Field(default_factory=Sensing)
     view: View = Field(default_factory=View)
+
+    @model_validator(mode="after")
+    def _world_for_robot_laws(self) -> "Scenario":
+        if self.controller.law in ROBOT_LAWS and self.world is None:
+            raise ValueError(f"controller.law {self.controller.law!r} needs a [world] section")
+        if self.controller.law in ("robot-centred", "nonomni") and self.robot.drive != "differential":
+            raise ValueError(f"controller.law {self.controller.law!r} needs robot.drive = 'differential'")
+        if self.world is not None and self.sim.d != 2:
+            raise ValueError("sim.d must be 2 with a [world]")
+        return self
