@@ -1,0 +1,9 @@
+"""Thesis-figure reproductions and the seeded Monte-Carlo runner behind them.
+
+``shoal reproduce TARGET`` calls :func:`reproduce`; ``--list`` prints :data:`TARGETS`.
+"""
+
+from .registry import TARGETS, OutputDirError, Target, reproduce
+from .runner import BatchResult, Job, run_batch, run_jobs
+
+__all__ = ["TARGETS", "BatchResult", "Job", "OutputDirError", "Target", "reproduce", "run_batch", "run_jobs"]

@@ -1,0 +1,108 @@
+"""Reproduction targets (one thesis figure or table each) and ``reproduce``."""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+from ..atomic import atomic_output_dir
+
+
+@dataclass(frozen=True)
+class Target:
+    """A figure or table that ``shoal reproduce NAME`` regenerates.
+
+    ``run(out_dir, runs, workers, progress, **options)`` writes the target's files into
+    ``out_dir`` and returns the summary fields (at least ``checks``).
+    """
+
+    name: str
+    description: str
+    default_runs: int
+    _run: Callable[..., dict[str, Any]]
+
+    def run(self, out_dir: Path, runs: int, workers: int = 1, progress: bool = True, **options: Any) -> dict[str, Any]:
+        return self._run(Path(out_dir), runs, workers, progress, **options)
+
+
+def _fig3_4(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+    from . import fig3_4
+
+    return fig3_4.run(out_dir, runs, workers, progress, **options)
+
+
+def _fig3_5(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+    from . import fig3_5
+
+    return fig3_5.run(out_dir, runs, workers, progress, **options)
+
+
+TARGETS: dict[str, Target] = {
+    t.name: t
+    for t in (
+        Target("fig3-4", "Ch. 3 Fig. 3-4: highest speed at constant U, A+, dt (cases a-d, ahead and literal)",
+               100, _fig3_4),
+        Target("fig3-5", "Ch. 3 Fig. 3-5: response of the highest speed to step changes of U and A+ (a-c)",
+               100, _fig3_5),
+    )
+}
+
+
+class OutputDirError(ValueError):
+    """The output folder exists and does not look like an earlier reproduction."""
+
+
+def _check_replaceable(out_dir: Path) -> None:
+    if out_dir.exists():
+        if not out_dir.is_dir():
+            raise OutputDirError(f"{out_dir} exists and is not a folder")
+        if any(out_dir.iterdir()) and not (out_dir / "summary.json").is_file():
+            raise OutputDirError(
+                f"{out_dir} is not empty and holds no summary.json; refusing to replace it (choose another --out)"
+            )
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def reproduce(
+    target: str,
+    out_dir: Path,
+    runs: int | None = None,
+    workers: int = 1,
+    progress: bool = True,
+    **options: Any,
+) -> dict[str, Any]:
+    """Regenerate ``target`` into ``out_dir`` and return its summary.
+
+    Everything is written into a temporary sibling folder which replaces ``out_dir`` only
+    when the target has finished: an interrupted or failed run leaves ``out_dir`` as it was
+    (absent, or the previous reproduction). A non-empty ``out_dir`` that is not an earlier
+    reproduction (no ``summary.json``) is refused. ``options`` go to the target (e.g.
+    ``sizes=(10, 100)`` for a quick check).
+    """
+    if target not in TARGETS:
+        raise KeyError(f"unknown target {target!r}; known: {', '.join(TARGETS)}")
+    spec = TARGETS[target]
+    runs = spec.default_runs if runs is None else int(runs)
+    if runs < 1:
+        raise ValueError(f"runs must be >= 1, got {runs}")
+    if workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    out_dir = Path(out_dir)
+    _check_replaceable(out_dir)
+    start = time.perf_counter()
+    with atomic_output_dir(out_dir) as tmp:
+        tmp.chmod(0o777 & ~_umask())  # mkdtemp makes it private; the result is an ordinary folder
+        fields = spec.run(tmp, runs, workers, progress, **options)
+        summary = {"target": target, "runs": runs, "elapsed_s": round(time.perf_counter() - start, 3), **fields}
+        summary["workers"] = workers
+        (tmp / "summary.json").write_text(json.dumps(summary, indent=2, ensure_ascii=False) + "\n", encoding="utf-8")
+    return summary
