@@ -64,7 +64,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from shoal.engine.experiments import TARGETS, reproduce
+    from shoal.engine.experiments import TARGETS, OutputDirError, reproduce
 
     if args.list or not args.target:
         for name, target in TARGETS.items():
@@ -79,7 +79,10 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     if args.workers < 1:
         return _err("--workers must be >= 1")
     out = Path(args.out or f"out/{args.target}")
-    summary = reproduce(args.target, out, runs=args.runs, workers=args.workers, progress=True)
+    try:
+        summary = reproduce(args.target, out, runs=args.runs, workers=args.workers, progress=True)
+    except OutputDirError as e:
+        return _err(f"{e} (choose another --out)")
     failed = [c["name"] for c in summary["checks"] if not c["pass"]]
     print(f"wrote {out}/summary.json ({len(summary['checks'])} checks, {len(failed)} not passed)")
     for name in failed:

@@ -27,7 +27,10 @@ def objective_for(o: ObjectiveModel) -> Objective:
     return Objective(name=o.kind, source=np.asarray(o.source, dtype=float), scale=o.scale)
 
 
-def build_simulation(scenario: Scenario, *, runs: int | None = None, seed: int | None = None) -> Simulation:
+def build_simulation(
+    scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0
+) -> Simulation:
+    """A Chapter 3 swarm for runs ``first_run … first_run + runs − 1`` of the seed."""
     s = scenario
     return Simulation(
         robots=s.sim.robots,
@@ -38,6 +41,7 @@ def build_simulation(scenario: Scenario, *, runs: int | None = None, seed: int |
         objective=objective_for(s.objective),
         runs=runs or s.sim.runs,
         seed=s.sim.seed if seed is None else seed,
+        first_run=first_run,
         attractors=s.bests.attractors,
         pbest_order=s.bests.pbest_order,
         init_center=np.asarray(s.init.center, dtype=float),

@@ -29,9 +29,7 @@ def test_same_seed_same_trajectory_bit_for_bit():
 
 def test_a_run_is_the_same_alone_or_in_a_batch():
     batch = _run(build_simulation(load("default"), runs=4, seed=3), 60)
-    alone = build_simulation(load("default"), runs=1, seed=3)
-    alone.first_run = 2
-    alone.reset()
+    alone = build_simulation(load("default"), runs=1, seed=3, first_run=2)
     _run(alone, 60)
     assert np.array_equal(batch.state.x[2], alone.state.x[0])
 

@@ -93,11 +93,7 @@ def _coefficients(info_omega: Any, info_c: Any) -> tuple[float, float]:
 
 def make_simulation(scenario: Scenario, *, runs: int, seed: int, first_run: int = 0) -> Simulation:
     """``build_simulation`` for runs ``first_run … first_run + runs − 1`` of ``seed``."""
-    sim = build_simulation(scenario, runs=runs, seed=seed)
-    if first_run:
-        sim.first_run = first_run
-        sim.reset()
-    return sim
+    return build_simulation(scenario, runs=runs, seed=seed, first_run=first_run)
 
 
 def run_batch(
