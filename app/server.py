@@ -1,0 +1,207 @@
+"""The Viser server behind ``shoal serve``: one :class:`Session` per browser tab.
+
+``start_server`` returns at once (tests use it with ``port=0``); ``serve`` blocks until
+Ctrl-C. One daemon thread ticks every tab; browser callbacks run on viser's thread pool
+and meet the ticking thread only through each session's lock.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import socket
+import sys
+import threading
+import time
+from typing import Any
+
+import viser
+
+from shoal.presets import io as presets_io
+from shoal.presets.io import PresetError
+from shoal.presets.models import Scenario
+
+from .scene import CAMERA_FOV, CAMERA_HEIGHT, camera_height
+from .session import Session
+from .tab import TabApp
+
+TICK_HZ = 60.0
+LOOPBACK_NAMES = ("localhost",)
+
+
+class PortInUseError(OSError):
+    """The requested port is taken (viser would silently move to the next free one)."""
+
+
+def is_loopback(host: str) -> bool:
+    if host in LOOPBACK_NAMES:
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def _port_free(host: str, port: int) -> bool:
+    """Can a server bind ``host:port`` now? (SO_REUSEADDR as asyncio servers use it.)"""
+    try:
+        infos = socket.getaddrinfo(host or None, port, type=socket.SOCK_STREAM)
+    except socket.gaierror:
+        return True  # let viser report the bad host
+    family, socktype, proto, _, addr = infos[0]
+    with socket.socket(family, socktype, proto) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            s.bind(addr)
+        except OSError:
+            return False
+    return True
+
+
+class ShoalServer:
+    """A running app: ``port``, ``sessions`` (client id → Session), ``tabs`` (client id → TabApp), ``stop()``."""
+
+    def __init__(self, scenario: Scenario, host: str = "127.0.0.1", port: int = 8080) -> None:
+        self.scenario = scenario
+        self.host = host
+        self.viser = viser.ViserServer(host=host, port=port, verbose=False)
+        self.port = self.viser.get_port()
+        self.tabs: dict[int, TabApp] = {}
+        self._lock = threading.Lock()
+        self._stopping = threading.Event()
+        self._configure()
+        self.viser.on_client_connect(self._connect)
+        self.viser.on_client_disconnect(self._disconnect)
+        self._thread = threading.Thread(target=self._run, name="shoal-ticker", daemon=True)
+        self._thread.start()
+
+    @property
+    def sessions(self) -> dict[int, Session]:
+        with self._lock:
+            return {cid: tab.session for cid, tab in self.tabs.items()}
+
+    @property
+    def url(self) -> str:
+        host = "127.0.0.1" if self.host in ("0.0.0.0", "::", "") else self.host
+        return f"http://{host}:{self.port}/"
+
+    def _configure(self) -> None:
+        gui = self.viser.gui
+        gui.configure_theme(control_width="large", show_share_button=False, brand_color=(40, 90, 200))
+        gui.main_panel.dock_right()
+        gui.set_panel_label("Shoal · Adapted PSO")
+        cam = self.viser.initial_camera
+        cam.position = (0.0, 0.0, CAMERA_HEIGHT)
+        cam.look_at = (0.0, 0.0, 0.0)
+        cam.up = (0.0, 1.0, 0.0)
+        cam.fov = CAMERA_FOV
+        cam.near = 1.0
+        cam.far = 4.0 * CAMERA_HEIGHT
+        self.viser.scene.set_up_direction("+z")
+
+    # ------------------------------------------------------------------ tabs
+    def open_tab(
+        self, key: int, gui: Any, scene: Any, client: viser.ClientHandle | None = None, *, auto_tick: bool = True
+    ) -> TabApp:
+        """Build a session with its panels and arena on ``gui``/``scene`` and start ticking it.
+
+        Browser tabs come here from ``on_client_connect``; tests may pass ``server.gui``
+        and ``server.scene`` with ``client=None`` to drive the panels without a browser, and
+        ``auto_tick=False`` to advance it only by calling ``tab.tick(now)`` themselves.
+        """
+        session = Session(self.scenario)
+        kwargs: dict[str, Any] = {}
+        if client is not None:
+            kwargs = dict(
+                notify=lambda title, body, color: client.add_notification(
+                    title, body, color=color, auto_close_seconds=10.0 if color == "red" else 4.0),
+                send_file=lambda name, data: client.send_file_download(name, data, save_immediately=True),
+                atomic=client.atomic,
+            )
+        tab = TabApp(session, gui, scene, **kwargs)
+        tab.auto_tick = auto_tick
+        with self._lock:
+            self.tabs[key] = tab
+        return tab
+
+    def close_tab(self, key: int) -> None:
+        with self._lock:
+            self.tabs.pop(key, None)
+
+    def _connect(self, client: viser.ClientHandle) -> None:
+        if self._stopping.is_set():
+            return
+        client.camera.position = (0.0, 0.0, CAMERA_HEIGHT)
+        client.camera.look_at = (0.0, 0.0, 0.0)
+        client.camera.up_direction = (0.0, 1.0, 0.0)
+        fitted = threading.Event()
+
+        @client.camera.on_update
+        def _(camera: viser.CameraHandle) -> None:
+            if fitted.is_set():
+                return
+            fitted.set()  # once: the first report tells the canvas' aspect; later moves are the user's
+            camera.position = (0.0, 0.0, camera_height(camera.aspect))
+
+        tab = self.open_tab(client.client_id, client.gui, client.scene, client)
+        tab.session.play()
+
+    def _disconnect(self, client: viser.ClientHandle) -> None:
+        self.close_tab(client.client_id)
+
+    # ------------------------------------------------------------------ ticking
+    def _run(self) -> None:
+        period = 1.0 / TICK_HZ
+        while not self._stopping.is_set():
+            start = time.monotonic()
+            with self._lock:
+                tabs = [tab for tab in self.tabs.values() if tab.auto_tick]
+            for tab in tabs:
+                try:
+                    tab.tick(start)
+                except Exception as err:  # one broken tab must not stop the others
+                    print(f"shoal: tab update failed: {err!r}", file=sys.stderr)
+            self._stopping.wait(max(0.0, period - (time.monotonic() - start)))
+
+    def stop(self) -> None:
+        """Stop ticking, then the viser server (in that order: no updates on closed connections)."""
+        self._stopping.set()
+        if self._thread.is_alive() and threading.current_thread() is not self._thread:
+            self._thread.join(timeout=5.0)
+        self.viser.stop()
+
+
+def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080) -> ShoalServer:
+    """Start the app without blocking. ``port=0`` picks a free port (see ``.port``).
+
+    Raises :class:`PresetError` for an unknown or invalid preset and :class:`PortInUseError`
+    when ``port`` is taken.
+    """
+    scenario = presets_io.load(preset)
+    if port and not _port_free(host, port):
+        raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
+    server = ShoalServer(scenario, host=host, port=port)
+    if port and server.port != port:  # viser moved to the next free port: refuse instead
+        server.stop()
+        raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
+    return server
+
+
+def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080) -> None:
+    """Run the browser app until Ctrl-C (``shoal serve``). Exits with a message if the port is taken."""
+    if not is_loopback(host):
+        print(f"warning: serving on {host}: anyone who can reach this machine on port {port} "
+              "can open and drive the app", file=sys.stderr)
+    try:
+        server = start_server(preset, host, port)
+    except PortInUseError as err:
+        raise SystemExit(f"shoal serve: {err}") from None
+    except PresetError as err:
+        raise SystemExit("shoal serve: bad preset:\n" + "\n".join(err.messages)) from None
+    print(f"Shoal is running at {server.url}  (Ctrl-C to stop)", flush=True)
+    try:
+        while True:
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        print("\nstopping", flush=True)
+    finally:
+        server.stop()
