@@ -129,3 +129,30 @@ def dvc_nonomni(
     c12 = beta * W12  # [5.14] with d = 1
     c = np.stack([c1_share * c12, (1.0 - c1_share) * c12, beta * W3, beta * W4, beta * U])
     return _omega(beta, gap.shape[:-1]), c
+
+
+def approach_guard(
+    u: np.ndarray, x: np.ndarray, point: np.ndarray, gap: np.ndarray, *, alpha: float = 0.9, dt: float = 1.0
+) -> np.ndarray:
+    """Scale each global velocity so one step closes at most α·s_p toward every sensed body.
+
+    DVC bounds the accelerating terms but not the carried-over ω·u, so the thesis'
+    "never reaches the nearest body in one step" is approximate (spec §20 item 19). This
+    optional guard (ours, not in the thesis) makes it exact for straight-line motion:
+    with n_p the unit vector to body p's closest point, Δt·(u·n_p) ≤ α s_p for all p.
+    ``u``, ``x``: (R, N, 2); ``point``: (R, N, 6, 2), nan where a sector is empty; ``gap``: (R, N, 6).
+    """
+    rel = point - x[..., None, :]
+    dist = np.linalg.norm(rel, axis=-1)
+    seen = np.isfinite(dist) & (dist > 0)
+    n = np.where(seen[..., None], rel / np.where(seen, dist, 1.0)[..., None], 0.0)
+    closing = np.einsum("rnkd,rnd->rnk", n, u) * dt  # distance closed in one step
+    allowed = alpha * np.maximum(gap, 0.0)
+    ratio = np.where(seen & (closing > allowed), allowed / np.where(closing > 0, closing, 1.0), 1.0)
+    return u * ratio.min(axis=-1, initial=1.0)[..., None]
+
+
+def forward_guard(v: np.ndarray, gap: np.ndarray, *, alpha: float = 0.9, dt: float = 1.0) -> np.ndarray:
+    """Non-omni counterpart of :func:`approach_guard`: v ≤ α·sf_1/Δt including the ω·v carry."""
+    sf1 = np.maximum(np.asarray(gap, dtype=float)[..., FRONT].min(axis=-1), 0.0)
+    return np.minimum(v, alpha * sf1 / dt)

@@ -1,0 +1,304 @@
+"""Chapters 4–5: robots with bodies in an obstacle world.
+
+One tick (Algorithms 1 and 2): bests → sense → coefficients (constant or DVC) →
+velocity (RPSO, Adapted RPSO, robot-centred, non-omni) → move (kinematic or pymunk) →
+metrics. Arrays are (runs, robots, …); run ``i`` draws from child ``i`` of
+``SeedSequence(seed)``, like :class:`shoal.engine.sim.Simulation`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from .dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
+from .motion import Drive, Kinematic, Physics
+from .robot_laws import (
+    Inertia, adapted_rpso_velocity, energy_limit, min_turning_radius, nonomni_velocity,
+    robot_centred_velocity, rpso_velocity, to_body, to_world,
+)
+from .sensing import SectorReading, sense, virtual_force
+from .world import RunSpace, WorldSpec
+
+FleetLaw = Literal["rpso", "adapted-rpso", "robot-centred", "nonomni"]
+ACTIVE, COLLIDED = 0, 1
+
+
+@dataclass
+class FleetParams:
+    """Controller and robot parameters of a fleet (Tables 4.1 and 5.1 by default)."""
+
+    law: FleetLaw = "adapted-rpso"
+    dvc: bool = True
+    dt: float = 1.0
+    omega: float = 0.1  # constant mode; ω = 1 − β (spec §20 item 17)
+    c: tuple[float, ...] = (0.4296, 0.4296, 0.8591)  # constant c1, c2, c3
+    alpha: float = 0.9
+    beta: float = 0.9
+    gamma: float = 1.0
+    c1_share: float = 0.5
+    sensing_range: float = 3.0
+    robot_radius: float = 0.5
+    v_max: float = 3.0
+    a_max: float = 10.0
+    motion: Literal["kinematic", "physics"] = "kinematic"
+    drive: Drive = "holonomic"
+    r_min: float = 0.0
+    s_min: float = 0.0
+    rotational_energy: Inertia = "pi"
+    update: Literal["sequential", "simultaneous"] = "sequential"
+    guard: bool = False  # DVC inertia guard (ours): see dvc.approach_guard
+    spawn_gap: float = 0.3  # free space between robots at the start [m]
+
+    @property
+    def body_frame(self) -> bool:
+        return self.law in ("robot-centred", "nonomni")
+
+
+@dataclass
+class FleetState:
+    x: np.ndarray  # (R, N, 2)
+    heading: np.ndarray  # (R, N)
+    u: np.ndarray  # (R, N, 2) world-frame velocity (realised)
+    cmd: np.ndarray  # (R, N, 2) controller state: global u, or body-frame [v, w]
+    y: np.ndarray  # (R, N, 2) personal bests
+    f_y: np.ndarray  # (R, N)
+    yg: np.ndarray  # (R, 2)
+    f_yg: np.ndarray  # (R,)
+    f: np.ndarray  # (R, N) cost at x
+    status: np.ndarray  # (R, N) int8: 0 active, 1 collided
+    k: int = 0
+    reading: SectorReading | None = None
+    force: np.ndarray | None = None  # (R, N, 2) F_t [4.3]
+    omega: np.ndarray | None = None  # (R, N)
+    c: np.ndarray | None = None  # (n, R, N) coefficients in force this tick
+    a: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+@dataclass
+class FleetInfo:
+    t: float
+    com_fitness: np.ndarray  # (R,) mean x_1 of all robots [4.17]
+    collided: np.ndarray  # (R,)
+    operational: np.ndarray  # (R,)
+    layers_passed: np.ndarray  # (R,) layers with x below the CoM
+    best_fitness: np.ndarray  # (R,) distance of the global best to the source
+    max_speed: np.ndarray  # (R,)
+
+
+def spawn_positions(
+    rng: np.random.Generator, box: tuple[float, float, float, float], n: int, radius: float, spacing: float = 0.3
+) -> np.ndarray:
+    """n robot centres uniformly in ``box``, at least ``spacing`` apart surface to surface
+    (rejection sampling; a grid when the box is too small for that)."""
+    xmin, ymin, xmax, ymax = box
+    pts: list[np.ndarray] = []
+    gap = 2.0 * radius + spacing
+    for _ in range(200 * n):
+        if len(pts) == n:
+            break
+        p = rng.uniform([xmin + radius, ymin + radius], [xmax - radius, ymax - radius])
+        if all(np.hypot(*(p - q)) >= gap for q in pts):
+            pts.append(p)
+    if len(pts) < n:  # box too small for random placement: fill a grid, row by row
+        cols = max(1, int((xmax - xmin) // gap))
+        pts = [np.array([xmin + radius + (i % cols) * gap, ymin + radius + (i // cols) * gap]) for i in range(n)]
+    return np.array(pts)
+
+
+class Fleet:
+    """A seeded swarm of robots in a world, for ``runs`` Monte-Carlo runs at once."""
+
+    def __init__(self, *, world: WorldSpec, robots: int, params: FleetParams | None = None,
+                 runs: int = 1, seed: int = 0, first_run: int = 0) -> None:
+        if robots < 1 or runs < 1:
+            raise ValueError("robots and runs must be >= 1")
+        self.world, self.params = world, params or FleetParams()
+        self.runs, self.first_run, self._robots = runs, first_run, robots
+        self.reset(seed)
+
+    # ------------------------------------------------------------------ setup
+    @property
+    def dt(self) -> float:
+        return self.params.dt
+
+    @property
+    def t(self) -> float:
+        return self.state.k * self.dt
+
+    @property
+    def robots(self) -> int:
+        return self.state.x.shape[1]
+
+    @property
+    def source(self) -> np.ndarray:
+        return np.asarray(self.world.source, dtype=float)
+
+    def reset(self, seed: int | None = None) -> None:
+        if seed is not None:
+            self.seed = int(seed)
+        children = range(self.first_run, self.first_run + self.runs)
+        self.rngs = [np.random.Generator(np.random.PCG64(np.random.SeedSequence(self.seed, spawn_key=(i,)))) for i in children]
+        p = self.params
+        x = np.stack([spawn_positions(g, self.world.start_box, self._robots, p.robot_radius, p.spawn_gap) for g in self.rngs])
+        body = "dynamic" if p.motion == "physics" else "kinematic"
+        self.spaces = [RunSpace(self.world, x[r], p.robot_radius, body_type=body) for r in range(self.runs)]
+        self.motion = Physics(p.drive, p.v_max, p.a_max) if p.motion == "physics" else Kinematic(p.drive, p.v_max)
+        heading = np.zeros(x.shape[:2])
+        f = self.cost(x)
+        R, N = f.shape
+        best = np.argmin(f, axis=1)
+        self.state = FleetState(
+            x=x, heading=heading, u=np.zeros_like(x), cmd=np.zeros_like(x), y=x.copy(), f_y=f.copy(),
+            yg=x[np.arange(R), best], f_yg=f[np.arange(R), best], f=f, status=np.zeros((R, N), np.int8),
+        )
+
+    def cost(self, x: np.ndarray) -> np.ndarray:
+        """Distance to the source, the cost of Algorithms 1 and 2."""
+        return np.linalg.norm(x - self.source, axis=-1)
+
+    def set_world(self, world: WorldSpec) -> None:
+        """Replace the static obstacles of every run at once (robots keep their state)."""
+        self.world = world
+        p, s = self.params, self.state
+        body = "dynamic" if p.motion == "physics" else "kinematic"
+        self.spaces = [RunSpace(world, s.x[r], p.robot_radius, body_type=body) for r in range(self.runs)]
+        if p.motion == "physics":
+            self.motion = Physics(p.drive, p.v_max, p.a_max)
+            for r, sp in enumerate(self.spaces):
+                for i, b in enumerate(sp.robot_bodies):
+                    b.angle = float(s.heading[r, i])
+                    if s.status[r, i] != ACTIVE:
+                        Physics._disable(sp, i)
+
+    # ------------------------------------------------------------------ tick
+    def _draw(self, shape: tuple[int, ...]) -> np.ndarray:
+        """U(0,1) draws of shape (n, R, N, …), one generator per run."""
+        return np.stack([g.random((shape[0],) + shape[2:]) for g in self.rngs], axis=1)
+
+    def _update_bests(self) -> None:
+        s = self.state
+        active = s.status == ACTIVE
+        s.f = self.cost(s.x)
+        better = active & (s.f < s.f_y)  # disabled robots keep their last best (spec §20 item 20)
+        s.y = np.where(better[..., None], s.x, s.y)
+        s.f_y = np.where(better, s.f, s.f_y)
+        idx = np.argmin(s.f_y, axis=1)
+        runs = np.arange(self.runs)
+        s.yg, s.f_yg = s.y[runs, idx], s.f_y[runs, idx]
+
+    def _coefficients(self, gap: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        p, shape = self.params, gap.shape[:2]
+        if p.law == "nonomni":
+            if p.dvc:
+                wm = w_max(p.v_max, p.dt, p.rotational_energy, p.robot_radius)
+                return dvc_nonomni(gap, alpha=p.alpha, beta=p.beta, dt=p.dt, sensing_range=p.sensing_range,
+                                   w_max=wm, c1_share=p.c1_share, v_max=p.v_max)
+            c = np.asarray((tuple(p.c) + (0.0,) * 5)[:5], dtype=float)
+        elif p.law in ("rpso", "adapted-rpso") and p.dvc:
+            return dvc_omni(gap, alpha=p.alpha, beta=p.beta, dt=p.dt, c1_share=p.c1_share)
+        else:
+            n = 2 if p.law == "robot-centred" else 3
+            c = np.asarray((tuple(p.c) + (0.0,) * 3)[:n], dtype=float)
+        return np.full(shape, p.omega), np.broadcast_to(c.reshape((-1, 1, 1)), (c.size,) + shape).copy()
+
+    def _draws(self) -> np.ndarray:
+        """This tick's U(0,1) draws for every robot, drawn once so the update order does not
+        change the random stream."""
+        shape = self.state.x.shape
+        n = {"rpso": 3, "adapted-rpso": 3, "nonomni": 5, "robot-centred": 2}[self.params.law]
+        return self._draw((n,) + (shape[:2] if self.params.law == "nonomni" else shape))
+
+    def _velocity(self, omega: np.ndarray, c: np.ndarray, force: np.ndarray, r: np.ndarray) -> np.ndarray:
+        p, s = self.params, self.state
+        g_p, g_g = s.y - s.x, s.yg[:, None, :] - s.x
+        if p.law == "rpso":  # [4.2], clipped to the top speed (spec §20 item 18)
+            return rpso_velocity(s.cmd, g_p, g_g, force, c, omega, r, v_max=p.v_max)
+        if p.law == "adapted-rpso":  # [4.5]
+            return adapted_rpso_velocity(s.cmd, g_p, g_g, force, c, omega, r)
+        y_t, yg_t = to_body(g_p, s.heading), to_body(g_g, s.heading)
+        if p.law == "nonomni":  # [5.13]
+            vw = nonomni_velocity(s.cmd, y_t, yg_t, c, omega, r)
+        else:  # robot-centred Generalised Adapted PSO [5.4], same c_n for v and w
+            cc = np.repeat(c[..., None], 2, axis=-1)
+            vw = robot_centred_velocity(s.cmd, np.stack([y_t, yg_t]), cc, omega[..., None], r)
+        v, w = energy_limit(vw[..., 0], vw[..., 1], p.v_max, p.rotational_energy, p.robot_radius)  # §14
+        w = min_turning_radius(v, w, p.r_min)  # §5.4
+        return np.stack([v, w], axis=-1)
+
+    def _guard(self, cmd: np.ndarray, reading: SectorReading, gap: np.ndarray) -> np.ndarray:
+        p = self.params
+        if p.body_frame:
+            return np.stack([forward_guard(cmd[..., 0], gap, alpha=p.alpha, dt=p.dt), cmd[..., 1]], axis=-1)
+        return approach_guard(cmd, self.state.x, reading.point, gap, alpha=p.alpha, dt=p.dt)
+
+    def _groups(self, active: np.ndarray) -> list[np.ndarray]:
+        """Which robots decide and move together. ``sequential`` (Algorithms 1–2 as written:
+        a loop over robots, each sensing the ones already moved) gives one group per robot
+        index, vectorised over runs; ``simultaneous`` and physics move everyone at once."""
+        if self.params.update == "simultaneous" or self.params.motion == "physics":
+            return [active]
+        groups = []
+        for i in range(active.shape[1]):
+            m = np.zeros_like(active)
+            m[:, i] = active[:, i]
+            groups.append(m)
+        return groups
+
+    def step(self) -> FleetInfo:
+        p, s = self.params, self.state
+        self._update_bests()  # phase A, all robots
+        active = s.status == ACTIVE
+        r = self._draws()
+        n = r.shape[0]
+        R, N = active.shape
+        omega_all, c_all = np.full((R, N), np.nan), np.zeros((n, R, N))
+        force_all = np.zeros_like(s.x)
+        gap_all = np.full((R, N, 6), p.sensing_range)
+        reading = None
+        for group in self._groups(active):  # phase B
+            m = group & (s.status == ACTIVE)
+            if not m.any():
+                continue
+            reading = sense(self.spaces, s.x, s.heading, sensing_range=p.sensing_range,
+                            robot_frame=p.body_frame, active=m)
+            gap = reading.gap
+            if p.s_min > 0:  # §5.4: keep a clearance s_min by treating it as contact distance
+                gap = np.maximum(gap - p.s_min, 0.0)
+            omega, c = self._coefficients(gap)
+            force = virtual_force(s.x, reading, p.gamma) if not p.body_frame else np.zeros_like(s.x)
+            cmd = self._velocity(omega, c, force, r)
+            if p.dvc and p.guard:
+                cmd = self._guard(cmd, reading, gap)
+            cmd = np.where(m[..., None], cmd, 0.0)
+            moved = self.motion.move(self.spaces, s.x, s.heading, cmd, m, p.dt)
+            s.x = np.where(m[..., None], moved.x, s.x)
+            s.heading = np.where(m, moved.heading, s.heading)
+            s.u = np.where(m[..., None], moved.velocity, s.u)
+            s.cmd = np.where(m[..., None], cmd, s.cmd)
+            touching = np.stack([sp.touching(-1e-6) for sp in self.spaces]) & (s.status == ACTIVE)
+            s.status = np.where(moved.hit | touching, COLLIDED, s.status).astype(np.int8)
+            omega_all = np.where(m, omega, omega_all)
+            c_all = np.where(m, c, c_all)
+            force_all = np.where(m[..., None], force, force_all)
+            gap_all = np.where(m[..., None], reading.gap, gap_all)
+        s.cmd[s.status != ACTIVE] = 0.0
+        s.u[s.status != ACTIVE] = 0.0
+        if reading is not None:
+            reading.gap = gap_all
+        s.reading, s.force, s.omega, s.c = reading, force_all, omega_all, c_all
+        s.k += 1
+        return self.info()
+
+    def info(self) -> FleetInfo:
+        s = self.state
+        com = s.x[..., 0].mean(axis=1)  # [4.17]
+        collided = (s.status != ACTIVE).sum(axis=1)
+        layers = np.asarray(self.world.layer_x)
+        passed = (layers[None, :] < com[:, None]).sum(axis=1) if layers.size else np.zeros(self.runs, int)
+        return FleetInfo(
+            t=self.t, com_fitness=com, collided=collided, operational=self.robots - collided,
+            layers_passed=passed, best_fitness=s.f_yg.copy(), max_speed=np.linalg.norm(s.u, axis=-1).max(axis=1),
+        )
