@@ -36,7 +36,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from shoal.engine.runs import run_to_dir
-    from shoal.presets.build import build_simulation
+    from shoal.presets.build import build
     from shoal.presets.io import PresetError, load
 
     overrides = list(args.set or [])
@@ -47,7 +47,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         scenario = load(args.preset, overrides)
     except PresetError as e:
         return _err("bad preset:\n  " + "\n  ".join(e.messages))
-    sim = build_simulation(scenario)
+    sim = build(scenario)
     out = Path(args.out or f"out/{scenario.name}-seed{scenario.sim.seed}")
     meta = {
         "shoal_version": __version__,

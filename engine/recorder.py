@@ -1,17 +1,15 @@
-"""Per-step records of a swarm as table rows (trajectories.csv, metrics.csv)."""
+"""Per-step records of a swarm or fleet as table rows (trajectories.csv, metrics.csv)."""
 
 from __future__ import annotations
 
-from typing import IO
+from typing import IO, Any
 
 import numpy as np
 
-from .sim import StepInfo, SwarmState
+from .sim import SwarmState
 
 TRAJECTORY_COLUMNS = ("run", "step", "t", "robot", "x", "y", "heading", "vx", "vy", "status")
-METRIC_COLUMNS = ("run", "step", "t", "best_fitness", "max_speed", "mean_speed", "max_component", "omega", "c_hat")
 _TRAJ_FMT = ["%d", "%d", "%.6f", "%d", "%.9g", "%.9g", "%.9g", "%.9g", "%.9g", "%d"]
-_METRIC_FMT = ["%d", "%d", "%.6f", "%.9g", "%.9g", "%.9g", "%.9g", "%.9g", "%.9g"]
 
 
 def _component(a: np.ndarray, j: int) -> np.ndarray:
@@ -24,7 +22,7 @@ def _per_run(value: np.ndarray | float, R: int) -> np.ndarray:
     return np.full(R, float(v)) if v.ndim == 0 else v.reshape(R, -1).mean(axis=1)
 
 
-def trajectory_rows(state: SwarmState, t: float) -> np.ndarray:
+def trajectory_rows(state: SwarmState | Any, t: float) -> np.ndarray:
     """One row per (run, robot) at the state's step, columns :data:`TRAJECTORY_COLUMNS`
     (a 3rd dimension, if any, is appended as ``z, vz``)."""
     R, N, d = state.x.shape
@@ -39,17 +37,29 @@ def trajectory_rows(state: SwarmState, t: float) -> np.ndarray:
     return np.stack([np.asarray(c, dtype=float).ravel() for c in cols], axis=1) + 0.0  # no "-0"
 
 
-def metric_rows(state: SwarmState, info: StepInfo | None, t: float) -> np.ndarray:
-    """One row per run at the state's step, columns :data:`METRIC_COLUMNS`."""
+def metric_table(state: Any, info: Any, t: float) -> dict[str, np.ndarray]:
+    """Per-run metrics at the state's step, one array (R,) per column.
+
+    Common: best fitness and speeds. A Chapter 3 swarm adds the largest component and the
+    coefficients in force; a fleet (``FleetInfo``) adds CoM fitness [4.17], collided and
+    operational counts and layers passed.
+    """
     R = state.x.shape[0]
     speed = np.linalg.norm(state.u, axis=-1)
-    omega = np.nan if info is None else _per_run(info.omega, R)
-    c_hat = np.nan if info is None else _per_run(np.sum(info.c, axis=0), R)
-    cols = [
-        np.arange(R), np.full(R, state.k), np.full(R, t), state.f_yg, speed.max(axis=1), speed.mean(axis=1),
-        np.abs(state.u).max(axis=(1, 2)), np.broadcast_to(omega, (R,)), np.broadcast_to(c_hat, (R,)),
-    ]
-    return np.stack([np.asarray(c, dtype=float) for c in cols], axis=1)
+    cols: dict[str, np.ndarray] = {
+        "run": np.arange(R), "step": np.full(R, state.k), "t": np.full(R, t), "best_fitness": state.f_yg,
+        "max_speed": speed.max(axis=1), "mean_speed": speed.mean(axis=1),
+    }
+    if hasattr(info, "com_fitness"):
+        cols.update(com_fitness=info.com_fitness, collided=info.collided, operational=info.operational,
+                    layers_passed=info.layers_passed)
+    else:
+        cols.update(
+            max_component=np.abs(state.u).max(axis=(1, 2)),
+            omega=np.full(R, np.nan) if info is None else _per_run(info.omega, R),
+            c_hat=np.full(R, np.nan) if info is None else _per_run(np.sum(info.c, axis=0), R),
+        )
+    return cols
 
 
 def trajectory_header(d: int) -> str:
@@ -62,5 +72,12 @@ def write_trajectory(fh: IO[str], rows: np.ndarray) -> None:
     np.savetxt(fh, rows, fmt=fmt, delimiter=",")
 
 
-def write_metrics(fh: IO[str], rows: np.ndarray) -> None:
-    np.savetxt(fh, rows, fmt=_METRIC_FMT, delimiter=",")
+_INT_COLUMNS = {"run", "step", "collided", "operational", "layers_passed"}
+
+
+def write_metrics(fh: IO[str], table: dict[str, np.ndarray], header: bool = False) -> None:
+    if header:
+        fh.write(",".join(table) + "\n")
+    rows = np.stack([np.asarray(v, dtype=float) for v in table.values()], axis=1)
+    fmt = ["%d" if k in _INT_COLUMNS else ("%.6f" if k == "t" else "%.9g") for k in table]
+    np.savetxt(fh, rows, fmt=fmt, delimiter=",")

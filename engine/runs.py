@@ -7,12 +7,13 @@ from pathlib import Path
 from typing import Any, Callable
 
 from .atomic import atomic_output_dir
-from .recorder import METRIC_COLUMNS, metric_rows, trajectory_header, trajectory_rows, write_metrics, write_trajectory
+from .fleet import Fleet
+from .recorder import metric_table, trajectory_header, trajectory_rows, write_metrics, write_trajectory
 from .sim import Simulation
 
 
 def run_to_dir(
-    sim: Simulation,
+    sim: Simulation | Fleet,
     steps: int,
     out: Path | str,
     meta: dict[str, Any],
@@ -25,14 +26,14 @@ def run_to_dir(
         with open(tmp / "trajectories.csv", "w", encoding="utf-8", newline="") as traj, open(
             tmp / "metrics.csv", "w", encoding="utf-8", newline=""
         ) as metrics:
-            traj.write(trajectory_header(sim.d) + "\n")
-            metrics.write(",".join(METRIC_COLUMNS) + "\n")
+            traj.write(trajectory_header(sim.state.x.shape[-1]) + "\n")
             write_trajectory(traj, trajectory_rows(sim.state, sim.t))
-            write_metrics(metrics, metric_rows(sim.state, None, sim.t))
+            first = sim.info() if isinstance(sim, Fleet) else None
+            write_metrics(metrics, metric_table(sim.state, first, sim.t), header=True)
             for k in range(steps):
                 info = sim.step()
                 write_trajectory(traj, trajectory_rows(sim.state, sim.t))
-                write_metrics(metrics, metric_rows(sim.state, info, sim.t))
+                write_metrics(metrics, metric_table(sim.state, info, sim.t))
                 if on_step is not None:
                     on_step(k)
     return Path(out)

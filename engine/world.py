@@ -252,11 +252,13 @@ def _arena(size: float, start_size: float = 6.0) -> tuple[Box, Box, tuple[float,
     return (-h, -h, h, h), start, (size / 4, size / 8)
 
 
-def empty_arena(size: float = 40.0, wall_radius: float = 0.1) -> WorldSpec:
+def empty_arena(size: float = 40.0, wall_radius: float = 0.1, start_size: float = 6.0) -> WorldSpec:
     """A square arena with walls only; start box on the left, source off-centre."""
     if size <= 12.0:
         raise ValueError("size: must be > 12 m")
-    bounds, start, source = _arena(size)
+    if not 1.0 < start_size < size / 2:
+        raise ValueError("start_size: must be in (1, size/2)")
+    bounds, start, source = _arena(size, start_size)
     return WorldSpec("empty", np.zeros((0, 3)), (), box_walls(bounds), wall_radius, start, source, np.zeros(0), bounds)
 
 
@@ -269,6 +271,7 @@ def forest(
     source_clear: float = 3.0,
     wall_radius: float = 0.1,
     max_tries: int = 20000,
+    start_size: float = 6.0,
 ) -> WorldSpec:
     """Random non-overlapping circles ("trees") in the square arena of ``empty_arena``.
 
@@ -283,8 +286,10 @@ def forest(
         raise ValueError("density: must be in (0, 1)")
     if not 0 < radius[0] <= radius[1]:
         raise ValueError("radius: need 0 < min <= max")
+    if not 1.0 < start_size < size / 2:
+        raise ValueError("start_size: must be in (1, size/2)")
     rng = _rng(seed)
-    bounds, start, source = _arena(size)
+    bounds, start, source = _arena(size, start_size)
     h = size / 2
     target = density * size * size
     sx0, sy0, sx1, sy1 = start

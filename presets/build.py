@@ -5,11 +5,13 @@ from __future__ import annotations
 import numpy as np
 
 from shoal.engine.coeffs import Constant, Physical, Segment
+from shoal.engine.fleet import Fleet, FleetParams
 from shoal.engine.laws import Law
 from shoal.engine.objectives import Objective
 from shoal.engine.sim import Simulation
+from shoal.engine.world import WorldSpec, empty_arena, forest, obstacle_course
 
-from .models import Controller, ObjectiveModel, Scenario
+from .models import Controller, ObjectiveModel, Scenario, WorldModel
 
 
 def policy_for(c: Controller) -> Constant | Physical:
@@ -48,3 +50,38 @@ def build_simulation(
         init_spread=s.init.spread,
         init_speed=s.init.speed,
     )
+
+
+def world_for(w: WorldModel) -> WorldSpec:
+    """The obstacle world of a ``[world]`` section."""
+    if w.kind == "obstacle-course":
+        return obstacle_course(seed=w.seed, layers=w.layers, length=w.length, width=w.width, start_size=w.start_size)
+    if w.kind == "forest":
+        return forest(seed=w.seed, size=w.width, density=w.density, start_size=w.start_size)
+    return empty_arena(size=w.width, start_size=w.start_size)
+
+
+def fleet_params_for(s: Scenario) -> FleetParams:
+    c, r = s.controller, s.robot
+    return FleetParams(
+        law=c.law, dvc=c.mode == "dvc", dt=c.dt, omega=c.omega, c=(c.c1, c.c2, c.c3), alpha=c.alpha, beta=c.beta,
+        gamma=c.gamma, c1_share=c.c1_share, sensing_range=s.sensing.range, robot_radius=r.radius, v_max=r.v_max,
+        a_max=r.a_max, motion=r.motion, drive=r.drive, r_min=c.r_min, s_min=c.s_min,
+        rotational_energy=c.rotational_energy, update=c.update, guard=c.guard, spawn_gap=r.spawn_gap,
+    )
+
+
+def build_fleet(scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0) -> Fleet:
+    """A Chapter 4–5 fleet (needs a ``[world]`` section)."""
+    if scenario.world is None:
+        raise ValueError("this scenario has no [world] section")
+    return Fleet(
+        world=world_for(scenario.world), robots=scenario.sim.robots, params=fleet_params_for(scenario),
+        runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed, first_run=first_run,
+    )
+
+
+def build(scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0) -> Simulation | Fleet:
+    """Whatever the scenario describes: a free-space swarm (Ch. 3) or a fleet in a world (Ch. 4–5)."""
+    make = build_fleet if scenario.world is not None else build_simulation
+    return make(scenario, runs=runs, seed=seed, first_run=first_run)

@@ -64,6 +64,10 @@ class Controller(_Model):
     gamma: Annotated[float, Field(gt=0.0, le=1e3, description="avoidance sensitivity γ [4.4]")] = 1.0
     r_min: Annotated[float, Field(ge=0.0, le=100.0, description="minimum turning radius [m] (0 = off, §5.4)")] = 0.0
     s_min: Annotated[float, Field(ge=0.0, le=100.0, description="minimum obstacle clearance [m] (§5.4)")] = 0.0
+    update: Literal["sequential", "simultaneous"] = Field(
+        "sequential", description="robots sense and move one after another (Algorithms 1–2) or all at once"
+    )
+    guard: bool = Field(False, description="DVC inertia guard (ours): a step never closes more than α·s on a body")
     rotational_energy: Literal["pi", "disc"] = Field(
         "pi", description="[5.12] as printed (π w²/4) or a disc of the robot's radius (R_b² w²/4)"
     )
@@ -112,6 +116,7 @@ class WorldModel(_Model):
     length: Annotated[float, Field(gt=5.0, le=1000.0, description="course length along x [m]")] = 60.0
     width: Annotated[float, Field(gt=5.0, le=1000.0, description="course/arena width [m]")] = 30.0
     density: Annotated[float, Field(gt=0.0, le=0.5, description="forest area fraction")] = 0.05
+    start_size: Annotated[float, Field(gt=1.0, le=100.0, description="side of the start square [m]")] = 6.0
 
 
 class Robot(_Model):
@@ -122,6 +127,7 @@ class Robot(_Model):
     a_max: Annotated[float, Field(gt=0.0, le=1e3, description="actuator acceleration (physics) [m/s²]")] = 10.0
     motion: Literal["kinematic", "physics"] = "kinematic"
     drive: Literal["holonomic", "mecanum", "differential"] = "holonomic"
+    spawn_gap: Annotated[float, Field(ge=0.0, le=10.0, description="free space between robots at the start [m]")] = 0.3
 
 
 class Sensing(_Model):
