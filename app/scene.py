@@ -31,6 +31,7 @@ def camera_height(aspect: float) -> float:
     return CAMERA_HEIGHT * max(1.0, 1.0 / aspect)
 
 ROBOT = (220, 50, 50)
+ROBOT_SIZE = 0.24  # viser point_size: the disc drawn has this radius in view units
 HEADING = (120, 20, 20)
 TRAIL = (80, 120, 255)
 PBEST = (110, 110, 110)
@@ -135,7 +136,7 @@ class ArenaView:
         self.nodes["headings"] = sc.add_line_segments(
             "/world/headings", seg, colors=HEADING, thickness=2.0, thickness_units="screen")
         self.nodes["robots"] = sc.add_point_cloud(
-            "/world/robots", one, colors=ROBOT, point_size=0.24, point_shape="circle",
+            "/world/robots", one, colors=ROBOT, point_size=ROBOT_SIZE, point_shape="circle",
             precision="float32", point_shading="flat")
         self.nodes["gbest"] = sc.add_point_cloud(
             "/world/gbest", one, colors=GBEST, point_size=0.4, point_shape="diamond",

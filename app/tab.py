@@ -42,6 +42,7 @@ class TabApp:
         self.panels = Panels(gui, session, self.notify, self.send_file)
         self.arena = ArenaView(scene)
         self._acc = 0.0
+        self._was_playing = False
         self._last: float | None = None
         self._next_scene = 0.0
         self._next_plot = 0.0
@@ -73,7 +74,8 @@ class TabApp:
         elapsed = 0.0 if self._last is None else max(0.0, now - self._last)
         self._last = now
         if s.playing:
-            self._acc += elapsed * s.scenario.view.steps_per_second
+            if self._was_playing:  # time before Play was pressed does not count
+                self._acc += elapsed * s.scenario.view.steps_per_second
             n = int(self._acc)
             self._acc -= n
             if n:
@@ -81,6 +83,7 @@ class TabApp:
             self._acc = min(self._acc, 1.0)
         else:
             self._acc = 0.0
+        self._was_playing = s.playing
         if s.scene_revision != self.arena.built_revision:
             with self._atomic():
                 self.arena.rebuild(s.scenario, s.scene_revision)

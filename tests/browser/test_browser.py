@@ -1,0 +1,227 @@
+"""The browser app in a real headless Chromium (Debian's ``chromium``, driven by playwright).
+
+One server and one page for the module; the tests run in file order and each one leaves
+the page usable for the next. The Python side is checked through ``server.sessions``.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import re
+import shutil
+import time
+
+import numpy as np
+import pytest
+
+CHROMIUM = shutil.which("chromium")
+pytestmark = [
+    pytest.mark.browser,
+    pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not on PATH (apt-get install chromium)"),
+]
+
+sync_api = pytest.importorskip("playwright.sync_api")
+
+from shoal.app.scene import ROBOT, ROBOT_SIZE, VIEW_HALF  # noqa: E402
+from shoal.app.server import start_server  # noqa: E402
+
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+VIEWPORT = {"width": 1280, "height": 800}
+
+
+def wait_until(cond, timeout: float = 15.0, what: str = "condition"):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        value = cond()
+        if value:
+            return value
+        time.sleep(0.05)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+@pytest.fixture(scope="module")
+def server():
+    srv = start_server("default", port=0)
+    yield srv
+    srv.stop()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        yield b
+        b.close()
+
+
+@pytest.fixture(scope="module")
+def page(browser, server):
+    context = browser.new_context(accept_downloads=True, viewport=VIEWPORT)
+    pg = context.new_page()
+    pg.goto(f"http://127.0.0.1:{server.port}/")
+    pg.wait_for_selector("label:has-text('robots')", timeout=30000)
+    yield pg
+    context.close()
+
+
+@pytest.fixture(scope="module")
+def client_id(server, page):
+    wait_until(lambda: len(server.sessions) == 1, what="the tab's session")
+    return next(iter(server.sessions))
+
+
+def root_for(page, label: str):
+    """The visible input element viser labels exactly ``label`` (``<label for=id>``)."""
+    exact = re.compile(rf"^\s*{re.escape(label)}\s*$")
+    fid = page.locator("label").filter(has_text=exact).first.get_attribute("for")
+    return page.locator(f'[id="{fid}"]')
+
+
+def number_box(page, label: str):
+    """The number box beside a slider."""
+    return root_for(page, label).locator("xpath=..").locator(".mantine-NumberInput-input")
+
+
+def choose(page, label: str, option: str) -> None:
+    root_for(page, label).click()
+    page.get_by_role("option", name=option, exact=True).click()
+
+
+def dismiss_toasts(page) -> None:
+    closes = page.locator(".mantine-Notification-root button")
+    for i in range(closes.count()):
+        try:
+            closes.nth(i).click(timeout=1000)
+        except Exception:
+            pass
+
+
+# ---------------------------------------------------------------------------- (a) load
+def test_page_loads_with_its_own_session(server, page, client_id):
+    for text in ("law", "Δt [s]", "robots", "speed [steps/s]", "seed"):
+        assert page.locator("label", has_text=text).count() >= 1, text
+    for tab in ("Controller", "Plots", "Export", "Notes"):
+        assert page.get_by_role("tab", name=tab).count() == 1
+    session = server.sessions[client_id]
+    assert session.scenario.name == "default"
+    k0 = session.sim.state.k
+    wait_until(lambda: session.sim.state.k > k0, what="the swarm to play")  # playing on arrival
+
+
+# ---------------------------------------------------------------------------- (b) slider
+def test_typing_omega_in_the_browser_changes_the_engine(server, page, client_id):
+    session = server.sessions[client_id]
+    page.get_by_role("tab", name="Controller").click()
+    choose(page, "mode", "raw")
+    wait_until(lambda: session.scenario.controller.mode == "raw", what="raw mode")
+    box = number_box(page, "omega ω")
+    box.fill("0.77")
+    box.press("Enter")
+    wait_until(lambda: getattr(session.sim.policy, "omega", None) == pytest.approx(0.77), what="ω = 0.77")
+    assert session.scenario.controller.omega == pytest.approx(0.77)
+
+    # An Adapted law refuses ω ≥ 1: red toast, engine and box keep 0.77.
+    box.fill("1.1")
+    box.press("Enter")
+    page.wait_for_selector(".mantine-Notification-root:has-text('Refused')", timeout=10000)
+    assert session.sim.policy.omega == pytest.approx(0.77)
+    wait_until(lambda: box.input_value() == "0.77", what="the box to show 0.77 again")
+    dismiss_toasts(page)
+
+
+# ---------------------------------------------------------------------------- (c) picture
+def _canvas_box(page):
+    boxes = [b for b in (c.bounding_box() for c in page.locator("canvas").all()) if b]
+    return max(boxes, key=lambda b: b["width"] * b["height"])
+
+
+def test_the_picture_shows_the_robots_where_the_engine_has_them(server, page, client_id):
+    from PIL import Image
+
+    session = server.sessions[client_id]
+    page.get_by_role("button", name="Pause", exact=True).click()
+    wait_until(lambda: not session.playing, what="pause")
+    dismiss_toasts(page)
+    time.sleep(1.5)  # last frame drawn and rendered
+    x = session.sim.state.x[0].copy()
+    box = _canvas_box(page)
+    png = page.screenshot(clip=box)
+    img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+    h, w, _ = img.shape
+
+    # Project with the tab's real camera: straight down, vertical field of view ``fov``.
+    client = server.viser.get_clients()[client_id]
+    z = float(client.camera.position[2])
+    half_view = z * math.tan(client.camera.fov / 2)  # view units from centre to top edge
+    px_per_unit = (h / 2) / half_view
+    scale = VIEW_HALF / session.scenario.arena.half_size
+    cols = w / 2 + x[:, 0] * scale * px_per_unit
+    rows = h / 2 - x[:, 1] * scale * px_per_unit
+
+    red = (np.abs(img[..., 0] - ROBOT[0]) < 45) & (img[..., 1] < 110) & (img[..., 2] < 110)
+    assert red.any(), "no robot-coloured pixel at all"
+    hits = 0
+    for r, c in zip(rows, cols):
+        r0, c0 = int(round(r)), int(round(c))
+        window = red[max(r0 - 3, 0): r0 + 4, max(c0 - 3, 0): c0 + 4]
+        hits += bool(window.any())
+    assert hits >= 0.9 * len(x), f"only {hits}/{len(x)} robots seen where the engine has them"
+    # ...and every robot-coloured pixel belongs to a robot: none lies further from the nearest
+    # projected robot centre than a robot's radius on screen (plus anti-aliasing).
+    ys, xs = np.nonzero(red)
+    keep = ~((ys > h - 90) & (xs < 90))  # viser's orientation gizmo (red x axis) sits bottom left
+    ys, xs = ys[keep], xs[keep]
+    dist = np.sqrt((ys[:, None] - rows[None, :]) ** 2 + (xs[:, None] - cols[None, :]) ** 2).min(axis=1)
+    radius_px = ROBOT_SIZE * px_per_unit  # viser: point px size = point_size·height/(z·tan(fov/2))
+    assert dist.max() <= radius_px + 4, f"robot colour {dist.max():.1f} px from any robot (radius {radius_px:.1f})"
+
+
+# ---------------------------------------------------------------------------- (d) export
+def test_export_csv_download_matches_the_engine(server, page, client_id):
+    session = server.sessions[client_id]
+    page.get_by_role("button", name="Pause", exact=True).click()
+    wait_until(lambda: not session.playing, what="pause")
+    page.get_by_role("tab", name="Export").click()
+    with page.expect_download(timeout=20000) as dl:
+        page.get_by_role("button", name="Export CSV").click()
+    download = dl.value
+    assert download.suggested_filename.endswith(".csv")
+    with open(download.path(), encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    assert list(rows[0]) == ["run", "step", "t", "robot", "x", "y", "heading", "vx", "vy", "status"]
+    k = session.sim.state.k
+    last = sorted((r for r in rows if int(r["step"]) == k), key=lambda r: int(r["robot"]))
+    assert len(last) == session.sim.robots
+    xy = np.array([[float(r["x"]), float(r["y"])] for r in last])
+    np.testing.assert_allclose(xy, session.sim.state.x[0], rtol=1e-8, atol=1e-8)
+
+
+def test_bad_upload_shows_the_field_and_keeps_the_scene(server, page, client_id):
+    session = server.sessions[client_id]
+    sim, k = session.sim, session.sim.state.k
+    page.get_by_role("tab", name="Export").click()
+    page.locator("input[type=file]").first.set_input_files(
+        {"name": "bad.toml", "mimeType": "application/toml", "buffer": b"[controller]\nomega = 7\n"})
+    page.wait_for_selector(".mantine-Notification-root:has-text('controller.omega')", timeout=10000)
+    assert session.sim is sim and session.sim.state.k == k
+    dismiss_toasts(page)
+
+
+def test_a_second_tab_gets_its_own_session(server, browser, page, client_id):
+    other = browser.new_page(viewport=VIEWPORT)
+    try:
+        other.goto(f"http://127.0.0.1:{server.port}/")
+        other.wait_for_selector("label:has-text('robots')", timeout=30000)
+        wait_until(lambda: len(server.sessions) == 2, what="a second session")
+        second = next(cid for cid in server.sessions if cid != client_id)
+        box = number_box(other, "robots")
+        box.fill("7")
+        box.press("Enter")
+        wait_until(lambda: server.sessions[second].sim.robots == 7, what="7 robots in the second tab")
+        assert server.sessions[client_id].sim.robots == 20
+    finally:
+        other.close()
+    wait_until(lambda: len(server.sessions) == 1, what="the closed tab's session to go")
