@@ -22,12 +22,11 @@ import annotated_types as at
 import numpy as np
 
 from shoal.engine import tuning
-from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from . import plots
-from .session import Session
+from .session import Session, app_presets
 
 Notify = Callable[[str, str, str], None]
 SendFile = Callable[[str, bytes], None]
@@ -141,14 +140,14 @@ class Panels:
         self._local = threading.local()  # per thread: programmatic .value fires callbacks inline
         self.sliders: dict[str, Any] = {}
         self._stability_key: tuple | None = None
+        self._phase_key: tuple | None = None
         self._build()
         self.sync_from_scenario()
 
     # ------------------------------------------------------------------ building
     def _build(self) -> None:
         gui, sc = self.gui, self.session.scenario
-        presets = presets_io.list_presets()
-        names = tuple(presets)
+        names = tuple(app_presets())
         self.preset = gui.add_dropdown(
             "preset", names, initial_value=sc.name if sc.name in names else names[0],
             hint="shipped scenes; switching replaces the whole scene")
@@ -175,17 +174,17 @@ class Panels:
             self._slider(SPECS["view.trail_seconds"])
             self.readout = gui.add_markdown("")
         with tabs.add_tab("Plots"):
-            self.stability_plot = gui.add_plotly(plots.stability_figure(0.5, 1.0, adapted=True), aspect=1.35)
+            self.stability_plot = gui.add_plotly(plots.stability_figure(0.5, 1.0, adapted=True), aspect=1.0)  # plotly: height = aspect·width
             self.particle = gui.add_number("particle", initial_value=0, min=0, max=max(sc.sim.robots - 1, 0),
                                            step=1, hint="which particle the phase plane shows")
             self.dimension = gui.add_dropdown("dimension", self._dims(sc), initial_value="x")
-            self.phase_plot = gui.add_plotly(plots.phase_figure(0.5, 1.0, 0.1), aspect=1.2)
+            self.phase_plot = gui.add_plotly(plots.phase_figure(0.5, 1.0, 0.1), aspect=1.0)
             adapted = sc.controller.law != "standard"
             self.speed_plot = gui.add_uplot(
                 data=plots.speed_data(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0),
                                       adapted=adapted, d=sc.sim.d),
                 series=plots.speed_series_config(adapted), scales=plots.speed_scales(np.zeros(2)),
-                title="highest speed vs time [m/s]", aspect=1.5,
+                title="highest speed vs time [m/s]", aspect=2.0,
             )
             self._speed_adapted = adapted
         with tabs.add_tab("Export"):
@@ -443,7 +442,7 @@ class Panels:
     def refresh_status(self) -> None:
         r = self.session.readout()
         sc = self.session.scenario
-        state = "▶ playing" if self.session.playing else ("■ finished" if self.session.finished else "⏸ paused")
+        state = "▶ playing" if self.session.playing else ("■ finished" if self.session.finished else "paused")
         self.status.content = (
             f"**{sc.name}** · {state} · t = {r['t']:.1f} s · step {int(r['k'])}/{sc.sim.steps} · "
             f"best f = {r['best']:.4g}"
@@ -456,13 +455,19 @@ class Panels:
         adapted = sc.controller.law != "standard"
         omega, c_hat = s.coefficients()
         key = (round(omega, 9), round(c_hat, 9), adapted)
-        if key != self._stability_key:
-            self.stability_plot.figure = plots.stability_figure(omega, c_hat, adapted=adapted)
+        if key != self._stability_key:  # move the point; building a new figure costs ~50 ms
+            self.stability_plot.figure = plots.update_stability_point(
+                self.stability_plot.figure, omega, c_hat, adapted=adapted)
             self._stability_key = key
         robot, dim = s.selected_robot, s.selected_dim
         u, a = s.particle_history(robot, dim)
         label = f"particle {robot}, {self._dims(sc)[min(dim, sc.sim.d - 1)]}"
-        self.phase_plot.figure = plots.phase_figure(omega, c_hat, s.sim.dt, u, a, adapted=adapted, label=label)
+        phase_key = (key, round(s.sim.dt, 12), label)
+        fig = self.phase_plot.figure
+        if phase_key != self._phase_key or not plots.update_phase_points(fig, u, a):
+            fig = plots.phase_figure(omega, c_hat, s.sim.dt, u, a, adapted=adapted, label=label)
+            self._phase_key = phase_key
+        self.phase_plot.figure = fig
         m = s.metric_arrays()
         n = self.PLOT_HISTORY
         cut = {k: v[-n:] for k, v in m.items()}

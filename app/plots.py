@@ -95,18 +95,41 @@ def stability_figure(omega: float, c_hat: float, *, adapted: bool, n: int = 201)
         x=[omega], y=[c_hat], mode="markers", name="current",
         marker=dict(size=13, color=POINT_OK if ok else POINT_BAD, symbol="x", line=dict(width=1, color="white")),
     ))
-    unit = "m/s, Adapted law" if adapted else "no unit, standard law"
-    verdict = "inside" if ok else "OUTSIDE"
-    region = "the Adapted region" if adapted else "the order-2 region"
     fig = _layout(
-        fig, title=f"(ω, ĉ) = ({omega:.3g}, {c_hat:.3g}): {verdict} {region}",
-        x="inertia weight ω", y=f"ĉ = c1 + c2 ({unit})", revision="stability",
-        legend=dict(x=0.01, y=0.99, xanchor="left", yanchor="top", bgcolor="rgba(255,255,255,0.75)",
-                    font=dict(size=10)),
+        fig, title=_stability_title(omega, c_hat, adapted, ok),
+        x="inertia weight ω", y=_stability_ylabel(adapted), revision="stability",
+
     )
     fig.update_xaxes(range=[-1.05, 1.25], autorange=False, zeroline=True)
     fig.update_yaxes(range=[0, top], autorange=False)
     return fig
+
+
+def update_stability_point(fig: go.Figure, omega: float, c_hat: float, *, adapted: bool) -> go.Figure:
+    """Move the live point of a :func:`stability_figure` in place (cheap: no new figure)."""
+    top = max(8.5, 1.15 * float(c_hat) if math.isfinite(c_hat) else 8.5)
+    ok = in_region(omega, c_hat, adapted)
+    with fig.batch_update():
+        for trace in fig.data:
+            if trace.name == "current":
+                trace.x, trace.y = [omega], [c_hat]
+                trace.marker.color = POINT_OK if ok else POINT_BAD
+            elif trace.name.startswith("Adapted"):
+                trace.y = [0, 0, top, top, 0]
+        fig.layout.title.text = _stability_title(omega, c_hat, adapted, ok)
+        fig.layout.yaxis.title.text = _stability_ylabel(adapted)
+        fig.layout.yaxis.range = [0, top]
+    return fig
+
+
+def _stability_title(omega: float, c_hat: float, adapted: bool, ok: bool) -> str:
+    verdict = "inside" if ok else "OUTSIDE"
+    region = "the Adapted region" if adapted else "the order-2 region"
+    return f"(ω, ĉ) = ({omega:.3g}, {c_hat:.3g}): {verdict} {region}"
+
+
+def _stability_ylabel(adapted: bool) -> str:
+    return f"ĉ = c1 + c2 ({'m/s, Adapted law' if adapted else 'no unit, standard law'})"
 
 
 # --------------------------------------------------------------------- (u, a) plane
@@ -184,6 +207,24 @@ def phase_figure(
         title = f"{label} (no bound for ω = {omega:.3g})"
     return _layout(fig, title=title, x="velocity u_j [m/s]", y="acceleration a_j [m/s²]",
                    revision="phase")
+
+
+def update_phase_points(fig: go.Figure, u: np.ndarray, a: np.ndarray) -> bool:
+    """Replace the ``recent``/``now`` points of a :func:`phase_figure` in place, widening the axes
+    if the points leave them. Returns False when the figure has no such traces (rebuild it)."""
+    names = {t.name: t for t in fig.data}
+    if "recent" not in names or "now" not in names or not len(u):
+        return False
+    u, a = np.asarray(u, float), np.asarray(a, float)
+    with fig.batch_update():
+        names["recent"].x, names["recent"].y = u, a
+        names["now"].x, names["now"].y = u[-1:], a[-1:]
+        for axis, values in ((fig.layout.xaxis, u), (fig.layout.yaxis, a)):
+            if axis.range is not None:
+                lim = max(abs(axis.range[1]), 1.1 * float(np.nanmax(np.abs(values))))
+                if lim > axis.range[1]:
+                    axis.range = [-lim, lim]
+    return True
 
 
 # --------------------------------------------------------------------- speed vs time

@@ -119,7 +119,7 @@ class ArenaView:
         if kind != "linear":
             where = source if scenario.sim.d >= 2 else np.array([source[0], 0.0])
             self.nodes["source"] = sc.add_point_cloud(
-                "/world/source", _z(where[None, :], 0.01), colors=SOURCE, point_size=0.45,
+                "/world/source", _z(where[None, :], 0.01), colors=SOURCE, point_size=0.3,
                 point_shape="circle", precision="float32", point_shading="flat",
             )
             self.nodes["source_label"] = sc.add_label(
@@ -173,8 +173,10 @@ class ArenaView:
         return True
 
     def draw(self, snap: Snapshot) -> None:
-        """Push one snapshot into the batched nodes."""
+        """Push one snapshot into the batched nodes (nothing before the first ``rebuild``)."""
         n = self.nodes
+        if "robots" not in n:
+            return
         self.follow(snap.x)
         n["robots"].points = self.view_points(snap.x, 0.02)
         n["pbests"].points = self.view_points(snap.y, 0.005)

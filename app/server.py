@@ -21,7 +21,7 @@ from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .scene import CAMERA_FOV, CAMERA_HEIGHT, camera_height
-from .session import Session
+from .session import Session, check_supported
 from .tab import TabApp
 
 TICK_HZ = 60.0
@@ -176,7 +176,7 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
     Raises :class:`PresetError` for an unknown or invalid preset and :class:`PortInUseError`
     when ``port`` is taken.
     """
-    scenario = presets_io.load(preset)
+    scenario = check_supported(presets_io.load(preset))
     if port and not _port_free(host, port):
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
     server = ShoalServer(scenario, host=host, port=port)

@@ -11,6 +11,7 @@ refuses raises :class:`PresetError` and leaves both the scenario and the swarm u
 from __future__ import annotations
 
 import copy
+import functools
 import io as _io
 import json
 import math
@@ -32,6 +33,33 @@ TRAJECTORY_COLUMNS = ("run", "step", "t", "robot", "x", "y", "heading", "vx", "v
 _CSV_FORMAT = ["%d", "%d", "%.6f", "%d", "%.9g", "%.9g", "%.9g", "%.9g", "%.9g", "%d"]
 
 MAX_UPLOAD_BYTES = 256 * 1024
+
+
+def check_supported(scenario: Scenario) -> Scenario:
+    """The browser app runs the Chapter 3 swarm; refuse scenes it cannot show (yet)."""
+    problems = []
+    if getattr(scenario, "world", None) is not None:
+        problems.append("world: scenes with obstacles (Chapters 4-5) do not run in the browser app yet; "
+                        "use `shoal run` for them")
+    elif scenario.controller.mode not in ("raw", "physical"):
+        problems.append(f"controller.mode: {scenario.controller.mode!r} needs a [world]; the browser app "
+                        "offers 'raw' and 'physical'")
+    if problems:
+        raise PresetError(problems)
+    return scenario
+
+
+@functools.lru_cache(maxsize=1)
+def app_presets() -> dict[str, str]:
+    """Shipped presets the browser app can run, name → one-line description."""
+    out = {}
+    for name, description in presets_io.list_presets().items():
+        try:
+            check_supported(presets_io.load(name))
+        except PresetError:
+            continue
+        out[name] = description
+    return out
 
 
 @dataclass(frozen=True)
@@ -73,6 +101,7 @@ class Session:
     MAX_METRICS = 5000
 
     def __init__(self, scenario: Scenario) -> None:
+        check_supported(scenario)
         self.lock = threading.RLock()
         self.playing = False
         self.revision = 0  # bumps whenever the swarm changes (scene redraw)
@@ -97,7 +126,8 @@ class Session:
         self._record(None)
 
     def load_scenario(self, scenario: Scenario) -> None:
-        """Replace the whole scene (preset switch, upload)."""
+        """Replace the whole scene (preset switch, upload); refuses scenes the app cannot show."""
+        check_supported(scenario)
         with self.lock:
             self._load(scenario)
             self.selected_robot = min(self.selected_robot, scenario.sim.robots - 1)

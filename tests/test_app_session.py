@@ -208,6 +208,16 @@ def test_good_upload_replaces_the_scene(tab):
     assert "landscape" in tab.arena.nodes  # benchmark drawn as a heat map
 
 
+def test_obstacle_scenes_are_refused_until_the_app_draws_them(tab):
+    sim = tab.session.sim
+    text = presets_io.to_toml(presets_io.load("course-dvc")).encode()
+    assert not tab.panels.upload_preset("course.toml", text)
+    assert "world" in _last_message(tab)[1] and tab.session.sim is sim
+    assert "course-dvc" not in tab.panels.preset.options and "default" in tab.panels.preset.options
+    with pytest.raises(PresetError, match="world"):
+        start_server("course-dvc", port=0)
+
+
 def test_preset_dropdown_switches_scene_and_syncs_sliders(tab):
     tab.panels.preset.value = "standard-pso"
     s = tab.session
@@ -379,6 +389,25 @@ def test_stability_figure_draws_the_region_boundaries_and_live_point():
     # the live point is judged against the active law's region
     assert plots.in_region(0.9, 3.0, adapted=True) and not plots.in_region(0.9, 3.0, adapted=False)
     assert not plots.in_region(1.0, 3.0, adapted=True)
+
+
+def test_plots_update_in_place_like_a_fresh_figure():
+    fig = plots.stability_figure(0.5, 1.0, adapted=True)
+    plots.update_stability_point(fig, 1.1, 12.0, adapted=False)
+    fresh = plots.stability_figure(1.1, 12.0, adapted=False)
+    for name in ("current", "Adapted (−1 < ω < 1)"):
+        a = next(t for t in fig.data if t.name == name)
+        b = next(t for t in fresh.data if t.name == name)
+        assert list(a.x) == list(b.x) and list(a.y) == list(b.y) and a.marker.color == b.marker.color
+    assert fig.layout.title.text == fresh.layout.title.text and "OUTSIDE" in fig.layout.title.text
+    assert list(fig.layout.yaxis.range) == list(fresh.layout.yaxis.range)
+
+    phase = plots.phase_figure(0.6, 4.0, 1.0, np.array([1.0]), np.array([1.0]))
+    assert plots.update_phase_points(phase, np.array([1.0, 30.0]), np.array([2.0, -3.0]))
+    now = next(t for t in phase.data if t.name == "now")
+    assert (now.x[0], now.y[0]) == (30.0, -3.0)
+    assert phase.layout.xaxis.range[1] >= 30.0  # the axis widened to show the point
+    assert not plots.update_phase_points(plots.phase_figure(0.6, 4.0, 1.0), np.array([1.0]), np.array([1.0]))
 
 
 def test_phase_figure_matches_fig_3_3_worked_example():
