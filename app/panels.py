@@ -184,7 +184,7 @@ class Panels:
                 data=plots.speed_data(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0),
                                       adapted=adapted, d=sc.sim.d),
                 series=plots.speed_series_config(adapted), scales=plots.speed_scales(np.zeros(2)),
-                title="highest speed vs time [m/s]", aspect=2.0,
+                title="highest speed vs time [m/s]", aspect=2.0, axes=({}, {"size": 76}),
             )
             self._speed_adapted = adapted
         with tabs.add_tab("Export"):
@@ -446,6 +446,7 @@ class Panels:
         self.status.content = (
             f"**{sc.name}** · {state} · t = {r['t']:.1f} s · step {int(r['k'])}/{sc.sim.steps} · "
             f"best f = {r['best']:.4g}"
+            + (f" · {int(r['outside'])} outside the arena" if r["outside"] else "")
         )
 
     def refresh_plots(self) -> None:

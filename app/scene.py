@@ -150,7 +150,9 @@ class ArenaView:
         return _z(np.asarray(world, dtype=float) * self.scale, z)
 
     def follow(self, x: np.ndarray) -> bool:
-        """Shift the view when robots leave the arena square; returns True if it moved."""
+        """Shift the view when the swarm leaves the arena square but would fit in one (a 1-D swarm
+        drifting along x); a swarm spread wider than the arena keeps the home view. Returns True
+        if the view moved."""
         if x.size == 0:
             return False
         xy = _z(x)[:, :2].astype(float)
@@ -160,8 +162,8 @@ class ArenaView:
         def within(centre: np.ndarray) -> bool:
             return bool(np.all(lo >= centre - half) and np.all(hi <= centre + half))
 
-        if within(np.zeros(2)):
-            target = np.zeros(2)  # back in the arena: the home view
+        if within(np.zeros(2)) or np.any(hi - lo > 2 * half):
+            target = np.zeros(2)  # in the arena, or too spread to frame (a diverging swarm): home view
         elif within(self.offset):
             return False  # still in the shifted view
         else:

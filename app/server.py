@@ -188,15 +188,15 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
 
 def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080) -> None:
     """Run the browser app until Ctrl-C (``shoal serve``). Exits with a message if the port is taken."""
-    if not is_loopback(host):
-        print(f"warning: serving on {host}: anyone who can reach this machine on port {port} "
-              "can open and drive the app", file=sys.stderr)
     try:
         server = start_server(preset, host, port)
     except PortInUseError as err:
         raise SystemExit(f"shoal serve: {err}") from None
     except PresetError as err:
         raise SystemExit("shoal serve: bad preset:\n" + "\n".join(err.messages)) from None
+    if not is_loopback(host):
+        print(f"warning: serving on {host}: anyone who can reach this machine on port {server.port} "
+              "can open and drive the app", file=sys.stderr)
     print(f"Shoal is running at {server.url}  (Ctrl-C to stop)", flush=True)
     try:
         while True:

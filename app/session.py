@@ -286,7 +286,14 @@ class Session:
                 "omega": omega, "c_hat": c_hat, "beta": (1.0 - omega) if bounded else math.nan,
                 "U": U_j * math.sqrt(d), "U_j": U_j, "A_plus": A_plus, "A_minus": 2 * A_plus,
                 "t": self.clock(), "k": float(self.sim.state.k), "best": float(self.sim.state.f_yg[0]),
+                "outside": float(self.outside_arena()),
             }
+
+    def outside_arena(self) -> int:
+        """How many robots are outside the arena square (a diverging swarm leaves the picture)."""
+        with self.lock:
+            x = self.sim.state.x[0, :, :2]
+            return int(np.sum(np.any(np.abs(x) > self.scenario.arena.half_size, axis=-1)))
 
     def snapshot(self, max_trails: int = 200, max_trail_points: int = 40) -> Snapshot:
         """What the arena draws now: positions, bests and trails of the last ``view.trail_seconds``."""

@@ -367,6 +367,17 @@ def test_one_dimensional_preset_draws_on_the_x_axis_and_follows(tab):
     tab.panels.refresh_plots()  # plots for d = 1 do not fail either
 
 
+def test_a_diverging_swarm_keeps_the_home_view_and_is_reported(tab):
+    tab.panels.preset.value = "standard-pso"
+    tab.panels.sliders["controller.omega"].value = 1.1  # standard PSO outside its stable regions
+    s = tab.session
+    s.step(250)
+    tab.tick(70.0)
+    assert s.outside_arena() > 0
+    assert np.all(tab.arena.offset == 0)  # too spread to follow: the arena stays in view
+    assert "outside the arena" in tab.panels.status.content
+
+
 def test_landscape_image_is_oriented_with_plus_y_up():
     img = landscape_rgb(Objective(name="sphere", source=np.array([5.0, 5.0]), scale=1.0), half_size=10.0, n=41)
     brightness = img.astype(float).sum(axis=-1)
