@@ -3,7 +3,7 @@ receiver, vectorised over runs × robots × hydrophones.
 
 Run: python benchmarks/bench_acoustics.py
 Prints the best and median wall time per step (ms) and per robot-step (µs) for a few
-batch sizes and bands. The machine may be shared: read the best time as the cost and the
+batch sizes and bands, and the same for the APPROXIMATE surrogate mode. The machine may be shared: read the best time as the cost and the
 median as what a busy machine gives.
 """
 
@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 
+from shoal.engine.acoustic_surrogate import surrogate
 from shoal.engine.band import Band
 from shoal.engine.receiver import bearing
 from shoal.engine.signals import hydrophone_positions, synthesise
@@ -40,6 +41,23 @@ def measure(runs: int, robots: int, band: Band, full_lag: bool = False, reps: in
     return float(total.min()), float(np.median(total)), float(synth.min() / total.min())
 
 
+def measure_surrogate(runs: int, robots: int, band: Band, reps: int = 30) -> tuple[float, float]:
+    """(best, median) ms per step of the APPROXIMATE surrogate (intensity + bearing)."""
+    D = band.lam_c / 2
+    rng = np.random.default_rng(0)
+    rngs = [np.random.default_rng([0, i]) for i in range(runs)]
+    o = rng.uniform(-np.pi, np.pi, (runs, robots))
+    pos = hydrophone_positions(rng.uniform(-50, 50, (runs, robots, 2)), o, D)
+    src = rng.uniform(-400, 400, (runs, 2))
+    times = []
+    for _ in range(reps + 1):
+        t0 = time.perf_counter()
+        surrogate(rngs, pos, src, band, 1000.0, heading=o, D=D)
+        times.append(time.perf_counter() - t0)
+    times = np.array(times[1:]) * 1e3
+    return float(times.min()), float(np.median(times))
+
+
 def main() -> None:
     cases = [
         ("default Q=1.5 TBP=100", 100, 10, Band(), False),
@@ -54,6 +72,9 @@ def main() -> None:
         best, med, share = measure(runs, robots, band, full, reps=10 if full or runs > 100 else 30)
         per = best * 1e3 / (runs * robots)
         print(f"{name:<24} {runs:>5} {robots:>6} {band.K:>4} {best:>8.2f} {med:>9.2f} {per:>13.2f} {100 * share:>7.0f}")
+    for runs in (100, 1000):
+        best, med = measure_surrogate(runs, 10, Band())
+        print(f"{'surrogate (approximate)':<24} {runs:>5} {10:>6} {Band().K:>4} {best:>8.2f} {med:>9.2f} {best * 1e3 / (runs * 10):>13.2f} {'-':>7}")
 
 
 if __name__ == "__main__":

@@ -242,3 +242,58 @@ def test_batched_bearing_equals_runs_alone():
         alone = bearing(synthesise([np.random.default_rng([4, i])], pos[i : i + 1], src[i : i + 1], b, 1000.0), b, D, o[i : i + 1])
         for name in ("tau", "rho", "alpha", "rays", "corr"):
             assert np.allclose(getattr(batch, name)[i], getattr(alone, name)[0], rtol=1e-12, atol=1e-12), name
+
+
+# --- approximate surrogate mode, validated against the waveform mode -----------------------
+
+
+def _both_modes(Q: float, d_over_lam: float, snr_db: float, degs, runs: int = 200):
+    from shoal.engine.acoustic_surrogate import surrogate
+
+    b = Band(Q=Q)
+    D = d_over_lam * b.lam_c
+    rel = np.radians(np.repeat(degs, runs))
+    n = rel.size
+    o = np.zeros((n, 1))
+    dist = 300.0
+    src = dist * np.stack([np.cos(rel), np.sin(rel)], -1)
+    pos = hydrophone_positions(np.zeros((n, 1, 2)), o, D)
+    rr = dist * 10 ** (snr_db / 20)
+    sp = synthesise(_rngs(n, 1), pos, src, b, rr)
+    wave = (intensity(sp), bearing(sp, b, D, o))
+    s = surrogate(_rngs(n, 2), pos, src, b, rr, heading=o, D=D)
+    return rel, wave, (s.intensity, s.bearing)
+
+
+@pytest.mark.parametrize("Q,d_over_lam,snr", [(1.5, 0.5, 10.0), (1.5, 0.5, 0.0), (20.0, 2.0, 3.0), (20.0, 0.5, 3.0)])
+def test_surrogate_statistics_match_waveform_mode(Q, d_over_lam, snr):
+    rel, (wi, wb), (si, sb) = _both_modes(Q, d_over_lam, snr, [60.0, 90.0, 120.0])
+    assert si.mean() == pytest.approx(wi.mean(), rel=0.03)
+    assert si.std() == pytest.approx(wi.std(), rel=0.15)
+    assert sb.rho.mean() == pytest.approx(wb.rho.mean(), rel=0.05)
+    assert sb.rho.std() == pytest.approx(wb.rho.std(), rel=0.2)
+    werr, serr = wb.alpha[:, 0] - np.abs(rel), sb.alpha[:, 0] - np.abs(rel)
+    assert np.std(serr) == pytest.approx(np.std(werr), rel=0.3)
+    wrong_w, wrong_s = np.mean(np.abs(werr) > np.radians(10)), np.mean(np.abs(serr) > np.radians(10))
+    assert abs(wrong_s - wrong_w) < 0.08
+
+
+def test_surrogate_is_finite_batch_independent_and_single_hydrophone_aware():
+    from shoal.engine.acoustic_surrogate import surrogate
+
+    b = Band()
+    D = b.lam_c / 2
+    x = np.array([[[0.0, 0.0], [10.0, 0.0]], [[3.0, 4.0], [-50.0, 20.0]]])
+    o = np.zeros((2, 2))
+    pos = hydrophone_positions(x, o, D)
+    src = np.stack([pos[0, 0, 0], x[1, 1]])  # on a hydrophone; under a robot
+    batch = surrogate(_rngs(2, 6), pos, src, b, 1000.0, heading=o, D=D)
+    for v in (batch.intensity, batch.bearing.tau, batch.bearing.rho, batch.bearing.alpha, batch.bearing.rays):
+        assert np.all(np.isfinite(v))
+    alone = surrogate([np.random.default_rng([6, 1])], pos[1:], src[1:], b, 1000.0, heading=o[1:], D=D)
+    assert np.array_equal(batch.intensity[1], alone.intensity[0])
+    assert np.allclose(batch.bearing.alpha[1], alone.bearing.alpha[0], rtol=1e-12, atol=1e-12)
+    quiet = surrogate(_rngs(2), pos, src, b, 0.0, heading=o, D=D)
+    assert np.all(np.isfinite(quiet.bearing.alpha)) and np.all(np.isfinite(quiet.intensity))
+    single = surrogate(_rngs(2), hydrophone_positions(x, o), src, b, 1000.0)
+    assert single.bearing is None and single.intensity.shape == (2, 2, 1)
