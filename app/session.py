@@ -295,7 +295,7 @@ class Session:
             x = self.sim.state.x[0, :, :2]
             return int(np.sum(np.any(np.abs(x) > self.scenario.arena.half_size, axis=-1)))
 
-    def snapshot(self, max_trails: int = 200, max_trail_points: int = 40) -> Snapshot:
+    def snapshot(self, max_trails: int = 80, max_trail_points: int = 40) -> Snapshot:
         """What the arena draws now: positions, bests and trails of the last ``view.trail_seconds``."""
         with self.lock:
             s = self.sim.state
@@ -303,8 +303,10 @@ class Session:
             horizon = self.scenario.view.trail_seconds
             recent = [f for f in self.frames if f.t >= t_now - horizon - 1e-9]
             if len(recent) > max_trail_points:
-                idx = np.linspace(0, len(recent) - 1, max_trail_points).round().astype(int)
-                recent = [recent[i] for i in idx]
+                # keep every stride-th step by step number (not by position in the window), so
+                # the kept points stay put from frame to frame instead of shimmering
+                stride = -(-len(recent) // (max_trail_points - 1))
+                recent = [f for f in recent[:-1] if f.k % stride == 0] + recent[-1:]
             if len(recent) >= 2:
                 m = min(min(f.x.shape[0] for f in recent), max_trails)
                 trails = np.stack([f.x[:m] for f in recent], axis=1)
