@@ -40,11 +40,31 @@ class Moved:
     hit: np.ndarray  # (R, N) bool, touched something during this tick
 
 
+def first_contact(sp: RunSpace, start: tuple[float, float], end: tuple[float, float], i: int) -> float | None:
+    """Fraction of the way from ``start`` to ``end`` at which robot ``i``'s disc first
+    touches another body of ``sp`` (None: a free path).
+
+    ``Space.segment_query_first`` with a radius is not used: its broad phase tests the bare
+    centre line against the bounding boxes, so it misses a body that the disc grazes while
+    the line passes beside its box. Candidates come from a bounding-box query of the whole
+    swept disc instead, and each is tested exactly with ``Shape.segment_query``.
+    """
+    rad = sp.robot_radius
+    bb = pymunk.BB(min(start[0], end[0]) - rad, min(start[1], end[1]) - rad,
+                   max(start[0], end[0]) + rad, max(start[1], end[1]) + rad)
+    best = None
+    for shape in sp.space.bb_query(bb, sp.filters[i]):
+        q = shape.segment_query(start, end, rad)
+        if q is not None and (best is None or q.alpha < best):
+            best = q.alpha
+    return best
+
+
 class Kinematic:
     """Exact position update ([3.10]/[4.6], or the arc [5.5]–[5.10] for differential drive).
 
     Contacts: each robot's path is swept as a disc against the world and the other
-    robots' previous positions (pymunk ``segment_query_first``), and stops at the first
+    robots' previous positions (:func:`first_contact`), and stops at the first
     contact; robots that overlap after the move are also disabled.
     """
 
@@ -70,9 +90,9 @@ class Kinematic:
                 start, end = tuple(x[r, i]), tuple(target[r, i])
                 if start == end:
                     continue
-                q = sp.space.segment_query_first(start, end, sp.robot_radius, sp.filters[i])
-                if q is not None:  # stop where the swept disc first touches
-                    new_x[r, i] = x[r, i] + max(q.alpha - 1e-6, 0.0) * (target[r, i] - x[r, i])
+                alpha = first_contact(sp, start, end, i)
+                if alpha is not None:  # stop where the swept disc first touches
+                    new_x[r, i] = x[r, i] + max(alpha - 1e-6, 0.0) * (target[r, i] - x[r, i])
                     hit[r, i] = True
             sp.set_positions(new_x[r])
             hit[r] |= active[r] & sp.touching(-1e-6)
