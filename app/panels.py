@@ -174,7 +174,8 @@ class Panels:
             self._slider(SPECS["view.trail_seconds"])
             self.readout = gui.add_markdown("")
         with tabs.add_tab("Plots"):
-            self.stability_plot = gui.add_plotly(plots.stability_figure(0.5, 1.0, adapted=True), aspect=1.0)  # plotly: height = aspect·width
+            # (viser's plotly aspect is height/width; uPlot's below is width/height)
+            self.stability_plot = gui.add_plotly(plots.stability_figure(0.5, 1.0, adapted=True), aspect=1.0)
             self.particle = gui.add_number("particle", initial_value=0, min=0, max=max(sc.sim.robots - 1, 0),
                                            step=1, hint="which particle the phase plane shows")
             self.dimension = gui.add_dropdown("dimension", self._dims(sc), initial_value="x")

@@ -353,6 +353,21 @@ def test_changes_from_another_thread_while_ticking(tab):
     assert tab.session.sim.state.x.shape[1] == 10 + 59 % 7
 
 
+def test_phase_plane_follows_the_chosen_particle_and_dimension(tab):
+    s, p = tab.session, tab.panels
+    s.step(30)
+    p.particle.value = 3
+    p.dimension.value = "y"
+    p.refresh_plots()
+    traces = {t.name: t for t in p.phase_plot.figure.data}
+    u_hist = np.array([f.u[3, 1] for f in list(s.frames)[-len(traces["recent"].x):]])
+    a_hist = np.array([f.a[3, 1] for f in list(s.frames)[-len(traces["recent"].y):]])
+    np.testing.assert_allclose(traces["recent"].x, u_hist)
+    np.testing.assert_allclose(traces["recent"].y, a_hist)
+    assert (traces["now"].x[0], traces["now"].y[0]) == (s.sim.state.u[0, 3, 1], s.sim.state.a[0, 3, 1])
+    assert "particle 3, y" in p.phase_plot.figure.layout.title.text
+
+
 # ---------------------------------------------------------------------------- scene
 def test_arena_draws_robots_where_the_engine_has_them(tab):
     s = tab.session
