@@ -8,7 +8,6 @@ figures and checks use the snapshot at whole seconds.
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +18,8 @@ import numpy as np
 from shoal.presets.io import load
 from shoal.presets.models import Scenario
 
+from .output import check, r3, write_csv  # noqa: F401 (used as c3.check etc.)
+from .output import num as _num
 from .runner import BatchResult, Job
 
 SIZES = (10, 100, 1000)
@@ -95,8 +96,6 @@ def limits(scenario: Scenario) -> tuple[list[float], list[float]]:
     return [c.U] + [s.U for s in c.schedule], [c.A_plus] + [s.A_plus for s in c.schedule]
 
 
-def _num(v: float) -> str:
-    return f"{float(v) + 0.0:.12g}"  # + 0.0 turns -0.0 into 0.0
 
 
 def runs_rows(case: Case, size: int, res: BatchResult, scenario: Scenario) -> list[list[str]]:
@@ -152,21 +151,6 @@ def series_rows(case: Case, size: int, s: Series) -> list[list[str]]:
          _num(s.particle[i]), _num(s.U[i]), _num(s.A_plus_dt[i])]
         for i in range(len(s.t))
     ]
-
-
-def write_csv(path: Path, header: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
-    with open(path, "w", encoding="utf-8", newline="") as fh:
-        w = csv.writer(fh, lineterminator="\n")
-        w.writerow(header)
-        w.writerows(rows)
-
-
-def check(name: str, thesis: Any, measured: Any, passed: bool) -> dict[str, Any]:
-    return {"name": name, "thesis": thesis, "measured": measured, "pass": bool(passed)}
-
-
-def r3(v: float) -> float:
-    return round(float(v), 3)
 
 
 # ---------------------------------------------------------------------- figures

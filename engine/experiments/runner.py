@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable, Hashable, Iterable, Sequence
 
 import numpy as np
 
@@ -171,24 +171,34 @@ class Job:
     track: int = 0
 
 
+def simulate_job(job: Job, first_run: int, runs: int) -> BatchResult:
+    """Runs ``first_run … first_run + runs − 1`` of a :class:`Job` (the default ``simulate``)."""
+    scenario = load(job.preset, list(job.overrides))
+    return run_batch(scenario, runs, job.seed, job.steps, first_run=first_run, track=job.track)
+
+
+# simulate(job, first_run, runs) -> result of those runs; merge(results of consecutive chunks) -> one result
+Simulate = Callable[[Any, int, int], Any]
+Merge = Callable[[Sequence[Any]], Any]
+
+
 @dataclass(frozen=True)
 class _Chunk:
-    job: Job
+    job: Any  # anything picklable with ``key`` and ``runs``
     first_run: int
     runs: int
+    simulate: Simulate
 
 
-def _simulate_chunk(chunk: _Chunk) -> tuple[tuple[str, int], BatchResult]:
-    job = chunk.job
-    scenario = load(job.preset, list(job.overrides))
-    return job.key, run_batch(scenario, chunk.runs, job.seed, job.steps, first_run=chunk.first_run, track=job.track)
+def _simulate_chunk(chunk: _Chunk) -> tuple[Hashable, Any]:
+    return chunk.job.key, chunk.simulate(chunk.job, chunk.first_run, chunk.runs)
 
 
-def _chunks(jobs: Iterable[Job], size: int) -> list[_Chunk]:
+def _chunks(jobs: Iterable[Any], size: int, simulate: Simulate) -> list[_Chunk]:
     out = []
     for job in jobs:
         for start in range(0, job.runs, size):
-            out.append(_Chunk(job, start, min(size, job.runs - start)))
+            out.append(_Chunk(job, start, min(size, job.runs - start), simulate))
     return out
 
 
@@ -216,10 +226,15 @@ class _Progress:
 
 
 def run_jobs(
-    jobs: Sequence[Job], *, workers: int = 1, progress: bool = False, chunk: int = 25, desc: str = "runs"
-) -> dict[tuple[str, int], BatchResult]:
+    jobs: Sequence[Any], *, workers: int = 1, progress: bool = False, chunk: int = 25, desc: str = "runs",
+    simulate: Simulate = simulate_job, merge: Merge = concat,
+) -> dict[Hashable, Any]:
     """Simulate every job, split into chunks of at most ``chunk`` runs; with ``workers > 1``
-    the chunks go to a process pool. The results do not depend on ``workers`` or ``chunk``."""
+    the chunks go to a process pool. The results do not depend on ``workers`` or ``chunk``.
+
+    By default a job is a :class:`Job` and its result a :class:`BatchResult`; other kinds
+    of job (e.g. Chapter 4–5 fleets) pass their own module-level, picklable ``simulate``
+    and a ``merge`` that glues chunks of consecutive runs, in any order, into one result."""
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     if len({j.key for j in jobs}) != len(jobs):
@@ -227,8 +242,8 @@ def run_jobs(
     if workers > 1:  # enough chunks to keep every worker busy
         longest = max(j.runs for j in jobs)
         chunk = max(1, min(chunk, math.ceil(longest * len(jobs) / (4 * workers))))
-    chunks = _chunks(jobs, max(1, chunk))
-    parts: dict[tuple[str, int], list[BatchResult]] = {j.key: [] for j in jobs}
+    chunks = _chunks(jobs, max(1, chunk), simulate)
+    parts: dict[Hashable, list[Any]] = {j.key: [] for j in jobs}
     with _Progress(sum(j.runs for j in jobs), progress, desc) as bar:
         if workers == 1:
             for c in chunks:
@@ -247,4 +262,4 @@ def run_jobs(
                     for fut in futures:
                         fut.cancel()
                     raise
-    return {key: concat(p) for key, p in parts.items()}
+    return {key: merge(p) for key, p in parts.items()}

@@ -1,0 +1,63 @@
+"""Writing reproduction outputs: CSV files, checks, number formatting, shared plot pieces.
+
+Used by every target (Chapter 3 and Chapters 4–5) so that their files look alike.
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+
+def num(v: float) -> str:
+    """A number for a CSV cell: 12 significant digits, ``-0`` written as ``0``."""
+    return f"{float(v) + 0.0:.12g}"  # + 0.0 turns -0.0 into 0.0
+
+
+def write_csv(path: Path, header: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
+    with open(path, "w", encoding="utf-8", newline="") as fh:
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(header)
+        w.writerows(rows)
+
+
+def check(name: str, thesis: Any, measured: Any, passed: bool) -> dict[str, Any]:
+    """One entry of ``summary.json`` → ``checks``: a thesis claim beside what was measured."""
+    return {"name": name, "thesis": thesis, "measured": measured, "pass": bool(passed)}
+
+
+def r3(v: float) -> float:
+    return round(float(v), 3)
+
+
+def checks_table(checks: Sequence[dict[str, Any]]) -> str:
+    """The checks as a markdown table (for a target's README.md)."""
+    def cell(v: Any) -> str:
+        return str(v).replace("|", "\\|").replace("\n", " ")
+
+    rows = [f"| {cell(c['name'])} | {cell(c['thesis'])} | {cell(c['measured'])} | {'yes' if c['pass'] else 'no'} |"
+            for c in checks]
+    return "| check | thesis | measured | pass |\n|---|---|---|---|\n" + "\n".join(rows)
+
+
+def percentile_band(values: np.ndarray, axis: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Median, 5th and 95th percentiles of ``values`` over ``axis`` (the runs)."""
+    med = np.median(values, axis=axis)
+    p05, p95 = np.percentile(values, [5, 95], axis=axis)
+    return med, p05, p95
+
+
+def new_figure(nrows: int, ncols: int, width: float, height: float) -> tuple[Any, np.ndarray]:
+    """A matplotlib figure (Agg canvas, no pyplot, no display needed) and its axes, flattened."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width * ncols, height * nrows), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(nrows, ncols)).ravel()
+    return fig, axes
+
+
+def save(fig: Any, path: Path, dpi: int = 120) -> None:
+    fig.savefig(path, dpi=dpi, metadata={"Software": None})  # no version stamp: same inputs, same bytes
