@@ -96,3 +96,24 @@ def test_standard_pso_has_no_speed_limit():
     g = np.full((2, 1, 1, 1), 1e4)
     new = Law("standard").velocity(u, g, np.array([1.5, 1.5]), 0.7, np.ones_like(g))
     assert new[0, 0, 0] == pytest.approx(3e4)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    n=st.integers(1, 6),
+    omega=st.floats(0.0, 0.99),
+    seed=st.integers(0, 2**32 - 1),
+    frac=st.floats(-1.0, 1.0),
+)
+def test_generalised_law_bound_uses_the_sum_of_all_terms(n, omega, seed, frac):
+    """[3.36]–[3.38]: with n accelerating terms the bound is ĉ/(1−ω) with ĉ = Σ c_n, and it
+    is tight: all pushes at full strength in one direction reach it exactly from U_j."""
+    rng = np.random.default_rng(seed)
+    c = rng.uniform(0.0, 5.0, n)
+    U_j = c.sum() / (1.0 - omega)
+    u = np.full((1, 3, 2), frac * U_j)
+    g = rng.normal(size=(n, 1, 3, 2))
+    new = adapted_velocity(u, g, c, omega, rng.random(g.shape))
+    assert np.all(np.abs(new) <= U_j * (1 + 1e-12) + 1e-12)
+    top = adapted_velocity(np.full((1, 1, 1), U_j), np.ones((n, 1, 1, 1)), c, omega, np.ones((n, 1, 1, 1)))
+    assert top[0, 0, 0] == pytest.approx(U_j)
