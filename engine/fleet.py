@@ -234,18 +234,43 @@ class Fleet:
             return np.stack([forward_guard(cmd[..., 0], gap, alpha=p.alpha, dt=p.dt), cmd[..., 1]], axis=-1)
         return approach_guard(cmd, self.state.x, reading.point, gap, alpha=p.alpha, dt=p.dt)
 
+    def _touching(self, moved: np.ndarray) -> np.ndarray:
+        """Robots in contact after a move: the movers and whatever they touch (only a mover
+        can have made a new contact)."""
+        out = np.zeros_like(moved)
+        for r, sp in enumerate(self.spaces):
+            for i in np.flatnonzero(moved[r]):
+                bodies = sp.contacts_of(i, -1e-6)
+                if bodies:
+                    out[r, i] = True
+                    out[r, [j for j in bodies if j is not None]] = True
+        return out & (self.state.status == ACTIVE)
+
     def _groups(self, active: np.ndarray) -> list[np.ndarray]:
-        """Which robots decide and move together. ``sequential`` (Algorithms 1–2 as written:
-        a loop over robots, each sensing the ones already moved) gives one group per robot
-        index, vectorised over runs; ``simultaneous`` and physics move everyone at once."""
-        if self.params.update == "simultaneous" or self.params.motion == "physics":
+        """Which robots decide and move together.
+
+        ``sequential`` (Algorithms 1–2 as written: a loop over robots, each sensing the ones
+        already moved). Robots farther apart than R_s + 2r + 2·v_max·Δt cannot see or reach
+        each other within one tick, so any order among them gives the same result; a greedy
+        colouring of the "can interact" graph (vectorised over runs) gives a few groups that
+        are processed one after another, which is a sequential update in colour order.
+        ``simultaneous`` and physics move everyone at once.
+        """
+        p = self.params
+        if p.update == "simultaneous" or p.motion == "physics":
             return [active]
-        groups = []
-        for i in range(active.shape[1]):
-            m = np.zeros_like(active)
-            m[:, i] = active[:, i]
-            groups.append(m)
-        return groups
+        reach = p.sensing_range + 2.0 * p.robot_radius + 2.0 * p.v_max * p.dt
+        x = self.state.x
+        near = np.linalg.norm(x[:, :, None, :] - x[:, None, :, :], axis=-1) <= reach  # (R, N, N)
+        R, N = active.shape
+        colour = np.full((R, N), -1)
+        rows = np.arange(R)
+        for i in range(N):  # greedy: the smallest colour no earlier neighbour has
+            taken = np.zeros((R, N + 1), dtype=bool)
+            nb = near[:, i, :i] & (colour[:, :i] >= 0)
+            taken[np.repeat(rows, i)[nb.ravel()], colour[:, :i][nb]] = True
+            colour[:, i] = np.argmin(taken, axis=1)
+        return [active & (colour == k) for k in range(int(colour.max()) + 1)]
 
     def step(self) -> FleetInfo:
         p, s = self.params, self.state
@@ -278,8 +303,7 @@ class Fleet:
             s.heading = np.where(m, moved.heading, s.heading)
             s.u = np.where(m[..., None], moved.velocity, s.u)
             s.cmd = np.where(m[..., None], cmd, s.cmd)
-            touching = np.stack([sp.touching(-1e-6) for sp in self.spaces]) & (s.status == ACTIVE)
-            s.status = np.where(moved.hit | touching, COLLIDED, s.status).astype(np.int8)
+            s.status = np.where(moved.hit | self._touching(m), COLLIDED, s.status).astype(np.int8)
             omega_all = np.where(m, omega, omega_all)
             c_all = np.where(m, c, c_all)
             force_all = np.where(m[..., None], force, force_all)

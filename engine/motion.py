@@ -84,18 +84,15 @@ class Kinematic:
             target, new_heading = x + dt * u, heading  # [4.6]
         new_x = target.copy()
         hit = np.zeros(active.shape, dtype=bool)
-        for r, sp in enumerate(spaces):
-            sp.set_positions(x[r])
+        for r, sp in enumerate(spaces):  # the space holds every robot at x (kept in sync)
             for i in np.flatnonzero(active[r]):
                 start, end = tuple(x[r, i]), tuple(target[r, i])
-                if start == end:
-                    continue
-                alpha = first_contact(sp, start, end, i)
-                if alpha is not None:  # stop where the swept disc first touches
-                    new_x[r, i] = x[r, i] + max(alpha - 1e-6, 0.0) * (target[r, i] - x[r, i])
-                    hit[r, i] = True
-            sp.set_positions(new_x[r])
-            hit[r] |= active[r] & sp.touching(-1e-6)
+                if start != end:
+                    q = sp.space.segment_query_first(start, end, sp.robot_radius, sp.filters[i])
+                    if q is not None:  # stop where the swept disc first touches
+                        new_x[r, i] = x[r, i] + max(q.alpha - 1e-6, 0.0) * (target[r, i] - x[r, i])
+                        hit[r, i] = True
+                    sp.move_robot(i, new_x[r, i])
         velocity = (new_x - x) / dt
         return Moved(new_x, wrap_angle(new_heading), velocity, hit)
 

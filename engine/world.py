@@ -443,6 +443,17 @@ class RunSpace:
             b.position = p
             self.space.reindex_shapes_for_body(b)
 
+    def move_robot(self, i: int, p: np.ndarray) -> None:
+        """Teleport robot ``i`` to ``p`` and reindex its shape for queries."""
+        body = self.robot_bodies[i]
+        body.position = (float(p[0]), float(p[1]))
+        self.space.reindex_shapes_for_body(body)
+
+    def contacts_of(self, i: int, tol: float = 0.0) -> list[int | None]:
+        """Bodies within ``tol`` of robot ``i``'s surface: robot indices, or None for obstacles."""
+        hits = self.space.point_query(tuple(self.robot_bodies[i].position), self.robot_radius + tol, self.filters[i])
+        return [self.robot_of(h.shape) for h in hits]
+
     def touching(self, tol: float = 0.0) -> np.ndarray:
         """(N,) bool: robot i is within ``tol`` m of (or overlapping) any other body."""
         q = self.space.point_query_nearest
