@@ -64,8 +64,9 @@ class Kinematic:
     """Exact position update ([3.10]/[4.6], or the arc [5.5]–[5.10] for differential drive).
 
     Contacts: each robot's path is swept as a disc against the world and the other
-    robots' previous positions (:func:`first_contact`), and stops at the first
-    contact; robots that overlap after the move are also disabled.
+    robots (:func:`first_contact`) and stops at the first contact. Robots are moved one
+    after another in the space, so a later sweep sees an earlier robot's new position;
+    the space must hold every robot at ``x`` when ``move`` is called.
     """
 
     def __init__(self, drive: Drive = "holonomic", v_max: float = 3.0) -> None:
@@ -88,9 +89,9 @@ class Kinematic:
             for i in np.flatnonzero(active[r]):
                 start, end = tuple(x[r, i]), tuple(target[r, i])
                 if start != end:
-                    q = sp.space.segment_query_first(start, end, sp.robot_radius, sp.filters[i])
-                    if q is not None:  # stop where the swept disc first touches
-                        new_x[r, i] = x[r, i] + max(q.alpha - 1e-6, 0.0) * (target[r, i] - x[r, i])
+                    alpha = first_contact(sp, start, end, i)
+                    if alpha is not None:  # stop where the swept disc first touches
+                        new_x[r, i] = x[r, i] + max(alpha - 1e-6, 0.0) * (target[r, i] - x[r, i])
                         hit[r, i] = True
                     sp.move_robot(i, new_x[r, i])
         velocity = (new_x - x) / dt
