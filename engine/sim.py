@@ -15,6 +15,7 @@ import numpy as np
 from .bests import global_best, update_personal
 from .coeffs import CoefficientPolicy
 from .laws import Law
+from .laws import motion_heading as _heading
 from .objectives import Objective
 
 Attractors = Literal["literal", "ahead"]
@@ -53,6 +54,13 @@ class StepInfo:
     best_fitness: np.ndarray  # (R,)
     max_speed: np.ndarray  # (R,) highest |u| in the swarm
     max_component: np.ndarray  # (R,) highest |u_j|
+
+
+def run_generators(seed: int, first_run: int, runs: int) -> list[np.random.Generator]:
+    """One generator per run: run i draws from child i of ``SeedSequence(seed)``, wherever
+    it is simulated (alone, in a batch, in another process)."""
+    children = range(first_run, first_run + runs)
+    return [np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(i,)))) for i in children]
 
 
 class Simulation:
@@ -109,9 +117,7 @@ class Simulation:
         """Start again from step 0 with ``seed`` (or the current seed)."""
         if seed is not None:
             self.seed = int(seed)
-        # run i draws from child i of SeedSequence(seed), wherever it is simulated
-        children = range(self.first_run, self.first_run + self.runs)
-        self.rngs = [np.random.Generator(np.random.PCG64(np.random.SeedSequence(self.seed, spawn_key=(i,)))) for i in children]
+        self.rngs = run_generators(self.seed, self.first_run, self.runs)
         x, u = self._spawn(self._robots)
         self.state = self._fresh_state(x, u)
 
@@ -195,13 +201,3 @@ class Simulation:
             t=self.t, omega=omega, c=np.asarray(c),
             best_fitness=s.f_yg.copy(), max_speed=speed.max(axis=1), max_component=np.abs(u_new).max(axis=(1, 2)),
         )
-
-
-def _heading(u: np.ndarray, previous: np.ndarray) -> np.ndarray:
-    """Direction of motion atan2(u_2, u_1); kept from before while the robot is at rest."""
-    if u.shape[-1] < 2:
-        h = np.where(u[..., 0] < 0, np.pi, 0.0)
-    else:
-        h = np.arctan2(u[..., 1], u[..., 0])
-    moving = np.any(u != 0, axis=-1)
-    return np.where(moving, h, previous)
