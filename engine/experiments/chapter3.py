@@ -96,8 +96,6 @@ def limits(scenario: Scenario) -> tuple[list[float], list[float]]:
     return [c.U] + [s.U for s in c.schedule], [c.A_plus] + [s.A_plus for s in c.schedule]
 
 
-
-
 def runs_rows(case: Case, size: int, res: BatchResult, scenario: Scenario) -> list[list[str]]:
     """Rows of runs.csv; with a schedule, U, A_plus and beta are ``;``-joined per interval."""
     Us, As = limits(scenario)

@@ -41,6 +41,24 @@ def _fig3_5(out_dir: Path, runs: int, workers: int, progress: bool, **options: A
     return fig3_5.run(out_dir, runs, workers, progress, **options)
 
 
+def _fig4_6(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+    from . import fig4_6
+
+    return fig4_6.run(out_dir, runs, workers, progress, **options)
+
+
+def _fig5_4(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+    from . import fig5_4
+
+    return fig5_4.run(out_dir, runs, workers, progress, **options)
+
+
+def _fig5_5(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+    from . import fig5_5
+
+    return fig5_5.run(out_dir, runs, workers, progress, **options)
+
+
 TARGETS: dict[str, Target] = {
     t.name: t
     for t in (
@@ -48,6 +66,12 @@ TARGETS: dict[str, Target] = {
                100, _fig3_4),
         Target("fig3-5", "Ch. 3 Fig. 3-5: response of the highest speed to step changes of U and A+ (a-c)",
                100, _fig3_5),
+        Target("fig4-6", "Ch. 4 Figs. 4-6/4-7: seven RPSO/Adapted RPSO/DVC cases on the obstacle course, "
+               "kinematic and physics (CoM fitness, collisions)", 100, _fig4_6),
+        Target("fig5-4", "Ch. 5 Fig. 5-4: 20 non-omni DVC robots in an empty arena, with and without our guard "
+               "(collisions, roaming, trails of the last 15 s)", 20, _fig5_4),
+        Target("fig5-5", "Ch. 5 Fig. 5-5: omni vs non-omni DVC on the obstacle course (median CoM fitness, "
+               "5th-95th percentile bands)", 100, _fig5_5),
     )
 }
 
