@@ -42,7 +42,9 @@ def metric_table(state: Any, info: Any, t: float) -> dict[str, np.ndarray]:
 
     Common: best fitness and speeds. A Chapter 3 swarm adds the largest component and the
     coefficients in force; a fleet (``FleetInfo``) adds CoM fitness [4.17], collided and
-    operational counts and layers passed.
+    operational counts and layers passed; an acoustic swarm (``SonarInfo``) adds the CoM,
+    the source, |CoM − x_src|, convergence (flag and first step, −1 if none), the fraction
+    of robots inside the escort ring, the mean robot–source distance and contacts.
     """
     R = state.x.shape[0]
     speed = np.linalg.norm(state.u, axis=-1)
@@ -50,7 +52,12 @@ def metric_table(state: Any, info: Any, t: float) -> dict[str, np.ndarray]:
         "run": np.arange(R), "step": np.full(R, state.k), "t": np.full(R, t), "best_fitness": state.f_yg,
         "max_speed": speed.max(axis=1), "mean_speed": speed.mean(axis=1),
     }
-    if hasattr(info, "com_fitness"):
+    if hasattr(info, "com_dist"):
+        cols.update(com_x=info.com[:, 0], com_y=info.com[:, 1], source_x=info.source[:, 0],
+                    source_y=info.source[:, 1], com_dist=info.com_dist, converged=info.converged,
+                    steps_to_converge=info.steps_to_converge, frac_inside_ring=info.frac_inside_ring,
+                    mean_dist_to_source=info.mean_dist_to_source, contacts=info.contacts)
+    elif hasattr(info, "com_fitness"):
         cols.update(com_fitness=info.com_fitness, collided=info.collided, operational=info.operational,
                     layers_passed=info.layers_passed)
     else:
@@ -72,7 +79,7 @@ def write_trajectory(fh: IO[str], rows: np.ndarray) -> None:
     np.savetxt(fh, rows, fmt=fmt, delimiter=",")
 
 
-_INT_COLUMNS = {"run", "step", "collided", "operational", "layers_passed"}
+_INT_COLUMNS = {"run", "step", "collided", "operational", "layers_passed", "converged", "steps_to_converge", "contacts"}
 
 
 def write_metrics(fh: IO[str], table: dict[str, np.ndarray], header: bool = False) -> None:

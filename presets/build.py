@@ -9,9 +9,10 @@ from shoal.engine.fleet import Fleet, FleetParams
 from shoal.engine.laws import Law
 from shoal.engine.objectives import Objective
 from shoal.engine.sim import Simulation
+from shoal.engine.sonar import AcousticSwarm, SonarParams
 from shoal.engine.world import WorldSpec, empty_arena, forest, obstacle_course
 
-from .models import Controller, ObjectiveModel, Scenario, WorldModel
+from .models import Acoustics, Controller, ObjectiveModel, Scenario, WorldModel
 
 
 def policy_for(c: Controller) -> Constant | Physical:
@@ -81,7 +82,36 @@ def build_fleet(scenario: Scenario, *, runs: int | None = None, seed: int | None
     )
 
 
-def build(scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0) -> Simulation | Fleet:
-    """Whatever the scenario describes: a free-space swarm (Ch. 3) or a fleet in a world (Ch. 4–5)."""
-    make = build_fleet if scenario.world is not None else build_simulation
+def sonar_params_for(a: Acoustics) -> SonarParams:
+    """The engine parameters of an ``[acoustics]`` section (angles in degrees → radians)."""
+    return SonarParams(
+        algorithm=a.algorithm, controller=a.controller, mode=a.mode, snr0_db=a.snr0_db, psd_s_db=a.psd_s,
+        psd_n_db=a.psd_n, f_c=a.f_c, Q=a.Q, tbp=a.tbp, c=a.c, fs=a.fs, d_over_lambda=a.d_over_lambda,
+        full_lag=a.full_lag, a=a.a, d0=a.d_0, dc=a.d_c, U=a.U, dt=a.dt, beta=a.beta, c1_share=a.c1_share,
+        alpha_dvc=a.alpha_dvc, sensing_range=a.sensing_range, robot_radius=a.robot_radius, r_trap=a.r, v_n=a.v_n,
+        source_heading=np.deg2rad(a.source_heading_deg),
+        source_bearing=None if a.source_bearing_deg is None else float(np.deg2rad(a.source_bearing_deg)),
+        start=a.start, guard=a.guard, stop_on_converge=a.stop_on_converge,
+    )
+
+
+def build_sonar(scenario: Scenario, *, runs: int | None = None, seed: int | None = None,
+                first_run: int = 0) -> AcousticSwarm:
+    """A Chapter 7–8 acoustic swarm (needs an ``[acoustics]`` section)."""
+    if scenario.acoustics is None:
+        raise ValueError("this scenario has no [acoustics] section")
+    return AcousticSwarm(
+        sonar_params_for(scenario.acoustics), robots=scenario.sim.robots, runs=runs or scenario.sim.runs,
+        seed=scenario.sim.seed if seed is None else seed, first_run=first_run,
+    )
+
+
+def build(scenario: Scenario, *, runs: int | None = None, seed: int | None = None,
+          first_run: int = 0) -> Simulation | Fleet | AcousticSwarm:
+    """Whatever the scenario describes: an acoustic swarm (Ch. 7–8), a fleet in a world
+    (Ch. 4–5) or a free-space swarm (Ch. 3)."""
+    if scenario.acoustics is not None:
+        make = build_sonar
+    else:
+        make = build_fleet if scenario.world is not None else build_simulation
     return make(scenario, runs=runs, seed=seed, first_run=first_run)

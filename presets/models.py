@@ -151,6 +151,59 @@ class ObjectiveModel(_Model):
     scale: Annotated[float, Field(gt=0.0, le=1e4, description="benchmark length scale [m per unit]")] = 1.0
 
 
+class Acoustics(_Model):
+    """Acoustic source localisation (Chapters 7–8): algorithm, signal, swarm and source.
+
+    The robot count, horizon, runs and seed come from ``[sim]``; the ``[controller]``,
+    ``[robot]`` and ``[sensing]`` sections do not apply (their values are here).
+    """
+
+    algorithm: Literal["a-pso", "x-pso", "b-pso", "xb-pso", "gt-pso"] = Field(
+        "xb-pso", description="best-location strategy: A-/X-/B-/XB-PSO (Ch. 7) or GT-PSO (Ch. 8)")
+    controller: Literal["adapted", "nonomni"] = Field(
+        "adapted", description="Adapted PSO [3.11] in the global frame (Ch. 7) or the non-omni DVC controller [8.7] (Ch. 8)")
+    mode: Literal["waveform", "surrogate"] = Field(
+        "waveform", description="band spectra and cross-correlation, or the APPROXIMATE statistical surrogate")
+    snr0_db: Annotated[float, Field(ge=-30.0, le=40.0, description="SNR at the origin [dB]; sets d_s = R_ref·10^(−SNR0/20)")] = 10.0
+    psd_s: Annotated[float, Field(ge=0.0, le=250.0, description="source PSD at 1 m [dB re 1 µPa²/Hz]")] = 120.0
+    psd_n: Annotated[float, Field(ge=0.0, le=200.0, description="noise PSD [dB re 1 µPa²/Hz]")] = 60.0
+    f_c: Annotated[float, Field(ge=10.0, le=100_000.0, description="centre frequency f_c [Hz]")] = 1000.0
+    Q: Annotated[float, Field(ge=0.1, le=1000.0, description="quality factor Q = f_c/B [7.13]")] = 1.5
+    tbp: Annotated[float, Field(ge=2.0, le=5000.0, description="time-bandwidth product B·T of a window")] = 100.0
+    d_over_lambda: Annotated[float, Field(gt=0.0, le=50.0, description="hydrophone separation D/λ_c (two-hydrophone strategies)")] = 0.5
+    c: Annotated[float, Field(ge=1000.0, le=2000.0, description="sound speed [m/s]")] = 1500.0
+    fs: Annotated[float, Field(ge=1000.0, le=1_000_000.0, description="sample rate of the lag grid [Hz]")] = 48_000.0
+    full_lag: bool = Field(False, description="search the lag over the whole window instead of ±D/c (waveform mode)")
+    a: Annotated[float, Field(ge=0.0, le=20.0, description="forgetting scale a [7.2]: memory × e^(−a) per step")] = 1.0
+    d_0: Annotated[float, Field(ge=0.0, le=10_000.0, description="deployment radius d_0 [m]")] = 50.0
+    d_c: Annotated[float, Field(gt=0.0, le=10_000.0, description="convergence radius d_c [m]")] = 50.0
+    U: Annotated[float, Field(gt=0.0, le=50.0, description="top speed U = v_max [m/s]")] = 2.0
+    dt: Annotated[float, Field(gt=0.0, le=10.0, description="controller period Δt [s]")] = 1.0
+    beta: Annotated[float, Field(gt=0.0, le=1.0, description="sensitivity β: ω = 1 − β, ĉ = βU/√d")] = 0.9
+    c1_share: Annotated[float, Field(ge=0.0, le=1.0, description="c1/(c1 + c2)")] = 0.5
+    alpha_dvc: Annotated[float, Field(gt=0.0, lt=1.0, description="DVC safety factor α (nonomni)")] = 0.9
+    sensing_range: Annotated[float, Field(gt=0.0, le=1000.0, description="six-sector sensing range [m] (nonomni)")] = 10.0
+    robot_radius: Annotated[float, Field(gt=0.0, le=20.0, description="robot disc radius [m] (1 m encloses a 2 × 1 m hull)")] = 1.0
+    guard: bool = Field(False, description="DVC forward guard (ours, not in the thesis): v ≤ α·s_f/Δt")
+    r: Annotated[float, Field(ge=0.0, le=10_000.0, description="escort ring radius r [m] round y_g (0 = no escort; nonomni)")] = 0.0
+    v_n: Annotated[float, Field(ge=0.0, le=2.0, description="source speed / U [8.8]")] = 0.0
+    source_heading_deg: Annotated[float, Field(ge=-360.0, le=360.0, description="direction the source moves [°] (0 = +x)")] = 0.0
+    source_bearing_deg: Annotated[float | None, Field(ge=-360.0, le=360.0, description="source bearing from the origin [°]; unset = random per run")] = None
+    start: Literal["origin", "source"] = Field("origin", description="deploy the robots round the origin or round the source")
+    stop_on_converge: bool = Field(False, description="freeze a run once its CoM is within d_c of the source")
+
+    @model_validator(mode="after")
+    def _consistent(self) -> "Acoustics":
+        if self.full_lag and self.mode == "surrogate":
+            raise ValueError("full_lag = true needs mode 'waveform' (the surrogate has no correlation function)")
+        if self.r > 0 and self.controller != "nonomni":
+            raise ValueError("r > 0 (escorting) needs controller 'nonomni' (the ring is a sensed obstacle)")
+        top = self.f_c * (1.0 + 0.5 / self.Q)  # upper band edge f_c + B/2
+        if self.fs <= 2.0 * top:
+            raise ValueError(f"fs = {self.fs:g} Hz must exceed twice the upper band edge, {2.0 * top:g} Hz")
+        return self
+
+
 class Arena(_Model):
     """The square drawn in the app, ``[-half_size, half_size]²``."""
 
@@ -177,6 +230,7 @@ class Scenario(_Model):
     objective: ObjectiveModel = Field(default_factory=ObjectiveModel)
     arena: Arena = Field(default_factory=Arena)
     world: WorldModel | None = None
+    acoustics: Acoustics | None = None
     robot: Robot = Field(default_factory=Robot)
     sensing: Sensing = Field(default_factory=Sensing)
     view: View = Field(default_factory=View)
@@ -189,4 +243,13 @@ class Scenario(_Model):
             raise ValueError(f"controller.law {self.controller.law!r} needs robot.drive = 'differential'")
         if self.world is not None and self.sim.d != 2:
             raise ValueError("sim.d must be 2 with a [world]")
+        if self.acoustics is not None:
+            a = self.acoustics
+            if self.world is not None:
+                raise ValueError("[acoustics] runs in an open sea: remove the [world] section")
+            if self.sim.d != 2:
+                raise ValueError("sim.d must be 2 with [acoustics]")
+            need = {"gt-pso": 4, "b-pso": 2, "xb-pso": 2}.get(a.algorithm, 1)
+            if self.sim.robots < need:
+                raise ValueError(f"sim.robots = {self.sim.robots}: acoustics.algorithm {a.algorithm!r} needs at least {need}")
         return self

@@ -144,3 +144,38 @@ def test_open_sea_sensing_matches_pymunk_sensing():
     apart = ref.hit & (ref.gap > 0)  # overlapping robots tie at gap 0 (either may be kept)
     np.testing.assert_allclose(got.point[apart], ref.point[apart], atol=1e-9)
     np.testing.assert_allclose(got.centre[apart], ref.centre[apart], atol=1e-12)
+
+
+@pytest.mark.parametrize("preset", ["sonar-xb-pso", "sonar-gt-pso", "escort-stationary", "escort-moving"])
+def test_shipped_acoustic_presets_build_and_record(preset, tmp_path):
+    from shoal.engine.runs import run_to_dir
+    from shoal.presets.build import build
+    from shoal.presets.io import load
+
+    scenario = load(preset, ["sim.runs=2", "sim.steps=3"])
+    sw = build(scenario)
+    assert isinstance(sw, AcousticSwarm) and sw.robots == scenario.sim.robots
+    run_to_dir(sw, 3, tmp_path / "out", {"preset": preset})
+    traj = (tmp_path / "out" / "trajectories.csv").read_text().splitlines()
+    assert traj[0] == "run,step,t,robot,x,y,heading,vx,vy,status"
+    assert len(traj) == 1 + 4 * 2 * scenario.sim.robots
+    metrics = (tmp_path / "out" / "metrics.csv").read_text().splitlines()
+    cols = metrics[0].split(",")
+    assert {"com_dist", "converged", "steps_to_converge", "frac_inside_ring", "mean_dist_to_source"} <= set(cols)
+    assert len(metrics) == 1 + 4 * 2
+
+
+def test_acoustic_preset_rules_name_the_field():
+    from shoal.presets.io import PresetError, validate
+
+    for patch, words in [
+        ({"acoustics": {"mode": "surrogate", "full_lag": True}}, ("acoustics", "full_lag")),
+        ({"acoustics": {"r": 50.0}}, ("acoustics", "nonomni")),
+        ({"acoustics": {"algorithm": "gt-pso"}, "sim": {"robots": 3}}, ("sim.robots", "gt-pso")),
+        ({"acoustics": {"Q": 0.0}}, ("acoustics.Q",)),
+        ({"acoustics": {"speed": 1.0}}, ("acoustics.speed",)),
+        ({"acoustics": {}, "world": {}}, ("[world]",)),
+    ]:
+        with pytest.raises(PresetError) as e:
+            validate(patch)
+        assert any(all(w in m for w in words) for m in e.value.messages), e.value.messages
