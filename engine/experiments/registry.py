@@ -59,6 +59,42 @@ def _fig5_5(out_dir: Path, runs: int, workers: int, progress: bool, **options: A
     return fig5_5.run(out_dir, runs, workers, progress, **options)
 
 
+def _fig7_2(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+    from . import fig7_2
+
+    return fig7_2.run(out_dir, runs, workers, progress, **options)
+
+
+def _fig7_4(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+    from . import fig7_4
+
+    return fig7_4.run(out_dir, runs, workers, progress, **options)
+
+
+def _fig7_5(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+    from . import fig7_5
+
+    return fig7_5.run(out_dir, runs, workers, progress, **options)
+
+
+def _fig8_2(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+    from . import fig8_2
+
+    return fig8_2.run(out_dir, runs, workers, progress, **options)
+
+
+def _fig8_4(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+    from . import fig8_4
+
+    return fig8_4.run(out_dir, runs, workers, progress, **options)
+
+
+def _fig8_5(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+    from . import fig8_5
+
+    return fig8_5.run(out_dir, runs, workers, progress, **options)
+
+
 TARGETS: dict[str, Target] = {
     t.name: t
     for t in (
@@ -72,6 +108,18 @@ TARGETS: dict[str, Target] = {
                "(collisions, roaming, trails of the last 15 s)", 20, _fig5_4),
         Target("fig5-5", "Ch. 5 Fig. 5-5: omni vs non-omni DVC on the obstacle course (median CoM fitness, "
                "5th-95th percentile bands)", 100, _fig5_5),
+        Target("fig7-2", "Ch. 7 Fig. 7-2: A-/X-/B-/XB-PSO convergence from SNR0 = 10, 4, 0 dB (waveform level, "
+               "10 robots, 6000 steps)", 100, _fig7_2),
+        Target("fig7-4", "Ch. 7 Fig. 7-4: median time to convergence over (Q, D/lambda_c) at 10 dB "
+               "(20 runs per point by default)", 20, _fig7_4),
+        Target("fig7-5", "Ch. 7 Fig. 7-5: median time to convergence over (Q, U) at 10 dB, D = lambda_c/2 "
+               "(20 runs per point by default)", 20, _fig7_5),
+        Target("fig8-2", "Ch. 8 Fig. 8-2: GT-PSO vs XB-PSO with the non-omni DVC controller from SNR0 = 10, 6, 4, 0 dB "
+               "(2000 steps)", 100, _fig8_2),
+        Target("fig8-4", "Ch. 8 Fig. 8-4: escorting a stationary source, 10 and 40 robots at r = 25, 50, 75 m "
+               "(GT-PSO, occupancy maps)", 20, _fig8_4),
+        Target("fig8-5", "Ch. 8 Fig. 8-5: escorting a source moving at v_n = 0.1 and 0.25, 40 robots, r = 25/50 m, "
+               "louder source", 20, _fig8_5),
     )
 }
 

@@ -1,0 +1,208 @@
+"""Fig. 7-2: convergence of A-, X-, B- and XB-PSO against the initial SNR (spec §8.1, §9.1).
+
+Table 7.1 set-up (preset ``sonar-xb-pso``): 10 USVs, Adapted PSO [3.11] with U = 2 m/s,
+Δt = 1 s (β = 0.9, c1 = c2: spec §12 defaults), waveform-level signals (Q = 1.5, TBP = 100,
+D = λ_c/2, fs = 48 kHz), forgetting a = 1, d_0 = d_c = 50 m, horizon 6000 timesteps, the
+source at d_s = R_ref·10^(−SNR_0/20) on a random bearing. Every algorithm at one SNR_0
+uses the same seed, so run i starts from the same layout and source for all four.
+
+A run stops at its first tick with |CoM − x_src| ≤ d_c (its distance is held from then on
+in the series and the figure); the median time counts a run that never converged as +∞.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from shoal.presets.build import sonar_params_for
+from shoal.presets.io import load
+
+from . import chapter78 as ch
+from .output import check, checks_table, new_figure, r3, save, write_csv
+from .runner import run_jobs
+
+PRESET = "sonar-xb-pso"
+DEFAULT_RUNS = 100
+HORIZON = 6000
+SNRS = (10.0, 4.0, 0.0)
+# thesis median times (timesteps) to reach d_c; None = did not converge in 6000 (spec §9.1)
+THESIS: dict[float, dict[str, float | None]] = {
+    10.0: {"a-pso": 4500, "x-pso": 3400, "b-pso": 1200, "xb-pso": 1100},
+    4.0: {"a-pso": None, "x-pso": None, "b-pso": 2700, "xb-pso": 2600},
+    0.0: {"a-pso": None, "x-pso": None, "b-pso": 4400, "xb-pso": 4400},
+}
+RUNS_COLUMNS = ("case", "run", "seed", "snr0_db", "converged", "steps_to_converge")
+SERIES_EVERY = 10
+
+
+def seed_for(base: int, snr0_db: float) -> int:
+    """One seed per SNR_0, shared by the algorithms: 10000·base + 5000 + 10·SNR_0."""
+    return 10_000 * base + 5_000 + int(round(10 * snr0_db))
+
+
+def make_jobs(runs: int, steps: int, snrs: Sequence[float], algorithms: Sequence[str], mode: str,
+              preset: str = PRESET, extra: Sequence[str] = ()) -> list[ch.SonarJob]:
+    base = load(preset).sim.seed
+    return [
+        ch.job((alg, float(snr)), preset, (f"acoustics.algorithm={alg}", f"acoustics.snr0_db={snr:g}",
+                                           f"acoustics.mode={mode}", f"sim.steps={steps}", *extra),
+               seed_for(base, snr), runs, steps)
+        for snr in snrs for alg in algorithms
+    ]
+
+
+def run(
+    out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: bool = True, *,
+    steps: int = HORIZON, snrs: Sequence[float] = SNRS, algorithms: Sequence[str] = ch.ALGORITHMS,
+    mode: str = "waveform",
+) -> dict[str, Any]:
+    jobs = make_jobs(runs, steps, snrs, algorithms, mode)
+    t0 = time.perf_counter()
+    res = run_jobs(jobs, workers=workers, progress=progress, desc="fig7-2", simulate=ch.simulate_sonar,
+                   merge=ch.merge, chunk=runs)
+    wall = time.perf_counter() - t0
+    rows, series = [], []
+    for j in jobs:
+        alg, snr = j.key
+        b = res[j.key]
+        rows += [[alg, str(r), str(b.seed), f"{snr:g}", str(int(c)), ch.steps_cell(f)]
+                 for r, c, f in zip(b.run_index, b.converged, b.first_converged)]
+        series += ch.series_rows((alg, f"{snr:g}"), b, SERIES_EVERY)
+    write_csv(out_dir / "runs.csv", RUNS_COLUMNS, rows)
+    write_csv(out_dir / "series.csv", ("case", "snr0_db", *ch.SERIES_TAIL), series)
+
+    med = {j.key: res[j.key].median_steps() for j in jobs}
+    frac = {j.key: float(res[j.key].converged.mean()) for j in jobs}
+    p = sonar_params_for(jobs[0].scenario().acoustics)
+    r_ref, dc, U = p.r_ref, p.dc, p.U
+    _figure(out_dir / "fig7-2.png", res, snrs, algorithms, r_ref, dc, runs, steps)
+    checks = _checks(med, frac, res, snrs, algorithms, steps, r_ref, dc, U)
+    robot_steps = sum(b.robot_steps for b in res.values())
+    summary = {
+        "checks": checks,
+        "mode": mode,
+        "horizon": steps,
+        "snr0_db": list(snrs),
+        "cases": {f"{alg} @ {snr:g} dB": {
+            "median_steps_to_converge": None if not np.isfinite(med[(alg, snr)]) else med[(alg, snr)],
+            "converged_fraction": r3(frac[(alg, snr)]),
+            "mean_steps_converged_runs": _mean_converged(res[(alg, snr)]),
+            "thesis_median": THESIS.get(snr, {}).get(alg, "not reported"),
+            "command": next(j.command() for j in jobs if j.key == (alg, snr)),
+        } for snr in snrs for alg in algorithms},
+        "seeds": {f"{snr:g} dB": seed_for(load(PRESET).sim.seed, snr) for snr in snrs},
+        "seed_rule": "run i of every algorithm at one SNR_0 uses child i of SeedSequence(seed), "
+                     "seed = 10000·preset seed + 5000 + 10·SNR_0",
+        "cost": {"simulation_wall_s": round(wall, 1), "robot_steps": robot_steps,
+                 "wall_us_per_robot_step": round(wall / max(robot_steps, 1) * 1e6, 2), "workers": workers},
+    }
+    (out_dir / "README.md").write_text(_readme(runs, steps, mode, summary), encoding="utf-8")
+    return summary
+
+
+def _mean_converged(b: ch.SonarBatch) -> float | None:
+    f = b.first_converged[b.converged]
+    return round(float(f.mean()), 1) if f.size else None
+
+
+def _checks(med, frac, res, snrs, algorithms, steps, r_ref, dc, U) -> list[dict[str, Any]]:
+    txt = lambda alg, snr: f"{ch.time_text(med[(alg, snr)], steps)} ({frac[(alg, snr)]:.0%} of runs converged)"  # noqa: E731
+    checks = []
+    have = lambda *algs: all((a, s) in med for a in algs for s in snrs)  # noqa: E731
+    if 10.0 in snrs and have(*ch.ALGORITHMS):
+        conv = {a: np.isfinite(med[(a, 10.0)]) for a in ch.ALGORITHMS}
+        checks.append(check(
+            f"at SNR0 = 10 dB all four algorithms converge (median time to d_c within {steps} steps)",
+            "A 4500, X 3400, B 1200, XB 1100",
+            "; ".join(f"{ch.LABELS[a]} {txt(a, 10.0)}" for a in ch.ALGORITHMS), all(conv.values())))
+        for a in ("b-pso", "xb-pso"):
+            ratio = med[("a-pso", 10.0)] / med[(a, 10.0)]
+            lower = not np.isfinite(med[("a-pso", 10.0)])
+            shown = f"> {steps / med[(a, 10.0)]:.1f}× (A-PSO median not reached)" if lower else f"{ratio:.2f}×"
+            checks.append(check(
+                f"{ch.LABELS[a]} ≈ 4× faster than A-PSO at 10 dB (ratio of median times; pass: 2.5×–6×)",
+                "3.75× (B) / 4.09× (XB); text: 'more than 4 times'", shown,
+                (not lower) and 2.5 <= ratio <= 6.0))
+        checks.append(check(
+            "X-PSO faster than A-PSO at 10 dB (median time to d_c)", "3400 < 4500",
+            f"X {txt('x-pso', 10.0)} vs A {txt('a-pso', 10.0)}",
+            bool(np.isfinite(med[("x-pso", 10.0)]) and med[("x-pso", 10.0)] < med[("a-pso", 10.0)])))
+        dX, dA = (float(np.median(res[(a, 10.0)].com_dist[-1])) for a in ("x-pso", "a-pso"))
+        checks.append(check(
+            f"X-PSO ends nearer the source than A-PSO at 10 dB (median |CoM − source| after {steps} steps; ours)",
+            "X-PSO is less sensitive to noise", f"X {dX:.0f} m vs A {dA:.0f} m", dX < dA))
+    for snr in (s for s in snrs if s < 10.0 and s in THESIS):
+        if have(*ch.ALGORITHMS):
+            ok = all(np.isfinite(med[(a, snr)]) for a in ("b-pso", "xb-pso")) and not any(
+                np.isfinite(med[(a, snr)]) for a in ("a-pso", "x-pso"))
+            checks.append(check(
+                f"at SNR0 = {snr:g} dB only B-PSO and XB-PSO converge (median within {steps} steps)",
+                f"A n.c., X n.c., B {THESIS[snr]['b-pso']}, XB {THESIS[snr]['xb-pso']}",
+                "; ".join(f"{ch.LABELS[a]} {txt(a, snr)}" for a in ch.ALGORITHMS), ok))
+    for snr in snrs:
+        for a in algorithms:
+            th = THESIS.get(snr, {}).get(a, "absent")
+            if th == "absent":
+                continue
+            m = med[(a, snr)]
+            if th is None:
+                checks.append(check(f"{ch.LABELS[a]} at {snr:g} dB: median time to d_c (pass: n.c.)", "n.c.",
+                                    txt(a, snr), not np.isfinite(m)))
+            else:
+                checks.append(check(f"{ch.LABELS[a]} at {snr:g} dB: median time to d_c (pass: within ×2 of the thesis)",
+                                    th, txt(a, snr), bool(np.isfinite(m) and th / 2 <= m <= 2 * th)))
+        if ("b-pso", snr) in med and ("xb-pso", snr) in med:
+            mb, mx = med[("b-pso", snr)], med[("xb-pso", snr)]
+            checks.append(check(f"XB-PSO at least as fast as B-PSO at {snr:g} dB (median; pass: XB ≤ 1.05 × B)",
+                                "XB ≤ B at every SNR0", f"XB {ch.time_text(mx, steps)} vs B {ch.time_text(mb, steps)}",
+                                bool(np.isfinite(mx) and mx <= 1.05 * mb)))
+    floor = {snr: max(r_ref * 10 ** (-snr / 20) - dc, 0) / U for snr in snrs}
+    fastest = min((float(res[(a, s)].first_converged[res[(a, s)].converged].min()) - floor[s]
+                   for a in algorithms for s in snrs if res[(a, s)].converged.any()), default=np.inf)
+    checks.append(check("no run beats the straight line (d_s − d_c)/U (sanity)", "lower bound of spec §4.2",
+                        f"smallest margin {fastest:.1f} steps" if np.isfinite(fastest) else "no run converged",
+                        fastest >= 0))
+    return checks
+
+
+def _figure(path: Path, res, snrs, algorithms, r_ref: float, dc: float, runs: int, steps: int) -> None:
+    fig, axes = new_figure(1, len(snrs), 4.6, 3.8)
+    for ax, snr in zip(axes, snrs):
+        ds = r_ref * 10 ** (-snr / 20) / r_ref
+        thesis = {a: float(v) for a, v in THESIS.get(snr, {}).items() if v is not None}
+        ch.band_panel(ax, {a: res[(a, snr)] for a in algorithms}, f"SNR0 = {snr:g} dB (d_s = {ds:.3f} R)",
+                      dc, r_ref, thesis)
+        ax.set_xlim(0, steps)
+    axes[0].legend(fontsize=8, loc="upper right")
+    fig.suptitle(f"Fig. 7-2: median |CoM − source| and 5–95 % band, {runs} runs per case "
+                 "(▼ = thesis median time to d_c)", fontsize=10)
+    save(fig, path)
+
+
+def _readme(runs: int, steps: int, mode: str, summary: dict[str, Any]) -> str:
+    return f"""# Fig. 7-2 reproduction: convergence against the initial SNR
+
+A-, X-, B- and XB-PSO with the Adapted PSO controller (Table 7.1, spec §8.1), {runs} seeded runs
+per algorithm and SNR0, horizon {steps} timesteps, acoustics mode `{mode}`. Every case is the
+preset `sonar-xb-pso` with `--set` overrides (see `summary.json` → `cases.*.command`).
+
+## Files
+
+- `runs.csv`: `{",".join(RUNS_COLUMNS)}`. `steps_to_converge` is the first timestep with
+  |CoM − source| ≤ d_c = 50 m, empty when the run never got there within the horizon.
+  Run `run` uses child `run` of `SeedSequence(seed)`; all algorithms at one SNR0 share `seed`.
+- `series.csv`: per case and SNR0, every {SERIES_EVERY} steps, the median and 5/25/75/95th
+  percentiles of |CoM − source| in metres (a run is stopped when it converges and its
+  distance is held from then on).
+- `fig7-2.png`: median |CoM − source| in spatial steps (R_ref = 1000 m) with 5–95 % bands,
+  one panel per SNR0; ▼ marks the thesis median time at d_c.
+- `summary.json`: checks, per-case median and mean times, converged fractions, seeds and cost.
+
+## Checks
+
+{checks_table(summary["checks"])}
+"""
