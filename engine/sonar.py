@@ -107,9 +107,11 @@ class SonarParams:
             raise ValueError("r_trap: escorting needs the nonomni controller")
         if self.start not in ("origin", "source"):
             raise ValueError(f"start: 'origin' or 'source', got {self.start!r}")
-        for name in ("U", "dt", "beta", "d0", "dc", "sensing_range", "robot_radius"):
-            if not getattr(self, name) >= (0 if name == "d0" else 1e-300):
+        for name in ("U", "dt", "beta", "dc", "sensing_range", "robot_radius"):
+            if not getattr(self, name) > 0:
                 raise ValueError(f"{name}: must be > 0, got {getattr(self, name)!r}")
+        if not self.d0 >= 0:
+            raise ValueError(f"d0: must be >= 0, got {self.d0!r}")
         self.band  # validates f_c, Q, tbp, c, fs
 
     @property
@@ -221,10 +223,8 @@ class AcousticSwarm:
 
     def reset(self, seed: int | None = None) -> None:
         """Start again from step 0 with ``seed`` (or the current one)."""
-        if seed is not None:
-            self.seed = int(seed)
-        elif not hasattr(self, "seed"):
-            self.seed = 0
+        if seed is not None or not hasattr(self, "seed"):
+            self.seed = int(seed or 0)
         p, N = self.params, self._robots
         self.rngs = run_generators(self.seed, self.first_run, self.runs)
         x = np.empty((self.runs, N, 2))
