@@ -105,3 +105,14 @@ def test_fig5_5_tiny_outputs(tmp_path):
     assert (out / "runs.csv").read_text(encoding="utf-8").splitlines()[0] == RUNS_HEADER
     assert {r["case"] for r in _rows(out / "runs.csv")} == {"adapted-dvc", "nonomni-dvc", "nonomni-dvc-noguard"}
     assert (out / "fig5-5.png").stat().st_size > 0
+
+
+def test_cli_lists_the_targets():
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "shoal", "reproduce", "--list"], capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0
+    for name in ("fig4-6", "fig5-4", "fig5-5"):
+        assert name in out.stdout

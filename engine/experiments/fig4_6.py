@@ -34,8 +34,8 @@ RPSO = ("rpso-c3-high", "rpso-c3-equal", "rpso-c3-low")
 
 
 def physics_runs_for(runs: int) -> int:
-    """Physics is about 5 times slower per run than kinematic: a fifth of the runs."""
-    return max(1, runs // 5)
+    """Physics is several times slower per run than kinematic: half the runs."""
+    return max(1, runs // 2)
 
 
 def run(

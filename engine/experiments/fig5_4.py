@@ -35,6 +35,7 @@ SPEED_WINDOW = 100.0  # s: "they keep moving" is judged on the last 100 s
 TRAIL = 15.0  # s: trails of the thesis figure, and the "never settles" window
 MIN_SPEED = 0.5  # m/s: median speed over the last 100 s must be at least this (top speed 3 m/s)
 MIN_PATH = 3.0  # m: every robot covers at least this much in the last 15 s (0.2 m/s on average)
+STALL_GAP = 1e-3  # m: a robot-robot contact from closer than this for two ticks follows a stall
 RUNS_COLUMNS = ("case", "run", "seed", "collided", "robot_robot_collided", "wall_collided", "operational",
                 "median_speed_last_100s", "min_path_last_15s")
 
@@ -50,14 +51,16 @@ def _segment_gap(p: np.ndarray, walls: np.ndarray) -> np.ndarray:
     return np.linalg.norm(rel - t[..., None] * ab[None], axis=-1).min(axis=1)
 
 
-def classify_collisions(b: ch.FleetBatch, world: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Per run: robots disabled by touching another robot, and by touching a wall or an
-    obstacle. At the step a robot is disabled, whichever kind of body is closer to its
-    surface is the one it touched."""
+def classify_collisions(b: ch.FleetBatch, world: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per run: robots disabled by touching another robot, by touching a wall or an
+    obstacle, and robot-robot ones that follow a stall (the two were already closer than
+    ``STALL_GAP`` during the two ticks before; a robot that is run into is not "stalled"). At the step a robot is disabled, whichever kind of body
+    is closer to its surface is the one it touched."""
     assert b.x is not None and b.status is not None
     r = b.robot_radius
     robot_hits = np.zeros(b.runs, dtype=np.int64)
     other_hits = np.zeros(b.runs, dtype=np.int64)
+    stalled = np.zeros(b.runs, dtype=np.int64)
     new = (b.status[1:] != 0) & (b.status[:-1] == 0)  # (K, R, N) disabled during tick k
     for k, run, i in zip(*np.nonzero(new)):
         x = b.x[k + 1, run]
@@ -70,9 +73,12 @@ def classify_collisions(b: ch.FleetBatch, world: Any) -> tuple[np.ndarray, np.nd
             obstacle_gap = min(obstacle_gap, float((np.hypot(*(c[:, :2] - x[i]).T) - c[:, 2]).min() - r))
         if robot_gap <= obstacle_gap:
             robot_hits[run] += 1
+            j = int(np.argmin(d))
+            before = [np.linalg.norm(b.x[q, run, j] - b.x[q, run, i]) - 2 * r for q in (k, k - 1) if q >= 0]
+            stalled[run] += len(before) == 2 and max(before) < STALL_GAP
         else:
             other_hits[run] += 1
-    return robot_hits, other_hits
+    return robot_hits, other_hits, stalled
 
 
 def motion_stats(b: ch.FleetBatch) -> tuple[np.ndarray, np.ndarray]:
@@ -105,10 +111,11 @@ def run(
     rows, stats = [], {}
     for c in CASES:
         b = res[(c.name, "")]
-        rr, other = classify_collisions(b, world)
+        rr, other, stalled = classify_collisions(b, world)
         speed, path = motion_stats(b)
         coll = b.collided[-1]
-        stats[c.name] = {"robot_robot": rr, "other": other, "speed": speed, "path": path, "collided": coll}
+        stats[c.name] = {"robot_robot": rr, "other": other, "stalled": stalled, "speed": speed, "path": path,
+                         "collided": coll}
         rows += [[c.name, str(i), str(b.seed), str(int(coll[j])), str(int(rr[j])), str(int(other[j])),
                   str(int(b.robots - coll[j])), num(speed[j]), num(path[j])] for j, i in enumerate(b.run_index)]
     write_csv(out_dir / "runs.csv", RUNS_COLUMNS, rows)
@@ -121,8 +128,9 @@ def run(
         rr = s["robot_robot"]
         checks.append(check(
             f"{c.name}: no robot-robot collision in any run, {label}", "no robot-robot collisions",
-            f"{int(rr.sum())} robots disabled by touching another robot, in {int((rr > 0).sum())} of {b.runs} runs; "
-            f"{int(s['other'].sum())} by touching a wall", rr.sum() == 0))
+            f"{int(rr.sum())} robots disabled by touching another robot, in {int((rr > 0).sum())} of {b.runs} runs "
+            f"({int(s['stalled'].sum())} of them after a stall: closer than {STALL_GAP * 1e3:g} mm during the two "
+            f"ticks before); {int(s['other'].sum())} by touching a wall", rr.sum() == 0))
         checks.append(check(
             f"{c.name}: the robots keep moving: median speed of the operational robots over the last "
             f"{SPEED_WINDOW:g} s >= {MIN_SPEED:g} m/s in every run", "the robots roam constantly", f"lowest run median {r3(np.nanmin(s['speed']))} m/s "
@@ -144,9 +152,15 @@ def run(
                      "carried-over omega*v is not bounded by it (spec §20 item 19): a robot that was fast and "
                      "then turns toward a close body, or sees one appear in front, can close more than the gap in "
                      "one step. The guard (ours) caps v at alpha*sf_1/dt after the update, which makes the "
-                     "one-step clearance exact; the thesis reports no collisions without it.",
+                     "one-step clearance toward the frontal bodies exact in exact arithmetic; the thesis reports no "
+                     "collisions without it.",
         "collision_classes": "a disabled robot is counted as robot-robot when, at the tick it was disabled, "
-                             "another robot's surface is closer than any wall",
+                             "another robot's surface is closer than any wall. Both robots of a contact end up "
+                             "disabled: the one that was run into at its next move at the latest",
+        "stall": f"with the guard, two robots that meet nose to nose each close at most alpha = 0.9 of the gap "
+                 f"per tick, so the gap shrinks geometrically and both stop (v -> 0) while still turning; when the "
+                 f"gap reaches floating-point zero any motion touches. Contacts from a gap below "
+                 f"{STALL_GAP * 1e3:g} mm during the two ticks before are counted as after a stall.",
     }
     (out_dir / "README.md").write_text(_readme(summary, runs), encoding="utf-8")
     return summary
@@ -199,10 +213,11 @@ an empty 40 m × 40 m walled arena, {summary['duration_s']:g} s, {runs} seeded r
 
 ## Files
 
-- `runs.csv`: one row per (case, run): `{','.join(RUNS_COLUMNS)}`. Collided robots split
-  into robot-robot and wall contacts ({summary['collision_classes']}); median speed over
-  all robots and ticks of the last {SPEED_WINDOW:g} s; the shortest path any robot covered in the
-  last {TRAIL:g} s.
+- `runs.csv`: one row per (case, run): `{','.join(RUNS_COLUMNS)}`. Collided robots are
+  split into robot-robot and wall contacts; the median speed is over the operational robots
+  and the ticks of the last {SPEED_WINDOW:g} s; the shortest path is the least distance an
+  operational robot covered in the last {TRAIL:g} s (straight steps between ticks).
+- Collision classes: {summary['collision_classes']}.
 - `fig5-4.png`: run 0 of each case, every robot's path over the last {TRAIL:g} s and its
   final position.
 - `summary.json`: the checks below.
@@ -214,4 +229,8 @@ an empty 40 m × 40 m walled arena, {summary['duration_s']:g} s, {runs} seeded r
 ## Why a guard
 
 {summary['why_guard']}
+
+## Stalls with the guard
+
+{summary['stall'][0].upper() + summary['stall'][1:]}
 """
