@@ -27,6 +27,12 @@ def linear(x: np.ndarray) -> np.ndarray:
     return x[..., 0].copy()
 
 
+def line(x: np.ndarray) -> np.ndarray:
+    """Mai's "line" objective, undefined in the thesis: x_0², minimum 0 on the line x_0 = 0
+    (SLO spec gap A32)."""
+    return x[..., 0] ** 2
+
+
 def sphere(x: np.ndarray) -> np.ndarray:
     return np.sum(x**2, axis=-1)
 
