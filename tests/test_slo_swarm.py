@@ -1,0 +1,156 @@
+"""The SLO loop (Mai §3, Alg. 1; spec §15.4): determinism, localisation without error,
+PSO on Sphere, metrics and state for the app."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from shoal.engine.slo import SLOSwarm
+from shoal.engine.slo_localisation import Flag
+from shoal.engine.slo_objectives import QUALITY_THRESHOLDS, SLO_OBJECTIVES, slo_objective
+from shoal.engine.slo_selection import Kind
+
+
+def run(sw: SLOSwarm, steps: int) -> list:
+    return [sw.step() for _ in range(steps)]
+
+
+def test_seeded_runs_are_bit_reproducible_and_batch_equals_alone():
+    """Acceptance 6."""
+    kw = dict(errors="high", selection="rts", particles=8, neighbourhood="random")
+    a, b = SLOSwarm(runs=3, seed=11, **kw), SLOSwarm(runs=3, seed=11, **kw)
+    run(a, 15), run(b, 15)
+    assert np.array_equal(a.state.x, b.state.x) and np.array_equal(a.state.est, b.state.est)
+    alone = SLOSwarm(runs=1, seed=11, first_run=2, **kw)
+    run(alone, 15)
+    assert np.array_equal(alone.state.x[0], a.state.x[2]) and np.array_equal(alone.state.est[0], a.state.est[2])
+    other = SLOSwarm(runs=1, seed=12, **kw)
+    run(other, 15)
+    assert not np.array_equal(other.state.x[0], a.state.x[0])
+
+
+def test_components_draw_from_their_own_streams():
+    """A random walk ignores the beliefs, so its path is the same for every error level."""
+    paths = []
+    for errors in ("none", "high"):
+        sw = SLOSwarm(runs=2, seed=4, motion="random_walk", errors=errors, particles=6)
+        run(sw, 10)
+        paths.append(sw.state.x)
+    assert np.array_equal(paths[0], paths[1])
+
+
+@pytest.mark.parametrize("neighbourhood,param", [("full", None), ("ring", 2)])
+def test_error_free_localisation_converges_only_with_the_corrected_formula(neighbourhood, param):
+    """Acceptance 2: corrected [3.1] drives the mean e_abs to 0 within 100 generations."""
+    kw = dict(runs=2, seed=1, errors="none", motion="random_walk", neighbourhood=neighbourhood,
+              neighbourhood_param=param, particles=12)
+    start = SLOSwarm(**kw).info().e_abs["mean"]
+    fixed = run(SLOSwarm(**kw), 100)[-1].e_abs["mean"]
+    literal = run(SLOSwarm(literal_eq_3_1=True, **kw), 100)[-1].e_abs["mean"]
+    assert np.all(start > 5.0)
+    assert np.all(fixed < 1e-6)
+    assert np.all(literal > 0.3)
+
+
+def test_pso_on_sphere_keeps_improving_without_error():
+    """Acceptance 5 (short): error-free SLO-PSO descends by many orders of magnitude."""
+    infos = run(SLOSwarm(runs=2, seed=3, errors="none", objective="sphere"), 200)
+    best = np.array([i.best_so_far for i in infos])
+    assert np.all(best[-1] < 1e-10)
+    assert np.all(best[-1] < 1e-5 * best[99])
+    assert np.all(np.diff(best, axis=0) <= 0)
+    assert np.all(np.isfinite(infos[-1].quality_met_at))
+
+
+def test_sensor_error_sets_a_precision_floor_and_the_relative_error_turns_up():
+    """Acceptance 5 (errors): with Low error the best plateaus far above the error-free run,
+    and the median relative error rises once the swarm has contracted (Figs. 4.11–4.13)."""
+    kw = dict(runs=3, seed=5, objective="sphere")
+    low = run(SLOSwarm(errors="low", **kw), 200)
+    none = run(SLOSwarm(errors="none", **kw), 200)
+    assert np.median(low[-1].best_so_far) > 1e4 * np.median(none[-1].best_so_far)
+    rel = np.array([np.median(i.e_rel["median"]) for i in low])
+    dist = np.array([np.median(i.distance["median"]) for i in low])
+    assert dist[-1] < 0.05 * dist[0]
+    assert rel[-50:].mean() > 1.5 * rel[:50].min()
+
+
+def test_state_exposes_beliefs_for_the_app():
+    sw = SLOSwarm(runs=2, seed=0, particles=7, selection="rts")
+    s = sw.state
+    assert s.est.shape == (2, 7, 7, 2) and s.valid.shape == s.adjacency.shape == s.kind.shape == (2, 7, 7)
+    assert np.all(s.kind[s.valid] == Kind.INITIAL) and s.candidates is None
+    run(sw, 3)
+    s = sw.state
+    assert s.candidates.points.shape == (2, 7, 7, 3, 2) and s.candidates.mask.shape == (2, 7, 7, 3)
+    assert np.all(np.isin(s.kind[s.valid], [Kind.X1, Kind.X2, Kind.X3]))
+    assert np.all(s.kind[~s.valid] == Kind.NONE)
+    assert np.array_equal(s.valid, s.adjacency) and np.all(s.adjacency.sum(axis=2) == 5)
+    assert s.beliefs.triangle.shape == (2, 7, 7) and s.flag.dtype == np.int8
+    cols = sw.info().columns()
+    for name in ("best_fitness", "e_abs_mean", "e_abs_sem", "e_rel_median", "e_ang_std", "distance_median",
+                 "dead_reckoning", "round_trip", "quality_met_at"):
+        assert cols[name].shape == (2,)
+
+
+def test_perfect_localisation_has_no_error():
+    infos = run(SLOSwarm(runs=2, seed=2, selection="perfect", errors="high", particles=8), 5)
+    assert np.all(infos[-1].e_abs["mean"] == 0.0)
+
+
+@pytest.mark.parametrize("selection", ["css", "rts", "akcan"])
+@pytest.mark.parametrize("neighbourhood", ["random", "radius", "knn"])
+def test_every_method_stays_finite_under_high_error(selection, neighbourhood):
+    sw = SLOSwarm(runs=2, seed=9, particles=8, errors="high", selection=selection, neighbourhood=neighbourhood,
+                  objective="rastrigin", delta_cos=-np.inf)
+    infos = run(sw, 12)
+    assert np.all(np.isfinite(sw.state.est)) and np.all(np.isfinite(sw.state.x))
+    assert np.all((infos[-1].dead_reckoning >= 0) & (infos[-1].dead_reckoning <= 1))
+
+
+def test_range_failures_fall_back_to_dead_reckoning():
+    from shoal.engine.slo_sensors import ErrorModel, RangeErrors
+
+    sw = SLOSwarm(runs=1, seed=0, particles=6, errors=ErrorModel(RangeErrors(p_fail=1.0)), motion="random_walk")
+    info = run(sw, 3)[-1]
+    assert info.dead_reckoning[0] == 1.0 and np.all(sw.state.flag[sw.state.valid] == Flag.FALLBACK)
+
+
+def test_options_run():
+    """The open choices of §14 are parameters: local best from pbests (A36), SPSO halving
+    (A5), measured pbest shift (A35), fitness noise (A15), entry policy (A25), radius scale."""
+    sw = SLOSwarm(runs=2, seed=1, particles=10, errors="low", local_best="pbest", spso_self_best_halving=True,
+                  pbest_shift="measured", fitness_noise=0.01, entry_policy="geometric_random", radial="uniform_area",
+                  neighbourhood="random", rts_triangle="best", selection="rts", rts_prefer_geometric=True)
+    run(sw, 10)
+    assert np.all(np.isfinite(sw.state.x)) and np.all(np.isfinite(sw.state.P))
+    big = SLOSwarm(runs=1, seed=1, motion="random_walk", unit=2.0, particles=30)
+    assert big.state.x.min() >= 0.0 and big.state.x.max() <= 200.0 and big.state.x.max() > 100.0
+    with pytest.raises(ValueError, match="prediction_weight"):
+        SLOSwarm(prediction_weight=1.5)
+    with pytest.raises(ValueError, match="objective"):
+        SLOSwarm(objective="nope")
+
+
+def test_geometric_random_entry_places_new_neighbours_on_a_mirror_candidate():
+    sw = SLOSwarm(runs=2, seed=3, particles=10, neighbourhood="random", entry_policy="geometric_random",
+                  errors="none", motion="random_walk")
+    before = sw.state.adjacency.copy()
+    run(sw, 1)
+    s = sw.state
+    new = s.adjacency & ~before & (s.flag == Flag.GEOMETRIC)
+    assert new.any()
+    truth = s.x[:, None] - s.x[:, :, None]
+    d = np.linalg.norm(truth, axis=-1)
+    assert np.allclose(np.linalg.norm(s.est, axis=-1)[new], d[new])  # |x1| = |x2| = d*
+
+
+def test_slo_objectives():
+    zero = np.zeros((1, 1, 2))
+    for name in ("ackley", "griewank", "line", "rastrigin", "sphere"):
+        assert slo_objective(name)(zero)[0, 0] == pytest.approx(0.0, abs=1e-12)
+    assert slo_objective("rosenbrock")(np.ones((1, 1, 2)))[0, 0] == 0.0
+    assert slo_objective("plane")(np.array([[[-5.0, 3.0]]]))[0, 0] == -5.0
+    assert slo_objective("rastrigin")(np.array([[[0.99496, 0.0]]]))[0, 0] == pytest.approx(0.995, abs=1e-3)
+    assert set(QUALITY_THRESHOLDS) == set(SLO_OBJECTIVES)
