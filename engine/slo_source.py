@@ -1,0 +1,156 @@
+"""SLO-estimated positions for any Shoal swarm (spec §15): instead of reading oracle
+positions, each robot localises the others from noisy ranges and odometry and acts on what
+it believes. :class:`SLOPositionSource` follows a swarm given its true positions step by
+step; :class:`SLOSimulation` is the Chapter 3 :class:`~.sim.Simulation` driven by it.
+
+With the None error set and true initial beliefs the believed vectors equal the oracle ones
+up to floating-point error, so an SLO run and an oracle run of the same seed coincide.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+
+from .neighbourhoods import Neighbourhood, NeighbourhoodKind
+from .sim import Simulation
+from .slo_localiser import Beliefs, Localiser, LocaliserParams, random_estimates, relative_truth
+from .slo_sensors import ErrorModel, error_model
+from .slo_streams import component_generators
+
+# Component keys of an SLO layer inside another simulation: children (i, 100 + k) of run i,
+# clear of anything the host draws.
+SOURCE_STREAM_OFFSET = 100
+
+
+class SLOPositionSource:
+    """Beliefs of N robots about each other, updated from the swarm's true positions.
+
+    ``x0`` (R, N, 2) are the true starting positions. ``errors`` is a preset name (none, low,
+    high) or an :class:`ErrorModel` in thesis units, rescaled by ``unit`` (arena width / 100).
+    ``initial_estimates`` "truth" starts from correct beliefs (a calibrated deployment);
+    "random" uses differences of points in ``init_area`` (gap A9). Other keywords are
+    :class:`LocaliserParams` fields (``selection``, ``prediction_weight``, ``delta_cos``, …).
+    """
+
+    def __init__(
+        self,
+        x0: np.ndarray,
+        *,
+        seed: int = 0,
+        first_run: int = 0,
+        errors: str | ErrorModel = "none",
+        neighbourhood: NeighbourhoodKind = "full",
+        neighbourhood_param: float | None = None,
+        initial_estimates: Literal["truth", "random"] = "truth",
+        init_area: tuple[float, float] = (-50.0, 50.0),
+        unit: float = 1.0,
+        **localiser: Any,
+    ) -> None:
+        x0 = np.asarray(x0, dtype=float)
+        if x0.ndim != 3 or x0.shape[-1] != 2:
+            raise ValueError(f"SLO needs 2-D positions (R, N, 2), got {x0.shape}")
+        R, n, _ = x0.shape
+        self.streams = component_generators(seed, first_run, R, offset=SOURCE_STREAM_OFFSET)
+        self.errors = error_model(errors).scaled(unit)
+        if "max_range" in localiser:
+            localiser["max_range"] = float(localiser["max_range"]) * unit
+        self.params = LocaliserParams(**localiser)
+        rule = Neighbourhood(neighbourhood, neighbourhood_param)
+        self.rule = Neighbourhood("radius", rule.value * unit) if neighbourhood == "radius" else rule
+        self.localiser = Localiser(self.params, self.errors, self.streams, n)
+        lo, hi = init_area[0] * unit, init_area[1] * unit
+        est = relative_truth(x0) if initial_estimates == "truth" else random_estimates(self.streams["init"], n, lo, hi)
+        self.x = x0.copy()
+        self.beliefs: Beliefs = self.localiser.start(x0, self.rule.adjacency(x0, self.streams["topology"]), est)
+
+    def observe(self, x: np.ndarray) -> Beliefs:
+        """One sensing and localisation step at the new true positions ``x`` (R, N, 2)."""
+        x = np.asarray(x, dtype=float)
+        adjacency = self.rule.adjacency(x, self.streams["topology"])
+        self.beliefs = self.localiser.update(self.beliefs, self.x, x, adjacency)
+        self.x = x.copy()
+        return self.beliefs
+
+    @property
+    def odometry(self) -> np.ndarray:
+        """Each robot's measured displacement of the last step v*_i, (R, N, 2)."""
+        return self.beliefs.odometry
+
+    def relative(self, target: np.ndarray) -> np.ndarray:
+        """Each robot's belief of the vector to robot ``target`` (per run (R,) or per robot
+        (R, N)), (R, N, 2); zero for the target itself."""
+        est = self.beliefs.est
+        R, n = est.shape[:2]
+        t = np.broadcast_to(np.asarray(target).reshape(R, -1), (R, n))
+        out = np.take_along_axis(est, t[:, :, None, None], axis=2)[:, :, 0, :]
+        return np.where((t == np.arange(n))[..., None], 0.0, out)
+
+    def believed_positions(self, x_self: np.ndarray | None = None) -> np.ndarray:
+        """(R, N, N, 2): where robot i believes robot j is, anchored at i's own position
+        ``x_self`` (default: the true one) — the ghost overlay."""
+        anchor = self.x if x_self is None else x_self
+        return anchor[:, :, None, :] + self.beliefs.est
+
+
+class SLOSimulation(Simulation):
+    """The Chapter 3 swarm acting on SLO beliefs instead of oracle positions.
+
+    Each robot steers towards its personal best, kept relative to itself from its odometry
+    (gap A35, measured shift; reset to 0 when it improves), and the swarm's global best,
+    located as x̂_i,owner + P_owner (the owner's estimate of its own best, communicated;
+    gap A36). ``slo`` holds the :class:`SLOPositionSource` keywords (errors, selection, …).
+    Fitness is still read at the true position; positions must be 2-D; only the "literal"
+    attractors use positions.
+    """
+
+    def __init__(self, *, slo: dict[str, Any] | None = None, **kwargs: Any) -> None:
+        self.slo_params: dict[str, Any] = dict(slo or {})
+        super().__init__(**kwargs)
+
+    def reset(self, seed: int | None = None) -> None:
+        super().reset(seed)
+        self._start_source()
+
+    def _start_source(self) -> None:
+        if self.d != 2:
+            raise ValueError(f"SLO positions need d = 2, got {self.d}")
+        s = self.state
+        self.source = SLOPositionSource(s.x, seed=self.seed, first_run=self.first_run, **self.slo_params)
+        self.believed_pbest = s.y - s.x  # known at the start (0 for a fresh swarm)
+        self._sensed_k = s.k
+
+    def _sense(self) -> None:
+        """Localise once per tick at the current true positions; shift the pbest by v*."""
+        s = self.state
+        if self._sensed_k == s.k:
+            return
+        self.source.observe(s.x)
+        self.believed_pbest = self.believed_pbest - self.source.odometry  # [3.13], measured
+        self._sensed_k = s.k
+
+    def _update_bests(self) -> None:
+        self._sense()
+        before = self.state.f_y.copy()
+        super()._update_bests()
+        improved = self.state.f_y != before
+        self.believed_pbest = np.where(improved[..., None], 0.0, self.believed_pbest)
+
+    def _directions(self) -> np.ndarray:
+        if self.attractors != "literal":
+            return super()._directions()
+        self._sense()
+        s = self.state
+        owner = s.f_y.argmax(axis=1) if self.objective.maximise else s.f_y.argmin(axis=1)
+        own_best = np.take_along_axis(self.believed_pbest, owner[:, None, None], axis=1)  # (R, 1, 2)
+        to_best = self.source.relative(owner) + own_best
+        return np.stack([self.believed_pbest, to_best])
+
+    def set_robots(self, n: int) -> None:
+        super().set_robots(n)
+        self._start_source()
+
+    def set_objective(self, objective) -> None:  # type: ignore[no-untyped-def]
+        super().set_objective(objective)
+        self.believed_pbest = np.zeros_like(self.state.x)

@@ -1,0 +1,73 @@
+"""SLO-estimated positions for the Chapter 3 swarm: oracle vs SLO on the same seed."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from shoal.engine.coeffs import Constant
+from shoal.engine.laws import Law
+from shoal.engine.objectives import Objective
+from shoal.engine.sim import Simulation
+from shoal.engine.slo_source import SLOPositionSource, SLOSimulation
+from shoal.presets.build import build_simulation
+from shoal.presets.io import load
+
+
+def ch3_kwargs(**over) -> dict:
+    """The default preset's Chapter 3 swarm as plain keywords (40 m arena: unit 0.4)."""
+    base = build_simulation(load("default"), runs=2, seed=5)
+    kw = dict(robots=12, d=2, dt=base.dt, law=base.law, policy=base.policy, objective=base.objective, runs=2,
+              seed=5, init_center=base.init_center, init_spread=base.init_spread, init_speed=base.init_speed)
+    kw.update(over)
+    return kw
+
+
+def trajectories(sim: Simulation, steps: int) -> np.ndarray:
+    out = []
+    for _ in range(steps):
+        sim.step()
+        out.append(sim.state.x.copy())
+    return np.stack(out)
+
+
+@pytest.mark.parametrize("order", ["before_velocity", "after_velocity"])
+def test_error_free_slo_reproduces_the_oracle_run(order):
+    oracle = trajectories(Simulation(**ch3_kwargs(pbest_order=order)), 150)
+    slo = trajectories(SLOSimulation(slo=dict(errors="none", unit=0.4), **ch3_kwargs(pbest_order=order)), 150)
+    assert np.allclose(slo, oracle, rtol=0, atol=1e-9)
+
+
+def test_error_free_slo_matches_standard_pso_up_to_rounding():
+    kw = ch3_kwargs(law=Law("standard"), policy=Constant(0.6, (0.8, 0.8)), objective=Objective("sphere"),
+                    init_spread=20.0)
+    oracle = trajectories(Simulation(**kw), 80)
+    slo = trajectories(SLOSimulation(slo=dict(errors="none", selection="css"), **kw), 80)
+    assert np.allclose(slo, oracle, rtol=1e-7, atol=1e-9)
+
+
+def test_high_error_changes_the_run():
+    oracle = trajectories(Simulation(**ch3_kwargs()), 100)
+    slo = trajectories(SLOSimulation(slo=dict(errors="high", unit=0.4), **ch3_kwargs()), 100)
+    assert np.abs(slo - oracle).max() > 1.0
+    again = trajectories(SLOSimulation(slo=dict(errors="high", unit=0.4), **ch3_kwargs()), 100)
+    assert np.array_equal(slo, again)
+
+
+def test_source_beliefs_follow_the_swarm():
+    rng = np.random.default_rng(0)
+    x = rng.uniform(0, 10, (2, 5, 2))
+    src = SLOPositionSource(x, seed=1, errors="none")
+    for _ in range(5):
+        x = x + rng.uniform(-1, 1, x.shape)
+        b = src.observe(x)
+    truth = x[:, None] - x[:, :, None]
+    assert np.allclose(b.est, truth, atol=1e-9)
+    target = np.array([3, 0])
+    rel = src.relative(target)
+    assert rel.shape == (2, 5, 2)
+    assert np.allclose(rel, x[np.arange(2), target][:, None] - x, atol=1e-9)
+    assert np.all(rel[0, 3] == 0) and np.all(rel[1, 0] == 0)
+    assert np.allclose(src.believed_positions()[:, 1], x, atol=1e-9)
+    with pytest.raises(ValueError, match="2-D"):
+        SLOPositionSource(np.zeros((1, 4, 3)))
