@@ -17,6 +17,7 @@ from typing import Literal
 import numpy as np
 
 from .neighbourhoods import Neighbourhood, NeighbourhoodKind
+from .slo_formation import AttractionRepulsion
 from .slo_localisation import Candidates
 from .slo_localiser import Beliefs, EntryPolicy, Localiser, LocaliserParams, Selection, random_estimates, relative_truth
 from .slo_metrics import dead_reckoning_share, pair_distances, pair_errors, round_trip_errors, stats
@@ -26,7 +27,7 @@ from .slo_sensors import ErrorModel, error_model
 from .slo_streams import component_generators
 from .spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
 
-Motion = Literal["pso", "random_walk"]
+Motion = Literal["pso", "random_walk", "formation"]
 LocalBest = Literal["current", "pbest"]
 PbestShift = Literal["commanded", "measured"]
 InitialEstimates = Literal["random", "truth"]
@@ -70,12 +71,17 @@ class SLOConfig:
     rts_tolerance: float = 1.0
     fitness_noise: float = 0.0  # σ_f, gap A15
     quality_threshold: float | None = None  # T; None: the §12 table (gap A33)
+    ar_gain: float = 0.0  # gap A6: Gazi–Passino attraction–repulsion (external to the thesis); 0 = off
+    ar_a: float = 0.01
+    ar_b: float = 0.2
+    ar_c: float = 25.0  # a squared length: scaled by unit²
+    ar_v_max: float = np.inf
     unit: float = 1.0
 
     def __post_init__(self) -> None:
         if self.particles < 2:
             raise ValueError(f"particles: need at least 2, got {self.particles}")
-        if self.motion not in ("pso", "random_walk"):
+        if self.motion not in ("pso", "random_walk", "formation"):
             raise ValueError(f"motion: unknown {self.motion!r}")
         if self.local_best not in ("current", "pbest"):
             raise ValueError(f"local_best: unknown {self.local_best!r}")
@@ -107,6 +113,10 @@ class SLOConfig:
         rule = Neighbourhood(self.neighbourhood, self.neighbourhood_param)
         return Neighbourhood("radius", rule.value * self.unit) if self.neighbourhood == "radius" else rule
 
+    def formation(self) -> AttractionRepulsion:
+        return AttractionRepulsion(self.ar_gain, self.ar_a, self.ar_b, self.ar_c * self.unit**2,
+                                   self.ar_v_max * self.unit)
+
     def area(self) -> tuple[float, float]:
         lo, hi = self.init_area or ((-50.0, 50.0) if self.motion == "pso" else (0.0, 100.0))
         return lo * self.unit, hi * self.unit
@@ -129,7 +139,13 @@ class SLOState:
     heading: np.ndarray  # (R, N) direction of the last command
     status: np.ndarray  # (R, N) int8, 0 = active (recorder convention)
     beliefs: Beliefs
+    f_best: np.ndarray  # (R,) best true fitness of the run so far
     k: int = 0
+
+    @property
+    def f_yg(self) -> np.ndarray:
+        """Best fitness so far, under the name the recorder reads."""
+        return self.f_best
 
     @property
     def est(self) -> np.ndarray:
@@ -200,6 +216,7 @@ class SLOSwarm:
         self.errors: ErrorModel = error_model(self.config.errors).scaled(self.config.unit)
         self.spso = self.config.spso()
         self.rule = self.config.neighbourhood_rule()
+        self.formation = self.config.formation()
         self.reset(seed)
 
     @property
@@ -224,14 +241,20 @@ class SLOSwarm:
         self.state = SLOState(
             x=x, u=u, P=np.zeros_like(x), fP=np.full(shape, np.inf), f=self.fitness(x),
             heading=np.arctan2(u[..., 1], u[..., 0]), status=np.zeros(shape, dtype=np.int8), beliefs=beliefs,
+            f_best=np.full(self.runs, np.inf),
         )
-        self._best_so_far = np.full(self.runs, np.inf)
         self._met = np.full(self.runs, np.inf)
         self._last = self._record()
 
     def info(self) -> SLOInfo:
         """Metrics of the current generation."""
         return self._last
+
+    def run(self, generations: int) -> dict[str, np.ndarray]:
+        """Advance ``generations`` steps; per-generation columns of :meth:`SLOInfo.columns`
+        stacked to (generations + 1, R), the current generation first."""
+        rows = [self._last.columns()] + [self.step().columns() for _ in range(generations)]
+        return {k: np.stack([r[k] for r in rows]) for k in rows[0]}
 
     # ------------------------------------------------------------------ behaviour
     def _sensed_fitness(self) -> np.ndarray:
@@ -273,7 +296,14 @@ class SLOSwarm:
     def step(self) -> SLOInfo:
         """Advance every run by one generation and return its metrics."""
         s, cfg = self.state, self.config
-        v_new = self._pso_command() if cfg.motion == "pso" else self._walk_command()
+        if cfg.motion == "pso":
+            v_new = self._pso_command()
+        elif cfg.motion == "random_walk":
+            v_new = self._walk_command()
+        else:
+            v_new = self.formation.velocity(s.est, s.valid)
+        if cfg.motion != "formation" and cfg.ar_gain > 0:  # collision-avoidance term (§3)
+            v_new = v_new + self.formation.velocity(s.est, s.valid)
         x_prev = s.x
         s.x = s.x + v_new  # [3.12], perfect movement (§1)
         s.u = v_new
@@ -293,11 +323,11 @@ class SLOSwarm:
     def _record(self) -> SLOInfo:
         s = self.state
         best = s.f.min(axis=1)
-        self._best_so_far = np.minimum(self._best_so_far, best)
+        s.f_best = np.minimum(s.f_best, best)
         self._met = np.where(np.isinf(self._met) & (best <= self.config.threshold()), float(s.k), self._met)
         err = pair_errors(s.x, s.est, s.valid)
         return SLOInfo(
-            k=s.k, best_fitness=best, best_so_far=self._best_so_far.copy(), quality_met_at=self._met.copy(),
+            k=s.k, best_fitness=best, best_so_far=s.f_best.copy(), quality_met_at=self._met.copy(),
             e_abs=stats(err["abs"]), e_rel=stats(err["rel"]), e_ang=stats(err["ang"]),
             distance=stats(pair_distances(s.x)), dead_reckoning=dead_reckoning_share(s.kind, s.valid),
             round_trip=stats(round_trip_errors(s.est, s.adjacency))["mean"],

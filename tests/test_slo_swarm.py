@@ -154,3 +154,15 @@ def test_slo_objectives():
     assert slo_objective("plane")(np.array([[[-5.0, 3.0]]]))[0, 0] == -5.0
     assert slo_objective("rastrigin")(np.array([[[0.99496, 0.0]]]))[0, 0] == pytest.approx(0.995, abs=1e-3)
     assert set(QUALITY_THRESHOLDS) == set(SLO_OBJECTIVES)
+
+
+def test_attraction_repulsion_settles_at_the_equilibrium_spacing():
+    """Gap A6 (Gazi–Passino, external to the thesis): two robots end √(c·ln(b/a)) apart."""
+    sw = SLOSwarm(runs=2, seed=1, particles=2, neighbourhood="full", errors="none", motion="formation",
+                  ar_gain=2.0, selection="perfect")
+    history = sw.run(150)
+    assert history["distance_median"].shape == (151, 2)
+    assert np.allclose(history["distance_median"][-1], sw.formation.spacing, rtol=1e-6)
+    pso = SLOSwarm(runs=1, seed=1, particles=6, ar_gain=0.1, ar_v_max=2.0)
+    run(pso, 5)
+    assert np.all(np.isfinite(pso.state.x))
