@@ -64,29 +64,21 @@ def akcan(
 ) -> tuple[np.ndarray, np.ndarray]:
     """[3.9], aggregated as gap A24: score(p) = Σ_{C ∈ N_A ∩ N_B} min_{q ∈ C_AC} |‖p − q‖ − d*_BC|
     with d*_BC measured by B; x̂_AB = argmin score; no common neighbour → ``fallback`` (CSS)."""
-    R, n = adjacency.shape[:2]
     pts, mask = _masked_points(c), c.mask
-    # common[r, a, b, c]: c ∈ N_a ∩ N_b, c ∉ {a, b}, and B measured C
-    common = adjacency[:, :, None, :] & adjacency[:, None, :, :] & (ranges[:, None, :, :] > 0)
-    idx = np.arange(n)
-    common[:, idx, :, idx] = False  # C ≠ A
-    common[:, :, idx, idx] = False  # C ≠ B
-    d_bc = ranges[:, None, :, :]  # (R, 1, b, c)
-    score = np.empty((R, n, n, 3))
-    for p in range(3):  # the few candidates of (a → b)
-        best = np.full((R, n, n, n), np.inf)
-        for q in range(3):  # candidates of (a → c)
-            gap = np.linalg.norm(pts[:, :, :, None, p, :] - pts[:, :, None, :, q, :], axis=-1)  # (R, a, b, c)
-            err = np.abs(gap - d_bc)
-            best = np.where(mask[:, :, None, :, q], np.minimum(best, err), best)
-        score[..., p] = np.where(common, best, 0.0).sum(axis=-1)
-    score = np.where(mask, score, np.inf)
+    r, a, b = np.nonzero(adjacency)  # the edges (a → b) of every run
+    # common[e, c]: c ∈ N_a ∩ N_b (so c ∉ {a, b}) and B measured C
+    common = adjacency[r, a] & adjacency[r, b] & (ranges[r, b] > 0)
+    diff = pts[r, a, b][:, None, :, None, :] - pts[r, a][:, :, None, :, :]  # (E, c, p, q, 2)
+    gap = np.sqrt(np.sum(diff * diff, axis=-1))
+    err = np.abs(gap - ranges[r, b][:, :, None, None])
+    err = np.where(mask[r, a][:, :, None, :], err, np.inf).min(axis=-1)  # (E, c, p)
+    score = np.where(common[..., None], err, 0.0).sum(axis=1)
+    score = np.where(mask[r, a, b], score, np.inf)
     choice = np.argmin(score, axis=-1)
-    est = np.take_along_axis(c.points, choice[..., None, None], axis=-2)[..., 0, :]
-    kind = np.array([Kind.X1, Kind.X2, Kind.X3], dtype=np.int8)[choice]
-    has_common = common.any(axis=-1)
-    est = np.where(has_common[..., None], est, fallback[0])
-    kind = np.where(has_common, kind, fallback[1]).astype(np.int8)
+    use = common.any(axis=1)
+    est, kind = fallback[0].copy(), fallback[1].copy()
+    est[r[use], a[use], b[use]] = c.points[r, a, b][use, choice[use]]
+    kind[r[use], a[use], b[use]] = np.array([Kind.X1, Kind.X2, Kind.X3], dtype=np.int8)[choice[use]]
     return est, kind
 
 
