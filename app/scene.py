@@ -90,11 +90,16 @@ class ArenaView:
         self.built_revision = -1
 
     # ------------------------------------------------------------------ static scene
-    def rebuild(self, scenario: Scenario, scene_revision: int) -> None:
-        """(Re)create every node for ``scenario``: arena square, grid, landscape or source."""
+    def clear(self) -> None:
+        """Remove every node of this view."""
         for node in reversed(list(self.nodes.values())):
             node.remove()
         self.nodes.clear()
+        self.built_revision = self.drawn_revision = -1
+
+    def rebuild(self, scenario: Scenario, scene_revision: int) -> None:
+        """(Re)create every node for ``scenario``: arena square, grid, landscape or source."""
+        self.clear()
         sc = self.scene
         half = float(scenario.arena.half_size)
         s = VIEW_HALF / half

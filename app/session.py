@@ -1,8 +1,8 @@
-"""One browser tab's simulation: the current scenario, the running swarm, playback and history.
+"""The Chapter 3 session: one browser tab's free-space swarm (a :class:`Simulation`).
 
-No viser here: the GUI (``panels``) and the drawing (``scene``) call these methods, and so
-can tests. Every public method takes ``lock``, because browser callbacks run on viser's
-thread pool while the ticking thread advances the swarm.
+Playback, history and export come from :class:`BaseSession`; this module adds what is
+particular to the Chapter 3 swarm: its controller changes without restart, the (ω, ĉ)
+readout, the phase-plane history and the arena snapshot.
 
 Every change goes through the pydantic :class:`Scenario` first (``apply``): a value the model
 refuses raises :class:`PresetError` and leaves both the scenario and the swarm untouched.
@@ -10,42 +10,32 @@ refuses raises :class:`PresetError` and leaves both the scenario and the swarm u
 
 from __future__ import annotations
 
-import copy
 import functools
-import io as _io
-import json
 import math
-import threading
-from collections import deque
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-import shoal
+from shoal.engine.recorder import TRAJECTORY_COLUMNS
 from shoal.engine.sim import Simulation
 from shoal.presets import io as presets_io
 from shoal.presets.build import build_simulation, law_for, objective_for, policy_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-TRAJECTORY_COLUMNS = ("run", "step", "t", "robot", "x", "y", "heading", "vx", "vy", "status")
-_CSV_FORMAT = ["%d", "%d", "%.6f", "%d", "%.9g", "%.9g", "%.9g", "%.9g", "%.9g", "%d"]
+from .base_session import MAX_UPLOAD_BYTES, BaseSession, Frame
 
-MAX_UPLOAD_BYTES = 256 * 1024
+__all__ = ["MAX_UPLOAD_BYTES", "TRAJECTORY_COLUMNS", "Frame", "Session", "Snapshot", "app_presets",
+           "check_supported"]
 
 
 def check_supported(scenario: Scenario) -> Scenario:
-    """The browser app runs the Chapter 3 swarm; refuse scenes it cannot show (yet)."""
-    problems = []
-    if getattr(scenario, "world", None) is not None:
-        problems.append("world: scenes with obstacles (Chapters 4-5) do not run in the browser app yet; "
-                        "use `shoal run` for them")
-    elif scenario.controller.mode not in ("raw", "physical"):
-        problems.append(f"controller.mode: {scenario.controller.mode!r} needs a [world]; the browser app "
-                        "offers 'raw' and 'physical'")
-    if problems:
-        raise PresetError(problems)
+    """Refuse scenes the browser app cannot show: a free-space swarm needs mode raw or physical
+    (DVC needs a [world]); scenes with a [world] run as fleets."""
+    if scenario.world is None and scenario.controller.mode not in ("raw", "physical"):
+        raise PresetError([f"controller.mode: {scenario.controller.mode!r} needs a [world]; the browser app "
+                           "offers 'raw' and 'physical' without one"])
     return scenario
 
 
@@ -60,19 +50,6 @@ def app_presets() -> dict[str, str]:
             continue
         out[name] = description
     return out
-
-
-@dataclass(frozen=True)
-class Frame:
-    """The swarm (run 0) after step ``k``: what the trail, the phase plane and export need."""
-
-    k: int
-    t: float
-    x: np.ndarray  # (N, d)
-    u: np.ndarray  # (N, d)
-    a: np.ndarray  # (N, d)
-    heading: np.ndarray  # (N,)
-    status: np.ndarray  # (N,)
 
 
 @dataclass(frozen=True)
@@ -93,91 +70,36 @@ def _section_changed(old: Scenario, new: Scenario, name: str) -> bool:
     return getattr(old, name).model_dump() != getattr(new, name).model_dump()
 
 
-class Session:
-    """Simulation and playback state of one browser tab."""
+class Session(BaseSession):
+    """Simulation and playback state of one browser tab running a Chapter 3 swarm."""
 
-    MAX_STEPS = 5000  # history ring buffer: at most this many steps ...
-    MAX_ROWS = 400_000  # ... and at most this many (step, robot) rows
-    MAX_METRICS = 5000
+    METRICS = ("t", "max_speed", "max_component", "omega", "c_hat")
+    NOTES = "ch3"
 
     def __init__(self, scenario: Scenario) -> None:
-        check_supported(scenario)
-        self.lock = threading.RLock()
-        self.playing = False
-        self.revision = 0  # bumps whenever the swarm changes (scene redraw)
-        self.scene_revision = 0  # bumps when the arena or objective changes (static scene rebuild)
-        self.selected_robot = 0
         self.selected_dim = 0
-        self._load(scenario)
+        super().__init__(scenario)
 
-    # ------------------------------------------------------------------ loading
-    def _load(self, scenario: Scenario) -> None:
-        self.scenario = scenario
-        self.sim: Simulation = build_simulation(scenario, runs=1)
-        self._clear_history()
-        self.scene_revision += 1
+    @classmethod
+    def accepts(cls, scenario: Scenario) -> bool:
+        return scenario.world is None
 
-    def _clear_history(self) -> None:
-        self._t0, self._k0 = 0.0, self.sim.state.k  # session clock origin (see ``clock``)
-        self.frames: deque[Frame] = deque()
-        self._rows = 0
-        # per step: t, max |u|, max |u_j|, ω, ĉ
-        self.metrics: deque[tuple[float, float, float, float, float]] = deque(maxlen=self.MAX_METRICS)
-        self._record(None)
+    @classmethod
+    def check(cls, scenario: Scenario) -> Scenario:
+        check_supported(scenario)
+        if not cls.accepts(scenario):
+            raise PresetError([f"world: {scenario.name} has obstacles; it runs as a fleet, not a free swarm"])
+        return scenario
+
+    def _build(self, scenario: Scenario) -> Simulation:
+        return build_simulation(scenario, runs=1)
 
     def load_scenario(self, scenario: Scenario) -> None:
-        """Replace the whole scene (preset switch, upload); refuses scenes the app cannot show."""
-        check_supported(scenario)
+        super().load_scenario(scenario)
         with self.lock:
-            self._load(scenario)
-            self.selected_robot = min(self.selected_robot, scenario.sim.robots - 1)
             self.selected_dim = min(self.selected_dim, scenario.sim.d - 1)
-            self.revision += 1
-
-    def load_preset(self, name: str) -> Scenario:
-        scenario = presets_io.load(name)
-        self.load_scenario(scenario)
-        return scenario
-
-    def load_upload(self, filename: str, content: bytes) -> Scenario:
-        """Validate an uploaded TOML/JSON preset; replace the scene only if it is valid."""
-        if len(content) > MAX_UPLOAD_BYTES:
-            raise PresetError([f"{filename}: {len(content) / 1024:.0f} KiB is larger than the "
-                               f"{MAX_UPLOAD_BYTES // 1024} KiB limit for a preset"])
-        try:
-            text = content.decode("utf-8")
-        except UnicodeDecodeError:
-            raise PresetError([f"{filename}: not UTF-8 text"]) from None
-        lower = filename.lower()
-        if lower.endswith(".json"):
-            data = presets_io.parse_text(text, "json")
-        elif lower.endswith(".toml"):
-            data = presets_io.parse_text(text, "toml")
-        else:  # no telling extension: JSON starts with '{'
-            data = presets_io.parse_text(text, "json" if text.lstrip().startswith("{") else "toml")
-        scenario = presets_io.validate(data)
-        self.load_scenario(scenario)
-        return scenario
 
     # ------------------------------------------------------------------ changes
-    def propose(self, changes: dict[str, Any]) -> Scenario:
-        """The scenario with ``changes`` (dotted path → value) applied, validated; nothing is changed."""
-        with self.lock:
-            data = copy.deepcopy(self.scenario.model_dump(mode="json"))
-        for key, value in changes.items():
-            presets_io.set_dotted(data, key, value)
-        return presets_io.validate(data)
-
-    def apply(self, changes: dict[str, Any]) -> Scenario:
-        """Validate ``changes`` and apply them to the running swarm at once, without restarting.
-
-        Raises :class:`PresetError` (nothing changed) when the model refuses the result.
-        """
-        with self.lock:
-            new = self.propose(changes)
-            self._adopt(new)
-            return new
-
     def _adopt(self, new: Scenario) -> None:
         old, sim = self.scenario, self.sim
         if (new.sim.d != old.sim.d or _section_changed(old, new, "init")):
@@ -186,7 +108,7 @@ class Session:
             return
         self.scenario = new
         if _section_changed(old, new, "controller"):
-            self._t0, self._k0 = self.clock(), sim.state.k  # keep the time axis continuous
+            self._keep_clock()
             sim.policy = policy_for(new.controller)
             sim.law = law_for(new.controller)
             sim.dt = float(new.controller.dt)
@@ -205,65 +127,17 @@ class Session:
             self._reset_locked(new.sim.seed)
         self.revision += 1
 
-    # ------------------------------------------------------------------ playback
-    def play(self) -> None:
-        with self.lock:
-            self.playing = True
-
-    def pause(self) -> None:
-        with self.lock:
-            self.playing = False
-
-    def reset(self, seed: int | None = None) -> None:
-        """Back to step 0; with ``seed`` also change the scenario's seed (validated)."""
-        with self.lock:
-            if seed is not None and seed != self.scenario.sim.seed:
-                self.apply({"sim.seed": int(seed)})  # resets as part of the change
-                return
-            self._reset_locked(self.scenario.sim.seed)
-            self.revision += 1
-
-    def _reset_locked(self, seed: int) -> None:
-        self.sim.reset(seed)
-        self._clear_history()
-
-    def step(self, n: int = 1) -> int:
-        """Advance ``n`` ticks. Pauses when the preset's ``sim.steps`` is reached; returns the steps done."""
-        done = 0
-        with self.lock:
-            for _ in range(n):
-                info = self.sim.step()
-                self._record(info)
-                done += 1
-                if self.sim.state.k == self.scenario.sim.steps:
-                    self.playing = False
-                    break
-            if done:
-                self.revision += 1
-        return done
-
-    @property
-    def finished(self) -> bool:
-        with self.lock:
-            return self.sim.state.k >= self.scenario.sim.steps
-
     # ------------------------------------------------------------------ history
-    def clock(self) -> float:
-        """Seconds since reset. Equals the engine's ``k·Δt`` until Δt is changed mid-run; after that
-        it keeps counting from where it was, so trails and plots never jump back in time."""
-        return self._t0 + (self.sim.state.k - self._k0) * self.sim.dt
-
-    def _record(self, info: Any) -> None:
+    def _frame(self) -> Frame:
         s = self.sim.state
-        frame = Frame(k=s.k, t=self.clock(), x=s.x[0].copy(), u=s.u[0].copy(), a=s.a[0].copy(),
-                      heading=s.heading[0].copy(), status=s.status[0].copy())
-        self.frames.append(frame)
-        self._rows += frame.x.shape[0]
-        while len(self.frames) > 1 and (len(self.frames) > self.MAX_STEPS or self._rows > self.MAX_ROWS):
-            self._rows -= self.frames.popleft().x.shape[0]
+        return Frame(k=s.k, t=self.clock(), x=s.x[0].copy(), u=s.u[0].copy(), a=s.a[0].copy(),
+                     heading=s.heading[0].copy(), status=s.status[0].copy())
+
+    def _metric_row(self, info: Any) -> tuple[float, ...]:
+        s = self.sim.state
         omega, c_hat = self.coefficients()
         speed = np.linalg.norm(s.u[0], axis=-1)
-        self.metrics.append((self.clock(), float(speed.max()), float(np.abs(s.u[0]).max()), omega, c_hat))
+        return (self.clock(), float(speed.max()), float(np.abs(s.u[0]).max()), omega, c_hat)
 
     def coefficients(self) -> tuple[float, float]:
         """The (ω, ĉ) the controller uses at the current time (means over robots for per-robot policies)."""
@@ -299,21 +173,9 @@ class Session:
         """What the arena draws now: positions, bests and trails of the last ``view.trail_seconds``."""
         with self.lock:
             s = self.sim.state
-            t_now = self.clock()
-            horizon = self.scenario.view.trail_seconds
-            recent = [f for f in self.frames if f.t >= t_now - horizon - 1e-9]
-            if len(recent) > max_trail_points:
-                # keep every stride-th step by step number (not by position in the window), so
-                # the kept points stay put from frame to frame instead of shimmering
-                stride = -(-len(recent) // (max_trail_points - 1))
-                recent = [f for f in recent[:-1] if f.k % stride == 0] + recent[-1:]
-            if len(recent) >= 2:
-                m = min(min(f.x.shape[0] for f in recent), max_trails)
-                trails = np.stack([f.x[:m] for f in recent], axis=1)
-            else:
-                trails = np.zeros((0, 0, self.sim.d))
-            return Snapshot(k=s.k, t=t_now, x=s.x[0].copy(), heading=s.heading[0].copy(), y=s.y[0].copy(),
-                            yg=s.yg[0].copy(), trails=trails, revision=self.revision)
+            return Snapshot(k=s.k, t=self.clock(), x=s.x[0].copy(), heading=s.heading[0].copy(), y=s.y[0].copy(),
+                            yg=s.yg[0].copy(), trails=self.trails(max_trails, max_trail_points),
+                            revision=self.revision)
 
     def particle_history(self, robot: int, dim: int, n: int = 120) -> tuple[np.ndarray, np.ndarray]:
         """The last ``n`` (u_j, a_j) of one particle and dimension, oldest first."""
@@ -324,44 +186,3 @@ class Session:
             arr = np.array(pts, dtype=float).reshape(-1, 2)
             return arr[:, 0], arr[:, 1]
 
-    def metric_arrays(self) -> dict[str, np.ndarray]:
-        with self.lock:
-            m = np.array(self.metrics, dtype=float).reshape(-1, 5)
-        return {"t": m[:, 0], "max_speed": m[:, 1], "max_component": m[:, 2], "omega": m[:, 3], "c_hat": m[:, 4]}
-
-    # ------------------------------------------------------------------ export
-    def trajectory_rows(self) -> np.ndarray:
-        """Rows ``run,step,t,robot,x,y,heading,vx,vy,status`` of the buffered history (run 0)."""
-        with self.lock:
-            frames = list(self.frames)
-        blocks = []
-        for f in frames:
-            n, d = f.x.shape
-            comp = lambda a, j: a[:, j] if d > j else np.zeros(n)  # noqa: E731
-            blocks.append(np.column_stack([
-                np.zeros(n), np.full(n, f.k), np.full(n, f.t), np.arange(n),
-                comp(f.x, 0), comp(f.x, 1), f.heading, comp(f.u, 0), comp(f.u, 1), f.status,
-            ]))
-        return np.vstack(blocks) if blocks else np.zeros((0, len(TRAJECTORY_COLUMNS)))
-
-    def export_csv(self) -> bytes:
-        buf = _io.StringIO()
-        buf.write(",".join(TRAJECTORY_COLUMNS) + "\n")
-        np.savetxt(buf, self.trajectory_rows(), fmt=_CSV_FORMAT, delimiter=",")
-        return buf.getvalue().encode()
-
-    def export_json(self) -> bytes:
-        with self.lock:
-            preset = self.scenario.model_dump(mode="json")
-            seed = self.sim.seed
-        rows = self.trajectory_rows()
-        ints = {"run", "step", "robot", "status"}
-        trajectories = [
-            {c: (int(v) if c in ints else float(v)) for c, v in zip(TRAJECTORY_COLUMNS, row)} for row in rows
-        ]
-        doc = {"preset": preset, "seed": seed, "version": shoal.__version__, "trajectories": trajectories}
-        return json.dumps(doc, separators=(",", ":")).encode()
-
-    def preset_toml(self) -> bytes:
-        with self.lock:
-            return presets_io.to_toml(self.scenario).encode()

@@ -208,16 +208,6 @@ def test_good_upload_replaces_the_scene(tab):
     assert "landscape" in tab.arena.nodes  # benchmark drawn as a heat map
 
 
-def test_obstacle_scenes_are_refused_until_the_app_draws_them(tab):
-    sim = tab.session.sim
-    text = presets_io.to_toml(presets_io.load("course-dvc")).encode()
-    assert not tab.panels.upload_preset("course.toml", text)
-    assert "world" in _last_message(tab)[1] and tab.session.sim is sim
-    assert "course-dvc" not in tab.panels.preset.options and "default" in tab.panels.preset.options
-    with pytest.raises(PresetError, match="world"):
-        start_server("course-dvc", port=0)
-
-
 def test_preset_dropdown_switches_scene_and_syncs_sliders(tab):
     tab.panels.preset.value = "standard-pso"
     s = tab.session

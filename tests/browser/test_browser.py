@@ -9,7 +9,6 @@ from __future__ import annotations
 import csv
 import io
 import math
-import re
 import shutil
 import time
 
@@ -24,22 +23,12 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
+from browser_helpers import (  # noqa: E402
+    ARGS, VIEWPORT, canvas_box, choose, dismiss_toasts, number_box, wait_until,
+)
+
 from shoal.app.scene import ROBOT, ROBOT_SIZE, VIEW_HALF  # noqa: E402
 from shoal.app.server import start_server  # noqa: E402
-
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-VIEWPORT = {"width": 1280, "height": 800}
-
-
-def wait_until(cond, timeout: float = 15.0, what: str = "condition"):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        value = cond()
-        if value:
-            return value
-        time.sleep(0.05)
-    raise AssertionError(f"timed out waiting for {what}")
 
 
 @pytest.fixture(scope="module")
@@ -71,32 +60,6 @@ def page(browser, server):
 def client_id(server, page):
     wait_until(lambda: len(server.sessions) == 1, what="the tab's session")
     return next(iter(server.sessions))
-
-
-def root_for(page, label: str):
-    """The visible input element viser labels exactly ``label`` (``<label for=id>``)."""
-    exact = re.compile(rf"^\s*{re.escape(label)}\s*$")
-    fid = page.locator("label").filter(has_text=exact).first.get_attribute("for")
-    return page.locator(f'[id="{fid}"]')
-
-
-def number_box(page, label: str):
-    """The number box beside a slider."""
-    return root_for(page, label).locator("xpath=..").locator(".mantine-NumberInput-input")
-
-
-def choose(page, label: str, option: str) -> None:
-    root_for(page, label).click()
-    page.get_by_role("option", name=option, exact=True).click()
-
-
-def dismiss_toasts(page) -> None:
-    closes = page.locator(".mantine-Notification-root button")
-    for i in range(closes.count()):
-        try:
-            closes.nth(i).click(timeout=1000)
-        except Exception:
-            pass
 
 
 # ---------------------------------------------------------------------------- (a) load
@@ -133,11 +96,6 @@ def test_typing_omega_in_the_browser_changes_the_engine(server, page, client_id)
 
 
 # ---------------------------------------------------------------------------- (c) picture
-def _canvas_box(page):
-    boxes = [b for b in (c.bounding_box() for c in page.locator("canvas").all()) if b]
-    return max(boxes, key=lambda b: b["width"] * b["height"])
-
-
 def test_the_picture_shows_the_robots_where_the_engine_has_them(server, page, client_id):
     from PIL import Image
 
@@ -147,7 +105,7 @@ def test_the_picture_shows_the_robots_where_the_engine_has_them(server, page, cl
     dismiss_toasts(page)
     time.sleep(1.5)  # last frame drawn and rendered
     x = session.sim.state.x[0].copy()
-    box = _canvas_box(page)
+    box = canvas_box(page)
     png = page.screenshot(clip=box)
     img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
     h, w, _ = img.shape

@@ -1,0 +1,53 @@
+"""Helpers shared by the real-browser tests: Chromium flags, waiting, and finding viser's
+inputs by their labels."""
+
+from __future__ import annotations
+
+import re
+import time
+
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+VIEWPORT = {"width": 1280, "height": 800}
+
+
+def wait_until(cond, timeout: float = 15.0, what: str = "condition"):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        value = cond()
+        if value:
+            return value
+        time.sleep(0.05)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def root_for(page, label: str):
+    """The visible input element viser labels exactly ``label`` (``<label for=id>``)."""
+    exact = re.compile(rf"^\s*{re.escape(label)}\s*$")
+    fid = page.locator("label").filter(has_text=exact).first.get_attribute("for")
+    return page.locator(f'[id="{fid}"]')
+
+
+def number_box(page, label: str):
+    """The number box beside a slider."""
+    return root_for(page, label).locator("xpath=..").locator(".mantine-NumberInput-input")
+
+
+def choose(page, label: str, option: str) -> None:
+    root_for(page, label).click()
+    page.get_by_role("option", name=option, exact=True).click()
+
+
+def dismiss_toasts(page) -> None:
+    closes = page.locator(".mantine-Notification-root button")
+    for i in range(closes.count()):
+        try:
+            closes.nth(i).click(timeout=1000)
+        except Exception:
+            pass
+
+
+def canvas_box(page):
+    """The page box of the 3-D canvas (the largest canvas)."""
+    boxes = [b for b in (c.bounding_box() for c in page.locator("canvas").all()) if b]
+    return max(boxes, key=lambda b: b["width"] * b["height"])
