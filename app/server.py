@@ -1,4 +1,4 @@
-"""The Viser server behind ``shoal serve``: one :class:`Session` per browser tab.
+"""The Viser server behind ``shoal serve``: one session per browser tab (Chapter 3 swarm or Chapter 4–5 fleet).
 
 ``start_server`` returns at once (tests use it with ``port=0``); ``serve`` blocks until
 Ctrl-C. One daemon thread ticks every tab; browser callbacks run on viser's thread pool
@@ -20,9 +20,10 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
+from .base_session import BaseSession
 from .scene import CAMERA_FOV, CAMERA_HEIGHT, camera_height
-from .session import Session, check_supported
-from .tab import TabApp
+from .session import check_supported
+from .tab import TabApp, session_for
 
 TICK_HZ = 60.0
 LOOPBACK_NAMES = ("localhost",)
@@ -75,7 +76,7 @@ class ShoalServer:
         self._thread.start()
 
     @property
-    def sessions(self) -> dict[int, Session]:
+    def sessions(self) -> dict[int, BaseSession]:
         with self._lock:
             return {cid: tab.session for cid, tab in self.tabs.items()}
 
@@ -88,7 +89,7 @@ class ShoalServer:
         gui = self.viser.gui
         gui.configure_theme(control_width="large", show_share_button=False, brand_color=(40, 90, 200))
         gui.main_panel.dock_right()
-        gui.set_panel_label("Shoal · Adapted PSO")
+        gui.set_panel_label("Shoal · PSO for robot swarms")
         cam = self.viser.initial_camera
         cam.position = (0.0, 0.0, CAMERA_HEIGHT)
         cam.look_at = (0.0, 0.0, 0.0)
@@ -108,7 +109,7 @@ class ShoalServer:
         and ``server.scene`` with ``client=None`` to drive the panels without a browser, and
         ``auto_tick=False`` to advance it only by calling ``tab.tick(now)`` themselves.
         """
-        session = Session(self.scenario)
+        session = session_for(self.scenario)
         kwargs: dict[str, Any] = {}
         if client is not None:
             kwargs = dict(
@@ -123,9 +124,12 @@ class ShoalServer:
             self.tabs[key] = tab
         return tab
 
-    def close_tab(self, key: int) -> None:
+    def close_tab(self, key: int, *, gone: bool = False) -> None:
+        """Forget a tab; unless its client is ``gone``, also stop listening to its scene."""
         with self._lock:
-            self.tabs.pop(key, None)
+            tab = self.tabs.pop(key, None)
+        if tab is not None and not gone:
+            tab.close()
 
     def _connect(self, client: viser.ClientHandle) -> None:
         if self._stopping.is_set():
@@ -146,7 +150,7 @@ class ShoalServer:
         tab.session.play()
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
-        self.close_tab(client.client_id)
+        self.close_tab(client.client_id, gone=True)
 
     # ------------------------------------------------------------------ ticking
     def _run(self) -> None:

@@ -3,6 +3,10 @@
 ``tick(now)`` runs a few steps when playing (``view.steps_per_second``), redraws the arena
 at most ``SCENE_HZ`` times a second and the plots and readouts at most ``PLOT_HZ`` times,
 so that plot traffic never holds up the scene.
+
+A tab shows one kind of scene at a time: a Chapter 3 swarm (``Session``, ``Panels``,
+``ArenaView``) or a Chapter 4–5 fleet (``FleetSession``, ``FleetPanels``, ``FleetView``).
+Loading a scene of the other kind (preset dropdown, upload) swaps all three in place.
 """
 
 from __future__ import annotations
@@ -11,11 +15,46 @@ import contextlib
 import threading
 import time
 from collections import deque
+from dataclasses import dataclass
 from typing import Any, Callable, ContextManager
 
+from shoal.presets.io import PresetError
+from shoal.presets.models import Scenario
+
+from .base_session import BaseSession
+from .fleet_panels import FleetPanels
+from .fleet_scene import FleetView
+from .fleet_session import FleetSession
+from .panel_base import PanelsBase
 from .panels import Panels
 from .scene import ArenaView
 from .session import Session
+
+CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
+
+
+@dataclass(frozen=True)
+class Kind:
+    """The session, panel and view classes that together show one kind of scene."""
+
+    session: type[BaseSession]
+    panels: type[PanelsBase]
+    view: type
+
+
+KINDS = (Kind(FleetSession, FleetPanels, FleetView), Kind(Session, Panels, ArenaView))
+
+
+def kind_for(scenario: Scenario) -> Kind:
+    for kind in KINDS:
+        if kind.session.accepts(scenario):
+            return kind
+    raise PresetError([f"{scenario.name}: no view for this kind of scene"])
+
+
+def session_for(scenario: Scenario) -> BaseSession:
+    """A new session of the kind ``scenario`` needs."""
+    return kind_for(scenario).session(scenario)
 
 
 class TabApp:
@@ -25,7 +64,7 @@ class TabApp:
 
     def __init__(
         self,
-        session: Session,
+        session: BaseSession,
         gui: Any,
         scene: Any,
         *,
@@ -34,21 +73,72 @@ class TabApp:
         atomic: Callable[[], ContextManager[None]] | None = None,
     ) -> None:
         self.session = session
+        self.gui, self.scene = gui, scene
         self.messages: deque[tuple[str, str, str]] = deque(maxlen=50)  # (title, body, colour), newest last
         self.downloads: deque[tuple[str, bytes]] = deque(maxlen=5)
         self._notify_client = notify
         self._send_client = send_file
         self._atomic = atomic or contextlib.nullcontext
-        self.panels = Panels(gui, session, self.notify, self.send_file)
-        self.arena = ArenaView(scene)
+        self._ticking = threading.Lock()
+        self._clicks: list[Callable[[Any], None]] = []
+        self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
+        self._build_kind()
+
+    def _build_kind(self) -> None:
+        kind = next(k for k in KINDS if isinstance(self.session, k.session))
+        self.panels = kind.panels(self.gui, self.session, self.notify, self.send_file, replace=self.replace)
+        self.arena = kind.view(self.scene)
+        if hasattr(self.panels, "drag_obstacle"):
+            self.arena.on_obstacle_drag = self.panels.drag_obstacle  # type: ignore[attr-defined]
+        if hasattr(self.panels, "handle_click"):
+            for modifier in CLICK_MODIFIERS:
+                self._clicks.append(self.scene.on_click(modifier=modifier)(self.scene_click))
         self._acc = 0.0
         self._was_playing = False
         self._last: float | None = None
         self._next_scene = 0.0
         self._next_plot = 0.0
         self._plot_key: tuple | None = None
-        self._ticking = threading.Lock()
-        self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
+
+    def _drop_kind(self) -> None:
+        for cb in self._clicks:
+            self.scene.remove_click_callback(cb)
+        self._clicks.clear()
+        self.panels.remove()
+        self.arena.clear()
+
+    def replace(self, scenario: Scenario) -> None:
+        """Load ``scenario``; a scene of the other kind swaps session, panels and arena.
+        Raises :class:`PresetError` (nothing changed) when it cannot be shown."""
+        kind = kind_for(scenario)
+        with self._ticking:
+            if isinstance(self.session, kind.session):
+                self.session.load_scenario(scenario)
+                self.panels.sync_from_scenario()
+                return
+            new = kind.session(scenario)  # may refuse: then the old scene stays
+            if self.session.playing:
+                new.play()
+            self._drop_kind()
+            self.session = new
+            self._build_kind()
+
+    def close(self) -> None:
+        """The browser tab went away: stop listening to its scene."""
+        for cb in self._clicks:
+            with contextlib.suppress(Exception):
+                self.scene.remove_click_callback(cb)
+        self._clicks.clear()
+
+    def scene_click(self, event: Any) -> None:
+        """A click in the arena (viser ``SceneClickEvent``): the panels decide what it does."""
+        to_world = getattr(self.arena, "ray_to_world", None)
+        handle = getattr(self.panels, "handle_click", None)
+        if to_world is None or handle is None:
+            return
+        xy = to_world(event.ray_origin, event.ray_direction)
+        if xy is not None:
+            handle(float(xy[0]), float(xy[1]), event.modifier)
 
     def notify(self, title: str, body: str, color: str = "blue") -> None:
         self.messages.append((title, body, color))
@@ -91,9 +181,10 @@ class TabApp:
             snap = s.snapshot()
             with self._atomic():
                 self.arena.draw(snap)
+            self.panels.on_snapshot(snap)
             self._next_scene = now + 1.0 / self.SCENE_HZ
         if now >= self._next_plot:
-            key = (s.revision, s.selected_robot, s.selected_dim, s.playing)
+            key = (s.revision, s.selected_robot, getattr(s, "selected_dim", 0), s.playing)
             if key != self._plot_key:
                 self.panels.refresh_status()
                 self.panels.refresh_readout()
