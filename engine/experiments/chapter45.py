@@ -23,7 +23,6 @@ from shoal.presets.io import load
 from shoal.presets.models import Scenario
 
 from ..dvc import TABLE_4_1
-from ..fleet import ACTIVE
 from .output import num
 from .output import percentile_band as band
 
