@@ -43,11 +43,11 @@ def budget_markdown(view: RobotView, params: FleetParams, status: int, cmd: np.n
         turn = p.beta * wm
         push = p.beta * min(p.alpha * p.sensing_range / p.dt, p.v_max)
         rows = [
-            _row("c1 turn to own best", c[0], turn),
-            _row("c2 turn to swarm best", c[1], turn),
-            _row("c3 turn right", c[2], turn, "body on the left"),
-            _row("c4 turn left", c[3], turn, "body on the right"),
-            _row("c5 forward push", c[4], push, f"U = {c[4] / p.beta:.2f} m/s"),
+            _row("c1 → own best", c[0], turn),
+            _row("c2 → swarm best", c[1], turn),
+            _row("c3 turn right", c[2], turn, "body left"),
+            _row("c4 turn left", c[3], turn, "body right"),
+            _row("c5 forward", c[4], push, f"U = {c[4] / p.beta:.2f} m/s"),
         ]
         tail = [f"v = {cmd[0]:.2f} m/s, w = {cmd[1]:.2f} rad/s (w_max = {wm:.2f} rad/s)"]
     else:
@@ -60,9 +60,9 @@ def budget_markdown(view: RobotView, params: FleetParams, status: int, cmd: np.n
         c3 = float(c[2]) if len(c) >= 3 else 0.0
         bounded = p.law == "adapted-rpso"
         reach = (lambda v: f"reach {v * k * p.dt:.2f} m") if bounded else (lambda v: "")
-        rows = [_row("attraction c1 + c2", c12, full, reach(c12))]
+        rows = [_row("attract c1 + c2", c12, full, reach(c12))]
         if p.law != "robot-centred":
-            rows.append(_row("avoidance c3", c3, full, reach(c12 + c3) if bounded else ""))
+            rows.append(_row("avoid c3", c3, full, reach(c12 + c3) if bounded else ""))
         force = float(np.hypot(*view.force))
         tail = [f"‖F_t‖ = {force:.3g} · ‖u‖ = {float(np.hypot(*cmd)):.2f} m/s"]
         if p.dvc:

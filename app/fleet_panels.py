@@ -67,6 +67,8 @@ class FleetPanels(PanelsBase):
 
     PLOT_HISTORY = 1500
     SLIDERS = SLIDERS
+    EXPORT_NOTE = (" Obstacles added, removed or moved by hand are not part of the preset (it names its "
+                   "world by generator and seed); the JSON export lists the obstacles as they are.")
     session: FleetSession
 
     def __init__(self, gui: Any, session: FleetSession, notify: Any, *args: Any, **kwargs: Any) -> None:
@@ -133,7 +135,8 @@ class FleetPanels(PanelsBase):
             self.com_plot = gui.add_uplot(
                 data=fleet_plots.com_data(np.zeros(0), np.zeros(0), layers), series=fleet_plots.com_series(layers),
                 scales=fleet_plots.com_scales(np.zeros(2), self.session.sim.world.bounds),
-                title="swarm fitness: CoM x [m] vs time [s]", aspect=1.6, axes=({}, {"size": 50}))
+                title="swarm fitness: CoM x [m] vs time [s] · dotted: layers", aspect=1.6,
+                axes=({}, {"size": 50}), legend={"show": False})
             self.robots_plot = gui.add_uplot(
                 data=fleet_plots.robots_data(np.zeros(0), np.zeros(0), np.zeros(0)),
                 series=fleet_plots.robots_series(), scales=fleet_plots.robots_scales(np.zeros(2), sc.sim.robots),

@@ -21,7 +21,6 @@ from . import shapes
 from .fleet_session import FleetSnapshot
 from .scene import VIEW_HALF
 
-GROUND = (246, 246, 242)
 GRID_CELL = (228, 228, 224)
 GRID_SECTION = (205, 205, 200)
 WALL = (60, 60, 60)
@@ -46,8 +45,8 @@ REACH_ATTRACT = (40, 90, 200)
 REACH_TOTAL = (240, 140, 20)
 
 # heights: later entries are drawn above earlier ones in the top view
-Z = dict(ground=-0.03, grid=-0.025, start=-0.02, layers=-0.015, sectors=-0.01, trails=-0.005, obstacles=0.0,
-         pbests=0.004, source=0.006, robots=0.01, headings=0.012, probe=0.014, hits=0.016, gbest=0.018)
+Z = dict(grid=-0.025, start=-0.02, layers=-0.015, sectors=-0.01, trails=-0.005, obstacles=0.0,
+         pbests=0.004, source=0.006, gbest=0.008, robots=0.01, headings=0.012, probe=0.014, hits=0.016)
 
 ObstacleDrag = Callable[[int, float, float, str], None]
 
@@ -73,6 +72,7 @@ class FleetView:
         self.on_obstacle_drag: ObstacleDrag | None = None  # (index, x, y, phase) in world metres
         self._static = False
         self._n_obstacles = -1
+        self._followed: str | None = None  # follow mode of the last draw (a new one re-centres at once)
 
     # ------------------------------------------------------------------ transforms
     def to_view(self, xy: np.ndarray, z: float = 0.0) -> np.ndarray:
@@ -105,6 +105,7 @@ class FleetView:
         self.drawn_revision = self.world_revision = -1
         self._static = False
         self._n_obstacles = -1
+        self._followed = None
 
     def clear(self) -> None:
         self._drop_nodes()
@@ -147,10 +148,6 @@ class FleetView:
         self.scale = self.zoom * 2 * VIEW_HALF / max(x1 - x0, y1 - y0)
         w, h = (x1 - x0) * self.scale, (y1 - y0) * self.scale
         self.nodes["root"] = sc.add_frame("/fleet", show_axes=False)
-        corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
-        self.nodes["ground"] = sc.add_mesh_simple(
-            "/fleet/ground", self.to_view(corners, Z["ground"]), np.array([[0, 1, 2], [0, 2, 3]], np.uint32),
-            color=GROUND, material="toon3", side="double", cast_shadow=False, receive_shadow=False)
         self.nodes["grid"] = sc.add_grid(
             "/fleet/grid", width=w, height=h, plane="xy", cell_size=1.0 * self.scale, section_size=5.0 * self.scale,
             cell_color=GRID_CELL, section_color=GRID_SECTION, position=(0.0, 0.0, Z["grid"]), shadow_opacity=0.0,
@@ -247,10 +244,11 @@ class FleetView:
         else:
             alive = snap.status == 0
             target = snap.x[alive].mean(axis=0) if alive.any() else snap.x.mean(axis=0)
-            half = VIEW_HALF / self.scale  # metres from the middle to the nearer screen edge
-            off = target - self.focus
-            dead = 0.3 * half
-            target = self.focus + np.sign(off) * np.maximum(np.abs(off) - dead, 0.0)  # dead zone: no jitter
+            if self._followed == "swarm":  # a dead zone round the middle: no jitter step by step
+                off = target - self.focus
+                dead = 0.15 * VIEW_HALF / self.scale  # metres; VIEW_HALF/scale reaches the nearer edge
+                target = self.focus + np.sign(off) * np.maximum(np.abs(off) - dead, 0.0)
+        self._followed = snap.follow
         x0, y0, x1, y1 = snap.world.bounds
         target = np.clip(target, (x0, y0), (x1, y1))
         if not np.allclose(target, self.focus):
@@ -280,7 +278,7 @@ class FleetView:
             segs = np.zeros((0, 2, 2))
         self._lines("trails", segs, TRAIL, 1.5, Z["trails"])
         self._points("pbests", snap.y, PBEST, 0.25, "square", Z["pbests"])
-        self._points("gbest", snap.yg[None], GBEST, 0.9, "diamond", Z["gbest"])
+        self._points("gbest", snap.yg[None], GBEST, 0.75, "diamond", Z["gbest"])
 
     def _draw_probe(self, snap: FleetSnapshot) -> None:
         """The selected robot: sectors filled out to each closest body, the range circle, the
@@ -309,7 +307,7 @@ class FleetView:
                                 shapes.rays(centre, start, radius, radius + rng)])
         self._lines("sector_edges", edges, SECTOR_EDGE, 1.0, Z["probe"])
         hits = v.point[v.hit]
-        self._points("hits", hits, HIT, 0.45, "diamond", Z["hits"])
+        self._points("hits", hits, HIT, 0.28, "diamond", Z["hits"])
         self._lines("hit_lines", np.stack([np.repeat(centre[None], len(hits), 0), hits], axis=1)
                     if len(hits) else np.zeros((0, 2, 2)), HIT, 1.0, Z["probe"])
         f = np.asarray(v.force, dtype=float)

@@ -123,6 +123,7 @@ class PanelsBase:
     (``client.gui`` for a browser tab, ``server.gui`` in tests)."""
 
     SLIDERS: ClassVar[tuple[SliderSpec, ...]] = ()
+    EXPORT_NOTE: ClassVar[str] = ""  # more words for the Export tab
 
     def __init__(self, gui: Any, session: BaseSession, notify: Notify, send_file: SendFile,
                  replace: Replace | None = None) -> None:
@@ -166,7 +167,7 @@ class PanelsBase:
         gui = self.gui
         with self.tabs.add_tab("Export"):
             gui.add_markdown("Trajectories of the current run (the last steps kept in memory), "
-                             "the scenario as a preset file, or load your own preset.")
+                             "the scenario as a preset file, or load your own preset." + self.EXPORT_NOTE)
             self.export_csv = gui.add_button("Export CSV", hint="run,step,t,robot,x,y,heading,vx,vy,status")
             self.export_json = gui.add_button("Export JSON", hint="resolved preset, seed, version, trajectories")
             self.download = gui.add_button("Download preset", hint="the current scenario as TOML")
