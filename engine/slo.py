@@ -32,6 +32,9 @@ LocalBest = Literal["current", "pbest"]
 PbestShift = Literal["commanded", "measured"]
 InitialEstimates = Literal["random", "truth"]
 
+GENERATIONS = {"pso": 1000, "random_walk": 100, "formation": 100}  # gap A28; Figs. 4.2, 4.4
+REPETITIONS = 31  # runs per parameter set [§4.2]
+
 
 @dataclass(frozen=True)
 class SLOConfig:

@@ -65,11 +65,14 @@ class SLOPositionSource:
         self.x = x0.copy()
         self.beliefs: Beliefs = self.localiser.start(x0, self.rule.adjacency(x0, self.streams["topology"]), est)
 
-    def observe(self, x: np.ndarray) -> Beliefs:
-        """One sensing and localisation step at the new true positions ``x`` (R, N, 2)."""
+    def observe(self, x: np.ndarray, displacement: np.ndarray | None = None) -> Beliefs:
+        """One sensing and localisation step at the new true positions ``x`` (R, N, 2).
+
+        Odometry reads ``displacement`` (e.g. Δt·velocity) if given, else the change of ``x``."""
         x = np.asarray(x, dtype=float)
+        before = self.x if displacement is None else x - np.asarray(displacement, dtype=float)
         adjacency = self.rule.adjacency(x, self.streams["topology"])
-        self.beliefs = self.localiser.update(self.beliefs, self.x, x, adjacency)
+        self.beliefs = self.localiser.update(self.beliefs, before, x, adjacency)
         self.x = x.copy()
         return self.beliefs
 

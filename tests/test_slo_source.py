@@ -58,9 +58,10 @@ def test_source_beliefs_follow_the_swarm():
     rng = np.random.default_rng(0)
     x = rng.uniform(0, 10, (2, 5, 2))
     src = SLOPositionSource(x, seed=1, errors="none")
-    for _ in range(5):
-        x = x + rng.uniform(-1, 1, x.shape)
-        b = src.observe(x)
+    for k in range(6):
+        move = rng.uniform(-1, 1, x.shape)
+        x = x + move
+        b = src.observe(x, displacement=move if k % 2 else None)
     truth = x[:, None] - x[:, :, None]
     assert np.allclose(b.est, truth, atol=1e-9)
     target = np.array([3, 0])
