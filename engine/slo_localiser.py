@@ -86,7 +86,8 @@ class Localiser:
         self.permanent = draw_permanent(errors, streams["permanent"], n)
 
     def _ranges(self, x: np.ndarray, adjacency: np.ndarray) -> np.ndarray:
-        d = measure_ranges(distances(x), self.errors.range, self.permanent, self.streams["range"], self.params.max_range)
+        d = measure_ranges(distances(x), self.errors.range, self.permanent, self.streams["range"],
+                           self.params.max_range)
         return d if self.params.measure_all_ranges else np.where(adjacency, d, 0.0)
 
     def start(self, x: np.ndarray, adjacency: np.ndarray, initial: np.ndarray) -> Beliefs:

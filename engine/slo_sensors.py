@@ -61,10 +61,11 @@ class ErrorModel:
 
     def with_values(self, **changes: float) -> "ErrorModel":
         """A copy with some fields changed, named ``range_<field>`` or ``odometry_<field>``."""
-        parts = {"range": {}, "odometry": {}}
+        parts: dict[str, dict[str, float]] = {"range": {}, "odometry": {}}
+        known = {"range": {f.name for f in fields(RangeErrors)}, "odometry": {f.name for f in fields(OdometryErrors)}}
         for key, value in changes.items():
             part, _, name = key.partition("_")
-            if part not in parts or name not in {f.name for f in fields(RangeErrors if part == "range" else OdometryErrors)}:
+            if name not in known.get(part, ()):
                 raise ValueError(f"errors: unknown field {key!r}")
             parts[part][name] = float(value)
         return ErrorModel(replace(self.range, **parts["range"]), replace(self.odometry, **parts["odometry"]))

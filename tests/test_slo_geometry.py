@@ -54,7 +54,8 @@ def test_clip_only_mode_keeps_geometric_candidates_exact(r1, v):
 @given(
     d0=st.one_of(st.just(0.0), st.just(-1.0), st.just(np.inf), st.just(np.nan), st.floats(0, 1e6)),
     d1=st.one_of(st.just(0.0), st.just(-2.0), st.just(np.inf), st.just(np.nan), st.floats(0, 1e6)),
-    v=st.one_of(st.just(np.zeros(2)), vec, st.tuples(st.floats(-1e-300, 1e-300), st.floats(-1e-300, 1e-300)).map(np.array)),
+    v=st.one_of(st.just(np.zeros(2)), vec, st.tuples(st.floats(-1e-300, 1e-300), st.floats(-1e-300, 1e-300)).map(
+        np.array)),
     prev=vec,
     delta_cos=st.sampled_from([0.03, 0.0, -np.inf, -0.5, 1.0]),
     delta_v=st.sampled_from([0.03, 0.0, 0.5]),
