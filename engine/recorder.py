@@ -44,7 +44,9 @@ def metric_table(state: Any, info: Any, t: float) -> dict[str, np.ndarray]:
     coefficients in force; a fleet (``FleetInfo``) adds CoM fitness [4.17], collided and
     operational counts and layers passed; an acoustic swarm (``SonarInfo``) adds the CoM,
     the source, |CoM − x_src|, convergence (flag and first step, −1 if none), the fraction
-    of robots inside the escort ring, the mean robot–source distance and contacts.
+    of robots inside the escort ring, the mean robot–source distance and contacts. An SLO
+    swarm (``SLOInfo``) adds every column of :meth:`SLOInfo.columns` (localisation errors,
+    pair distances, dead-reckoning share, first generation meeting the quality threshold).
     """
     R = state.x.shape[0]
     speed = np.linalg.norm(state.u, axis=-1)
@@ -52,7 +54,11 @@ def metric_table(state: Any, info: Any, t: float) -> dict[str, np.ndarray]:
         "run": np.arange(R), "step": np.full(R, state.k), "t": np.full(R, t), "best_fitness": state.f_yg,
         "max_speed": speed.max(axis=1), "mean_speed": speed.mean(axis=1),
     }
-    if hasattr(info, "com_dist"):
+    if hasattr(info, "e_abs"):
+        slo = info.columns()
+        cols["generation_best"] = slo.pop("best_fitness")  # min_i f(x_i(t)); best_fitness is the best so far
+        cols.update(slo)
+    elif hasattr(info, "com_dist"):
         cols.update(com_x=info.com[:, 0], com_y=info.com[:, 1], source_x=info.source[:, 0],
                     source_y=info.source[:, 1], com_dist=info.com_dist, converged=info.converged,
                     steps_to_converge=info.steps_to_converge, frac_inside_ring=info.frac_inside_ring,

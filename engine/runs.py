@@ -10,11 +10,12 @@ from .atomic import atomic_output_dir
 from .fleet import Fleet
 from .recorder import metric_table, trajectory_header, trajectory_rows, write_metrics, write_trajectory
 from .sim import Simulation
+from .slo import SLOSwarm
 from .sonar import AcousticSwarm
 
 
 def run_to_dir(
-    sim: Simulation | Fleet | AcousticSwarm,
+    sim: Simulation | Fleet | AcousticSwarm | SLOSwarm,
     steps: int,
     out: Path | str,
     meta: dict[str, Any],
@@ -29,7 +30,7 @@ def run_to_dir(
         ) as metrics:
             traj.write(trajectory_header(sim.state.x.shape[-1]) + "\n")
             write_trajectory(traj, trajectory_rows(sim.state, sim.t))
-            first = sim.info() if isinstance(sim, (Fleet, AcousticSwarm)) else None
+            first = sim.info() if isinstance(sim, (Fleet, AcousticSwarm, SLOSwarm)) else None
             write_metrics(metrics, metric_table(sim.state, first, sim.t), header=True)
             for k in range(steps):
                 info = sim.step()

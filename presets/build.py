@@ -9,10 +9,13 @@ from shoal.engine.fleet import Fleet, FleetParams
 from shoal.engine.laws import Law
 from shoal.engine.objectives import Objective
 from shoal.engine.sim import Simulation
+from shoal.engine.slo import SLOSwarm
+from shoal.engine.slo_sensors import ErrorModel, error_model
+from shoal.engine.slo_source import SLOSimulation
 from shoal.engine.sonar import AcousticSwarm, SonarParams
 from shoal.engine.world import WorldSpec, empty_arena, forest, obstacle_course
 
-from .models import Acoustics, Controller, ObjectiveModel, Scenario, WorldModel
+from .models import SLO, Acoustics, Controller, ObjectiveModel, Scenario, WorldModel
 
 
 def policy_for(c: Controller) -> Constant | Physical:
@@ -34,8 +37,12 @@ def build_simulation(
     scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0
 ) -> Simulation:
     """A Chapter 3 swarm for runs ``first_run … first_run + runs − 1`` of the seed."""
+    return Simulation(**_simulation_kwargs(scenario, runs=runs, seed=seed, first_run=first_run))
+
+
+def _simulation_kwargs(scenario: Scenario, *, runs: int | None, seed: int | None, first_run: int) -> dict:
     s = scenario
-    return Simulation(
+    return dict(
         robots=s.sim.robots,
         d=s.sim.d,
         dt=s.controller.dt,
@@ -106,11 +113,48 @@ def build_sonar(scenario: Scenario, *, runs: int | None = None, seed: int | None
     )
 
 
+def slo_errors_for(slo: SLO) -> str | ErrorModel:
+    """The error set of an ``[slo]`` section, with its single values applied."""
+    values = slo.error_values.values()
+    return error_model(slo.errors).with_values(**values) if values else slo.errors
+
+
+def slo_localiser_for(slo: SLO) -> dict:
+    """The localisation keywords shared by :class:`SLOSwarm` and :class:`SLOSimulation`."""
+    return dict(
+        errors=slo_errors_for(slo), selection=slo.selection, prediction_weight=slo.prediction_weight,
+        delta_cos=slo.delta_cos, delta_v=slo.delta_v, literal_eq_3_1=slo.literal_eq_3_1,
+        neighbourhood=slo.neighbourhood, neighbourhood_param=slo.neighbourhood_param,
+    )
+
+
+def build_slo(scenario: Scenario, *, runs: int | None = None, seed: int | None = None,
+              first_run: int = 0) -> SLOSwarm | SLOSimulation | Simulation:
+    """An ``[slo]`` scene: Mai's SLO swarm, or the Chapter 3 swarm on SLO-estimated
+    (or, with ``positions = "oracle"``, true) positions with the same seed."""
+    slo = scenario.slo
+    if slo is None:
+        raise ValueError("this scenario has no [slo] section")
+    if slo.swarm == "chapter3":
+        kwargs = _simulation_kwargs(scenario, runs=runs, seed=seed, first_run=first_run)
+        if slo.positions == "oracle":
+            return Simulation(**kwargs)
+        unit = 2.0 * scenario.arena.half_size / 100.0  # thesis lengths on a 100-wide area (spec §15.1)
+        return SLOSimulation(slo={**slo_localiser_for(slo), "unit": unit}, **kwargs)
+    return SLOSwarm(
+        runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed, first_run=first_run,
+        particles=scenario.sim.robots, objective=slo.objective, motion=slo.motion, walk_speed=slo.walk_speed,
+        quality_threshold=slo.quality_threshold, **slo_localiser_for(slo),
+    )
+
+
 def build(scenario: Scenario, *, runs: int | None = None, seed: int | None = None,
-          first_run: int = 0) -> Simulation | Fleet | AcousticSwarm:
-    """Whatever the scenario describes: an acoustic swarm (Ch. 7–8), a fleet in a world
-    (Ch. 4–5) or a free-space swarm (Ch. 3)."""
-    if scenario.acoustics is not None:
+          first_run: int = 0) -> Simulation | Fleet | AcousticSwarm | SLOSwarm:
+    """Whatever the scenario describes: an SLO scene (Mai), an acoustic swarm (Ch. 7–8), a
+    fleet in a world (Ch. 4–5) or a free-space swarm (Ch. 3)."""
+    if scenario.slo is not None:
+        make = build_slo
+    elif scenario.acoustics is not None:
         make = build_sonar
     else:
         make = build_fleet if scenario.world is not None else build_simulation

@@ -204,6 +204,72 @@ class Acoustics(_Model):
         return self
 
 
+SLOErrorValue = Annotated[float | None, Field(ge=0.0, le=100.0)]
+
+
+class SLOErrorValues(_Model):
+    """Single error parameters of Mai's Tab. 4.3 that replace the value of ``slo.errors``
+    (unset = the preset's value). Multiplicative σ are factors, additive σ thesis length
+    units (a 100 × 100 area), rotations radians, failures probabilities."""
+
+    range_sigma_m: Annotated[SLOErrorValue, Field(description="range: stochastic multiplicative σ_m [4.2]")] = None
+    range_sigma_a: Annotated[SLOErrorValue, Field(description="range: stochastic additive σ_a [4.3]")] = None
+    range_perm_sigma_m: Annotated[SLOErrorValue, Field(description="range: permanent multiplicative σ̂_m")] = None
+    range_perm_sigma_a: Annotated[SLOErrorValue, Field(description="range: permanent additive σ̂_a")] = None
+    range_p_fail: Annotated[float | None, Field(ge=0.0, le=1.0, description="range: failure probability")] = None
+    odometry_sigma_m: Annotated[SLOErrorValue, Field(description="odometry: stochastic multiplicative σ_m [4.4]")] = None
+    odometry_sigma_a: Annotated[SLOErrorValue, Field(description="odometry: stochastic additive σ_a")] = None
+    odometry_perm_sigma_m: Annotated[SLOErrorValue, Field(description="odometry: permanent multiplicative σ̂_m")] = None
+    odometry_perm_sigma_a: Annotated[SLOErrorValue, Field(description="odometry: permanent additive σ̂_a (velocity offset)")] = None
+    odometry_p_fail: Annotated[float | None, Field(ge=0.0, le=1.0, description="odometry: failure probability")] = None
+    odometry_sigma_r: Annotated[SLOErrorValue, Field(description="odometry: stochastic rotation σ_r [rad]")] = None
+    odometry_perm_sigma_r: Annotated[SLOErrorValue, Field(description="odometry: permanent rotation σ̂_r [rad]")] = None
+
+    def values(self) -> dict[str, float]:
+        """The fields that are set, as :meth:`ErrorModel.with_values` keywords."""
+        return {k: v for k, v in self.model_dump().items() if v is not None}
+
+
+class SLO(_Model):
+    """Simultaneous Localisation and Optimisation (Mai): robots act on positions they estimate
+    from noisy ranges and odometry.
+
+    ``swarm = "slo"`` runs Mai's SLO swarm (PSO or random-walk motion; ``sim.robots`` particles,
+    ``sim.steps`` generations). ``swarm = "chapter3"`` runs the Chapter 3 swarm of
+    ``[controller]``/``[objective]`` on SLO-estimated (``positions = "slo"``) or true
+    (``positions = "oracle"``) positions, same seed either way.
+    """
+
+    swarm: Literal["slo", "chapter3"] = Field("slo", description="Mai's SLO swarm, or the Chapter 3 swarm on SLO positions")
+    positions: Literal["slo", "oracle"] = Field("slo", description="chapter3 swarm: estimated or true positions")
+    motion: Literal["pso", "random_walk"] = Field("pso", description="SLO swarm: SPSO 2011 in each robot's frame or a random walk")
+    objective: Literal["ackley", "griewank", "line", "plane", "rastrigin", "rosenbrock", "sphere"] = Field(
+        "sphere", description="SLO swarm: 2-D benchmark, minimised (DEAP forms)")
+    selection: Literal["css", "rts", "akcan"] = Field("css", description="candidate selection [3.7]-[3.9]")
+    errors: Literal["none", "low", "high"] = Field("low", description="sensor error set of Tab. 4.3")
+    error_values: SLOErrorValues = Field(default_factory=SLOErrorValues, description="single error parameters replacing the set's")
+    prediction_weight: Annotated[float, Field(ge=0.0, le=1.0, description="prediction weight w of [3.7]")] = 0.5
+    delta_cos: Annotated[float, Field(ge=0.0, le=1.0, description="mitigation threshold δ_cos [3.5]")] = 0.03
+    delta_v: Annotated[float, Field(ge=0.0, le=10.0, description="mitigation threshold δ_v [3.6]")] = 0.03
+    literal_eq_3_1: bool = Field(False, description="use [3.1] as printed (known slip) instead of the corrected law of cosines")
+    neighbourhood: Literal["knn", "radius", "full", "random", "ring"] = Field("knn", description="who localises whom")
+    neighbourhood_param: Annotated[float | None, Field(ge=0.0, le=1e4, description="k (knn), r (radius), n (ring), p (random); unset = 5, 25, 2, 0.5")] = None
+    walk_speed: Annotated[float, Field(gt=0.0, le=100.0, description="random walk: top step length (thesis units)")] = 5.0
+    quality_threshold: Annotated[float | None, Field(ge=-1e12, le=1e12, description="fitness T of 'first generation with best <= T'; unset = the benchmark's")] = None
+
+    @model_validator(mode="after")
+    def _consistent(self) -> "SLO":
+        p = self.neighbourhood_param
+        if p is not None:
+            if self.neighbourhood == "random" and not 0.0 < p <= 1.0:
+                raise ValueError(f"neighbourhood_param = {p:g}: a random neighbourhood takes a probability in (0, 1]")
+            if self.neighbourhood in ("knn", "ring") and (p < 1 or p != int(p)):
+                raise ValueError(f"neighbourhood_param = {p:g}: {self.neighbourhood} takes a whole number >= 1")
+        if self.positions == "oracle" and self.swarm != "chapter3":
+            raise ValueError("positions = 'oracle' needs swarm = 'chapter3' (the SLO swarm always localises)")
+        return self
+
+
 class Arena(_Model):
     """The square drawn in the app, ``[-half_size, half_size]²``."""
 
@@ -231,6 +297,7 @@ class Scenario(_Model):
     arena: Arena = Field(default_factory=Arena)
     world: WorldModel | None = None
     acoustics: Acoustics | None = None
+    slo: SLO | None = None
     robot: Robot = Field(default_factory=Robot)
     sensing: Sensing = Field(default_factory=Sensing)
     view: View = Field(default_factory=View)
@@ -252,4 +319,11 @@ class Scenario(_Model):
             need = {"gt-pso": 4, "b-pso": 2, "xb-pso": 2}.get(a.algorithm, 1)
             if self.sim.robots < need:
                 raise ValueError(f"sim.robots = {self.sim.robots}: acoustics.algorithm {a.algorithm!r} needs at least {need}")
+        if self.slo is not None:
+            if self.world is not None or self.acoustics is not None:
+                raise ValueError("[slo] runs in free space: remove the [world] and [acoustics] sections")
+            if self.sim.d != 2:
+                raise ValueError("sim.d must be 2 with [slo]")
+            if self.sim.robots < 2:
+                raise ValueError(f"sim.robots = {self.sim.robots}: [slo] needs at least 2 robots")
         return self
