@@ -3,12 +3,13 @@ for the selected robot, its six sensing sectors, closest hits, virtual force and
 
 The world is scaled so that its longer side spans ``2 · VIEW_HALF`` view units around the
 origin (the camera of ``scene.py`` shows that square). Batched nodes only: every obstacle is
-one instance of a single disc mesh (so a drag on it reports which one), every robot one
-instance of another; lines are segment lists. All nodes live under ``/fleet``.
+one instance of a single disc mesh (so a drag on it reports which one), the robots are one
+flat-shaded point cloud, lines are segment lists. All nodes hang off one frame ``/fleet_<n>``.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from typing import Any, Callable
 
@@ -50,6 +51,11 @@ Z = dict(grid=-0.025, start=-0.02, layers=-0.015, sectors=-0.01, trails=-0.005, 
 
 ObstacleDrag = Callable[[int, float, float, str], None]
 
+# Every build of the scene, and every re-created obstacle node, gets names never used before:
+# viser lets a create supersede a pending remove of the same name in its send queue, which
+# can reorder a subtree's removal and re-creation (and leave the scene empty).
+_SERIAL = itertools.count()
+
 
 class FleetView:
     """The scene of one tab showing a fleet. ``scene`` is a viser ``SceneApi``.
@@ -73,6 +79,7 @@ class FleetView:
         self._static = False
         self._n_obstacles = -1
         self._followed: str | None = None  # follow mode of the last draw (a new one re-centres at once)
+        self._root = "/fleet"
 
     # ------------------------------------------------------------------ transforms
     def to_view(self, xy: np.ndarray, z: float = 0.0) -> np.ndarray:
@@ -107,6 +114,10 @@ class FleetView:
         self._n_obstacles = -1
         self._followed = None
 
+    def _name(self, key: str, fresh: bool = False) -> str:
+        """The scene path of node ``key`` (``fresh``: a name not used before, for a re-created node)."""
+        return f"{self._root}/{key}" + (f"_{next(_SERIAL)}" if fresh else "")
+
     def clear(self) -> None:
         self._drop_nodes()
         self.built_revision = -1
@@ -122,7 +133,7 @@ class FleetView:
         node = self.nodes.get(key)
         if node is None:
             self.nodes[key] = self.scene.add_line_segments(
-                f"/fleet/{key}", pts, colors=color, thickness=px, thickness_units="screen")
+                self._name(key), pts, colors=color, thickness=px, thickness_units="screen")
         else:
             node.points = pts
         self.nodes[key].visible = bool(len(segs))
@@ -133,7 +144,7 @@ class FleetView:
         node = self.nodes.get(key)
         if node is None:
             self.nodes[key] = self.scene.add_point_cloud(
-                f"/fleet/{key}", pts, colors=color, point_size=size_m * self.scale, point_shape=shape,
+                self._name(key), pts, colors=color, point_size=size_m * self.scale, point_shape=shape,
                 precision="float32", point_shading="flat")
         else:
             node.points = pts
@@ -147,15 +158,16 @@ class FleetView:
         self.focus = self.centre.copy()
         self.scale = self.zoom * 2 * VIEW_HALF / max(x1 - x0, y1 - y0)
         w, h = (x1 - x0) * self.scale, (y1 - y0) * self.scale
-        self.nodes["root"] = sc.add_frame("/fleet", show_axes=False)
+        self._root = f"/fleet_{next(_SERIAL)}"
+        self.nodes["root"] = sc.add_frame(self._root, show_axes=False)
         self.nodes["grid"] = sc.add_grid(
-            "/fleet/grid", width=w, height=h, plane="xy", cell_size=1.0 * self.scale, section_size=5.0 * self.scale,
-            cell_color=GRID_CELL, section_color=GRID_SECTION, position=(0.0, 0.0, Z["grid"]), shadow_opacity=0.0,
-            infinite_grid=False, fade_distance=1e4)
+            self._name("grid"), width=w, height=h, plane="xy", cell_size=1.0 * self.scale,
+            section_size=5.0 * self.scale, cell_color=GRID_CELL, section_color=GRID_SECTION,
+            position=(0.0, 0.0, Z["grid"]), shadow_opacity=0.0, infinite_grid=False, fade_distance=1e4)
         bx0, by0, bx1, by1 = world.start_box
         box = np.array([[bx0, by0], [bx1, by0], [bx1, by1], [bx0, by1]])
         self.nodes["start"] = sc.add_mesh_simple(
-            "/fleet/start", self.to_view(box, Z["start"]), np.array([[0, 1, 2], [0, 2, 3]], np.uint32),
+            self._name("start"), self.to_view(box, Z["start"]), np.array([[0, 1, 2], [0, 2, 3]], np.uint32),
             color=START, opacity=0.18, material="toon3", side="double", cast_shadow=False,
             receive_shadow=False)
         self._lines("start_edge", shapes.polyline(box, closed=True), START, 1.5, Z["start"])
@@ -164,11 +176,11 @@ class FleetView:
         self._lines("layers", np.concatenate(layers) if layers else np.zeros((0, 2, 2)), LAYER, 1.2, Z["layers"])
         for i, lx in enumerate(world.layer_x):
             self.nodes[f"layer_label_{i}"] = sc.add_label(
-                f"/fleet/layer_label_{i}", f"layer {i + 1}", position=tuple(self.to_view((lx, y1 + 0.8), 0.0)))
+                self._name(f"layer_label_{i}"), f"layer {i + 1}", position=tuple(self.to_view((lx, y1 + 0.8), 0.0)))
         src = np.asarray(world.source, dtype=float)
         self._points("source", src[None], SOURCE, 1.0, "circle", Z["source"])
         self.nodes["source_label"] = sc.add_label(
-            "/fleet/source_label", "source", position=tuple(self.to_view(src + (0.8, 0.8), 0.0)))
+            self._name("source_label"), "source", position=tuple(self.to_view(src + (0.8, 0.8), 0.0)))
         self._static = True
 
     def _draw_obstacles(self, world: WorldSpec) -> None:
@@ -183,9 +195,10 @@ class FleetView:
             if len(circles):
                 v, f = shapes.disc_mesh(40)
                 node = self.scene.add_batched_meshes_simple(
-                    "/fleet/obstacles", v, f, batched_wxyzs=np.tile([1.0, 0, 0, 0], (len(circles), 1)),
-                    batched_positions=pos, batched_scales=scales, batched_colors=OBSTACLE, lod="off",
-                    material="toon3", side="double", cast_shadow=False, receive_shadow=False)
+                    self._name("obstacles", fresh=True), v, f,
+                    batched_wxyzs=np.tile([1.0, 0, 0, 0], (len(circles), 1)), batched_positions=pos,
+                    batched_scales=scales, batched_colors=OBSTACLE, lod="off", material="toon3", side="double",
+                    cast_shadow=False, receive_shadow=False)
                 self.nodes["obstacles"] = node
                 node.on_drag("left")(self._dragged)
             self._n_obstacles = len(circles)
@@ -208,8 +221,8 @@ class FleetView:
             faces += [(base, base + j, base + j + 1) for j in range(1, len(p) - 1)]
             base += len(p)
         self.nodes["polygons"] = self.scene.add_mesh_simple(
-            "/fleet/polygons", np.vstack(verts), np.array(faces, np.uint32), color=OBSTACLE, material="toon3",
-            side="double", cast_shadow=False, receive_shadow=False)
+            self._name("polygons", fresh=True), np.vstack(verts), np.array(faces, np.uint32), color=OBSTACLE,
+            material="toon3", side="double", cast_shadow=False, receive_shadow=False)
 
     def _dragged(self, event: Any) -> None:
         if self.on_obstacle_drag is None or event.instance_index is None:
@@ -263,7 +276,7 @@ class FleetView:
         node = self.nodes.get("robots")
         if node is None:  # flat-shaded points: exact colours; a point's size is its radius
             self.nodes["robots"] = self.scene.add_point_cloud(
-                "/fleet/robots", pos, colors=colors, point_size=r * self.scale, point_shape="circle",
+                self._name("robots"), pos, colors=colors, point_size=r * self.scale, point_shape="circle",
                 precision="float32", point_shading="flat")
         else:
             node.points, node.colors = pos, colors
@@ -290,19 +303,19 @@ class FleetView:
         node = self.nodes.get("sectors")
         frac = np.clip(v.gap / rng, 0.0, 1.0)
         colors = (SECTOR_NEAR + (SECTOR_FAR - SECTOR_NEAR) * frac[:, None]).astype(np.uint8)
-        opac = np.where(v.hit, 0.55, 0.25).astype(np.float32)
         pos = np.repeat(self.to_view(centre[None], Z["sectors"]), 6, axis=0)
         scales = ((radius + v.gap) * self.scale).astype(np.float32)
         wxyz = shapes.yaw_wxyz(start)
         if node is None:
             vert, face = shapes.wedge_mesh(math.pi / 3, 12)
             self.nodes["sectors"] = self.scene.add_batched_meshes_simple(
-                "/fleet/sectors", vert, face, batched_wxyzs=wxyz, batched_positions=pos, batched_scales=scales,
-                batched_colors=colors, batched_opacities=opac, opacity=1.0, lod="off", material="toon3",
+                self._name("sectors"), vert, face, batched_wxyzs=wxyz, batched_positions=pos, batched_scales=scales,
+                batched_colors=colors, opacity=0.45, lod="off", material="toon3",
                 side="double", cast_shadow=False, receive_shadow=False)
         else:
             node.batched_positions, node.batched_wxyzs, node.batched_scales = pos, wxyz, scales
-            node.batched_colors, node.batched_opacities = colors, opac
+            if not np.array_equal(node.batched_colors, colors):
+                node.batched_colors = colors
         edges = np.concatenate([shapes.circle_segments(centre, radius + rng, 72),
                                 shapes.rays(centre, start, radius, radius + rng)])
         self._lines("sector_edges", edges, SECTOR_EDGE, 1.0, Z["probe"])
