@@ -110,13 +110,16 @@ def test_the_preset_dropdown_switches_to_the_obstacle_course(server, page, cid):
                                tab.arena.to_view(circles[:, :2])[:, :2], atol=1e-5)
     # ...and the picture has an obstacle where each one is
     dismiss_toasts(page)
-    time.sleep(1.0)
-    img = screenshot(page)
-    centres = to_pixel(server, cid, page, circles[:, :2])
-    dark = 0
-    for cx, cy in np.round(centres).astype(int):
-        patch = img[cy - 1: cy + 2, cx - 1: cx + 2]
-        dark += bool(np.all(patch.max(axis=-1) < 150) and np.all(patch[..., 2] >= patch[..., 0]))
+    centres = np.round(to_pixel(server, cid, page, circles[:, :2])).astype(int)
+    for attempt in range(5):  # a loaded machine may need a few seconds for the first frames
+        time.sleep(1.0)
+        img = screenshot(page)
+        dark = 0
+        for cx, cy in centres:
+            patch = img[cy - 1: cy + 2, cx - 1: cx + 2]
+            dark += bool(np.all(patch.max(axis=-1) < 150) and np.all(patch[..., 2] >= patch[..., 0]))
+        if dark >= 0.9 * len(circles):
+            break
     assert dark >= 0.9 * len(circles), f"only {dark}/{len(circles)} obstacles seen where the world has them"
     ground = to_pixel(server, cid, page, free_point(session, 20.0, 40.0)).round().astype(int)
     assert img[ground[1], ground[0]].min() > 200  # and free ground is light
