@@ -95,6 +95,23 @@ def _fig8_5(out_dir: Path, runs: int, workers: int, progress: bool, **options: A
     return fig8_5.run(out_dir, runs, workers, progress, **options)
 
 
+_SLO_TARGETS = {  # target -> (module, function)
+    "slo-errors": ("slo_walk", "run_errors"), "slo-mitigation": ("slo_walk", "run_mitigation"),
+    "slo-neighbourhood": ("slo_walk", "run_neighbourhood"), "slo-weight": ("slo_walk", "run_weight"),
+    "slo-pso": ("slo_pso", "run"),
+}
+
+
+def _slo(name: str) -> Callable[..., dict[str, Any]]:
+    def run(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+        from importlib import import_module
+
+        module, fn = _SLO_TARGETS[name]
+        return getattr(import_module(f".{module}", __package__), fn)(out_dir, runs, workers, progress, **options)
+
+    return run
+
+
 TARGETS: dict[str, Target] = {
     t.name: t
     for t in (
@@ -120,6 +137,8 @@ TARGETS: dict[str, Target] = {
                "(GT-PSO, occupancy maps)", 20, _fig8_4),
         Target("fig8-5", "Ch. 8 Fig. 8-5: escorting a source moving at v_n = 0.1 and 0.25, 40 robots, r = 25/50 m, "
                "louder source", 20, _fig8_5),
+        Target("slo-errors", "SLO Figs. 4.1-4.3: localisation error vs single sensor errors, velocity offset per "
+               "neighbourhood x selection, failures (random walk)", 10, _slo("slo-errors")),
     )
 }
 
