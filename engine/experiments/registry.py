@@ -139,6 +139,8 @@ TARGETS: dict[str, Target] = {
                "louder source", 20, _fig8_5),
         Target("slo-errors", "SLO Figs. 4.1-4.3: localisation error vs single sensor errors, velocity offset per "
                "neighbourhood x selection, failures (random walk)", 10, _slo("slo-errors")),
+        Target("slo-pso", "SLO Table 4.4 and Figs. 4.11-4.13: SLO-PSO on seven benchmarks x 3 selections x 3 error "
+               "levels (3 runs per case by default)", 3, _slo("slo-pso")),
     )
 }
 
