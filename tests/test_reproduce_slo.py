@@ -7,7 +7,7 @@ import json
 
 from shoal.engine.experiments import TARGETS, reproduce
 
-SLO_TARGETS = ("slo-errors", "slo-pso")
+SLO_TARGETS = ("slo-errors", "slo-mitigation", "slo-neighbourhood", "slo-weight", "slo-pso")
 
 
 def _rows(path):
