@@ -29,6 +29,9 @@ from .panel_base import PanelsBase
 from .panels import Panels
 from .scene import ArenaView
 from .session import Session
+from .slo_panels import SLOPanels
+from .slo_scene import SLOView
+from .slo_session import SLOSession
 
 CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
 
@@ -43,6 +46,7 @@ class Kind:
 
 
 KINDS = (Kind(FleetSession, FleetPanels, FleetView), Kind(Session, Panels, ArenaView))
+KINDS = (Kind(SLOSession, SLOPanels, SLOView),) + KINDS  # [slo] scenes first: they have no [world]
 
 
 def kind_for(scenario: Scenario) -> Kind:
