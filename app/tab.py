@@ -32,6 +32,9 @@ from .session import Session
 from .slo_panels import SLOPanels
 from .slo_scene import SLOView
 from .slo_session import SLOSession
+from .sonar_panels import SonarPanels
+from .sonar_scene import SonarView
+from .sonar_session import SonarSession
 
 CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
 
@@ -47,6 +50,7 @@ class Kind:
 
 KINDS = (Kind(FleetSession, FleetPanels, FleetView), Kind(Session, Panels, ArenaView))
 KINDS = (Kind(SLOSession, SLOPanels, SLOView),) + KINDS  # [slo] scenes first: they have no [world]
+KINDS = KINDS[:1] + (Kind(SonarSession, SonarPanels, SonarView),) + KINDS[1:]  # [acoustics] scenes
 
 
 def kind_for(scenario: Scenario) -> Kind:
@@ -94,6 +98,8 @@ class TabApp:
         self.arena = kind.view(self.scene)
         if hasattr(self.panels, "drag_obstacle"):
             self.arena.on_obstacle_drag = self.panels.drag_obstacle  # type: ignore[attr-defined]
+        if hasattr(self.panels, "drag_source"):
+            self.arena.on_source_drag = self.panels.drag_source  # type: ignore[attr-defined]
         if hasattr(self.panels, "handle_click"):
             for modifier in CLICK_MODIFIERS:
                 self._clicks.append(self.scene.on_click(modifier=modifier)(self.scene_click))
