@@ -1,0 +1,80 @@
+"""SLO scenes in a real headless Chromium: switching to slo-walk through the preset dropdown
+draws the ghost overlay of the observer robot, and the oracle/SLO switch in the GUI changes
+the engine that runs. One server and one page for the module; tests run in file order."""
+
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+
+CHROMIUM = shutil.which("chromium")
+pytestmark = [
+    pytest.mark.browser,
+    pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not on PATH (apt-get install chromium)"),
+]
+
+sync_api = pytest.importorskip("playwright.sync_api")
+
+from browser_helpers import ARGS, VIEWPORT, choose, dismiss_toasts, wait_until  # noqa: E402
+
+from shoal.app.server import start_server  # noqa: E402
+from shoal.app.slo_session import SLOSession  # noqa: E402
+from shoal.engine.sim import Simulation  # noqa: E402
+from shoal.engine.slo import SLOSwarm  # noqa: E402
+from shoal.engine.slo_source import SLOSimulation  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def server():
+    srv = start_server("default", port=0)
+    yield srv
+    srv.stop()
+
+
+@pytest.fixture(scope="module")
+def page(server):
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        pg = browser.new_page(viewport=VIEWPORT)
+        pg.goto(f"http://127.0.0.1:{server.port}/")
+        pg.wait_for_selector("label:has-text('robots')", timeout=30000)
+        yield pg
+        browser.close()
+
+
+@pytest.fixture(scope="module")
+def cid(server, page):
+    wait_until(lambda: len(server.tabs) == 1, what="the tab")
+    return next(iter(server.tabs))
+
+
+def test_the_dropdown_switches_to_slo_walk_and_the_ghosts_are_drawn(server, page, cid):
+    dismiss_toasts(page)
+    choose(page, "preset", "slo-walk")
+    wait_until(lambda: isinstance(server.tabs[cid].session, SLOSession), what="an SLO session")
+    page.wait_for_selector("label:has-text('selection')", timeout=20000)
+    tab = server.tabs[cid]
+    session = tab.session
+    assert isinstance(session.sim, SLOSwarm)
+    page.get_by_role("button", name="Step", exact=True).click()
+    wait_until(lambda: session.sim.state.k >= 1, what="a step")
+    wait_until(lambda: tab.arena.drawn_revision == session.revision, what="the overlay redrawn")
+    st = session.sim.state
+    i = session.selected_robot
+    j = np.flatnonzero(st.valid[0, i])
+    ghosts = np.asarray(tab.arena.nodes["ghosts"].points, dtype=float)[:, :2] / tab.arena.scale + tab.arena.centre
+    np.testing.assert_allclose(ghosts, st.x[0, i] + st.est[0, i, j], atol=1e-4)
+    assert tab.arena.nodes["ghosts"].visible and len(j) >= 1
+
+
+def test_the_oracle_switch_in_the_gui_changes_the_engine(server, page, cid):
+    dismiss_toasts(page)
+    choose(page, "preset", "slo-adapted")
+    wait_until(lambda: type(server.tabs[cid].session.sim) is SLOSimulation, what="SLO positions")
+    page.get_by_role("tab", name="SLO", exact=True).click()
+    choose(page, "positions", "oracle (true)")
+    wait_until(lambda: type(server.tabs[cid].session.sim) is Simulation, what="the oracle swarm")
+    choose(page, "positions", "SLO (estimated)")
+    wait_until(lambda: type(server.tabs[cid].session.sim) is SLOSimulation, what="SLO positions again")
