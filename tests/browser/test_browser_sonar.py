@@ -1,0 +1,127 @@
+"""Chapter 6–8 scenes in a real headless Chromium: the preset switch through the dropdown, the
+bearing rays and the correlation plot following the robot chosen in the GUI, and a mouse
+drag that moves the source in the engine.
+
+One server (started on a Chapter 3 preset) and one page for the module; tests run in file
+order. Screen positions come from the tab's real camera, as in ``test_browser_fleet.py``.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import time
+
+import numpy as np
+import pytest
+
+CHROMIUM = shutil.which("chromium")
+pytestmark = [
+    pytest.mark.browser,
+    pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not on PATH (apt-get install chromium)"),
+]
+
+sync_api = pytest.importorskip("playwright.sync_api")
+
+from browser_helpers import ARGS, VIEWPORT, canvas_box, choose, dismiss_toasts, root_for, wait_until  # noqa: E402
+
+from shoal.app.server import start_server  # noqa: E402
+from shoal.app.sonar_session import SonarSession  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def server():
+    srv = start_server("default", port=0)
+    yield srv
+    srv.stop()
+
+
+@pytest.fixture(scope="module")
+def page(server):
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        pg = browser.new_page(viewport=VIEWPORT)
+        pg.goto(f"http://127.0.0.1:{server.port}/")
+        pg.wait_for_selector("label:has-text('robots')", timeout=30000)
+        yield pg
+        browser.close()
+
+
+@pytest.fixture(scope="module")
+def cid(server, page):
+    wait_until(lambda: len(server.tabs) == 1, what="the tab")
+    return next(iter(server.tabs))
+
+
+def to_pixel(server, cid, page, xy: np.ndarray) -> np.ndarray:
+    """World metres → page pixels through the tab's camera and view."""
+    tab = server.tabs[cid]
+    camera = server.viser.get_clients()[cid].camera
+    box = canvas_box(page)
+    half_view = float(camera.position[2]) * math.tan(camera.fov / 2)
+    px_per_unit = (box["height"] / 2) / half_view
+    s = tab.arena.to_scene(np.asarray(xy, dtype=float))
+    return np.array([box["x"] + box["width"] / 2 + s[0] * px_per_unit,
+                     box["y"] + box["height"] / 2 - s[1] * px_per_unit])
+
+
+def _plot_matches(tab, robot: int) -> bool:
+    b = tab.session.sim.state.bearing
+    if b is None or tab.session.selected_robot != robot:
+        return False
+    x, y, _ = (np.asarray(a) for a in tab.panels.corr_plot.data)
+    on_grid = np.isin(x, b.lags * 1e3)
+    return on_grid.sum() == b.corr.shape[-1] and np.allclose(y[on_grid], b.corr[0, robot])
+
+
+def test_switching_to_sonar_draws_rays_and_the_correlation_follows_the_robot(server, page, cid):
+    server.tabs[cid].session.pause()
+    dismiss_toasts(page)
+    choose(page, "preset", "sonar-xb-pso")
+    wait_until(lambda: isinstance(server.tabs[cid].session, SonarSession), what="an acoustic session")
+    page.wait_for_selector("label:has-text('algorithm')", timeout=20000)
+    tab = server.tabs[cid]
+    page.get_by_role("button", name="Step", exact=True).click()
+    wait_until(lambda: tab.session.sim.state.k >= 1, what="one step")
+    session = tab.session
+    wait_until(lambda: "rays_true" in tab.arena.nodes and tab.arena.nodes["rays_true"].visible, what="rays drawn")
+    x = session.sim.state.x[0]
+    pts = np.asarray(tab.arena.nodes["rays_true"].points)
+    np.testing.assert_allclose(pts[:, 0, :2], tab.arena.to_view(x)[:, :2], atol=1e-4)
+    wait_until(lambda: _plot_matches(tab, 0), what="robot 0's R(τ) plotted")
+    before = np.asarray(tab.panels.corr_plot.data[1]).copy()
+    field = root_for(page, "robot")
+    field.fill("6")
+    field.press("Enter")
+    wait_until(lambda: session.selected_robot == 6, what="robot 6 selected")
+    wait_until(lambda: _plot_matches(tab, 6), what="robot 6's R(τ) plotted")
+    assert not np.allclose(np.asarray(tab.panels.corr_plot.data[1]), before)
+    page.get_by_role("tab", name="Plots").click()
+    page.wait_for_selector("text=R(τ) vs τ", timeout=10000)
+
+
+def test_dragging_the_source_with_the_mouse_moves_it_in_the_engine(server, page, cid):
+    tab = server.tabs[cid]
+    session = tab.session
+    session.pause()
+    dismiss_toasts(page)
+    start = session.sim.state.source[0].copy()
+    dest = start * 0.5 + np.array([0.0, -60.0])
+    a, b = to_pixel(server, cid, page, start), to_pixel(server, cid, page, dest)
+    for attempt in range(3):  # the first frames may still be on their way on a loaded machine
+        time.sleep(1.0)
+        page.mouse.move(float(a[0]), float(a[1]))
+        page.mouse.down()
+        for f in np.linspace(0.1, 1.0, 12):
+            p = a + f * (b - a)
+            page.mouse.move(float(p[0]), float(p[1]))
+            time.sleep(0.05)
+        page.mouse.up()
+        try:
+            wait_until(lambda: np.hypot(*(session.sim.state.source[0] - dest)) < 15.0, timeout=5.0,
+                       what="the source moved")
+            break
+        except AssertionError:
+            if attempt == 2:
+                raise
+    assert np.hypot(*(session.sim.state.source[0] - start)) > 100.0
