@@ -285,6 +285,9 @@ class SLOPanels(PanelsBase):
         self.engine.content = f"engine: **{s.engine_name}**, {what} · selection {sc.slo.selection.upper()}"
 
     def on_snapshot(self, snap: Any) -> None:
+        if self.robot.value != snap.selected:
+            with self._sync():
+                self._set(self.robot, snap.selected)
         p = snap.pair
         if not snap.localising:
             self.inspector.content = "Oracle mode: every robot reads true positions, nothing to estimate."

@@ -197,7 +197,8 @@ class SLOSession(BaseSession):
             others = np.flatnonzero(adj)
             if not len(others):
                 return None
-            j = int(others[0])
+            geometric = others[b.flag[0, i, others] == 0]  # prefer a pair with its mirror pair
+            j = int(geometric[0] if len(geometric) else others[0])
         nan2 = np.full(2, np.nan)
         a = x[i]
         if b.candidates is not None:
