@@ -52,7 +52,7 @@ _SERIAL = itertools.count()
 class SonarView:
     """The scene of one tab showing an acoustic swarm. ``scene`` is a viser ``SceneApi``."""
 
-    RAY_SHARE = 0.45  # ray length as a share of the arena side
+    RAY_SHARE = 0.3  # ray length as a share of the arena side
 
     def __init__(self, scene: Any) -> None:
         self.scene = scene
@@ -148,7 +148,7 @@ class SonarView:
         v, f = shapes.disc_mesh(32)
         node = sc.add_batched_meshes_simple(
             self._name("source"), v, f, batched_wxyzs=np.array([[1.0, 0, 0, 0]]),
-            batched_positions=np.zeros((1, 3), np.float32), batched_scales=np.array([0.03 * side], np.float32),
+            batched_positions=np.zeros((1, 3), np.float32), batched_scales=np.array([0.022 * side], np.float32),
             batched_colors=SOURCE, lod="off", material="toon3", side="double", cast_shadow=False,
             receive_shadow=False)
         node.on_drag("left")(self._dragged)
@@ -200,7 +200,7 @@ class SonarView:
         self._lines("escort", rings, ESCORT, 2.0, Z["rings"])
 
     def _draw_robots(self, snap: SonarSnapshot) -> None:
-        self._points("robots", snap.x, ROBOT, 0.016 * VIEW_HALF * 2, "circle", Z["robots"])
+        self._points("robots", snap.x, ROBOT, 0.009 * VIEW_HALF * 2, "circle", Z["robots"])
         tip = snap.x + 0.025 * self.half * np.column_stack([np.cos(snap.heading), np.sin(snap.heading)])
         self._lines("headings", np.stack([snap.x, tip], axis=1), HEADING, 2.0, Z["headings"])
         tr = snap.trails
@@ -209,8 +209,8 @@ class SonarView:
         else:
             segs = np.zeros((0, 2, 2))
         self._lines("trails", segs, TRAIL, 1.2, Z["trails"])
-        self._points("pbests", snap.y, PBEST, 0.012 * VIEW_HALF * 2, "square", Z["pbests"])
-        self._points("gbest", snap.yg[None], GBEST, 0.035 * VIEW_HALF * 2, "diamond", Z["gbest"])
+        self._points("pbests", snap.y, PBEST, 0.006 * VIEW_HALF * 2, "square", Z["pbests"])
+        self._points("gbest", snap.yg[None], GBEST, 0.016 * VIEW_HALF * 2, "diamond", Z["gbest"])
         i = snap.selected
         self._lines("selected", shapes.circle_segments(snap.x[i], 0.02 * self.half, 32), SELECTED, 3.0,
                     Z["selected"])
@@ -259,7 +259,7 @@ class SonarView:
             j = int(snap.partner[i])
             if 0 <= j < len(snap.x) and j != i:
                 partner = np.stack([snap.x[i], snap.x[j]])[None]
-        size = 0.01 * VIEW_HALF * 2
+        size = 0.006 * VIEW_HALF * 2
         self._points("hits_kept", kept, HIT_KEPT, size, "circle", Z["hits"])
         self._points("hits_dropped", dropped, HIT_DROPPED, size, "circle", Z["hits"])
         self._points("picks", picks, PICK, 1.8 * size, "diamond", Z["hits"] + 0.001)
