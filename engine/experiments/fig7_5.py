@@ -44,7 +44,20 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
                                 f" = {a / b:.2f}" if np.isfinite(a) and np.isfinite(b) else ""),
                             bool(np.isfinite(a) and np.isfinite(b) and ideal / 1.5 <= a / b <= ideal * 1.5)))
     for alg in ("a-pso", "x-pso"):
+        reached = [x for x in u if np.isfinite(med(res, alg, Q0, D0, x))]
+        if len(reached) >= 2 and reached[0] != ulo:
+            a, b = med(res, alg, Q0, D0, reached[0]), med(res, alg, Q0, D0, reached[-1])
+            ideal = reached[-1] / reached[0]
+            checks.append(check(f"{ch.LABELS[alg]}: time ∝ 1/U over the speeds where it converges (U = {reached[0]:g} "
+                                f"over U = {reached[-1]:g}; pass: within ×1.5 of {ideal:g}; ours)", "time ∝ d_s/U",
+                                f"{a:.0f} / {b:.0f} = {a / b:.2f}", ideal / 1.5 <= a / b <= ideal * 1.5))
         checks.append(unaffected(res, alg, [(qlo, D0, uhi), (qhi, D0, uhi)], f"Q at U = {uhi:g} m/s", steps))
+    both = [x for x in u if np.isfinite(med(res, "a-pso", Q0, D0, x)) and np.isfinite(med(res, "x-pso", Q0, D0, x))]
+    checks.append(check(f"X-PSO faster than A-PSO wherever both converge (Q = {Q0:g}, median times)",
+                        "3400 < 4500 at U = 2 m/s (Fig. 7-2)",
+                        "; ".join(f"U {x:g}: X {med(res, 'x-pso', Q0, D0, x):.0f} vs A {med(res, 'a-pso', Q0, D0, x):.0f}"
+                                  for x in both) or "neither converges at any U",
+                        bool(both) and all(med(res, "x-pso", Q0, D0, x) < med(res, "a-pso", Q0, D0, x) for x in both)))
     b_hi = [med(res, "b-pso", qhi, D0, x) for x in u]
     xb_hi = [med(res, "xb-pso", qhi, D0, x) for x in u]
     checks.append(check(f"B-PSO never converges at large U with Q = {qhi:g} (median not reached at U ≥ {u[len(u) // 2]:g})",
