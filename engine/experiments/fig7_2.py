@@ -205,4 +205,17 @@ preset `sonar-xb-pso` with `--set` overrides (see `summary.json` → `cases.*.co
 ## Checks
 
 {checks_table(summary["checks"])}
+
+## Reading the differences
+
+- A-PSO and X-PSO assign fitness to the robots' own positions. With collisions ignored and
+  the spec's β = 0.9, c1 = c2 (ĉ = 1.27 m/s), the swarm gathers into a cluster about a metre
+  across; over it the intensity gradient at 10 dB is a few per cent of the window-to-window
+  fluctuation of f_A (or ρ), so the cluster drifts toward the source slowly (thesis: "diversity
+  loss"). `shoal reproduce fig7-5` shows both converging once U ≥ 4 m/s (ĉ ≥ 2.5 m/s), with
+  X-PSO faster than A-PSO, as the thesis reports at U = 2 m/s.
+- B-PSO and XB-PSO select remote intersections, so their personal bests lie near the source
+  and the robots move at close to the controller's top speed; their median times are about
+  2–2.5× below the thesis values, and the order XB ≤ B and the growth with d_s are kept.
+- β, c1:c2 and the heading rule are spec defaults, not thesis values (spec §12, A16, A17).
 """
