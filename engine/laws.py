@@ -29,10 +29,11 @@ def squash(z: np.ndarray, kind: Squash = "sgn", width: float = 1.0) -> np.ndarra
         return np.sign(z)
     if width <= 0:
         raise ValueError(f"smooth width must be > 0, got {width}")
-    if kind == "tanh":
-        return np.tanh(z / width)
-    if kind == "logistic":
-        return 2.0 * expit(z / width) - 1.0
+    with np.errstate(over="ignore"):  # z/width = ±inf saturates to ±1, as intended
+        if kind == "tanh":
+            return np.tanh(z / width)
+        if kind == "logistic":
+            return 2.0 * expit(z / width) - 1.0
     raise ValueError(f"unknown squash {kind!r}")
 
 
