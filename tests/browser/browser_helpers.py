@@ -3,8 +3,11 @@ inputs by their labels."""
 
 from __future__ import annotations
 
+import math
 import re
 import time
+
+import numpy as np
 
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
@@ -51,3 +54,15 @@ def canvas_box(page):
     """The page box of the 3-D canvas (the largest canvas)."""
     boxes = [b for b in (c.bounding_box() for c in page.locator("canvas").all()) if b]
     return max(boxes, key=lambda b: b["width"] * b["height"])
+
+
+def to_pixel(server, cid, page, xy: np.ndarray) -> np.ndarray:
+    """World metres → page pixels (x right, y down) through the tab's camera and view."""
+    tab = server.tabs[cid]
+    camera = server.viser.get_clients()[cid].camera
+    box = canvas_box(page)
+    half_view = float(camera.position[2]) * math.tan(camera.fov / 2)
+    px_per_unit = (box["height"] / 2) / half_view
+    s = tab.arena.to_scene(np.asarray(xy, dtype=float))
+    return np.stack([box["x"] + box["width"] / 2 + s[..., 0] * px_per_unit,
+                     box["y"] + box["height"] / 2 - s[..., 1] * px_per_unit], axis=-1)

@@ -28,14 +28,6 @@ from browser_helpers import (  # noqa: E402
 )
 
 from shoal.app.scene import ROBOT, ROBOT_SIZE, VIEW_HALF  # noqa: E402
-from shoal.app.server import start_server  # noqa: E402
-
-
-@pytest.fixture(scope="module")
-def server():
-    srv = start_server("default", port=0)
-    yield srv
-    srv.stop()
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,6 @@ view ``fov``), as in ``test_browser.py``.
 from __future__ import annotations
 
 import io
-import math
 import shutil
 import time
 
@@ -25,48 +24,9 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import (  # noqa: E402
-    ARGS, VIEWPORT, canvas_box, choose, dismiss_toasts, root_for, wait_until,
-)
+from browser_helpers import choose, dismiss_toasts, root_for, to_pixel, wait_until  # noqa: E402
 
 from shoal.app.fleet_session import FleetSession  # noqa: E402
-from shoal.app.server import start_server  # noqa: E402
-
-
-@pytest.fixture(scope="module")
-def server():
-    srv = start_server("default", port=0)
-    yield srv
-    srv.stop()
-
-
-@pytest.fixture(scope="module")
-def page(server):
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        pg = browser.new_page(viewport=VIEWPORT)
-        pg.goto(f"http://127.0.0.1:{server.port}/")
-        pg.wait_for_selector("label:has-text('robots')", timeout=30000)
-        yield pg
-        browser.close()
-
-
-@pytest.fixture(scope="module")
-def cid(server, page):
-    wait_until(lambda: len(server.tabs) == 1, what="the tab")
-    return next(iter(server.tabs))
-
-
-def to_pixel(server, cid, page, xy: np.ndarray) -> np.ndarray:
-    """World metres → page pixels (x right, y down) through the tab's camera and view."""
-    tab = server.tabs[cid]
-    camera = server.viser.get_clients()[cid].camera
-    box = canvas_box(page)
-    half_view = float(camera.position[2]) * math.tan(camera.fov / 2)
-    px_per_unit = (box["height"] / 2) / half_view
-    s = tab.arena.to_scene(np.asarray(xy, dtype=float))
-    return np.stack([box["x"] + box["width"] / 2 + s[..., 0] * px_per_unit,
-                     box["y"] + box["height"] / 2 - s[..., 1] * px_per_unit], axis=-1)
 
 
 def screenshot(page) -> np.ndarray:

@@ -17,37 +17,12 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import ARGS, VIEWPORT, choose, dismiss_toasts, wait_until  # noqa: E402
+from browser_helpers import choose, dismiss_toasts, wait_until  # noqa: E402
 
-from shoal.app.server import start_server  # noqa: E402
 from shoal.app.slo_session import SLOSession  # noqa: E402
 from shoal.engine.sim import Simulation  # noqa: E402
 from shoal.engine.slo import SLOSwarm  # noqa: E402
 from shoal.engine.slo_source import SLOSimulation  # noqa: E402
-
-
-@pytest.fixture(scope="module")
-def server():
-    srv = start_server("default", port=0)
-    yield srv
-    srv.stop()
-
-
-@pytest.fixture(scope="module")
-def page(server):
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        pg = browser.new_page(viewport=VIEWPORT)
-        pg.goto(f"http://127.0.0.1:{server.port}/")
-        pg.wait_for_selector("label:has-text('robots')", timeout=30000)
-        yield pg
-        browser.close()
-
-
-@pytest.fixture(scope="module")
-def cid(server, page):
-    wait_until(lambda: len(server.tabs) == 1, what="the tab")
-    return next(iter(server.tabs))
 
 
 def test_the_dropdown_switches_to_slo_walk_and_the_ghosts_are_drawn(server, page, cid):

@@ -8,7 +8,6 @@ order. Screen positions come from the tab's real camera, as in ``test_browser_fl
 
 from __future__ import annotations
 
-import math
 import shutil
 import time
 
@@ -23,46 +22,9 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import ARGS, VIEWPORT, canvas_box, choose, dismiss_toasts, root_for, wait_until  # noqa: E402
+from browser_helpers import choose, dismiss_toasts, root_for, to_pixel, wait_until  # noqa: E402
 
-from shoal.app.server import start_server  # noqa: E402
 from shoal.app.sonar_session import SonarSession  # noqa: E402
-
-
-@pytest.fixture(scope="module")
-def server():
-    srv = start_server("default", port=0)
-    yield srv
-    srv.stop()
-
-
-@pytest.fixture(scope="module")
-def page(server):
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        pg = browser.new_page(viewport=VIEWPORT)
-        pg.goto(f"http://127.0.0.1:{server.port}/")
-        pg.wait_for_selector("label:has-text('robots')", timeout=30000)
-        yield pg
-        browser.close()
-
-
-@pytest.fixture(scope="module")
-def cid(server, page):
-    wait_until(lambda: len(server.tabs) == 1, what="the tab")
-    return next(iter(server.tabs))
-
-
-def to_pixel(server, cid, page, xy: np.ndarray) -> np.ndarray:
-    """World metres → page pixels through the tab's camera and view."""
-    tab = server.tabs[cid]
-    camera = server.viser.get_clients()[cid].camera
-    box = canvas_box(page)
-    half_view = float(camera.position[2]) * math.tan(camera.fov / 2)
-    px_per_unit = (box["height"] / 2) / half_view
-    s = tab.arena.to_scene(np.asarray(xy, dtype=float))
-    return np.array([box["x"] + box["width"] / 2 + s[0] * px_per_unit,
-                     box["y"] + box["height"] / 2 - s[1] * px_per_unit])
 
 
 def _plot_matches(tab, robot: int) -> bool:
