@@ -20,7 +20,7 @@ from shoal.presets.models import Scenario
 
 from .output import check, r3, write_csv  # noqa: F401 (used as c3.check etc.)
 from .output import num as _num
-from .runner import BatchResult, Job
+from .runner import BatchResult, Job, run_jobs
 
 SIZES = (10, 100, 1000)
 DURATION = 100.0  # s of simulated time
@@ -204,3 +204,24 @@ def save_figure(path: Path, panels: Sequence[tuple[str, dict[int, Series]]], nco
 def median_range(values: np.ndarray) -> str:
     v = np.asarray(values, dtype=float)
     return f"median {np.median(v):.3f} (min {v.min():.3f}, max {v.max():.3f})"
+
+
+def simulate_cases(
+    cases: Sequence[Case], sizes: Sequence[int], runs: int, duration: float, out_dir: Path,
+    workers: int, progress: bool, desc: str,
+) -> tuple[dict[Any, BatchResult], dict[str, dict[int, Series]]]:
+    """Run every case × swarm size, write runs.csv and series.csv, and return the results
+    and the per-second series of each case and size."""
+    results = run_jobs(make_jobs(cases, sizes, runs, duration), workers=workers, progress=progress, desc=desc)
+    rows, srows = [], []
+    ser: dict[str, dict[int, Series]] = {}
+    for case in cases:
+        ser[case.name] = {}
+        for size in sizes:
+            res = results[(case.name, size)]
+            rows += runs_rows(case, size, res, case.scenario(size))
+            ser[case.name][size] = s = series(res)
+            srows += series_rows(case, size, s)
+    write_csv(out_dir / "runs.csv", RUNS_COLUMNS, rows)
+    write_csv(out_dir / "series.csv", SERIES_COLUMNS, srows)
+    return results, ser

@@ -15,7 +15,9 @@ the same layouts (e.g. every algorithm at one SNR_0) share ``seed``.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
@@ -24,7 +26,8 @@ from shoal.presets.build import build_sonar
 from shoal.presets.io import load
 from shoal.presets.models import Scenario
 
-from .output import num, percentile_band
+from .output import num, percentile_band, write_csv
+from .runner import run_jobs
 
 ALGORITHMS = ("a-pso", "x-pso", "b-pso", "xb-pso")  # Chapter 7 order
 LABELS = {"a-pso": "A-PSO", "x-pso": "X-PSO", "b-pso": "B-PSO", "xb-pso": "XB-PSO", "gt-pso": "GT-PSO"}
@@ -302,3 +305,23 @@ def occupancy_panel(ax: Any, b: SonarBatch, title: str, r: float, level: float) 
     ax.set_xlabel("x − x_src (m)")
     ax.set_ylabel("y − y_src (m)")
     ax.set_aspect("equal")
+
+
+def convergence_sweep(
+    jobs: Sequence[Any], runs: int, out_dir: Path, runs_columns: Sequence[str], series_every: int,
+    workers: int, progress: bool, desc: str,
+) -> tuple[dict[Any, Any], float]:
+    """Run (algorithm, SNR_0) jobs, write runs.csv and series.csv; return results and wall time."""
+    t0 = time.perf_counter()
+    res = run_jobs(jobs, workers=workers, progress=progress, desc=desc, simulate=simulate_sonar, merge=merge, chunk=runs)
+    wall = time.perf_counter() - t0
+    rows, series = [], []
+    for j in jobs:
+        alg, snr = j.key
+        b = res[j.key]
+        rows += [[alg, str(r), str(b.seed), f"{snr:g}", str(int(c)), steps_cell(f)]
+                 for r, c, f in zip(b.run_index, b.converged, b.first_converged)]
+        series += series_rows((alg, f"{snr:g}"), b, series_every)
+    write_csv(out_dir / "runs.csv", runs_columns, rows)
+    write_csv(out_dir / "series.csv", ("case", "snr0_db", *SERIES_TAIL), series)
+    return res, wall

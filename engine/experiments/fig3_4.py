@@ -18,7 +18,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from . import chapter3 as c3
-from .runner import BatchResult, run_jobs
+from .runner import BatchResult
 
 PANELS = {
     "3-4a": ("fig3-4a", "A+ = 20 m/s², Δt = 1 s, β = 1"),
@@ -56,20 +56,7 @@ def run(
     sizes = sorted(sizes)
     big = sizes[-1]
     all_cases = cases()
-    results = run_jobs(c3.make_jobs(all_cases, sizes, runs, duration), workers=workers, progress=progress,
-                       desc="fig3-4")
-
-    runs_rows, series_rows = [], []
-    ser: dict[str, dict[int, c3.Series]] = {}
-    for case in all_cases:
-        ser[case.name] = {}
-        for size in sizes:
-            res = results[(case.name, size)]
-            runs_rows += c3.runs_rows(case, size, res, case.scenario(size))
-            ser[case.name][size] = s = c3.series(res)
-            series_rows += c3.series_rows(case, size, s)
-    c3.write_csv(out_dir / "runs.csv", c3.RUNS_COLUMNS, runs_rows)
-    c3.write_csv(out_dir / "series.csv", c3.SERIES_COLUMNS, series_rows)
+    results, ser = c3.simulate_cases(all_cases, sizes, runs, duration, out_dir, workers, progress, "fig3-4")
     for mode, fname in (("ahead", "fig3-4.png"), ("literal", "fig3-4-literal.png")):
         panels = [(f"{p} ({mode}): {text}", ser[f"{p}/{mode}"]) for p, (_, text) in PANELS.items()]
         c3.save_figure(out_dir / fname, panels, ncols=2,

@@ -18,7 +18,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from . import chapter3 as c3
-from .runner import BatchResult, run_jobs
+from .runner import BatchResult
 
 PANELS = {
     "3-5a": ("fig3-5a", "U 20 → 4 → 20, A+ = 4 (β 0.2 → 1 → 0.2)"),
@@ -99,20 +99,7 @@ def run(
     sizes = sorted(sizes)
     big = sizes[-1]
     all_cases = cases()
-    results = run_jobs(c3.make_jobs(all_cases, sizes, runs, duration), workers=workers, progress=progress,
-                       desc="fig3-5")
-
-    runs_rows, series_rows = [], []
-    ser: dict[str, dict[int, c3.Series]] = {}
-    for case in all_cases:
-        ser[case.name] = {}
-        for size in sizes:
-            res = results[(case.name, size)]
-            runs_rows += c3.runs_rows(case, size, res, case.scenario(size))
-            ser[case.name][size] = s = c3.series(res)
-            series_rows += c3.series_rows(case, size, s)
-    c3.write_csv(out_dir / "runs.csv", c3.RUNS_COLUMNS, runs_rows)
-    c3.write_csv(out_dir / "series.csv", c3.SERIES_COLUMNS, series_rows)
+    results, ser = c3.simulate_cases(all_cases, sizes, runs, duration, out_dir, workers, progress, "fig3-5")
     panels = [(f"{p}: {text}", ser[f"{p}/ahead"]) for p, (_, text) in PANELS.items()]
     c3.save_figure(out_dir / "fig3-5.png", panels, ncols=3,
                    suptitle=f"Fig. 3-5 reproduction, Δt = 1 s, switches at 34 s and 67 s, median over {runs} runs")

@@ -12,7 +12,6 @@ in the series and the figure); the median time counts a run that never converged
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -22,8 +21,7 @@ from shoal.presets.build import sonar_params_for
 from shoal.presets.io import load
 
 from . import chapter78 as ch
-from .output import check, checks_table, new_figure, r3, save, write_csv
-from .runner import run_jobs
+from .output import check, checks_table, new_figure, r3, save
 
 PRESET = "sonar-xb-pso"
 DEFAULT_RUNS = 100
@@ -61,19 +59,7 @@ def run(
     mode: str = "waveform",
 ) -> dict[str, Any]:
     jobs = make_jobs(runs, steps, snrs, algorithms, mode)
-    t0 = time.perf_counter()
-    res = run_jobs(jobs, workers=workers, progress=progress, desc="fig7-2", simulate=ch.simulate_sonar,
-                   merge=ch.merge, chunk=runs)
-    wall = time.perf_counter() - t0
-    rows, series = [], []
-    for j in jobs:
-        alg, snr = j.key
-        b = res[j.key]
-        rows += [[alg, str(r), str(b.seed), f"{snr:g}", str(int(c)), ch.steps_cell(f)]
-                 for r, c, f in zip(b.run_index, b.converged, b.first_converged)]
-        series += ch.series_rows((alg, f"{snr:g}"), b, SERIES_EVERY)
-    write_csv(out_dir / "runs.csv", RUNS_COLUMNS, rows)
-    write_csv(out_dir / "series.csv", ("case", "snr0_db", *ch.SERIES_TAIL), series)
+    res, wall = ch.convergence_sweep(jobs, runs, out_dir, RUNS_COLUMNS, SERIES_EVERY, workers, progress, "fig7-2")
 
     med = {j.key: res[j.key].median_steps() for j in jobs}
     frac = {j.key: float(res[j.key].converged.mean()) for j in jobs}

@@ -10,7 +10,6 @@ names only SNR_0 = 10 and 6 dB; 4 and 0 dB stand for its unlisted lower values (
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -21,8 +20,7 @@ from shoal.presets.io import load
 
 from . import chapter78 as ch
 from .fig7_2 import RUNS_COLUMNS, SERIES_EVERY, make_jobs, seed_for
-from .output import check, checks_table, new_figure, r3, save, write_csv
-from .runner import run_jobs
+from .output import check, checks_table, new_figure, r3, save
 
 PRESET = "sonar-gt-pso"
 DEFAULT_RUNS = 100
@@ -37,19 +35,7 @@ def run(
     steps: int = HORIZON, snrs: Sequence[float] = SNRS, mode: str = "waveform",
 ) -> dict[str, Any]:
     jobs = make_jobs(runs, steps, snrs, ALGORITHMS, mode, preset=PRESET)
-    t0 = time.perf_counter()
-    res = run_jobs(jobs, workers=workers, progress=progress, desc="fig8-2", simulate=ch.simulate_sonar,
-                   merge=ch.merge, chunk=runs)
-    wall = time.perf_counter() - t0
-    rows, series = [], []
-    for j in jobs:
-        alg, snr = j.key
-        b = res[j.key]
-        rows += [[alg, str(r), str(b.seed), f"{snr:g}", str(int(c)), ch.steps_cell(f)]
-                 for r, c, f in zip(b.run_index, b.converged, b.first_converged)]
-        series += ch.series_rows((alg, f"{snr:g}"), b, SERIES_EVERY)
-    write_csv(out_dir / "runs.csv", RUNS_COLUMNS, rows)
-    write_csv(out_dir / "series.csv", ("case", "snr0_db", *ch.SERIES_TAIL), series)
+    res, wall = ch.convergence_sweep(jobs, runs, out_dir, RUNS_COLUMNS, SERIES_EVERY, workers, progress, "fig8-2")
     p = sonar_params_for(jobs[0].scenario().acoustics)
     med = {j.key: res[j.key].median_steps() for j in jobs}
     frac = {j.key: float(res[j.key].converged.mean()) for j in jobs}
