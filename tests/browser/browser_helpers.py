@@ -14,7 +14,7 @@ ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-f
 VIEWPORT = {"width": 1280, "height": 800}
 
 
-def wait_until(cond, timeout: float = 15.0, what: str = "condition"):
+def wait_until(cond, timeout: float = 45.0, what: str = "condition"):
     end = time.monotonic() + timeout
     while time.monotonic() < end:
         value = cond()

@@ -27,7 +27,7 @@ def page(server):
         browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
         pg = browser.new_page(viewport=VIEWPORT)
         pg.goto(f"http://127.0.0.1:{server.port}/")
-        pg.wait_for_selector("label:has-text('robots')", timeout=30000)
+        pg.wait_for_selector("label:has-text('robots')", timeout=90000)
         yield pg
         browser.close()
 

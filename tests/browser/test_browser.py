@@ -43,7 +43,7 @@ def page(browser, server):
     context = browser.new_context(accept_downloads=True, viewport=VIEWPORT)
     pg = context.new_page()
     pg.goto(f"http://127.0.0.1:{server.port}/")
-    pg.wait_for_selector("label:has-text('robots')", timeout=30000)
+    pg.wait_for_selector("label:has-text('robots')", timeout=90000)
     yield pg
     context.close()
 
@@ -167,7 +167,7 @@ def test_a_second_tab_gets_its_own_session(server, browser, page, client_id):
     other = browser.new_page(viewport=VIEWPORT)
     try:
         other.goto(f"http://127.0.0.1:{server.port}/")
-        other.wait_for_selector("label:has-text('robots')", timeout=30000)
+        other.wait_for_selector("label:has-text('robots')", timeout=90000)
         wait_until(lambda: len(server.sessions) == 2, what="a second session")
         second = next(cid for cid in server.sessions if cid != client_id)
         box = number_box(other, "robots")
