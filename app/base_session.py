@@ -133,7 +133,16 @@ class BaseSession:
         raise NotImplementedError
 
     def _frame(self) -> Frame:
-        raise NotImplementedError
+        """The first run's robots now, for the history ring buffer."""
+        s = self.sim.state
+        return Frame(k=s.k, t=self.clock(), x=s.x[0].copy(), u=s.u[0].copy(), heading=s.heading[0].copy(),
+                     status=s.status[0].copy())
+
+    def select(self, robot: int) -> None:
+        """Make ``robot`` the one whose details the panels and the scene show."""
+        with self.lock:
+            self.selected_robot = int(min(max(robot, 0), self.sim.robots - 1))
+            self.revision += 1
 
     def _metric_row(self, info: Any) -> tuple[float, ...]:
         """One row of ``METRICS`` for the current state (``info`` is None at step 0)."""

@@ -96,13 +96,8 @@ class FleetView:
 
     def ray_to_world(self, origin: Any, direction: Any) -> np.ndarray | None:
         """Where a click ray meets the ground (z = 0), in world metres; None if it misses."""
-        o, d = np.asarray(origin, dtype=float), np.asarray(direction, dtype=float)
-        if abs(d[2]) < 1e-9:
-            return None
-        t = -o[2] / d[2]
-        if t < 0:
-            return None
-        return self.to_world((o + t * d)[:2])
+        p = shapes.ray_ground(origin, direction)
+        return None if p is None else self.to_world(p)
 
     # ------------------------------------------------------------------ lifecycle
     def _drop_nodes(self) -> None:

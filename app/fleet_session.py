@@ -26,7 +26,7 @@ from shoal.presets.build import build_fleet, fleet_params_for, world_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from .base_session import BaseSession, Frame
+from .base_session import BaseSession
 from .session import check_supported
 
 OBSTACLE_RADIUS = 0.7  # m: a new obstacle's default radius
@@ -212,17 +212,7 @@ class FleetSession(BaseSession):
             self.follow, self.zoom = follow, float(min(max(zoom, 1.0), 20.0))
             self.revision += 1
 
-    def select(self, robot: int) -> None:
-        with self.lock:
-            self.selected_robot = int(min(max(robot, 0), self.sim.robots - 1))
-            self.revision += 1
-
     # ------------------------------------------------------------------ history and views
-    def _frame(self) -> Frame:
-        s = self.sim.state
-        return Frame(k=s.k, t=self.clock(), x=s.x[0].copy(), u=s.u[0].copy(), heading=s.heading[0].copy(),
-                     status=s.status[0].copy())
-
     def _metric_row(self, info: Any) -> tuple[float, ...]:
         info = info if info is not None else self.sim.info()
         return (self.clock(), float(info.com_fitness[0]), float(info.operational[0]), float(info.collided[0]),

@@ -5,6 +5,7 @@ and circles, dashes and arrows as line segments ``(S, 2, 3)``. Pure numpy, no vi
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -90,3 +91,12 @@ def arrow(start: np.ndarray, vec: np.ndarray, head: float = 0.3, spread: float =
     left = np.array([c * back[0] - si * back[1], si * back[0] + c * back[1]])
     right = np.array([c * back[0] + si * back[1], -si * back[0] + c * back[1]])
     return np.stack([[s, tip], [tip, tip + left], [tip, tip + right]])
+
+
+def ray_ground(origin: Any, direction: Any) -> np.ndarray | None:
+    """Where a click ray (scene coordinates) meets the ground z = 0: (x, y), or None if it misses."""
+    o, d = np.asarray(origin, dtype=float), np.asarray(direction, dtype=float)
+    if abs(d[2]) < 1e-9:
+        return None
+    t = -o[2] / d[2]
+    return None if t < 0 else (o + t * d)[:2]

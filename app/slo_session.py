@@ -29,7 +29,7 @@ from shoal.presets.build import build_slo
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from .base_session import BaseSession, Frame
+from .base_session import BaseSession
 
 KIND_NAMES = {0: "none", 1: "x1", 2: "x2", 3: "x3 (dead reckoning)", 4: "initial guess", 5: "oracle"}
 FLAG_NAMES = {0: "geometric {x1, x2, x3}", 1: "fallback {x3}: range failure or no movement",
@@ -167,11 +167,6 @@ class SLOSession(BaseSession):
             return int(np.argmin(d)) if d.size and d.min() <= tol else None
 
     # ------------------------------------------------------------------ history
-    def _frame(self) -> Frame:
-        s = self.sim.state
-        return Frame(k=s.k, t=self.clock(), x=s.x[0].copy(), u=s.u[0].copy(), heading=s.heading[0].copy(),
-                     status=s.status[0].copy())
-
     def _metric_row(self, info: Any) -> tuple[float, ...]:
         s = self.sim.state
         if isinstance(self.sim, SLOSwarm):

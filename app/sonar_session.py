@@ -29,7 +29,7 @@ from shoal.presets.build import build_sonar, sonar_params_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from .base_session import BaseSession, Frame
+from .base_session import BaseSession
 
 # acoustics fields whose change rebuilds the swarm (everything else applies at the next step)
 REBUILD_FIELDS = ("algorithm", "controller", "mode", "snr0_db", "d_0", "start", "source_bearing_deg",
@@ -166,17 +166,7 @@ class SonarSession(BaseSession):
             d = np.hypot(*(self.sim.state.x[0] - (x, y)).T)
             return int(np.argmin(d)) if d.size and d.min() <= tol else None
 
-    def select(self, robot: int) -> None:
-        with self.lock:
-            self.selected_robot = int(min(max(robot, 0), self.sim.robots - 1))
-            self.revision += 1
-
     # ------------------------------------------------------------------ history and views
-    def _frame(self) -> Frame:
-        s = self.sim.state
-        return Frame(k=s.k, t=self.clock(), x=s.x[0].copy(), u=s.u[0].copy(), heading=s.heading[0].copy(),
-                     status=s.status[0].copy())
-
     def _metric_row(self, info: Any) -> tuple[float, ...]:
         info = info if info is not None else self.sim.info()
         snr = self.sim.state.snr_db[0]
