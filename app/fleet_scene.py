@@ -57,7 +57,7 @@ ObstacleDrag = Callable[[int, float, float, str], None]
 _SERIAL = itertools.count()
 
 
-class FleetView:
+class FleetView(shapes.GroundFrame):
     """The scene of one tab showing a fleet. ``scene`` is a viser ``SceneApi``.
 
     ``follow`` and ``zoom`` (from the snapshot) pick the view: the whole world (zoom 1), or a
@@ -85,19 +85,6 @@ class FleetView:
     def to_view(self, xy: np.ndarray, z: float = 0.0) -> np.ndarray:
         """World metres (…, 2) → view units (…, 3) float32."""
         return shapes.lift((np.asarray(xy, dtype=float) - self.centre) * self.scale, z)
-
-    def to_world(self, scene_xy: np.ndarray) -> np.ndarray:
-        """Scene coordinates (what clicks and drags report) → world metres."""
-        return np.asarray(scene_xy, dtype=float)[..., :2] / self.scale + self.focus
-
-    def to_scene(self, xy: np.ndarray) -> np.ndarray:
-        """World metres → scene coordinates, the inverse of :meth:`to_world`."""
-        return (np.asarray(xy, dtype=float) - self.focus) * self.scale
-
-    def ray_to_world(self, origin: Any, direction: Any) -> np.ndarray | None:
-        """Where a click ray meets the ground (z = 0), in world metres; None if it misses."""
-        p = shapes.ray_ground(origin, direction)
-        return None if p is None else self.to_world(p)
 
     # ------------------------------------------------------------------ lifecycle
     def _drop_nodes(self) -> None:

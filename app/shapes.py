@@ -100,3 +100,24 @@ def ray_ground(origin: Any, direction: Any) -> np.ndarray | None:
         return None
     t = -o[2] / d[2]
     return None if t < 0 else (o + t * d)[:2]
+
+
+class GroundFrame:
+    """World metres ↔ scene coordinates for a top-down view with ``focus`` (the world point at
+    the middle of the screen) and ``scale`` (scene units per metre)."""
+
+    focus: np.ndarray
+    scale: float
+
+    def to_world(self, scene_xy: np.ndarray) -> np.ndarray:
+        """Scene coordinates (what clicks and drags report) → world metres."""
+        return np.asarray(scene_xy, dtype=float)[..., :2] / self.scale + self.focus
+
+    def to_scene(self, xy: np.ndarray) -> np.ndarray:
+        """World metres → scene coordinates, the inverse of :meth:`to_world`."""
+        return (np.asarray(xy, dtype=float) - self.focus) * self.scale
+
+    def ray_to_world(self, origin: Any, direction: Any) -> np.ndarray | None:
+        """Where a click ray meets the ground (z = 0), in world metres; None if it misses."""
+        p = ray_ground(origin, direction)
+        return None if p is None else self.to_world(p)

@@ -49,7 +49,7 @@ SourceDrag = Callable[[float, float, str], None]
 _SERIAL = itertools.count()
 
 
-class SonarView:
+class SonarView(shapes.GroundFrame):
     """The scene of one tab showing an acoustic swarm. ``scene`` is a viser ``SceneApi``."""
 
     RAY_SHARE = 0.3  # ray length as a share of the arena side
@@ -70,18 +70,6 @@ class SonarView:
     def to_view(self, xy: np.ndarray, z: float = 0.0) -> np.ndarray:
         """World metres (…, 2) → coordinates under the root frame (…, 3) float32."""
         return shapes.lift(np.asarray(xy, dtype=float) * self.scale, z)
-
-    def to_world(self, scene_xy: np.ndarray) -> np.ndarray:
-        """Scene coordinates (clicks and drags) → world metres."""
-        return np.asarray(scene_xy, dtype=float)[..., :2] / self.scale + self.focus
-
-    def to_scene(self, xy: np.ndarray) -> np.ndarray:
-        return (np.asarray(xy, dtype=float) - self.focus) * self.scale
-
-    def ray_to_world(self, origin: Any, direction: Any) -> np.ndarray | None:
-        """Where a click ray meets the ground (z = 0), in world metres; None if it misses."""
-        p = shapes.ray_ground(origin, direction)
-        return None if p is None else self.to_world(p)
 
     # ------------------------------------------------------------------ lifecycle
     def _name(self, key: str) -> str:
