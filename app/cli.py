@@ -66,6 +66,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from shoal.engine.experiments import TARGETS, OutputDirError, reproduce
 
+    if args.report:
+        return _report(args.report)
+    if args.all:
+        return _reproduce_all(args)
     if args.list or not args.target:
         for name, target in TARGETS.items():
             print(f"{name:12s} {target.description}")
@@ -74,10 +78,8 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
         return _err(f"unknown target {args.target!r}; known: {', '.join(TARGETS)}")
     if args.scheduler:
         return _err("--scheduler (Dask cluster) is not supported yet; run locally with --workers")
-    if args.runs is not None and args.runs < 1:
-        return _err("--runs must be >= 1")
-    if args.workers < 1:
-        return _err("--workers must be >= 1")
+    if (msg := _check_counts(args)) is not None:
+        return _err(msg)
     out = Path(args.out or f"out/{args.target}")
     try:
         summary = reproduce(args.target, out, runs=args.runs, workers=args.workers, progress=True)
@@ -87,6 +89,40 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     print(f"wrote {out}/summary.json ({len(summary['checks'])} checks, {len(failed)} not passed)")
     for name in failed:
         print(f"  not passed: {name}")
+    return 0
+
+
+def _check_counts(args: argparse.Namespace) -> str | None:
+    if args.runs is not None and args.runs < 1:
+        return "--runs must be >= 1"
+    if args.workers < 1:
+        return "--workers must be >= 1"
+    return None
+
+
+def _reproduce_all(args: argparse.Namespace) -> int:
+    from shoal.engine.experiments.report import run_all
+
+    if args.target:
+        return _err("--all takes no TARGET")
+    if (msg := _check_counts(args)) is not None:
+        return _err(msg)
+    out = Path(args.out or "out/reproduction")
+    try:
+        report = run_all(out, runs=args.runs, workers=args.workers, resume=args.resume)
+    except OSError as e:
+        return _err(str(e))
+    print(f"wrote {report}")
+    return 0
+
+
+def _report(folder: str) -> int:
+    from shoal.engine.experiments.report import write_report
+
+    try:
+        print(f"wrote {write_report(Path(folder))}")
+    except FileNotFoundError as e:
+        return _err(str(e))
     return 0
 
 
@@ -138,6 +174,9 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--out")
     q.add_argument("--workers", type=int, default=1)
     q.add_argument("--scheduler", help="Dask scheduler address (tcp://HOST:PORT)")
+    q.add_argument("--all", action="store_true", help="every target into --out, plus REPRODUCTION.md")
+    q.add_argument("--resume", action="store_true", help="with --all: keep targets already finished in --out")
+    q.add_argument("--report", metavar="DIR", help="rebuild DIR/REPRODUCTION.md from its target folders")
     q.set_defaults(func=_cmd_reproduce)
 
     ps = sub.add_parser("presets", help="list, show or validate presets")

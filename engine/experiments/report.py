@@ -1,0 +1,208 @@
+"""``shoal reproduce --all``: every target into one folder, and ``REPRODUCTION.md`` beside them.
+
+Each target writes its own folder (``summary.json`` with the checks, ``README.md``, CSVs and
+PNGs). The report is assembled from those folders only, so it can be rebuilt at any time
+(``shoal reproduce --report DIR``), e.g. after rerunning one target or after running the
+targets on a cluster. A target that fails is named in the report with its error; the others
+still run.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable, Sequence
+
+from shoal import __version__
+
+from ..atomic import atomic_write_text
+from .registry import TARGETS, reproduce
+
+REPORT = "REPRODUCTION.md"
+FAILED = "failed.json"  # written into a target's folder slot when the target raised
+
+# Thesis figure/table each target stands for, in the order of the theses.
+SOURCES: dict[str, str] = {
+    "fig3-4": "Rossides, Fig. 3-4", "fig3-5": "Rossides, Fig. 3-5", "fig4-6": "Rossides, Figs. 4-6 and 4-7",
+    "fig5-4": "Rossides, Fig. 5-4", "fig5-5": "Rossides, Fig. 5-5", "fig7-2": "Rossides, Fig. 7-2",
+    "fig7-4": "Rossides, Fig. 7-4", "fig7-5": "Rossides, Fig. 7-5", "fig8-2": "Rossides, Fig. 8-2",
+    "fig8-4": "Rossides, Fig. 8-4", "fig8-5": "Rossides, Fig. 8-5", "slo-errors": "Mai, Figs. 4.1-4.3",
+    "slo-mitigation": "Mai, Figs. 4.4-4.6", "slo-neighbourhood": "Mai, Figs. 4.7-4.8",
+    "slo-weight": "Mai, Figs. 4.9-4.10", "slo-pso": "Mai, Table 4.4 and Figs. 4.11-4.13",
+}
+
+
+@dataclass
+class Outcome:
+    """What one target left in its folder."""
+
+    name: str
+    summary: dict[str, Any] | None = None
+    readme: str = ""
+    error: str | None = None
+    figures: list[str] = field(default_factory=list)
+
+    @property
+    def checks(self) -> list[dict[str, Any]]:
+        return list((self.summary or {}).get("checks", []))
+
+    @property
+    def passed(self) -> int:
+        return sum(bool(c.get("pass")) for c in self.checks)
+
+
+def run_all(
+    out_dir: Path,
+    *,
+    runs: int | None = None,
+    workers: int = 1,
+    progress: bool = True,
+    targets: Sequence[str] | None = None,
+    resume: bool = False,
+    log: Callable[[str], None] = print,
+    **options: Any,
+) -> Path:
+    """Reproduce ``targets`` (default: all) into ``out_dir/<target>`` and write the report.
+
+    ``runs`` overrides every target's default run count (``None`` keeps each default).
+    With ``resume``, a target folder that already holds a ``summary.json`` of the same run
+    count is kept. ``options`` go to :func:`reproduce` (e.g. a scheduler)."""
+    out_dir = Path(out_dir)
+    names = list(TARGETS) if targets is None else list(targets)
+    unknown = [n for n in names if n not in TARGETS]
+    if unknown:
+        raise KeyError(f"unknown target(s) {', '.join(unknown)}; known: {', '.join(TARGETS)}")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    for i, name in enumerate(names, 1):
+        folder = out_dir / name
+        wanted = TARGETS[name].default_runs if runs is None else runs
+        if resume and _finished(folder, wanted):
+            log(f"[{i}/{len(names)}] {name}: kept (finished earlier with {wanted} runs)")
+            continue
+        log(f"[{i}/{len(names)}] {name} ({wanted} runs)")
+        (out_dir / f"{name}.{FAILED}").unlink(missing_ok=True)
+        start = time.perf_counter()
+        try:
+            summary = reproduce(name, folder, runs=wanted, workers=workers, progress=progress, **options)
+        except KeyboardInterrupt:
+            raise
+        except Exception as e:  # one broken target must not cost the others
+            atomic_write_text(out_dir / f"{name}.{FAILED}", json.dumps(
+                {"target": name, "error": f"{type(e).__name__}: {e}", "traceback": traceback.format_exc()}, indent=2))
+            log(f"  {name} failed: {type(e).__name__}: {e}")
+            continue
+        n_pass = sum(bool(c["pass"]) for c in summary["checks"])
+        log(f"  {n_pass}/{len(summary['checks'])} checks pass ({time.perf_counter() - start:.0f} s)")
+    return write_report(out_dir, names)
+
+
+def _finished(folder: Path, runs: int) -> bool:
+    try:
+        return int(json.loads((folder / "summary.json").read_text(encoding="utf-8"))["runs"]) == runs
+    except (OSError, ValueError, KeyError, TypeError):
+        return False
+
+
+def collect(out_dir: Path, names: Iterable[str] | None = None) -> list[Outcome]:
+    """The outcome of every target that left a folder (or a failure record) in ``out_dir``."""
+    out_dir = Path(out_dir)
+    outcomes = []
+    for name in (list(TARGETS) if names is None else names):
+        folder, failed = out_dir / name, out_dir / f"{name}.{FAILED}"
+        if failed.is_file():
+            outcomes.append(Outcome(name, error=json.loads(failed.read_text(encoding="utf-8"))["error"]))
+        elif (folder / "summary.json").is_file():
+            readme = folder / "README.md"
+            outcomes.append(Outcome(
+                name, summary=json.loads((folder / "summary.json").read_text(encoding="utf-8")),
+                readme=readme.read_text(encoding="utf-8") if readme.is_file() else "",
+                figures=sorted(p.name for p in folder.glob("*.png")),
+            ))
+    return outcomes
+
+
+def _sections(readme: str) -> tuple[str, dict[str, str]]:
+    """Split a target README into its lead text and its ``## `` sections."""
+    parts = re.split(r"^## +(.+)$", readme, flags=re.M)
+    lead = re.sub(r"^# .*\n", "", parts[0], count=1).strip()
+    return lead, {parts[i].strip(): parts[i + 1].strip() for i in range(1, len(parts) - 1, 2)}
+
+
+def _demote(text: str) -> str:
+    return re.sub(r"^(#+) ", lambda m: "#" * (len(m.group(1)) + 2) + " ", text, flags=re.M)
+
+
+def _cell(v: Any) -> str:
+    return str(v).replace("|", "\\|").replace("\n", " ")
+
+
+def render(outcomes: Sequence[Outcome], *, image_prefix: str = "") -> str:
+    """The text of ``REPRODUCTION.md``; figures are linked as ``<image_prefix><target>/<png>``."""
+    lines = [
+        "# Shoal reproduction report", "",
+        f"Every thesis figure and table that Shoal reproduces, regenerated by `shoal reproduce --all` "
+        f"(Shoal {__version__}). For each target: the thesis' figure or table it stands for, Shoal's own "
+        "figures, each check with the thesis' claim beside Shoal's measured value, and where and why the two "
+        "differ. A check that does not hold is reported as not passed, never hidden. Each target folder also "
+        "holds `runs.csv`, the series behind the figures and `summary.json`.", "",
+        "| target | thesis | runs | checks passed | time (s) |", "|---|---|---:|---:|---:|",
+    ]
+    for o in outcomes:
+        if o.error is not None:
+            lines.append(f"| [{o.name}](#{o.name}) | {SOURCES.get(o.name, '')} | | failed to run | |")
+        else:
+            s = o.summary or {}
+            lines.append(f"| [{o.name}](#{o.name}) | {SOURCES.get(o.name, '')} | {s.get('runs', '')} | "
+                         f"{o.passed}/{len(o.checks)} | {s.get('elapsed_s', '')} |")
+    total = sum(len(o.checks) for o in outcomes)
+    lines += ["", f"In all: {sum(o.passed for o in outcomes)} of {total} checks pass over "
+              f"{sum(o.error is None for o in outcomes)} targets.", ""]
+    for o in outcomes:
+        lines += [f'<a id="{o.name}"></a>', "", f"## {o.name}: {SOURCES.get(o.name, '')}", ""]
+        if o.error is not None:
+            lines += [f"This target failed to run: `{_cell(o.error)}`. Rerun it alone with "
+                      f"`shoal reproduce {o.name}` to see the whole error.", ""]
+            continue
+        s = o.summary or {}
+        lead, sections = _sections(o.readme)
+        lines += [TARGETS[o.name].description if o.name in TARGETS else "", ""]
+        lines += [f"Regenerate: `shoal reproduce {o.name} --runs {s.get('runs')}` "
+                  f"({s.get('elapsed_s')} s with {s.get('workers', 1)} worker(s)).", ""]
+        if lead:
+            lines += ["### Setup", "", _demote(lead), ""]
+        if o.figures:
+            lines += ["### Shoal's figures", ""]
+            lines += [f"![{o.name} {png}]({image_prefix}{o.name}/{png})" for png in o.figures]
+            lines.append("")
+        lines += ["### Thesis beside Shoal", "", "| check | thesis | Shoal | holds |", "|---|---|---|---|"]
+        lines += [f"| {_cell(c['name'])} | {_cell(c.get('thesis', ''))} | {_cell(c.get('measured', ''))} | "
+                  f"{'yes' if c.get('pass') else '**no**'} |" for c in o.checks]
+        lines.append("")
+        discussion = {k: v for k, v in sections.items() if k not in ("Files", "Checks")}
+        failed = [c for c in o.checks if not c.get("pass")]
+        lines += ["### Where and why they differ", ""]
+        if failed:
+            lines += [f"{len(failed)} of {len(o.checks)} checks do not hold: "
+                      + "; ".join(f"*{_cell(c['name'])}* (thesis: {_cell(c.get('thesis', ''))}; "
+                                  f"Shoal: {_cell(c.get('measured', ''))})" for c in failed) + ".", ""]
+        else:
+            lines += ["Every check holds.", ""]
+        for title, body in discussion.items():
+            lines += [f"#### {title}", "", _demote(body), ""]
+    return "\n".join(lines).rstrip() + "\n"
+
+
+def write_report(out_dir: Path, names: Iterable[str] | None = None, *, dest: Path | None = None,
+                 image_prefix: str = "") -> Path:
+    """Write (atomically) ``REPRODUCTION.md`` for the target folders in ``out_dir``."""
+    out_dir = Path(out_dir)
+    outcomes = collect(out_dir, names)
+    if not outcomes:
+        raise FileNotFoundError(f"{out_dir} holds no reproduced target (no <target>/summary.json)")
+    dest = out_dir / REPORT if dest is None else Path(dest)
+    atomic_write_text(dest, render(outcomes, image_prefix=image_prefix))
+    return dest

@@ -1,0 +1,76 @@
+"""``shoal reproduce --all`` and the REPRODUCTION.md report."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from shoal.engine.experiments.report import REPORT, collect, run_all, write_report
+
+QUICK = ["fig3-5", "fig3-4"]
+
+
+@pytest.fixture(scope="module")
+def reproduced(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("all")
+    run_all(out, runs=1, targets=QUICK, progress=False, log=lambda _m: None)
+    return out
+
+
+def test_every_target_gets_a_folder_and_a_section(reproduced: Path) -> None:
+    text = (reproduced / REPORT).read_text(encoding="utf-8")
+    for name in QUICK:
+        summary = json.loads((reproduced / name / "summary.json").read_text(encoding="utf-8"))
+        passed = sum(c["pass"] for c in summary["checks"])
+        assert f"| [{name}](#{name}) |" in text
+        assert f"{passed}/{len(summary['checks'])}" in text
+        assert f"## {name}:" in text
+        for check in summary["checks"]:  # every check is beside the thesis' claim
+            assert check["name"].replace("|", "\\|") in text
+        for png in (reproduced / name).glob("*.png"):  # figures linked relative to the report
+            assert f"]({name}/{png.name})" in text
+    assert text.index("## fig3-5:") < text.index("## fig3-4:")  # the order asked for
+
+
+def test_a_failing_target_is_reported_and_the_others_still_run(tmp_path: Path) -> None:
+    (tmp_path / "fig3-5").write_text("not a folder")  # reproduce refuses to replace it
+    report = run_all(tmp_path, runs=1, targets=QUICK, progress=False, log=lambda _m: None)
+    text = report.read_text(encoding="utf-8")
+    assert "fig3-5 exists and is not a folder" in text
+    assert "failed to run" in text
+    assert (tmp_path / "fig3-4" / "summary.json").is_file()
+    assert [o.name for o in collect(tmp_path) if o.error is None] == ["fig3-4"]
+
+
+def test_resume_keeps_finished_targets_and_reruns_others(tmp_path: Path) -> None:
+    run_all(tmp_path, runs=1, targets=["fig3-5"], progress=False, log=lambda _m: None)
+    first = (tmp_path / "fig3-5" / "summary.json").stat().st_mtime_ns
+    said: list[str] = []
+    run_all(tmp_path, runs=1, targets=QUICK, progress=False, resume=True, log=said.append)
+    assert (tmp_path / "fig3-5" / "summary.json").stat().st_mtime_ns == first
+    assert any("fig3-5: kept" in s for s in said) and (tmp_path / "fig3-4" / "summary.json").is_file()
+    run_all(tmp_path, runs=2, targets=["fig3-5"], progress=False, resume=True, log=said.append)  # other runs
+    assert json.loads((tmp_path / "fig3-5" / "summary.json").read_text())["runs"] == 2
+
+
+def test_report_is_rebuilt_from_folders_alone(reproduced: Path, tmp_path: Path) -> None:
+    dest = write_report(reproduced, dest=tmp_path / "R.md", image_prefix="reproduction/")
+    text = dest.read_text(encoding="utf-8")
+    assert "](reproduction/fig3-4/" in text
+    with pytest.raises(FileNotFoundError, match="no reproduced target"):
+        write_report(tmp_path / "empty")
+
+
+def test_cli_report_and_all_refuse_bad_input(reproduced: Path, tmp_path: Path) -> None:
+    run = [sys.executable, "-m", "shoal"]
+    ok = subprocess.run([*run, "reproduce", "--report", str(reproduced)], capture_output=True, text=True)
+    assert ok.returncode == 0 and REPORT in ok.stdout
+    bad = subprocess.run([*run, "reproduce", "--all", "--runs", "0", "--out", str(tmp_path)],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "--runs must be >= 1" in bad.stderr
+    none = subprocess.run([*run, "reproduce", "--report", str(tmp_path / "nothing")], capture_output=True, text=True)
+    assert none.returncode == 2 and "no reproduced target" in none.stderr
