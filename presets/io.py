@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import copy
 import json
+import reprlib
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -22,13 +24,24 @@ class PresetError(ValueError):
         super().__init__("\n".join(messages))
 
 
+_SHORT = reprlib.Repr()  # a bad value is shown short: a few items, a few levels
+_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxtuple, _SHORT.maxdict = 2, 4, 4, 4
+_SHORT.maxstring = _SHORT.maxother = _SHORT.maxlong = 40
+MAX_NAME = 60  # characters of a field name shown in a message
+
+
+def _short_name(part: object) -> str:
+    text = str(part)
+    return text if len(text) <= MAX_NAME else text[: MAX_NAME - 3] + "..."
+
+
 def format_errors(err: ValidationError) -> list[str]:
-    """One line per error: ``dotted.field: message (got value)``."""
+    """One line per error: ``dotted.field: message (got value)``, the value and names shortened."""
     lines = []
     for e in err.errors(include_url=False):
-        loc = ".".join(str(p) for p in e["loc"])
+        loc = ".".join(_short_name(p) for p in e["loc"])
         msg = e["msg"].removeprefix("Value error, ")
-        got = "" if e["type"] in ("missing",) or isinstance(e.get("input"), dict) else f" (got {e.get('input')!r})"
+        got = "" if e["type"] in ("missing",) or isinstance(e.get("input"), dict) else f" (got {_SHORT.repr(e.get('input'))})"
         lines.append(f"{loc}: {msg}{got}" if loc else f"{msg}{got}")
     return lines
 
@@ -58,11 +71,30 @@ def parse_text(text: str, fmt: str = "toml") -> dict[str, Any]:
     """Parse TOML or JSON text into a dict, syntax errors as :class:`PresetError`."""
     try:
         data = json.loads(text) if fmt == "json" else tomllib.loads(text)
-    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as err:
-        raise PresetError([f"{fmt.upper()} syntax: {err}"]) from None
+    except ValueError as err:  # syntax errors, and integers too long to convert
+        why = "a number with thousands of digits" if "integer string conversion" in str(err) else str(err)[:200]
+        raise PresetError([f"{fmt.upper()} syntax: {why}"]) from None
+    except RecursionError:
+        raise PresetError([f"{fmt.upper()} syntax: nested too deeply"]) from None
     if not isinstance(data, dict):
         raise PresetError(["a preset must be a table of fields"])
+    if _depth(data) > MAX_DEPTH:
+        raise PresetError([f"{fmt.upper()} syntax: nested deeper than {MAX_DEPTH} levels; a preset needs a few"])
     return data
+
+
+MAX_DEPTH = 16  # tables and arrays in a preset; the deepest shipped one has 4
+
+
+def _depth(data: Any) -> int:
+    """How deeply tables and arrays nest in ``data`` (no recursion: any depth is safe)."""
+    deepest, stack = 0, [(data, 1)]
+    while stack:
+        node, level = stack.pop()
+        if isinstance(node, (dict, list)):
+            deepest = max(deepest, level)
+            stack.extend((child, level + 1) for child in (node.values() if isinstance(node, dict) else node))
+    return deepest
 
 
 def read_raw(name_or_path: str | Path) -> dict[str, Any]:
@@ -85,7 +117,7 @@ def parse_value(text: str) -> Any:
     """A ``--set`` value: a TOML literal (number, bool, array, quoted string) or a bare string."""
     try:
         return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
+    except (ValueError, RecursionError):  # not a TOML literal (or one nested too deeply): a string
         return text
 
 
@@ -119,11 +151,11 @@ def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
 
 def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any]:
     """Apply ``dotted.key=value`` strings to a copy of ``data`` (validated later, by the model)."""
-    out = json.loads(json.dumps(data))
+    out = copy.deepcopy(data)  # (TOML dates are not JSON: no JSON round trip here)
     for item in overrides:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
-            raise PresetError([f"--set {item!r}: expected dotted.key=value"])
+            raise PresetError([f"--set {_SHORT.repr(item)}: expected dotted.key=value"])
         set_dotted(out, key.strip(), parse_value(value.strip()))
     return out
 

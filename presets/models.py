@@ -20,7 +20,7 @@ Coefficient = Annotated[float, Field(ge=0.0, le=100.0)]
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)  # no NaN/inf anywhere
 
 
 class Sim(_Model):
