@@ -138,15 +138,15 @@ TARGETS: dict[str, Target] = {
         Target("fig8-5", "Ch. 8 Fig. 8-5: escorting a source moving at v_n = 0.1 and 0.25, 40 robots, r = 25/50 m, "
                "louder source", 20, _fig8_5),
         Target("slo-errors", "SLO Figs. 4.1-4.3: localisation error vs single sensor errors, velocity offset per "
-               "neighbourhood x selection, failures (random walk)", 10, _slo("slo-errors")),
+               "neighbourhood x selection, failures (random walk)", 31, _slo("slo-errors")),
         Target("slo-mitigation", "SLO Figs. 4.4-4.6: error at generation 100 over a delta_cos x delta_v grid "
-               "(knn None/Low/High, ring Low CSS/RTS, random None)", 10, _slo("slo-mitigation")),
+               "(knn None/Low/High, ring Low CSS/RTS, random None)", 31, _slo("slo-mitigation")),
         Target("slo-neighbourhood", "SLO Figs. 4.7-4.8: ring n sweep (CSS) and random p in {0.3, 0.5, 0.9} "
-               "(CSS, RTS), Low error", 20, _slo("slo-neighbourhood")),
+               "(CSS, RTS), Low error", 31, _slo("slo-neighbourhood")),
         Target("slo-weight", "SLO Figs. 4.9-4.10: prediction weight w in {0, 0.25, 0.5, 0.75}, knn and ring, CSS, "
                "Low error", 31, _slo("slo-weight")),
         Target("slo-pso", "SLO Table 4.4 and Figs. 4.11-4.13: SLO-PSO on seven benchmarks x 3 selections x 3 error "
-               "levels (3 runs per case by default)", 3, _slo("slo-pso")),
+               "levels, 1000 generations", 31, _slo("slo-pso")),
     )
 }
 
