@@ -123,7 +123,7 @@ def slo_localiser_for(slo: SLO) -> dict:
     """The localisation keywords shared by :class:`SLOSwarm` and :class:`SLOSimulation`."""
     return dict(
         errors=slo_errors_for(slo), selection=slo.selection, prediction_weight=slo.prediction_weight,
-        delta_cos=slo.delta_cos, delta_v=slo.delta_v, literal_eq_3_1=slo.literal_eq_3_1,
+        delta_cos=slo.delta_cos, delta_v=slo.delta_v, literal_eq_3_1=slo.literal_eq_3_1, entry_policy=slo.entry_policy,
         neighbourhood=slo.neighbourhood, neighbourhood_param=slo.neighbourhood_param,
     )
 

@@ -39,3 +39,25 @@ def test_slo_pso_runs_csv_header_and_determinism(tmp_path):
     # cheap qualitative claim: without error Sphere goes far below the Low-error runs (precision floor)
     end = {(r[4], r[5]): float(r[8]) for r in rows[1:] if r[1] == "0"}
     assert end[("css", "none")] < 1e-100 < end[("css", "low")]
+
+
+def test_walk_targets_write_their_files_and_name_every_case(tmp_path):
+    for name in ("slo-errors", "slo-mitigation", "slo-neighbourhood", "slo-weight"):
+        s = reproduce(name, tmp_path / name, runs=2, workers=1, progress=False, generations=30)
+        rows = _rows(tmp_path / name / "runs.csv")
+        cases = {r[0] for r in rows[1:]}
+        assert len(rows) - 1 == 2 * len(cases) and len(cases) == len(s["commands"])
+        assert list((tmp_path / name).glob("*.png")) and s["checks"]
+
+
+def test_fig4_8_runs_both_entry_readings_and_they_differ(tmp_path):
+    reproduce("slo-neighbourhood", tmp_path, runs=2, workers=2, progress=False, generations=12)
+    rows = _rows(tmp_path / "runs.csv")
+    head = rows[0]
+    err = {(r[0], r[1]): float(r[head.index("e_abs_avg")]) for r in rows[1:]}
+    stale, geo = "css/random=0.3/low", "css/random=0.3/low/geometric_random"
+    assert (stale, "0") in err and (geo, "0") in err
+    assert err[(stale, "0")] != err[(geo, "0")]  # the entry rule changes the run
+    summary = json.loads((tmp_path / "summary.json").read_text(encoding="utf-8"))
+    assert "slo.entry_policy=geometric_random" in json.dumps(summary["commands"])
+    assert (tmp_path / "fig4-8-geometric-entry.png").is_file()

@@ -30,9 +30,11 @@ def test_shipped_slo_presets_validate_and_build(name):
 
 def test_slo_fields_reach_the_engine():
     sw = build(load("slo-walk", ["slo.selection=rts", "slo.errors=high", "slo.error_values.range_sigma_m=0.4",
-                                 "slo.neighbourhood=ring", "slo.neighbourhood_param=3", "slo.prediction_weight=0.25"]))
+                                 "slo.neighbourhood=ring", "slo.neighbourhood_param=3", "slo.prediction_weight=0.25",
+                                 "slo.entry_policy=geometric_random"]))
     cfg = sw.config
     assert (cfg.selection, cfg.neighbourhood, cfg.neighbourhood_param, cfg.prediction_weight) == ("rts", "ring", 3, 0.25)
+    assert cfg.entry_policy == "geometric_random" and build(load("slo-walk")).config.entry_policy == "stale"
     assert cfg.motion == "random_walk" and sw.errors.range.sigma_m == 0.4
     assert sw.errors.range.sigma_a == 0.30  # the rest of the High set stays
 
@@ -41,6 +43,7 @@ def test_slo_fields_reach_the_engine():
     ("override", "field"),
     [
         ("slo.selection=gdl", "slo.selection"),
+        ("slo.entry_policy=nearest", "slo.entry_policy"),
         ("slo.prediction_weight=1.5", "slo.prediction_weight"),
         ("slo.error_values.range_p_fail=2", "slo.error_values.range_p_fail"),
         ("slo.error_values.bogus=1", "slo.error_values.bogus"),
