@@ -9,9 +9,11 @@ Two engines come out of an ``[slo]`` scene (``presets.build.build_slo``):
   (:class:`SLOSimulation`) or, with ``slo.positions = "oracle"``, by true positions (a plain
   :class:`Simulation`, same seed): the oracle-vs-SLO switch.
 
-Every change except the view goes through the model and rebuilds the engine with the same
-seed (a new localiser needs new sensors and beliefs), so two settings can be compared run
-against run. The snapshot carries what the overlay draws: truth, the selected robot's
+Changes of the localisation (selection, w, δ_cos, δ_v, entry), the sensor errors, the
+neighbourhood and the objective apply to the running swarm: positions and beliefs are kept
+and the learner sees the swarm react. Other changes (swarm size, motion, the oracle switch,
+the seed) rebuild the engine with the same seed, so two settings can be compared run against
+run. The snapshot carries what the overlay draws: truth, the selected robot's
 beliefs (ghosts), neighbourhood edges and the candidate triangle of one selected pair.
 """
 
@@ -25,7 +27,7 @@ import numpy as np
 from shoal.engine.slo import SLOSwarm
 from shoal.engine.slo_metrics import dead_reckoning_share, pair_distances, pair_errors, stats
 from shoal.engine.slo_source import SLOSimulation
-from shoal.presets.build import build_slo
+from shoal.presets.build import build_slo, slo_live_changes
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
@@ -136,12 +138,27 @@ class SLOSession(BaseSession):
     def _adopt(self, new: Scenario) -> None:
         old = self.scenario
         same = {**old.model_dump(), "view": None} == {**new.model_dump(), "view": None}
+        live = None if same else slo_live_changes(old, new)
         if same:  # only the view: keep running
             self.scenario = new
-        else:  # a new localiser, swarm or seed: rebuild with the (same) seed
+        elif live is not None and self._retune(live):  # errors, selection, w, δ, neighbourhood…: keep running
+            self.scenario = new
+        else:  # a new swarm, motion, oracle switch or seed: rebuild with the (same) seed
             self._load(new)
             self.selected_robot = min(self.selected_robot, self.robots - 1)
         self.revision += 1
+
+    def _retune(self, changes: dict[str, Any]) -> bool:
+        """Apply live changes to the running engine; False if this engine cannot take them."""
+        if isinstance(self.sim, SLOSwarm):
+            self.sim.retune(**changes)
+            return True
+        if isinstance(self.sim, SLOSimulation):
+            ch3 = {k: v for k, v in changes.items() if k not in ("objective", "walk_speed", "quality_threshold")}
+            if ch3:
+                self.sim.retune_slo(**ch3)
+            return True
+        return False  # oracle positions: nothing localises, the switch rebuilds
 
     def step(self, n: int = 1) -> int:
         done = 0

@@ -11,7 +11,7 @@ Arrays are (runs R, particles N, 2); run i draws from the children of
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Literal
 
 import numpy as np
@@ -130,6 +130,17 @@ class SLOConfig:
         return QUALITY_THRESHOLDS.get(self.objective, -np.inf) if isinstance(self.objective, str) else -np.inf
 
 
+# Settings an SLO swarm can change mid-run (:meth:`SLOSwarm.retune`).
+LIVE = frozenset({"selection", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1", "entry_policy",
+                  "neighbourhood", "neighbourhood_param", "errors", "objective", "walk_speed", "quality_threshold"})
+
+
+def _differs(a: object, b: object) -> bool:
+    if isinstance(a, (str, ErrorModel)) and isinstance(b, (str, ErrorModel)):
+        return error_model(a) != error_model(b) if not (isinstance(a, str) and isinstance(b, str)) else a != b
+    return a != b
+
+
 @dataclass
 class SLOState:
     """Truth, PSO memory and beliefs of every run at generation ``k``."""
@@ -221,6 +232,38 @@ class SLOSwarm:
         self.rule = self.config.neighbourhood_rule()
         self.formation = self.config.formation()
         self.reset(seed)
+
+    def retune(self, **changes) -> list[str]:
+        """Change :data:`LIVE` settings mid-run and return the names that changed.
+
+        Positions, commands and beliefs are kept, so a learner sees the same swarm react.
+        A new objective restarts the bests (personal bests, best so far, threshold
+        generation) at the current positions; new errors keep each robot's calibration
+        offsets, rescaled. Refused (``ValueError``, nothing changed) for other fields."""
+        fixed = sorted(set(changes) - LIVE)
+        if fixed:
+            raise ValueError(f"{', '.join(fixed)}: cannot change mid-run (reset the swarm instead)")
+        cfg = replace(self.config, **changes)  # validates
+        changed = [k for k in changes if _differs(getattr(self.config, k), getattr(cfg, k))]
+        if not changed:
+            return []
+        params = cfg.localiser_params()  # these validate before anything changes
+        errors = error_model(cfg.errors).scaled(cfg.unit) if "errors" in changed else None
+        rule = cfg.neighbourhood_rule()
+        fitness = slo_objective(cfg.objective)
+        self.config, self.rule = cfg, rule
+        if errors is not None:
+            self.errors = errors
+        self.localiser.retune(params, errors)
+        if "objective" in changed:
+            s = self.state
+            self.fitness = fitness
+            s.f, s.P, s.fP = self.fitness(s.x), np.zeros_like(s.P), np.full_like(s.fP, np.inf)
+            s.f_best = np.full(self.runs, np.inf)
+        if {"objective", "quality_threshold"} & set(changed):
+            self._met = np.full(self.runs, np.inf)
+            self._last = self._record()
+        return changed
 
     @property
     def t(self) -> float:

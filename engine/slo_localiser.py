@@ -15,7 +15,7 @@ import numpy as np
 from .neighbourhoods import distances
 from .slo_localisation import Candidates, Flag, candidates
 from .slo_selection import Kind, RTSTriangle, akcan, css, rts
-from .slo_sensors import ErrorModel, draw_permanent, measure_odometry, measure_ranges
+from .slo_sensors import ErrorModel, measure_odometry, measure_ranges, permanent_errors, permanent_normals
 from .slo_streams import Streams
 
 Selection = Literal["css", "rts", "akcan", "perfect"]
@@ -83,7 +83,17 @@ class Localiser:
 
     def __init__(self, params: LocaliserParams, errors: ErrorModel, streams: Streams, n: int) -> None:
         self.params, self.errors, self.streams, self.n = params, errors, streams, n
-        self.permanent = draw_permanent(errors, streams["permanent"], n)
+        self._z = permanent_normals(streams["permanent"], n)
+        self.permanent = permanent_errors(errors, self._z)
+
+    def retune(self, params: LocaliserParams | None = None, errors: ErrorModel | None = None) -> None:
+        """Change the localisation choices or the sensor errors mid-run; beliefs are kept and
+        each robot keeps its calibration offsets (rescaled to the new σ̂)."""
+        if params is not None:
+            self.params = params
+        if errors is not None:
+            self.errors = errors
+            self.permanent = permanent_errors(errors, self._z)
 
     def _ranges(self, x: np.ndarray, adjacency: np.ndarray) -> np.ndarray:
         d = measure_ranges(distances(x), self.errors.range, self.permanent, self.streams["range"],

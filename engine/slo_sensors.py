@@ -110,7 +110,17 @@ class PermanentErrors:
 
 def draw_permanent(model: ErrorModel, rngs: Sequence[np.random.Generator], n: int) -> PermanentErrors:
     """Draw P_m, P_a (range), P_m,k, P_a,k, P_r (odometry) once per run [4.2], [4.3], [4.4]."""
-    z = np.stack([g.standard_normal(7 * n) for g in rngs]).reshape(len(rngs), 7, n)
+    return permanent_errors(model, permanent_normals(rngs, n))
+
+
+def permanent_normals(rngs: Sequence[np.random.Generator], n: int) -> np.ndarray:
+    """The standard-normal draws behind the permanent errors, (R, 7, n), once per run."""
+    return np.stack([g.standard_normal(7 * n) for g in rngs]).reshape(len(rngs), 7, n)
+
+
+def permanent_errors(model: ErrorModel, z: np.ndarray) -> PermanentErrors:
+    """Permanent errors of ``model`` from the draws ``z`` of :func:`permanent_normals`: the same
+    calibration offsets, scaled by the model's σ̂ (so a live change of the error level keeps them)."""
     rg, od = model.range, model.odometry
     return PermanentErrors(
         range_m=rg.perm_sigma_m * z[:, 0],

@@ -9,6 +9,7 @@ up to floating-point error, so an SLO run and an oracle run of the same seed coi
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any, Literal
 
 import numpy as np
@@ -64,6 +65,23 @@ class SLOPositionSource:
         est = relative_truth(x0) if initial_estimates == "truth" else random_estimates(self.streams["init"], n, lo, hi)
         self.x = x0.copy()
         self.beliefs: Beliefs = self.localiser.start(x0, self.rule.adjacency(x0, self.streams["topology"]), est)
+
+    def retune(self, *, errors: str | ErrorModel | None = None, neighbourhood: NeighbourhoodKind | None = None,
+               neighbourhood_param: float | None = None, unit: float = 1.0, **localiser: Any) -> None:
+        """Change the sensor errors, the neighbourhood or the localisation choices mid-run,
+        keeping the beliefs (and each robot's calibration offsets, rescaled)."""
+        if "max_range" in localiser:
+            localiser["max_range"] = float(localiser["max_range"]) * unit
+        params = replace(self.params, **localiser) if localiser else None
+        new_errors = error_model(errors).scaled(unit) if errors is not None else None
+        if neighbourhood is not None:
+            rule = Neighbourhood(neighbourhood, neighbourhood_param)
+            self.rule = Neighbourhood("radius", rule.value * unit) if neighbourhood == "radius" else rule
+        if params is not None:
+            self.params = params
+        if new_errors is not None:
+            self.errors = new_errors
+        self.localiser.retune(params, new_errors)
 
     def observe(self, x: np.ndarray, displacement: np.ndarray | None = None) -> Beliefs:
         """One sensing and localisation step at the new true positions ``x`` (R, N, 2).
@@ -153,6 +171,14 @@ class SLOSimulation(Simulation):
     def set_robots(self, n: int) -> None:
         super().set_robots(n)
         self._start_source()
+
+    def retune_slo(self, **slo: Any) -> None:
+        """Change the SLO keywords (errors, selection, …) mid-run; see :meth:`SLOPositionSource.retune`."""
+        merged = {**self.slo_params, **slo}
+        self.source.retune(**{k: merged[k] for k in slo if k != "unit"}, unit=merged.get("unit", 1.0),
+                           **({"neighbourhood_param": merged.get("neighbourhood_param")}
+                              if "neighbourhood" in slo and "neighbourhood_param" not in slo else {}))
+        self.slo_params = merged
 
     def set_objective(self, objective) -> None:  # type: ignore[no-untyped-def]
         super().set_objective(objective)

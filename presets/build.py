@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from shoal.engine.coeffs import Constant, Physical, Segment
@@ -126,6 +128,34 @@ def slo_localiser_for(slo: SLO) -> dict:
         delta_cos=slo.delta_cos, delta_v=slo.delta_v, literal_eq_3_1=slo.literal_eq_3_1, entry_policy=slo.entry_policy,
         neighbourhood=slo.neighbourhood, neighbourhood_param=slo.neighbourhood_param,
     )
+
+
+# [slo] fields an engine can change mid-run (SLOSwarm.retune, SLOSimulation.retune_slo).
+SLO_LIVE = ("selection", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1", "entry_policy", "neighbourhood",
+            "neighbourhood_param", "errors", "error_values", "objective", "walk_speed", "quality_threshold")
+
+
+def slo_live_changes(old: Scenario, new: Scenario) -> dict[str, Any] | None:
+    """The engine keywords that take ``old`` to ``new`` without a rebuild, or None when
+    anything else differs (beyond the view). ``errors`` stands for the set and its values."""
+    if old.slo is None or new.slo is None:
+        return None
+    a, b = old.model_dump(), new.model_dump()
+    for d in (a, b):
+        d["view"] = None
+        d["slo"] = {k: v for k, v in d["slo"].items() if k not in SLO_LIVE}
+    if a != b:
+        return None
+    out: dict[str, Any] = {}
+    for key in SLO_LIVE:
+        if getattr(old.slo, key) != getattr(new.slo, key):
+            if key in ("errors", "error_values"):
+                out["errors"] = slo_errors_for(new.slo)
+            elif key == "neighbourhood":
+                out.update(neighbourhood=new.slo.neighbourhood, neighbourhood_param=new.slo.neighbourhood_param)
+            else:
+                out[key] = getattr(new.slo, key)
+    return out
 
 
 def build_slo(scenario: Scenario, *, runs: int | None = None, seed: int | None = None,
