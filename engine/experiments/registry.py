@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from ..atomic import atomic_output_dir
+from .schedulers import Scheduler, current, using
 
 
 @dataclass(frozen=True)
@@ -177,9 +178,14 @@ def reproduce(
     runs: int | None = None,
     workers: int = 1,
     progress: bool = True,
+    scheduler: Scheduler | None = None,
     **options: Any,
 ) -> dict[str, Any]:
     """Regenerate ``target`` into ``out_dir`` and return its summary.
+
+    The target's chunks of runs go to ``scheduler`` (e.g. a
+    :class:`~.schedulers.DaskCluster`) when given, else to ``workers`` local processes;
+    the files are the same either way.
 
     Everything is written into a temporary sibling folder which replaces ``out_dir`` only
     when the target has finished: an interrupted or failed run leaves ``out_dir`` as it was
@@ -200,8 +206,11 @@ def reproduce(
     start = time.perf_counter()
     with atomic_output_dir(out_dir) as tmp:
         tmp.chmod(0o777 & ~_umask())  # mkdtemp makes it private; the result is an ordinary folder
-        fields = spec.run(tmp, runs, workers, progress, **options)
+        with using(scheduler):
+            fields = spec.run(tmp, runs, workers, progress, **options)
         summary = {"target": target, "runs": runs, "elapsed_s": round(time.perf_counter() - start, 3), **fields}
         summary["workers"] = workers
+        if (used := scheduler or current()) is not None:
+            summary["scheduler"] = used.describe()
         (tmp / "summary.json").write_text(json.dumps(summary, indent=2, ensure_ascii=False) + "\n", encoding="utf-8")
     return summary

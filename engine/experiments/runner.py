@@ -9,9 +9,8 @@ is the same, bit for bit.
 from __future__ import annotations
 
 import math
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
-from typing import Any, Callable, Hashable, Iterable, Sequence
+from typing import Any, Callable, Hashable, Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -20,6 +19,8 @@ from shoal.presets.io import load
 from shoal.presets.models import Scenario
 
 from ..sim import Simulation, StepInfo
+from . import schedulers
+from .schedulers import Scheduler
 
 OnStep = Callable[[int, Simulation, StepInfo], None]
 
@@ -205,19 +206,23 @@ def _chunks(jobs: Iterable[Any], size: int, simulate: Simulate) -> list[_Chunk]:
 @dataclass
 class _Progress:
     total: int
-    enabled: bool
+    enabled: bool | Callable[[int], None]
     desc: str
     bar: Any = field(default=None, init=False)
 
     def __enter__(self) -> "_Progress":
-        if self.enabled:
+        if callable(self.enabled):
+            self.bar = None
+        elif self.enabled:
             from tqdm import tqdm
 
             self.bar = tqdm(total=self.total, desc=self.desc, unit="run")
         return self
 
     def update(self, n: int) -> None:
-        if self.bar is not None:
+        if callable(self.enabled):
+            self.enabled(n)
+        elif self.bar is not None:
             self.bar.update(n)
 
     def __exit__(self, *exc: Any) -> None:
@@ -225,41 +230,53 @@ class _Progress:
             self.bar.close()
 
 
-def run_jobs(
-    jobs: Sequence[Any], *, workers: int = 1, progress: bool = False, chunk: int = 25, desc: str = "runs",
+def iter_jobs(
+    jobs: Sequence[Any], *, workers: int = 1, scheduler: Scheduler | None = None,
+    progress: bool | Callable[[int], None] = False, chunk: int = 25, desc: str = "runs",
     simulate: Simulate = simulate_job, merge: Merge = concat,
-) -> dict[Hashable, Any]:
-    """Simulate every job, split into chunks of at most ``chunk`` runs; with ``workers > 1``
-    the chunks go to a process pool. The results do not depend on ``workers`` or ``chunk``.
-
-    By default a job is a :class:`Job` and its result a :class:`BatchResult`; other kinds
-    of job (e.g. Chapter 4–5 fleets) pass their own module-level, picklable ``simulate``
-    and a ``merge`` that glues chunks of consecutive runs, in any order, into one result."""
+) -> Iterator[tuple[Hashable, Any]]:
+    """Yield ``(key, result)`` of every job as soon as all its chunks are in (earlier jobs
+    tend to finish first). The chunks run on ``scheduler``; by default the one of the
+    enclosing :func:`~.schedulers.using` block, else this process (``workers == 1``) or a
+    local pool of ``workers`` processes. ``progress`` shows a bar, or is called with the
+    number of runs each finished chunk adds."""
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     if len({j.key for j in jobs}) != len(jobs):
         raise ValueError("job keys must be unique")
-    if workers > 1:  # enough chunks to keep every worker busy
+    if not jobs:
+        return
+    sched = scheduler or schedulers.current() or schedulers.local(workers)
+    if sched.workers > 1:  # enough chunks to keep every worker busy
         longest = max(j.runs for j in jobs)
-        chunk = max(1, min(chunk, math.ceil(longest * len(jobs) / (4 * workers))))
+        chunk = max(1, min(chunk, math.ceil(longest * len(jobs) / (4 * sched.workers))))
     chunks = _chunks(jobs, max(1, chunk), simulate)
     parts: dict[Hashable, list[Any]] = {j.key: [] for j in jobs}
+    expected = {j.key: 0 for j in jobs}
+    for c in chunks:
+        expected[c.job.key] += 1
     with _Progress(sum(j.runs for j in jobs), progress, desc) as bar:
-        if workers == 1:
-            for c in chunks:
-                key, res = _simulate_chunk(c)
-                parts[key].append(res)
-                bar.update(c.runs)
-        else:
-            with ProcessPoolExecutor(max_workers=workers) as pool:
-                futures = {pool.submit(_simulate_chunk, c): c for c in chunks}
-                try:
-                    for fut in as_completed(futures):
-                        key, res = fut.result()
-                        parts[key].append(res)
-                        bar.update(futures[fut].runs)
-                except BaseException:
-                    for fut in futures:
-                        fut.cancel()
-                    raise
-    return {key: merge(p) for key, p in parts.items()}
+        for i, (key, res) in sched.map_unordered(_simulate_chunk, chunks):
+            parts[key].append(res)
+            bar.update(chunks[i].runs)
+            if len(parts[key]) == expected[key]:
+                yield key, merge(parts.pop(key))
+
+
+def run_jobs(
+    jobs: Sequence[Any], *, workers: int = 1, scheduler: Scheduler | None = None,
+    progress: bool | Callable[[int], None] = False, chunk: int = 25, desc: str = "runs",
+    simulate: Simulate = simulate_job, merge: Merge = concat,
+) -> dict[Hashable, Any]:
+    """Simulate every job, split into chunks of at most ``chunk`` runs; with ``workers > 1``
+    the chunks go to a process pool, with a ``scheduler`` (or inside ``schedulers.using``)
+    wherever it sends them, e.g. a Dask cluster. The results do not depend on ``workers``,
+    ``chunk`` or the scheduler.
+
+    By default a job is a :class:`Job` and its result a :class:`BatchResult`; other kinds
+    of job (e.g. Chapter 4–5 fleets) pass their own module-level, picklable ``simulate``
+    and a ``merge`` that glues chunks of consecutive runs, in any order, into one result.
+    Returns the results in the order of ``jobs``."""
+    done = dict(iter_jobs(jobs, workers=workers, scheduler=scheduler, progress=progress, chunk=chunk, desc=desc,
+                          simulate=simulate, merge=merge))
+    return {j.key: done[j.key] for j in jobs}
