@@ -29,6 +29,9 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
+from .compare import CompareMixin
+from .timeline import TimelineMixin
+
 MAX_UPLOAD_BYTES = 256 * 1024
 
 
@@ -94,8 +97,10 @@ def frame_rows(frames: list[Frame]) -> np.ndarray:
     return np.vstack(blocks) + 0.0 if blocks else np.zeros((0, len(TRAJECTORY_COLUMNS)))
 
 
-class BaseSession:
-    """Scenario, engine (``sim``), playback and history of one browser tab."""
+class BaseSession(CompareMixin, TimelineMixin):
+    """Scenario, engine (``sim``), playback and history of one browser tab; optionally a
+    swarm B in lock-step (``twin``, see :mod:`.compare`) and a timeline cursor or a loaded
+    replay (``cursor``, ``replaying``, see :mod:`.timeline`)."""
 
     MAX_STEPS = 5000  # history ring buffer: at most this many steps ...
     MAX_ROWS = 400_000  # ... and at most this many (step, robot) rows
@@ -110,6 +115,8 @@ class BaseSession:
         self.revision = 0  # bumps whenever the robots change (scene redraw)
         self.scene_revision = 0  # bumps when the static scene changes (rebuild)
         self.selected_robot = 0
+        self.twin: BaseSession | None = None  # swarm B (compare), stepped with this one
+        self.overrides: dict[str, Any] = {}  # B = this scenario with these fields changed
         self._load(scenario)
 
     # ------------------------------------------------------------------ subclass hooks
@@ -161,6 +168,9 @@ class BaseSession:
         self.frames: deque[Frame] = deque()
         self._rows = 0
         self.metrics: deque[tuple[float, ...]] = deque(maxlen=self.MAX_METRICS)
+        self.cursor: int | None = None  # the recorded step shown (None: live)
+        self.replaying = None  # a loaded replay shown instead of the engine (timeline.ReplayInfo)
+        self.live_edits = 0  # changes made while the run went on (a replay of it cannot be re-simulated)
         self._record(None)
 
     def load_scenario(self, scenario: Scenario) -> None:
@@ -168,6 +178,7 @@ class BaseSession:
         self.check(scenario)
         with self.lock:
             self._load(scenario)
+            self.twin = None  # a new scene: no swarm B until asked again
             self.selected_robot = min(self.selected_robot, scenario.sim.robots - 1)
             self.revision += 1
 
@@ -194,12 +205,26 @@ class BaseSession:
     def apply(self, changes: dict[str, Any]) -> Scenario:
         """Validate ``changes`` and apply them, without restarting where the engine allows.
 
-        Raises :class:`PresetError` (nothing changed) when the model refuses the result.
+        Raises :class:`PresetError` (nothing changed) when the model refuses the result. Swarm B
+        takes the same change (keeping its overrides); a change B cannot take is refused too.
+        A change beyond the view ends a replay (a live run of the preset starts).
         """
         with self.lock:
             new = self.propose(changes)
             self.check(new)
-            self._adopt(new)
+            new_b = self._twin_propose(new)
+            view_only = all(k.startswith("view.") for k in changes)
+            if self.replaying is not None and not view_only:
+                self.leave_replay()
+            old_b = self._twin_adopt(new_b)
+            before = self.frames
+            try:
+                self._adopt(new)
+            except PresetError:
+                self._twin_adopt(old_b)
+                raise
+            if self.frames is before and not view_only:
+                self.live_edits += 1
             return new
 
     def _keep_clock(self) -> None:
@@ -208,7 +233,13 @@ class BaseSession:
 
     # ------------------------------------------------------------------ playback
     def play(self) -> None:
+        """Run on from the live end (a replay: on through the recording, from its start if at the end)."""
         with self.lock:
+            if self.replaying is None:
+                self.cursor = None
+            elif self.frames and self.cursor == self.frames[-1].k:
+                self.cursor = self.frames[0].k
+                self.revision += 1
             self.playing = True
 
     def pause(self) -> None:
@@ -227,14 +258,25 @@ class BaseSession:
     def _reset_locked(self, seed: int) -> None:
         self.sim.reset(seed)
         self._clear_history()
+        if self.twin is not None:
+            with self.twin.lock:
+                self.twin._reset_locked(self.twin.scenario.sim.seed)
 
     def step(self, n: int = 1) -> int:
-        """Advance ``n`` ticks. Pauses when the preset's ``sim.steps`` is reached; returns the steps done."""
+        """Advance ``n`` ticks (swarm B too). Pauses when the preset's ``sim.steps`` is reached;
+        returns the steps done. A replay moves ``n`` recorded frames on instead."""
         done = 0
         with self.lock:
+            if self.replaying is not None:
+                return self._advance_cursor(n)
+            if self.cursor is not None:
+                self.cursor = None
+                self.revision += 1
             for _ in range(n):
                 info = self.sim.step()
                 self._record(info)
+                if self.twin is not None:
+                    self.twin.step(1)
                 done += 1
                 if self.sim.state.k == self.scenario.sim.steps:
                     self.playing = False

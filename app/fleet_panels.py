@@ -55,6 +55,22 @@ VIEWS = {"whole world": "world", "follow the swarm": "swarm", "follow the robot"
 FOLLOW_ZOOM = 2.5  # zoom a follow view starts with
 
 
+def controller_changes(label: str, sc: Scenario) -> dict[str, Any]:
+    """The preset fields that switch ``sc`` to the controller ``label`` (one of ``CONTROLLERS``)."""
+    law, mode = CONTROLLERS[label]
+    c = sc.controller
+    changes: dict[str, Any] = {"controller.law": law, "controller.mode": mode}
+    drive = sc.robot.drive
+    if law in BODY_FRAME_LAWS and drive != "differential":
+        changes["robot.drive"] = "differential"
+    elif law not in BODY_FRAME_LAWS and drive == "differential":
+        changes["robot.drive"] = "holonomic"
+    if mode == "raw" and (c.c3 == 0.0 or c.mode == "dvc"):
+        case = TABLE_4_1["c3-equal"]  # a sensible constant case to start from
+        changes.update({f"controller.{k}": v for k, v in case.items()})
+    return changes
+
+
 def controller_label(law: str, mode: str) -> str:
     for label, key in CONTROLLERS.items():
         if key == (law, mode):
@@ -73,7 +89,6 @@ class FleetPanels(PanelsBase):
 
     def __init__(self, gui: Any, session: FleetSession, notify: Any, *args: Any, **kwargs: Any) -> None:
         self.editor = WorldEditor(session, notify, self.select_robot)
-        self._layers_key: tuple | None = None
         super().__init__(gui, session, notify, *args, **kwargs)
 
     # ------------------------------------------------------------------ building
@@ -141,7 +156,6 @@ class FleetPanels(PanelsBase):
                 data=fleet_plots.robots_data(np.zeros(0), np.zeros(0), np.zeros(0)),
                 series=fleet_plots.robots_series(), scales=fleet_plots.robots_scales(np.zeros(2), sc.sim.robots),
                 title="robots vs time [s]", aspect=2.0, axes=({}, {"size": 40}))
-            self._layers_key = (len(layers),)
         self._wire()
 
     def _wire(self) -> None:
@@ -263,20 +277,17 @@ class FleetPanels(PanelsBase):
         label = self.controller.value
         if label not in CONTROLLERS:
             return
-        law, mode = CONTROLLERS[label]
         c = self.session.scenario.controller
-        if (law, mode) == (c.law, c.mode):
+        if CONTROLLERS[label] == (c.law, c.mode):
             return
-        changes: dict[str, Any] = {"controller.law": law, "controller.mode": mode}
-        drive = self.session.scenario.robot.drive
-        if law in BODY_FRAME_LAWS and drive != "differential":
-            changes["robot.drive"] = "differential"
-        elif law not in BODY_FRAME_LAWS and drive == "differential":
-            changes["robot.drive"] = "holonomic"
-        if mode == "raw" and (c.c3 == 0.0 or c.mode == "dvc"):
-            case = TABLE_4_1["c3-equal"]  # a sensible constant case to start from
-            changes.update({f"controller.{k}": v for k, v in case.items()})
-        self.apply(changes, f"controller = {label}")
+        self.apply(controller_changes(label, self.session.scenario), f"controller = {label}")
+
+    def compare_choices(self) -> dict[str, dict[str, Any]]:
+        """B with another controller (law, coefficient policy and the drive it needs)."""
+        sc = self.session.scenario
+        here = (sc.controller.law, sc.controller.mode)
+        return {f"controller: {label}": controller_changes(label, sc)
+                for label, key in CONTROLLERS.items() if key != here}
 
     def _budget_changed(self) -> None:
         """ĉ and c3/(c1+c2) → c1, c2, c3 (split by c1 : c2)."""
@@ -353,15 +364,12 @@ class FleetPanels(PanelsBase):
 
     def refresh_plots(self) -> None:
         s = self.session
-        m = {k: v[-self.PLOT_HISTORY:] for k, v in s.metric_arrays().items()}
+        m, span = self.shown_metrics(self.PLOT_HISTORY)
         world = s.sim.world
         layers = np.asarray(world.layer_x)
-        if self._layers_key != (len(layers),):
-            self.com_plot.series = fleet_plots.com_series(layers)
-            self._layers_key = (len(layers),)
         data = fleet_plots.com_data(m["t"], m["com"], layers)
-        self.com_plot.data = data
-        self.com_plot.scales = fleet_plots.com_scales(data[0], world.bounds)
+        self.push_uplot(self.com_plot, data, fleet_plots.com_series(layers), fleet_plots.com_scales(span, world.bounds),
+                        twin=("com", "CoM x"))
         data = fleet_plots.robots_data(m["t"], m["operational"], m["collided"])
         self.robots_plot.data = data
-        self.robots_plot.scales = fleet_plots.robots_scales(data[0], s.sim.robots)
+        self.robots_plot.scales = fleet_plots.robots_scales(span, s.sim.robots)

@@ -21,6 +21,7 @@ from shoal.presets.models import Scenario
 from . import shapes
 from .fleet_session import FleetSnapshot
 from .scene import VIEW_HALF
+from .twin_view import TwinLayer
 
 GRID_CELL = (228, 228, 224)
 GRID_SECTION = (205, 205, 200)
@@ -49,6 +50,8 @@ REACH_TOTAL = (240, 140, 20)
 Z = dict(grid=-0.025, start=-0.02, layers=-0.015, sectors=-0.01, trails=-0.005, obstacles=0.0,
          pbests=0.004, source=0.006, gbest=0.008, robots=0.01, headings=0.012, probe=0.014, hits=0.016)
 
+PROBE_NODES = ("selected", "sectors", "sector_edges", "hits", "hit_lines", "force", "reach_attract", "reach_total")
+
 ObstacleDrag = Callable[[int, float, float, str], None]
 
 # Every build of the scene, and every re-created obstacle node, gets names never used before:
@@ -57,7 +60,7 @@ ObstacleDrag = Callable[[int, float, float, str], None]
 _SERIAL = itertools.count()
 
 
-class FleetView(shapes.GroundFrame):
+class FleetView(shapes.GroundFrame, TwinLayer):
     """The scene of one tab showing a fleet. ``scene`` is a viser ``SceneApi``.
 
     ``follow`` and ``zoom`` (from the snapshot) pick the view: the whole world (zoom 1), or a
@@ -227,7 +230,12 @@ class FleetView(shapes.GroundFrame):
             self._draw_obstacles(snap.world)
             self.world_revision = snap.world_revision
         self._draw_robots(snap)
-        self._draw_probe(snap)
+        if snap.live:
+            self._draw_probe(snap)
+        else:  # a recorded frame: what the robot sensed is not recorded
+            for key in PROBE_NODES:
+                if key in self.nodes:
+                    self.nodes[key].visible = False
         self.drawn_revision = snap.revision
 
     def _follow(self, snap: FleetSnapshot) -> None:
@@ -272,8 +280,13 @@ class FleetView(shapes.GroundFrame):
         else:
             segs = np.zeros((0, 2, 2))
         self._lines("trails", segs, TRAIL, 1.5, Z["trails"])
-        self._points("pbests", snap.y, PBEST, 0.25, "square", Z["pbests"])
-        self._points("gbest", snap.yg[None], GBEST, 0.75, "diamond", Z["gbest"])
+        none = np.zeros((0, 2))
+        self._points("pbests", snap.y if snap.live else none, PBEST, 0.25, "square", Z["pbests"])
+        self._points("gbest", snap.yg[None] if snap.live else none, GBEST, 0.75, "diamond", Z["gbest"])
+        self._robot_radius = r
+
+    def _twin_size(self) -> float:
+        return getattr(self, "_robot_radius", 0.2)
 
     def _draw_probe(self, snap: FleetSnapshot) -> None:
         """The selected robot: sectors filled out to each closest body, the range circle, the
@@ -298,6 +311,7 @@ class FleetView(shapes.GroundFrame):
             node.batched_positions, node.batched_wxyzs, node.batched_scales = pos, wxyz, scales
             if not np.array_equal(node.batched_colors, colors):
                 node.batched_colors = colors
+            node.visible = True
         edges = np.concatenate([shapes.circle_segments(centre, radius + rng, 72),
                                 shapes.rays(centre, start, radius, radius + rng)])
         self._lines("sector_edges", edges, SECTOR_EDGE, 1.0, Z["probe"])

@@ -59,6 +59,7 @@ class FleetSnapshot:
     view: RobotView  # the selected robot
     follow: str = "world"  # one of FOLLOW
     zoom: float = 1.0  # 1 = the whole world on screen
+    live: bool = True  # False: a recorded frame (timeline, replay): no bests, no sensing view
 
 
 def _world_error(msg: str) -> str:
@@ -235,6 +236,10 @@ class FleetSession(BaseSession):
                 params=dataclasses.replace(self.sim.params), view=self.view(), follow=self.follow,
                 zoom=self.zoom if self.follow != "world" else 1.0,
             )
+
+    def _replay_blanks(self, frame: Any) -> dict[str, Any]:
+        zeros = np.zeros_like(frame.x)
+        return {"status": frame.status.copy(), "u": zeros, "cmd": zeros, "y": frame.x.copy()}
 
     def readout(self) -> dict[str, float]:
         with self.lock:

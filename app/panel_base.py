@@ -22,17 +22,21 @@ from importlib import resources
 from typing import Any, Callable, ClassVar, Iterator
 
 import annotated_types as at
+import numpy as np
 
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .base_session import BaseSession, parse_upload
+from .compare_panel import CompareGui
+from .replay_panel import ReplayGui
 from .session import app_presets
+from .twin_view import twin_series
 
 Notify = Callable[[str, str, str], None]
 SendFile = Callable[[str, bytes], None]
-Replace = Callable[[Scenario], None]
+Replace = Callable[[Scenario], Any]  # loads a scene (maybe of another kind); returns the session shown
 
 PLAYBACK = ("Play", "Pause", "Step", "Reset")
 
@@ -133,11 +137,14 @@ class PanelsBase:
         self.sliders: dict[str, Any] = {}
         self.top: list[Any] = []  # top-level handles: removing them removes the whole panel
         self.removed = False
+        self._series: dict[int, tuple] = {}  # uPlot series last sent, by handle (see push_uplot)
         self._build_header()
+        self.replay_gui = ReplayGui(self)
         self._build_above_tabs()
         self.tabs = gui.add_tab_group()
         self.top.append(self.tabs)
         self._build_tabs()
+        self.compare_gui = CompareGui(self)
         self._build_export_notes()
         self._wire_common()
         self.sync_from_scenario()
@@ -268,6 +275,7 @@ class PanelsBase:
             if sc.name in self.preset.options:
                 self._set(self.preset, sc.name)
             self._sync_body(sc)
+        self.compare_gui.sync()
         self._visibility()
         self.refresh_readout()
 
@@ -371,6 +379,36 @@ class PanelsBase:
 
     def refresh_plots(self) -> None:
         """Redraw the live plots (the caller throttles this)."""
+
+    def refresh_timeline(self) -> None:
+        """The Replay folder: timeline and badge (the caller throttles this)."""
+        self.replay_gui.refresh()
+
+    # ------------------------------------------------------------------ compare and timeline in plots
+    def compare_choices(self) -> dict[str, dict[str, Any]]:
+        """Quick choices of how swarm B differs from A: label → overrides (a kind adds its own)."""
+        return {}
+
+    def shown_metrics(self, n: int) -> tuple[dict[str, Any], Any]:
+        """The last ``n`` metric rows up to the step shown (live or scrubbed), and the (t0, t1)
+        span of all of them: plots keep that x range, so a scrubbed curve ends at the cursor."""
+        m, span = self.session.shown_metrics(n)
+        return m, np.array(span)
+
+    def push_uplot(self, handle: Any, data: tuple, series: tuple, scales: dict[str, Any],
+                   twin: tuple[str, str] | None = None) -> None:
+        """Set a uPlot's data and scales (its series only when they change). ``twin = (metric,
+        label)``: with swarm B on, B's metric at the same times is one more (dashed teal) series."""
+        if twin is not None:
+            b = self.session.twin_metric(twin[0], data[0])
+            if b is not None:
+                data = tuple(data) + (np.nan_to_num(b, nan=0.0),)
+                series = tuple(series) + (twin_series(twin[1]),)
+        if self._series.get(id(handle)) != series:
+            handle.series = series
+            self._series[id(handle)] = series
+        handle.data = data
+        handle.scales = scales
 
     def on_snapshot(self, snap: Any) -> None:
         """Called after each scene redraw with the snapshot drawn (per-step readouts)."""

@@ -84,7 +84,6 @@ class Panels(PanelsBase):
                 series=plots.speed_series_config(adapted), scales=plots.speed_scales(np.zeros(2)),
                 title="highest speed vs time [m/s]", aspect=2.0, axes=({}, {"size": 76}),
             )
-            self._speed_adapted = adapted
         self._wire()
 
     @staticmethod
@@ -129,6 +128,26 @@ class Panels(PanelsBase):
         self.raw_folder.visible = c.mode == "raw"
         self.physical_folder.visible = c.mode == "physical"
         self.sliders["controller.smooth_width"].visible = c.law in ("adapted-tanh", "adapted-logistic")
+
+    def compare_choices(self) -> dict[str, dict[str, Any]]:
+        """B with another law: the standard law at the same (ω, c1, c2), or an Adapted one."""
+        c = self.session.scenario.controller
+        out: dict[str, dict[str, Any]] = {}
+        if c.law != "standard":
+            out["standard PSO law (same ω, c1, c2)"] = {"controller.law": "standard", **self._raw_coefficients()}
+        for law in LAWS[1:]:
+            if law != c.law:
+                out[f"{law} law"] = {"controller.law": law}
+        return out
+
+    def _raw_coefficients(self) -> dict[str, Any]:
+        """The controller's current (ω, c1, c2) as raw-mode fields (physical mode derives them)."""
+        sim = self.session.sim
+        with self.session.lock:
+            omega, c = sim.policy.coefficients(sim.t, sim.dt, sim.d)
+        c = np.asarray(c, dtype=float).reshape(-1)
+        return {"controller.mode": "raw", "controller.omega": round_sig(float(np.mean(omega))),
+                "controller.c1": round_sig(float(c[0])), "controller.c2": round_sig(float(c[1:].sum()))}
 
     # ------------------------------------------------------------------ changes
     def _mode_changed(self) -> None:
@@ -199,15 +218,10 @@ class Panels(PanelsBase):
             fig = plots.phase_figure(omega, c_hat, s.sim.dt, u, a, adapted=adapted, label=label)
             self._phase_key = phase_key
         self.phase_plot.figure = fig
-        m = s.metric_arrays()
-        n = self.PLOT_HISTORY
-        cut = {k: v[-n:] for k, v in m.items()}
-        if adapted != self._speed_adapted:
-            self.speed_plot.series = plots.speed_series_config(adapted)
-            self._speed_adapted = adapted
+        cut, span = self.shown_metrics(self.PLOT_HISTORY)
         data = plots.speed_data(
             cut["t"], cut["max_speed"], cut["max_component"], cut["omega"], cut["c_hat"], adapted=adapted, d=sc.sim.d)
-        self.speed_plot.data = data
         # An explicit x range on every update: viser's client keeps a *relative* x range across
         # data pushes, which goes wrong for a chart first mounted in a hidden tab.
-        self.speed_plot.scales = plots.speed_scales(data[0])
+        self.push_uplot(self.speed_plot, data, plots.speed_series_config(adapted), plots.speed_scales(span),
+                        twin=("max_speed", "max |u|"))

@@ -19,6 +19,7 @@ from shoal.presets.build import objective_for
 from shoal.presets.models import Scenario
 
 from .session import Snapshot
+from .twin_view import TWIN, TWIN_TRAIL, trail_segments
 
 VIEW_HALF = 10.0  # the arena's half size in view units
 CAMERA_FOV = math.radians(8.0)  # far and narrow: close to an orthographic top view
@@ -154,6 +155,10 @@ class ArenaView:
         """World (…, d) → view (…, 3) float32, before the follow offset (which moves ``/world``)."""
         return _z(np.asarray(world, dtype=float) * self.scale, z)
 
+    def to_scene(self, xy: np.ndarray) -> np.ndarray:
+        """World (…, d) → scene (…, 2) coordinates, the follow offset included (as the camera sees them)."""
+        return (_z(np.asarray(xy, dtype=float))[..., :2] - self.offset) * self.scale
+
     def follow(self, x: np.ndarray) -> bool:
         """Shift the view when the swarm leaves the arena square but would fit in one (a 1-D swarm
         drifting along x); a swarm spread wider than the arena keeps the home view. Returns True
@@ -188,6 +193,7 @@ class ArenaView:
         n["robots"].points = self.view_points(snap.x, 0.02)
         n["pbests"].points = self.view_points(snap.y, 0.005)
         n["gbest"].points = self.view_points(snap.yg[None, :], 0.012)
+        n["pbests"].visible = n["gbest"].visible = snap.live  # a recorded frame has no bests
         start = self.view_points(snap.x, 0.015)
         tip = start.copy()
         tip[:, 0] += 0.35 * np.cos(snap.heading)
@@ -201,3 +207,26 @@ class ArenaView:
             segs = np.repeat(start[:1, None, :], 2, axis=1) if len(start) else np.zeros((1, 2, 3), np.float32)
         n["trails"].points = segs
         self.drawn_revision = snap.revision
+
+    def draw_twin(self, view: tuple[np.ndarray, np.ndarray] | None) -> None:
+        """Swarm B (compare): teal dots just under A's robots and teal trails; hidden without B."""
+        n = self.nodes
+        if "robots" not in n:
+            return
+        if view is None:
+            for key in ("twin", "twin_trails"):
+                if key in n:
+                    n[key].visible = False
+            return
+        if "twin" not in n:
+            one, seg = np.zeros((1, 3), np.float32), np.zeros((1, 2, 3), np.float32)
+            n["twin_trails"] = self.scene.add_line_segments(
+                "/world/twin_trails", seg, colors=TWIN_TRAIL, thickness=1.5, thickness_units="screen")
+            n["twin"] = self.scene.add_point_cloud(
+                "/world/twin", one, colors=TWIN, point_size=ROBOT_SIZE, point_shape="circle", precision="float32",
+                point_shading="flat")
+        x, trails = view
+        n["twin"].points = self.view_points(x, 0.018)
+        segs = trail_segments(trails)
+        n["twin_trails"].points = self.view_points(segs, -0.001) if len(segs) else np.zeros((1, 2, 3), np.float32)
+        n["twin"].visible, n["twin_trails"].visible = True, bool(len(segs))

@@ -64,6 +64,7 @@ class Snapshot:
     yg: np.ndarray  # (d,) global best
     trails: np.ndarray  # (M, L, d) oldest first, M ≤ N
     revision: int
+    live: bool = True  # False: a recorded frame (timeline, replay): bests not known
 
 
 def _section_changed(old: Scenario, new: Scenario, name: str) -> bool:
@@ -138,6 +139,9 @@ class Session(BaseSession):
         omega, c_hat = self.coefficients()
         speed = np.linalg.norm(s.u[0], axis=-1)
         return (self.clock(), float(speed.max()), float(np.abs(s.u[0]).max()), omega, c_hat)
+
+    def _replay_blanks(self, frame: Frame) -> dict[str, Any]:
+        return {"y": frame.x.copy()}  # bests are not recorded (and not drawn)
 
     def coefficients(self) -> tuple[float, float]:
         """The (ω, ĉ) the controller uses at the current time (means over robots for per-robot policies)."""

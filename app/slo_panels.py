@@ -250,6 +250,19 @@ class SLOPanels(PanelsBase):
         self.sliders["slo.walk_speed"].visible = own and slo.motion == "random_walk"
         self.neigh_param.visible = slo.neighbourhood != "full"
 
+    def compare_choices(self) -> dict[str, dict[str, Any]]:
+        """B with the other positions (oracle vs SLO, Chapter 3 swarm) or another selection."""
+        slo = self.session.scenario.slo
+        out: dict[str, dict[str, Any]] = {}
+        if slo.swarm == "chapter3":
+            for label, value in POSITIONS.items():
+                if value != slo.positions:
+                    out[f"positions: {label}"] = {"slo.positions": value}
+        for label, value in SELECTIONS.items():
+            if value != slo.selection:
+                out[f"selection: {label}"] = {"slo.selection": value}
+        return out
+
     def apply(self, changes: dict[str, Any], what: str) -> bool:
         before = self.session.scene_revision
         ok = super().apply(changes, what)
@@ -319,14 +332,14 @@ class SLOPanels(PanelsBase):
             f"mean e_abs {fmt(r['e_abs_mean'])} · best f {fmt(r['best'])}")
 
     def refresh_plots(self) -> None:
-        m = {k: v[-self.PLOT_HISTORY:] for k, v in self.session.metric_arrays().items()}
+        m, span = self.shown_metrics(self.PLOT_HISTORY)
         t = m["t"]
         data = slo_plots.error_data(t, m["e_abs_mean"], m["e_abs_median"], m["e_rel_median"])
-        self.error_plot.data = data
-        self.error_plot.scales = slo_plots.error_scales(data[0])
+        self.push_uplot(self.error_plot, data, slo_plots.error_series(self._generations()),
+                        slo_plots.error_scales(span), twin=("e_abs_mean", "mean e_abs"))
         data = slo_plots.distance_data(t, m["distance_median"])
         self.distance_plot.data = data
-        self.distance_plot.scales = slo_plots.plain_scales(data[0])
+        self.distance_plot.scales = slo_plots.plain_scales(span)
         data = slo_plots.fitness_data(t, m["best"])
         self.fitness_plot.data = data
-        self.fitness_plot.scales = slo_plots.plain_scales(data[0])
+        self.fitness_plot.scales = slo_plots.plain_scales(span)

@@ -23,6 +23,7 @@ from shoal.presets.models import Scenario
 from . import shapes
 from .scene import ROBOT_SIZE, VIEW_HALF
 from .slo_session import SLOSnapshot
+from .twin_view import TwinLayer
 
 ROBOT = (220, 50, 50)
 TRAIL = (150, 175, 255)
@@ -59,7 +60,7 @@ def view_centre(scenario: Scenario) -> np.ndarray:
     return np.zeros(2)
 
 
-class SLOView:
+class SLOView(TwinLayer):
     """The scene of one tab showing an SLO scene. ``scene`` is a viser ``SceneApi``."""
 
     def __init__(self, scene: Any) -> None:
@@ -88,6 +89,9 @@ class SLOView:
         if abs(d[2]) < 1e-9 or -o[2] / d[2] < 0:
             return None
         return self.to_world((o + (-o[2] / d[2]) * d)[:2])
+
+    def _twin_size(self) -> float:
+        return ROBOT_SIZE
 
     # ------------------------------------------------------------------ lifecycle
     def clear(self) -> None:

@@ -248,6 +248,12 @@ class SLOSession(BaseSession):
                 ghosts=ghosts, ghost_of=of, ghost_error=err, edges=edges, pair=pair, localising=b is not None,
                 revision=self.revision, half_size=float(self.scenario.arena.half_size))
 
+    def _replay_blanks(self, frame: Any) -> dict[str, Any]:
+        """Beliefs are not recorded: a recorded frame shows the true positions only."""
+        return {"x": frame.x[:, :2].copy(), "ghosts": np.zeros((0, 2)), "ghost_of": np.zeros(0, int),
+                "ghost_error": np.zeros(0), "edges": np.zeros((0, 2, 2)), "pair": None,
+                "selected": min(self.selected_robot, len(frame.x) - 1)}
+
     def readout(self) -> dict[str, float]:
         with self.lock:
             m = self.metrics[-1] if self.metrics else (np.nan,) * len(self.METRICS)

@@ -188,6 +188,11 @@ class SonarPanels(PanelsBase):
             f"**{sc.name}** · {LABELS[sc.acoustics.algorithm]} · {state} · t = {r['t']:.0f} s · "
             f"step {int(r['k'])}/{sc.sim.steps} · |CoM − source| = {r['com_dist']:.0f} m{conv}{ring}")
 
+    def compare_choices(self) -> dict[str, dict[str, Any]]:
+        """B with another localisation algorithm."""
+        here = self.session.scenario.acoustics.algorithm
+        return {f"algorithm: {label}": {"acoustics.algorithm": alg} for label, alg in ALGORITHMS.items() if alg != here}
+
     def corr_plot_data(self) -> tuple[np.ndarray, ...]:
         c = self.session.correlation()
         if c is None:
@@ -201,10 +206,10 @@ class SonarPanels(PanelsBase):
         data = self.corr_plot_data()
         self.corr_plot.data = data
         self.corr_plot.scales = sonar_plots.corr_scales(data)
-        m = {k: v[-self.PLOT_HISTORY:] for k, v in s.metric_arrays().items()}
+        m, span = self.shown_metrics(self.PLOT_HISTORY)
         data = sonar_plots.dist_data(m["t"], m["com_dist"], s.scenario.acoustics.d_c)
-        self.dist_plot.data = data
-        self.dist_plot.scales = sonar_plots.dist_scales(data[0])
+        self.push_uplot(self.dist_plot, data, sonar_plots.dist_series(), sonar_plots.dist_scales(span),
+                        twin=("com_dist", "|CoM − source|"))
         with s.lock:
             snr = s.sim.state.snr_db[0].copy()
         self.snr_plot.data = sonar_plots.snr_data(snr)

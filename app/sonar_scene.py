@@ -21,6 +21,7 @@ from shoal.presets.models import Scenario
 from . import shapes
 from .scene import VIEW_HALF
 from .sonar_session import SonarSnapshot
+from .twin_view import TwinLayer
 
 GRID_CELL = (228, 228, 224)
 GRID_SECTION = (205, 205, 200)
@@ -49,7 +50,7 @@ SourceDrag = Callable[[float, float, str], None]
 _SERIAL = itertools.count()
 
 
-class SonarView(shapes.GroundFrame):
+class SonarView(shapes.GroundFrame, TwinLayer):
     """The scene of one tab showing an acoustic swarm. ``scene`` is a viser ``SceneApi``."""
 
     RAY_SHARE = 0.3  # ray length as a share of the arena side
@@ -176,7 +177,7 @@ class SonarView(shapes.GroundFrame):
         self.nodes["source"].batched_positions = self.to_view(src[None], Z["source"])
         self.nodes["source_label"].position = tuple(float(v) for v in self.to_view(src + 0.04 * self.half, 0.0))
         self._lines("dc_ring", shapes.circle_segments(src, snap.d_c, 72), DC_RING, 1.0, Z["rings"])
-        if snap.r_trap > 0:
+        if snap.r_trap > 0 and snap.live:
             rings = np.concatenate([shapes.circle_segments(snap.yg, snap.r_trap, 72),
                                     shapes.circle_segments(src, snap.r_trap, 72)])
         else:
@@ -194,10 +195,14 @@ class SonarView(shapes.GroundFrame):
             segs = np.zeros((0, 2, 2))
         self._lines("trails", segs, TRAIL, 1.2, Z["trails"])
         self._points("pbests", snap.y, PBEST, 0.006 * VIEW_HALF * 2, "square", Z["pbests"])
-        self._points("gbest", snap.yg[None], GBEST, 0.016 * VIEW_HALF * 2, "diamond", Z["gbest"])
+        self._points("gbest", snap.yg[None] if snap.live else np.zeros((0, 2)), GBEST, 0.016 * VIEW_HALF * 2,
+                     "diamond", Z["gbest"])
         i = snap.selected
         self._lines("selected", shapes.circle_segments(snap.x[i], 0.02 * self.half, 32), SELECTED, 3.0,
                     Z["selected"])
+
+    def _twin_size(self) -> float:
+        return 0.009 * VIEW_HALF * 2
 
     def ray_segments(self, snap: SonarSnapshot) -> tuple[np.ndarray, np.ndarray]:
         """(true, mirror) segment lists (N, 2, 2), each starting at a robot."""

@@ -66,6 +66,7 @@ class SonarSnapshot:
     tri_centroid: np.ndarray | None  # (N, 2)
     tri_direction: np.ndarray | None  # (N, 2)
     tri_valid: np.ndarray | None  # (N,)
+    live: bool = True  # False: a recorded frame (timeline, replay): no rays, hits or bests
 
 
 def true_ray_index(x: np.ndarray, rays: np.ndarray, source: np.ndarray) -> np.ndarray:
@@ -158,6 +159,7 @@ class SonarSession(BaseSession):
             sw.source0[0] += delta  # a moving source continues from here
             sw.state.source[0] = target
             self._refresh_snr()
+            self.live_edits += 1
             self.revision += 1
 
     def robot_near(self, x: float, y: float, tol: float | None = None) -> int | None:
@@ -211,6 +213,11 @@ class SonarSession(BaseSession):
                 rays=rays, true_ray=true_ray, points=pts, forward=fwd, kept=kept, pick=pick, partner=partner,
                 tri_members=tri[0], tri_centroid=tri[1], tri_direction=tri[2], tri_valid=tri[3],
             )
+
+    def _replay_blanks(self, frame: Any) -> dict[str, Any]:
+        blank = dict.fromkeys(("rays", "true_ray", "points", "forward", "kept", "pick", "partner", "tri_members",
+                               "tri_centroid", "tri_direction", "tri_valid"))
+        return {**blank, "y": np.zeros((0, 2)), "selected": min(self.selected_robot, len(frame.x) - 1)}
 
     def readout(self) -> dict[str, float]:
         with self.lock:

@@ -117,21 +117,23 @@ class TabApp:
         self.panels.remove()
         self.arena.clear()
 
-    def replace(self, scenario: Scenario) -> None:
+    def replace(self, scenario: Scenario) -> BaseSession:
         """Load ``scenario``; a scene of the other kind swaps session, panels and arena.
-        Raises :class:`PresetError` (nothing changed) when it cannot be shown."""
+        Returns the session now shown. Raises :class:`PresetError` (nothing changed) when it
+        cannot be shown."""
         kind = kind_for(scenario)
         with self._ticking:
             if isinstance(self.session, kind.session):
                 self.session.load_scenario(scenario)
                 self.panels.sync_from_scenario()
-                return
+                return self.session
             new = kind.session(scenario)  # may refuse: then the old scene stays
             if self.session.playing:
                 new.play()
             self._drop_kind()
             self.session = new
             self._build_kind()
+            return new
 
     def close(self) -> None:
         """The browser tab went away: stop listening to its scene."""
@@ -188,9 +190,11 @@ class TabApp:
             with self._atomic():
                 self.arena.rebuild(s.scenario, s.scene_revision)
         if now >= self._next_scene and s.revision != self.arena.drawn_revision:
-            snap = s.snapshot()
+            snap = s.shown_snapshot()  # live, or the recorded frame the timeline points at
+            twin = s.twin_view()
             with self._atomic():
                 self.arena.draw(snap)
+                self.arena.draw_twin(twin)
             self.panels.on_snapshot(snap)
             self._next_scene = now + 1.0 / self.SCENE_HZ
         if now >= self._next_plot:
@@ -199,5 +203,6 @@ class TabApp:
                 self.panels.refresh_status()
                 self.panels.refresh_readout()
                 self.panels.refresh_plots()
+                self.panels.refresh_timeline()
                 self._plot_key = key
             self._next_plot = now + 1.0 / self.PLOT_HZ

@@ -41,6 +41,12 @@ def choose(page, label: str, option: str) -> None:
     page.get_by_role("option", name=option, exact=True).click()
 
 
+def upload_input(page, label: str):
+    """The hidden file input of viser's upload button ``label`` (there may be several on a page)."""
+    fid = page.get_by_role("button", name=label, exact=True).get_attribute("id")
+    return page.locator(f'[id="file_upload_{fid}"]')
+
+
 def dismiss_toasts(page) -> None:
     closes = page.locator(".mantine-Notification-root button")
     for i in range(closes.count()):

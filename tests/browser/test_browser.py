@@ -24,7 +24,7 @@ pytestmark = [
 sync_api = pytest.importorskip("playwright.sync_api")
 
 from browser_helpers import (  # noqa: E402
-    ARGS, VIEWPORT, canvas_box, choose, dismiss_toasts, number_box, wait_until,
+    ARGS, VIEWPORT, canvas_box, choose, dismiss_toasts, number_box, upload_input, wait_until,
 )
 
 from shoal.app.scene import ROBOT, ROBOT_SIZE, VIEW_HALF  # noqa: E402
@@ -156,7 +156,7 @@ def test_bad_upload_shows_the_field_and_keeps_the_scene(server, page, client_id)
     session = server.sessions[client_id]
     sim, k = session.sim, session.sim.state.k
     page.get_by_role("tab", name="Export").click()
-    page.locator("input[type=file]").first.set_input_files(
+    upload_input(page, "Upload preset").set_input_files(
         {"name": "bad.toml", "mimeType": "application/toml", "buffer": b"[controller]\nomega = 7\n"})
     page.wait_for_selector(".mantine-Notification-root:has-text('controller.omega')", timeout=10000)
     assert session.sim is sim and session.sim.state.k == k

@@ -1,0 +1,177 @@
+"""A/B comparison and replays in a real headless Chromium.
+
+One server (``default``, a Chapter 3 swarm) and one page for the module; tests run in file
+order. The first switches swarm B on from the Compare tab and finds it in the picture (teal
+where B's robots are, apart from A's) and in the plot's legend. The second exports a replay
+from that page, loads it into a second server started on a fleet scene, scrubs the
+timeline and checks the robots drawn there are the recorded ones.
+"""
+
+from __future__ import annotations
+
+import io
+import shutil
+import time
+
+import numpy as np
+import pytest
+
+CHROMIUM = shutil.which("chromium")
+pytestmark = [
+    pytest.mark.browser,
+    pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not on PATH (apt-get install chromium)"),
+]
+
+sync_api = pytest.importorskip("playwright.sync_api")
+
+from browser_helpers import (  # noqa: E402
+    ARGS, VIEWPORT, canvas_box, dismiss_toasts, number_box, root_for, to_pixel, upload_input, wait_until,
+)
+
+from shoal.app import replay  # noqa: E402
+from shoal.app.scene import ROBOT_SIZE  # noqa: E402
+from shoal.app.server import start_server  # noqa: E402
+from shoal.app.session import Session  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        yield b
+        b.close()
+
+
+def open_page(browser, port: int, ready: str):
+    context = browser.new_context(accept_downloads=True, viewport=VIEWPORT)
+    pg = context.new_page()
+    pg.goto(f"http://127.0.0.1:{port}/")
+    pg.wait_for_selector(f"label:has-text('{ready}')", timeout=90000)
+    return pg
+
+
+@pytest.fixture(scope="module")
+def page(browser, server):
+    pg = open_page(browser, server.port, "robots")
+    yield pg
+    pg.context.close()
+
+
+@pytest.fixture(scope="module")
+def cid(server, page):
+    wait_until(lambda: len(server.tabs) == 1, what="the tab")
+    return next(iter(server.tabs))
+
+
+def screenshot(page) -> np.ndarray:
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("RGB")).astype(int)
+
+
+def radius_px(server, cid, page) -> float:
+    """A robot's radius on screen (viser: point size in view units at the camera's scale)."""
+    return float(np.linalg.norm(to_pixel(server, cid, page, np.array([1.0, 0.0]))
+                                - to_pixel(server, cid, page, np.zeros(2)))) * ROBOT_SIZE / server.tabs[cid].arena.scale
+
+
+def seen(page, pixels: np.ndarray, colour_ok, attempts: int = 6) -> int:
+    """How many of ``pixels`` show the colour (a 3×3 patch with one pixel that passes), retried
+    while a loaded machine is still drawing the last frame."""
+    hits = 0
+    for attempt in range(attempts):
+        time.sleep(1.5 if attempt == 0 else 1.0)
+        img = screenshot(page)
+        hits = sum(bool(colour_ok(img[y - 1: y + 2, x - 1: x + 2]).any()) for x, y in pixels)
+        if hits >= 0.9 * len(pixels):
+            break
+    return hits
+
+
+def teal(patch: np.ndarray) -> np.ndarray:
+    r, g, b = patch[..., 0], patch[..., 1], patch[..., 2]
+    return (r < 100) & (g > 130) & (b > 130)
+
+
+def red(patch: np.ndarray) -> np.ndarray:
+    r, g, b = patch[..., 0], patch[..., 1], patch[..., 2]
+    return (r > 170) & (g < 110) & (b < 110)
+
+
+# ---------------------------------------------------------------------------- compare
+def test_compare_runs_b_in_lock_step_and_draws_it_in_teal(server, page, cid):
+    session = server.tabs[cid].session
+    page.get_by_role("button", name="Pause", exact=True).click()
+    wait_until(lambda: not session.playing, what="pause")
+    page.get_by_role("tab", name="Compare").click()
+    root_for(page, "compare with swarm B").click()
+    wait_until(lambda: session.twin is not None, what="swarm B")
+    assert session.twin.scenario.controller.law == "standard"  # the first quick choice
+    assert session.sim.state.k == 0  # A restarted with B
+    page.get_by_role("button", name="Play", exact=True).click()
+    wait_until(lambda: session.sim.state.k >= 40, what="40 steps")
+    page.get_by_role("button", name="Pause", exact=True).click()
+    wait_until(lambda: not session.playing, what="pause")
+    assert session.twin.sim.state.k == session.sim.state.k
+    dismiss_toasts(page)
+    # B's robots that lie clear of A's are teal on screen
+    a = to_pixel(server, cid, page, session.sim.state.x[0])
+    b = to_pixel(server, cid, page, session.twin.sim.state.x[0])
+    box = canvas_box(page)
+    r = radius_px(server, cid, page)
+    clear = np.sqrt(((b[:, None] - a[None]) ** 2).sum(-1)).min(axis=1) > 2 * r + 3
+    inside = (b[:, 0] > box["x"] + 5) & (b[:, 0] < box["x"] + box["width"] - 5) & (b[:, 1] > box["y"] + 5) & (
+        b[:, 1] < box["y"] + box["height"] - 5)
+    pixels = np.round(b[clear & inside]).astype(int)
+    assert len(pixels) >= 3, "B should have moved apart from A"
+    hits = seen(page, pixels, teal)
+    assert hits >= 0.8 * len(pixels), f"only {hits}/{len(pixels)} of B's robots seen in teal"
+    # ...and its curve is in the speed plot
+    page.get_by_role("tab", name="Plots").click()
+    page.wait_for_selector("text=B: max |u|", timeout=20000)
+
+
+# ---------------------------------------------------------------------------- replay
+def test_a_replay_exported_here_plays_back_in_another_server(server, browser, page, cid):
+    session = server.tabs[cid].session
+    page.get_by_role("button", name="Pause", exact=True).click()
+    wait_until(lambda: not session.playing, what="pause")
+    with page.expect_download(timeout=30000) as dl:
+        page.get_by_role("button", name="Export replay").click()
+    data = open(dl.value.path(), "rb").read()
+    rec = replay.from_bytes(data, dl.value.suggested_filename)
+    assert dl.value.suggested_filename.endswith("-replay.npz")
+    assert rec.name == "default" and rec.frames == len(session.frames)
+
+    other = start_server("course-dvc", port=0)  # another user's server, on a fleet scene
+    try:
+        page2 = open_page(browser, other.port, "controller")
+        try:
+            wait_until(lambda: len(other.tabs) == 1, what="the second server's tab")
+            cid2 = next(iter(other.tabs))
+            upload_input(page2, "Load replay").set_input_files(
+                {"name": "run-replay.npz", "mimeType": "application/octet-stream", "buffer": data})
+            wait_until(lambda: getattr(other.tabs[cid2].session, "replaying", None) is not None, what="the replay")
+            tab2 = other.tabs[cid2]
+            assert isinstance(tab2.session, Session) and tab2.session.scenario.name == "default"
+            page2.wait_for_selector("text=Replay of default, seed 1", timeout=30000)
+            page2.wait_for_selector(".mantine-Notification-root:has-text('verified')", timeout=30000)
+            # scrub to step 12: the arena shows the recorded robots of that step
+            k = 12
+            box = number_box(page2, "timeline [step]")
+            box.fill(str(k))
+            box.press("Enter")
+            wait_until(lambda: tab2.session.cursor == k, what=f"the timeline at step {k}")
+            x = rec.robots(int(np.flatnonzero(rec.k == k)[0]))[0]
+            wait_until(lambda: tab2.arena.drawn_revision == tab2.session.revision, what="the frame drawn")
+            np.testing.assert_allclose(np.asarray(tab2.arena.nodes["robots"].points)[:, :2],
+                                       tab2.arena.view_points(x)[:, :2], atol=1e-5)
+            dismiss_toasts(page2)
+            pixels = np.round(to_pixel(other, cid2, page2, x)).astype(int)
+            hits = seen(page2, pixels, red)
+            assert hits >= 0.9 * len(pixels), f"only {hits}/{len(pixels)} recorded robots seen where they were"
+            assert tab2.session.sim.state.k == 0  # a replay does not advance the engine
+        finally:
+            page2.context.close()
+    finally:
+        other.stop()
