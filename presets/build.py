@@ -31,8 +31,13 @@ def law_for(c: Controller) -> Law:
     return Law(name=c.law, smooth_width=c.smooth_width)
 
 
+def _xyz(v: tuple[float, float]) -> np.ndarray:
+    """A preset's (x, y) as a point in up to three dimensions (z = 0): any ``sim.d`` takes its first d."""
+    return np.append(np.asarray(v, dtype=float), 0.0)
+
+
 def objective_for(o: ObjectiveModel) -> Objective:
-    return Objective(name=o.kind, source=np.asarray(o.source, dtype=float), scale=o.scale)
+    return Objective(name=o.kind, source=_xyz(o.source), scale=o.scale)
 
 
 def build_simulation(
@@ -56,7 +61,7 @@ def _simulation_kwargs(scenario: Scenario, *, runs: int | None, seed: int | None
         first_run=first_run,
         attractors=s.bests.attractors,
         pbest_order=s.bests.pbest_order,
-        init_center=np.asarray(s.init.center, dtype=float),
+        init_center=_xyz(s.init.center),
         init_spread=s.init.spread,
         init_speed=s.init.speed,
     )

@@ -54,7 +54,7 @@ class Controller(_Model):
 
     law: Literal[LawName, RobotLawName] = "adapted-sgn"
     mode: Literal["raw", "physical", "dvc"] = "physical"
-    dt: Annotated[float, Field(gt=0.0, le=10.0, description="controller period Δt [s]")] = 0.1
+    dt: Annotated[float, Field(ge=1e-6, le=10.0, description="controller period Δt [s]")] = 0.1
     omega: Annotated[float, Field(ge=-1.0, le=1.2, description="inertia weight ω (raw mode)")] = 0.5
     c1: Annotated[Coefficient, Field(description="cognitive coefficient (raw mode)")] = 0.5
     c2: Annotated[Coefficient, Field(description="social coefficient (raw mode)")] = 0.5
@@ -122,7 +122,7 @@ class WorldModel(_Model):
 class Robot(_Model):
     """Body, drive and motion model of every robot."""
 
-    radius: Annotated[float, Field(gt=0.0, le=10.0, description="robot radius [m] (1 m diameter default)")] = 0.5
+    radius: Annotated[float, Field(ge=1e-3, le=10.0, description="robot radius [m] (1 m diameter default)")] = 0.5
     v_max: Annotated[float, Field(gt=0.0, le=100.0, description="top speed [m/s]")] = 3.0
     a_max: Annotated[float, Field(gt=0.0, le=1e3, description="actuator acceleration (physics) [m/s²]")] = 10.0
     motion: Literal["kinematic", "physics"] = "kinematic"
@@ -178,7 +178,7 @@ class Acoustics(_Model):
     d_0: Annotated[float, Field(ge=0.0, le=10_000.0, description="deployment radius d_0 [m]")] = 50.0
     d_c: Annotated[float, Field(gt=0.0, le=10_000.0, description="convergence radius d_c [m]")] = 50.0
     U: Annotated[float, Field(gt=0.0, le=50.0, description="top speed U = v_max [m/s]")] = 2.0
-    dt: Annotated[float, Field(gt=0.0, le=10.0, description="controller period Δt [s]")] = 1.0
+    dt: Annotated[float, Field(ge=1e-6, le=10.0, description="controller period Δt [s]")] = 1.0
     beta: Annotated[float, Field(gt=0.0, le=1.0, description="sensitivity β: ω = 1 − β, ĉ = βU/√d")] = 0.9
     c1_share: Annotated[float, Field(ge=0.0, le=1.0, description="c1/(c1 + c2)")] = 0.5
     alpha_dvc: Annotated[float, Field(gt=0.0, lt=1.0, description="DVC safety factor α (nonomni)")] = 0.9
@@ -308,6 +308,12 @@ class Scenario(_Model):
     def _world_for_robot_laws(self) -> "Scenario":
         if self.controller.law in ROBOT_LAWS and self.world is None:
             raise ValueError(f"controller.law {self.controller.law!r} needs a [world] section")
+        if self.world is not None and self.controller.law not in ROBOT_LAWS:
+            raise ValueError(f"controller.law {self.controller.law!r}: a [world] scene needs a robot law "
+                             f"({', '.join(ROBOT_LAWS)})")
+        if self.world is not None and 2.0 * self.robot.radius >= self.world.start_size:
+            raise ValueError(f"robot.radius = {self.robot.radius:g}: a robot must fit the start square "
+                             f"(world.start_size = {self.world.start_size:g})")
         if self.controller.law in ("robot-centred", "nonomni") and self.robot.drive != "differential":
             raise ValueError(f"controller.law {self.controller.law!r} needs robot.drive = 'differential'")
         if self.world is not None and self.sim.d != 2:
