@@ -30,7 +30,6 @@ from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .compare import CompareMixin
-from .limits import check_app_limits
 from .timeline import TimelineMixin
 
 MAX_UPLOAD_BYTES = 256 * 1024
@@ -158,7 +157,6 @@ class BaseSession(CompareMixin, TimelineMixin):
 
     # ------------------------------------------------------------------ loading
     def _load(self, scenario: Scenario) -> None:
-        check_app_limits(scenario)  # a shared server: no scene far beyond the sliders' reach
         sim = self._build(scenario)  # may refuse: then nothing has changed
         self.scenario = scenario
         self.sim = sim
@@ -202,7 +200,7 @@ class BaseSession(CompareMixin, TimelineMixin):
             data = copy.deepcopy(self.scenario.model_dump(mode="json"))
         for key, value in changes.items():
             presets_io.set_dotted(data, key, value)
-        return check_app_limits(presets_io.validate(data))
+        return presets_io.validate(data)
 
     def apply(self, changes: dict[str, Any]) -> Scenario:
         """Validate ``changes`` and apply them, without restarting where the engine allows.
@@ -218,6 +216,8 @@ class BaseSession(CompareMixin, TimelineMixin):
             view_only = all(k.startswith("view.") for k in changes)
             if self.replaying is not None and not view_only:
                 self.leave_replay()
+            elif not view_only:
+                self.cursor = None  # a change applies to the live run: show it
             old_b = self._twin_adopt(new_b)
             before = self.frames
             try:

@@ -144,6 +144,11 @@ def test_scrubbing_shows_the_recorded_frame_and_play_returns_live():
     np.testing.assert_array_equal(s.twin_view()[0], s.twin.frames[8].x)
     m, span = s.shown_metrics(1000)
     assert m["t"][-1] == pytest.approx(s.frames[8].t) and span[1] == pytest.approx(s.frames[-1].t)
+    s.apply({"view.trail_seconds": 2.0})  # a view setting keeps the step shown...
+    assert s.cursor == 8
+    s.apply({"controller.U": 5.0})  # ...a change to the run shows the live run
+    assert s.cursor is None
+    s.scrub(3)
     s.play()
     assert s.cursor is None and s.shown_snapshot().live
 
