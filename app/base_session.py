@@ -30,6 +30,7 @@ from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .compare import CompareMixin
+from .limits import check_app_limits
 from .timeline import TimelineMixin
 
 MAX_UPLOAD_BYTES = 256 * 1024
@@ -157,6 +158,7 @@ class BaseSession(CompareMixin, TimelineMixin):
 
     # ------------------------------------------------------------------ loading
     def _load(self, scenario: Scenario) -> None:
+        check_app_limits(scenario)  # a shared server: no scene far beyond the sliders' reach
         sim = self._build(scenario)  # may refuse: then nothing has changed
         self.scenario = scenario
         self.sim = sim
@@ -200,7 +202,7 @@ class BaseSession(CompareMixin, TimelineMixin):
             data = copy.deepcopy(self.scenario.model_dump(mode="json"))
         for key, value in changes.items():
             presets_io.set_dotted(data, key, value)
-        return presets_io.validate(data)
+        return check_app_limits(presets_io.validate(data))
 
     def apply(self, changes: dict[str, Any]) -> Scenario:
         """Validate ``changes`` and apply them, without restarting where the engine allows.
