@@ -146,6 +146,14 @@ class FleetSession(BaseSession):
         self.world_revision += 1
         self.edits += 1
         self.revision += 1
+        self._twin_world()
+
+    def _twin_world(self) -> None:
+        """Swarm B meets the same obstacles as A (the arena draws A's world)."""
+        if self.twin is not None:
+            with self.twin.lock:
+                self.twin.sim.set_world(self.sim.world)
+                self.twin.world_revision += 1
 
     def _check_free(self, x: float, y: float, r: float, what: str) -> None:
         fleet = self.sim
@@ -197,6 +205,7 @@ class FleetSession(BaseSession):
             self.sim.set_world(world_for(self.scenario.world))
             self.world_revision += 1
             self.edits = 0
+            self._twin_world()
             self.revision += 1
 
     def robot_near(self, x: float, y: float, tol: float = 0.3) -> int | None:

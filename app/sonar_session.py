@@ -161,6 +161,8 @@ class SonarSession(BaseSession):
             self._refresh_snr()
             self.live_edits += 1
             self.revision += 1
+        if self.twin is not None:  # B hears the same source (the arena draws A's)
+            self.twin.move_source(x, y)
 
     def robot_near(self, x: float, y: float, tol: float | None = None) -> int | None:
         with self.lock:

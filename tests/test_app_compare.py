@@ -300,3 +300,19 @@ def test_every_kind_draws_b_and_a_scrubbed_frame(tab, name):
                                tab.arena.to_view(s.frames[5].x[:, :2])[:, :2], atol=1e-5)
     np.testing.assert_allclose(np.asarray(twin.points)[:, :2], tab.arena.to_view(s.twin.frames[5].x[:, :2])[:, :2],
                                atol=1e-5)
+
+
+def test_hand_edits_reach_b_too():
+    """An obstacle dropped in A's world, or a dragged source, is where B meets it as well."""
+    s = session("course-dvc")
+    s.enable_compare({"controller.alpha": 0.9})
+    s.step(3)
+    x = s.sim.world.bounds[2] - 5.0
+    s.add_obstacle(x, 0.0, 1.0)
+    np.testing.assert_array_equal(s.twin.sim.world.circles, s.sim.world.circles)
+    s.restore_world()
+    np.testing.assert_array_equal(s.twin.sim.world.circles, s.sim.world.circles)
+    sonar = session("sonar-xb-pso")
+    sonar.enable_compare({"acoustics.algorithm": "x-pso"})
+    sonar.move_source(12.0, -30.0)
+    np.testing.assert_array_equal(sonar.twin.sim.state.source[0], [12.0, -30.0])
