@@ -30,14 +30,32 @@ def one_core() -> str:
 
 def timed(fn: Callable[[], object], reps: int, warmup: int = 3) -> list[float]:
     """Wall milliseconds of ``reps`` calls of ``fn`` after ``warmup`` untimed calls."""
+    return timed_cpu(fn, reps, warmup)[0]
+
+
+def timed_cpu(fn: Callable[[], object], reps: int, warmup: int = 3) -> tuple[list[float], list[float]]:
+    """(wall, CPU) milliseconds of ``reps`` calls of ``fn`` after ``warmup`` untimed calls.
+
+    CPU is this thread's CPU time: what a call costs on a core of its own, even while other
+    jobs share the machine and stretch the wall time."""
     for _ in range(warmup):
         fn()
-    out = []
+    wall, cpu = [], []
     for _ in range(reps):
-        t0 = time.perf_counter()
+        c0, t0 = time.thread_time(), time.perf_counter()
         fn()
-        out.append((time.perf_counter() - t0) * 1e3)
-    return out
+        wall.append((time.perf_counter() - t0) * 1e3)
+        cpu.append((time.thread_time() - c0) * 1e3)
+    return wall, cpu
+
+
+def load_note() -> str:
+    """The machine's load averages and core count, for the report."""
+    try:
+        one, five, _ = os.getloadavg()
+        return f"load average {one:.1f} (1 min), {five:.1f} (5 min) on {os.cpu_count()} cores"
+    except OSError:
+        return f"{os.cpu_count()} cores"
 
 
 def summary(ms: Sequence[float]) -> dict[str, float]:

@@ -6,8 +6,10 @@ Run: python benchmarks/bench_interactive.py [--quick] [--steps 300]
 For each scene (one run, as in the app): the engine tick alone, and the app's session step
 (tick + history ring buffer + metrics) plus the snapshot the arena draws from. Median and
 95th percentile over ``--steps`` consecutive ticks after a short warm-up, so the dense
-start of the fleet and the later spread-out phase both count. BLAS/OpenMP threads are set
-to 1 and the process is pinned to one CPU before numpy is imported.
+start of the fleet and the later spread-out phase both count, of the CPU time (what a tick
+costs on a core of its own) and of the wall time (what it took on the machine as shared at
+the time). BLAS/OpenMP threads are set to 1 and the process is pinned to one CPU before
+numpy is imported.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_common import fmt, one_core, summary, table, timed  # noqa: E402
+from bench_common import fmt, load_note, one_core, summary, table, timed_cpu  # noqa: E402
 
 FRAME_MS = 1000.0 / 30.0
 WARMUP = 5
@@ -38,23 +40,24 @@ CASES = [
 ]
 
 
-def measure(preset: str, overrides: list[str], steps: int) -> tuple[dict, dict]:
-    """(engine tick, session step + snapshot) summaries in ms for ``steps`` ticks each."""
+def measure(preset: str, overrides: list[str], steps: int) -> dict[str, dict]:
+    """Wall and CPU summaries (ms) of the engine tick and of the session step + snapshot."""
     from shoal.app.tab import session_for
     from shoal.presets.build import build
     from shoal.presets.io import load
 
     scenario = load(preset, overrides)
     engine = build(scenario, runs=1)
-    engine_ms = timed(engine.step, steps, warmup=WARMUP)
+    engine_wall, engine_cpu = timed_cpu(engine.step, steps, warmup=WARMUP)
     session = session_for(scenario)
 
     def app_step() -> None:
         session.step(1)
         session.snapshot()
 
-    app_ms = timed(app_step, steps, warmup=WARMUP)
-    return summary(engine_ms), summary(app_ms)
+    app_wall, app_cpu = timed_cpu(app_step, steps, warmup=WARMUP)
+    return {"engine": summary(engine_wall), "engine_cpu": summary(engine_cpu), "app": summary(app_wall),
+            "app_cpu": summary(app_cpu)}
 
 
 def main() -> None:
@@ -63,15 +66,17 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=300, help="timed ticks per case")
     args = ap.parse_args()
     steps = 40 if args.quick else args.steps
-    print(f"one core: {one_core()}; {steps} ticks per case after {WARMUP} warm-up ticks\n")
+    print(f"one core: {one_core()}; {steps} ticks per case after {WARMUP} warm-up ticks; {load_note()}\n")
     rows = []
     for label, preset, overrides in CASES:
-        eng, app = measure(preset, overrides, steps)
-        rows.append([label, fmt(eng["median"]), fmt(eng["p95"]), fmt(app["median"]), fmt(app["p95"]),
-                     f"{app['p95'] / FRAME_MS:.0%}"])
-        print(f"  {label}: engine median {eng['median']:.2f} ms, p95 {eng['p95']:.2f} ms", file=sys.stderr)
-    print(table(["scene (one run)", "engine ms median", "engine ms p95", "app step + snapshot ms median",
-                 "app p95", "app p95 / 33 ms frame"], rows))
+        m = measure(preset, overrides, steps)
+        e, ec, a, ac = m["engine"], m["engine_cpu"], m["app"], m["app_cpu"]
+        rows.append([label, fmt(ec["median"]), fmt(ec["p95"]), fmt(ac["median"]), fmt(ac["p95"]),
+                     f"{ac['p95'] / FRAME_MS:.0%}", fmt(e["median"]), fmt(e["p95"]), fmt(a["median"]), fmt(a["p95"])])
+        print(f"  {label}: engine CPU median {ec['median']:.2f} ms, p95 {ec['p95']:.2f} ms", file=sys.stderr)
+    print(table(["scene (one run)", "engine CPU ms median", "p95", "app step + snapshot CPU ms median", "p95",
+                 "app CPU p95 / 33 ms", "engine wall ms median", "p95", "app wall ms median", "p95"], rows))
+    print(f"\nafter the run: {load_note()}")
 
 
 if __name__ == "__main__":

@@ -18,6 +18,8 @@ Run: python benchmarks/bench_pso_compare.py [--quick]   (part b needs: pip insta
     on either side. Reported: median wall time per iteration and the median best fitness
     reached over the seeds. Shoal also runs all seeds as one batch (runs = seeds), which is how
     the experiments use it.
+
+Times are this thread's CPU time (robust while other jobs share the machine).
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_common import fmt, table  # noqa: E402
+from bench_common import fmt, load_note, table  # noqa: E402
 
 # ---------------------------------------------------------------------- (a) the loop reference
 
@@ -129,8 +131,8 @@ def check_same(sim, loop: LoopSwarm) -> None:
 
 
 def compare_loop(sizes: tuple[int, ...], steps: int) -> list[list[str]]:
-    """Median ms per step of the loop and of the engine, steps timed one by one and alternated
-    (so both see the same machine load), after checking that they agree."""
+    """Median CPU ms per step of the loop and of the engine (``steps`` steps each, timed one by
+    one), after checking that they agree before and after."""
     rows = []
     for n in sizes:
         sim, loop, rngs, args = engine_and_loop(n)
@@ -140,12 +142,13 @@ def compare_loop(sizes: tuple[int, ...], steps: int) -> list[list[str]]:
         check_same(sim, loop)
         t_loop, t_vec = [], []
         for _ in range(steps):
-            t0 = time.perf_counter()
+            t0 = time.thread_time()
             loop_step(loop, rngs, *args)
-            t1 = time.perf_counter()
+            t_loop.append(time.thread_time() - t0)
+        for _ in range(steps):
+            t0 = time.thread_time()
             sim.step()
-            t_vec.append(time.perf_counter() - t1)
-            t_loop.append(t1 - t0)
+            t_vec.append(time.thread_time() - t0)
         check_same(sim, loop)
         lo, ve = float(np.median(t_loop)), float(np.median(t_vec))
         rows.append([str(n), fmt(lo * 1e3), fmt(ve * 1e3), f"{lo / ve:.1f}×", f"{n / lo / 1e6:.3g} M",
@@ -169,10 +172,10 @@ def shoal_standard(fn: str, dim: int, particles: int, iters: int, runs: int, see
                      objective=Objective(fn, source=np.zeros(dim)), runs=runs, seed=seed,
                      init_center=np.zeros(dim), init_spread=2 * HALF, init_speed=0.0)
     x0 = sim.state.x.copy()
-    t0 = time.perf_counter()
+    t0 = time.thread_time()
     for _ in range(iters):
         sim.step()
-    return sim.state.f_yg.copy(), time.perf_counter() - t0, x0
+    return sim.state.f_yg.copy(), time.thread_time() - t0, x0
 
 
 def pyswarms_standard(fn: str, dim: int, x0: np.ndarray, iters: int, seed: int) -> tuple[float, float]:
@@ -189,9 +192,9 @@ def pyswarms_standard(fn: str, dim: int, x0: np.ndarray, iters: int, seed: int) 
     opt = GlobalBestPSO(n_particles=len(x0), dimensions=dim, options={"c1": C1, "c2": C2, "w": W},
                         init_pos=x0.copy())
     opt.swarm.velocity = np.zeros_like(opt.swarm.position)
-    t0 = time.perf_counter()
+    t0 = time.thread_time()
     cost, _ = opt.optimize(objective, iters=iters, verbose=False)
-    return float(cost), time.perf_counter() - t0
+    return float(cost), time.thread_time() - t0
 
 
 def check_functions(dim: int) -> None:
@@ -232,7 +235,8 @@ def main() -> None:
     ap.add_argument("--particles", type=int, default=30)
     args = ap.parse_args()
     steps, iters, seeds = (20, 200, 5) if args.quick else (200, 1000, 20)
-    print("(a) Adapted PSO step, plain Python loop vs vectorised engine (one run, default preset)\n")
+    print(f"{load_note()}\n")
+    print("(a) Adapted PSO step, plain Python loop vs vectorised engine (one run, default preset), CPU time\n")
     print(table(["robots", "loop ms/step", "engine ms/step", "speed-up", "loop robot-steps/s",
                  "engine robot-steps/s", "same numbers"], compare_loop((10, 100, 1000), steps)))
     try:
@@ -242,7 +246,7 @@ def main() -> None:
         return
     print(f"\n(b) standard PSO, D = {args.dim}, {args.particles} particles, {iters} iterations, "
           f"{seeds} seeds, ω = {W}, c1 = c2 = {C1}\n")
-    print(table(["function", "implementation", "µs per iteration (per seed)", "median best fitness",
+    print(table(["function", "implementation", "CPU µs per iteration (per seed)", "median best fitness",
                  "range over seeds"], compare_pyswarms(args.dim, args.particles, iters, seeds)))
 
 

@@ -8,8 +8,9 @@ Run: python benchmarks/bench_scaling.py [--quick] [--png benchmarks/scaling.png]
   mecanum): robots 10, 100, 1000 with one run, and runs 1, 10, 100 of 10 robots. The start
   square grows as 2√N m (same density at every size) inside a course 10 m wider than it.
 
-Each point: median ms per step over a few seconds of steps (at least 5, at most 200) after
-warm-up steps; robot-steps/s = robots × runs / median step time.
+Each point: median ms per step over a few CPU seconds of steps (at least 5, at most 200)
+after warm-up steps, as this thread's CPU time (robust on a shared machine) and as wall time;
+robot-steps/s = robots × runs / median CPU time of a step.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_common import fmt, rate, summary, table  # noqa: E402
+from bench_common import fmt, load_note, rate, summary, table  # noqa: E402
 
 SIZES = (10, 100, 1000)
 BATCHES = (1, 10, 100)
@@ -35,17 +36,19 @@ def fleet_overrides(robots: int) -> list[str]:
             f"world.length={max(60.0, 2 * side + 30)}"]
 
 
-def step_ms(engine, budget_s: float, warmup: int = 2, min_steps: int = 5, max_steps: int = 200) -> float:
-    """Median wall ms of ``engine.step()`` over about ``budget_s`` seconds."""
+def step_ms(engine, budget_s: float, warmup: int = 2, min_steps: int = 5, max_steps: int = 200) -> tuple[float, float]:
+    """Median (CPU, wall) ms of ``engine.step()`` over about ``budget_s`` seconds of CPU."""
     for _ in range(warmup):
         engine.step()
-    times: list[float] = []
-    start = time.perf_counter()
-    while len(times) < max_steps and (len(times) < min_steps or time.perf_counter() - start < budget_s):
-        t0 = time.perf_counter()
+    cpu: list[float] = []
+    wall: list[float] = []
+    start = time.thread_time()
+    while len(cpu) < max_steps and (len(cpu) < min_steps or time.thread_time() - start < budget_s):
+        c0, t0 = time.thread_time(), time.perf_counter()
         engine.step()
-        times.append((time.perf_counter() - t0) * 1e3)
-    return summary(times)["median"]
+        wall.append((time.perf_counter() - t0) * 1e3)
+        cpu.append((time.thread_time() - c0) * 1e3)
+    return summary(cpu)["median"], summary(wall)["median"]
 
 
 def measure(budget_s: float) -> list[dict]:
@@ -56,12 +59,14 @@ def measure(budget_s: float) -> list[dict]:
     for runs in BATCHES:
         for robots in SIZES:
             sim = build(load("default", [f"sim.robots={robots}"]), runs=runs)
-            points.append({"engine": CH3, "robots": robots, "runs": runs, "ms": step_ms(sim, budget_s)})
+            cpu, wall = step_ms(sim, budget_s)
+            points.append({"engine": CH3, "robots": robots, "runs": runs, "ms": cpu, "wall": wall})
     for label, preset in FLEETS.items():
         grid = [(n, 1) for n in SIZES] + [(10, r) for r in BATCHES if r > 1]
         for robots, runs in grid:
             fleet = build(load(preset, fleet_overrides(robots)), runs=runs)
-            points.append({"engine": label, "robots": robots, "runs": runs, "ms": step_ms(fleet, budget_s)})
+            cpu, wall = step_ms(fleet, budget_s)
+            points.append({"engine": label, "robots": robots, "runs": runs, "ms": cpu, "wall": wall})
             print(f"  {label}: {robots} robots × {runs} runs: {points[-1]['ms']:.1f} ms", file=sys.stderr)
     for p in points:
         p["rate"] = p["robots"] * p["runs"] / (p["ms"] / 1e3)
@@ -109,9 +114,11 @@ def main() -> None:
     ap.add_argument("--png", type=Path, default=Path(__file__).resolve().parent / "scaling.png")
     args = ap.parse_args()
     points = measure(0.3 if args.quick else 3.0)
-    rows = [[p["engine"], str(p["robots"]), str(p["runs"]), fmt(p["ms"]), rate(p["rate"]),
+    rows = [[p["engine"], str(p["robots"]), str(p["runs"]), fmt(p["ms"]), fmt(p["wall"]), rate(p["rate"]),
              fmt(p["ms"] * 1e3 / (p["robots"] * p["runs"]))] for p in points]
-    print(table(["engine", "robots", "runs", "ms/step", "robot-steps/s", "µs/robot-step"], rows))
+    print(f"{load_note()}\n")
+    print(table(["engine", "robots", "runs", "CPU ms/step", "wall ms/step", "robot-steps/s (CPU)",
+                 "µs/robot-step (CPU)"], rows))
     plot(points, args.png)
     print(f"\nplot: {args.png}")
 
