@@ -1,4 +1,4 @@
-"""The ``shoal`` command: serve, run, reproduce, presets (DESIGN.md contract)."""
+"""The ``shoal`` command: serve, run, reproduce, sweep, presets (DESIGN.md contract)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ from pathlib import Path
 from shoal import __version__
 
 EXIT_USAGE = 2
+DEFAULT_MAX_SESSIONS = 24  # as shoal.app.server.DEFAULT_MAX_SESSIONS (not imported: viser loads slowly)
 
 
 def _err(msg: str) -> int:
@@ -25,8 +26,10 @@ def _cmd_serve(args: argparse.Namespace) -> int:
         return _err("bad preset:\n  " + "\n  ".join(e.messages))
     from shoal.app.server import serve
 
+    if args.max_sessions < 1:
+        return _err("--max-sessions must be >= 1")
     try:
-        serve(preset=args.preset, host=args.host, port=args.port)
+        serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions)
     except OSError as e:
         return _err(str(e))
     return 0
@@ -76,8 +79,6 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
         return 0 if args.list else _err("name a TARGET (see --list)")
     if args.target not in TARGETS:
         return _err(f"unknown target {args.target!r}; known: {', '.join(TARGETS)}")
-    if args.scheduler:
-        return _err("--scheduler (Dask cluster) is not supported yet; run locally with --workers")
     if (msg := _check_counts(args)) is not None:
         return _err(msg)
     out = Path(args.out or f"out/{args.target}")
@@ -89,6 +90,43 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     print(f"wrote {out}/summary.json ({len(summary['checks'])} checks, {len(failed)} not passed)")
     for name in failed:
         print(f"  not passed: {name}")
+    return 0
+
+
+def _cmd_reproduce_on(args: argparse.Namespace) -> int:
+    """``reproduce`` with ``--scheduler``: every target's chunks of runs go to the Dask cluster."""
+    if not args.scheduler or args.list or args.report:
+        return _cmd_reproduce(args)
+    from shoal.engine.experiments.schedulers import SchedulerError, connect, using
+
+    try:
+        with connect(args.scheduler) as cluster, using(cluster):
+            return _cmd_reproduce(args)
+    except SchedulerError as e:
+        return _err(str(e))
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from shoal.engine.experiments.schedulers import SchedulerError, connect
+    from shoal.engine.sweep import SweepError, run_sweep
+
+    if args.workers < 1:
+        return _err("--workers must be >= 1")
+    out = Path(args.out or f"out/sweep-{Path(args.preset).stem}")
+    try:
+        with connect(args.scheduler, args.workers) as scheduler:
+            report = run_sweep(args.preset, args.grid, out, runs=args.runs, seed=args.seed, steps=args.steps,
+                               sets=args.set or (), workers=args.workers, scheduler=scheduler)
+    except SweepError as e:
+        return _err("bad sweep:\n  " + "\n  ".join(e.messages))
+    except SchedulerError as e:
+        return _err(str(e))
+    except KeyboardInterrupt:
+        print(f"interrupted: finished cells are kept in {out}/cells; rerun the same command to resume",
+              file=sys.stderr)
+        return 130
+    print(f"wrote {out}/results.csv ({report.cells} cells x {report.runs} runs; {report.computed} cells computed, "
+          f"{report.cells - report.computed} already done), medians.csv, sweep.json and {len(report.plots)} plots")
     return 0
 
 
@@ -156,6 +194,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--host", default="127.0.0.1", help="bind address (default loopback)")
     s.add_argument("--port", type=int, default=8080)
     s.add_argument("--preset", default="default", help="preset name or TOML/JSON file")
+    s.add_argument("--max-sessions", type=int, default=DEFAULT_MAX_SESSIONS, metavar="N",
+                   help=f"browser tabs with a simulation at once; more are told the server is full "
+                        f"(default {DEFAULT_MAX_SESSIONS})")
     s.set_defaults(func=_cmd_serve)
 
     r = sub.add_parser("run", help="headless seeded runs")
@@ -177,7 +218,20 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--all", action="store_true", help="every target into --out, plus REPRODUCTION.md")
     q.add_argument("--resume", action="store_true", help="with --all: keep targets already finished in --out")
     q.add_argument("--report", metavar="DIR", help="rebuild DIR/REPRODUCTION.md from its target folders")
-    q.set_defaults(func=_cmd_reproduce)
+    q.set_defaults(func=_cmd_reproduce_on)
+
+    w = sub.add_parser("sweep", help="seeded runs of a preset over a grid of field values (resumable)")
+    w.add_argument("preset", help="preset name or TOML/JSON file")
+    w.add_argument("--grid", action="append", required=True, metavar="KEY=V1,V2,...",
+                   help="a dotted preset field and its values (TOML literals); repeat for more axes")
+    w.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field in every cell")
+    w.add_argument("--runs", type=int, help="seeded runs per cell (default: the preset's sim.runs)")
+    w.add_argument("--seed", type=int)
+    w.add_argument("--steps", type=int)
+    w.add_argument("--out", help="output folder (a rerun into it resumes)")
+    w.add_argument("--workers", type=int, default=1)
+    w.add_argument("--scheduler", help="Dask scheduler address (tcp://HOST:PORT)")
+    w.set_defaults(func=_cmd_sweep)
 
     ps = sub.add_parser("presets", help="list, show or validate presets")
     ps.add_argument("action", choices=["list", "show", "validate"])

@@ -1,0 +1,107 @@
+"""Sweeps and reproductions on a real local Dask cluster of two worker processes: the same
+files as local runs, and a worker that dies mid-sweep costs only a retry."""
+
+from __future__ import annotations
+
+import functools
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+distributed = pytest.importorskip("distributed")
+cloudpickle = pytest.importorskip("cloudpickle")
+
+from shoal.engine.experiments import reproduce  # noqa: E402
+from shoal.engine.experiments.schedulers import DaskCluster  # noqa: E402
+from shoal.engine.sweep import run_sweep, simulate_cell  # noqa: E402
+
+GRID = ["controller.U=2,4", "controller.A_plus=5,10"]
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as lc:
+        client = DaskCluster(lc.scheduler_address)
+        try:
+            yield client
+        finally:
+            client.close()
+
+
+@pytest.fixture(scope="module")
+def local_sweep(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("local") / "s"
+    run_sweep("default", GRID, out, runs=3, steps=20, progress=False)
+    return out
+
+
+def test_the_cluster_has_two_workers(cluster):
+    assert cluster.workers == 2 and "Dask cluster" in cluster.describe()
+
+
+def test_sweep_on_the_cluster_equals_the_local_sweep(cluster, local_sweep, tmp_path):
+    out = tmp_path / "dask"
+    report = run_sweep("default", GRID, out, runs=3, steps=20, progress=False, scheduler=cluster)
+    assert report.computed == 4
+    for name in ("results.csv", "medians.csv"):
+        assert (out / name).read_bytes() == (local_sweep / name).read_bytes()
+
+
+def test_reproduce_on_the_cluster_equals_local(cluster, tmp_path):
+    local, dask = tmp_path / "local", tmp_path / "dask"
+    reproduce("fig3-5", local, runs=3, progress=False, sizes=(10,))
+    summary = reproduce("fig3-5", dask, runs=3, progress=False, sizes=(10,), scheduler=cluster)
+    assert "Dask cluster" in summary["scheduler"]
+    for name in ("runs.csv", "series.csv"):
+        assert (dask / name).read_bytes() == (local / name).read_bytes()
+
+
+def die_once(marker: str, job, first_run: int, runs: int):
+    """Kill this worker process the first time cell 1 is simulated (the marker records it)."""
+    if job.key == 1 and not Path(marker).exists():
+        Path(marker).write_text(str(os.getpid()))
+        os._exit(1)
+    return simulate_cell(job, first_run, runs)
+
+
+def test_a_worker_that_dies_mid_sweep_costs_a_retry_not_the_sweep(cluster, local_sweep, tmp_path):
+    marker = tmp_path / "killed"
+    out = tmp_path / "dies"
+    module = sys.modules[__name__]
+    cloudpickle.register_pickle_by_value(module)  # workers cannot import this test module by name
+    try:
+        report = run_sweep("default", GRID, out, runs=3, steps=20, progress=False, scheduler=cluster,
+                           simulate=functools.partial(die_once, str(marker)))
+    finally:
+        cloudpickle.unregister_pickle_by_value(module)
+    assert marker.exists() and int(marker.read_text()) != os.getpid()  # a worker process really died
+    assert report.computed == 4 and len(list((out / "cells").iterdir())) == 4
+    assert (out / "results.csv").read_bytes() == (local_sweep / "results.csv").read_bytes()
+
+
+def test_cli_sweep_and_reproduce_take_a_scheduler_address(cluster, tmp_path):
+    out = tmp_path / "cli"
+    res = subprocess.run([sys.executable, "-m", "shoal", "sweep", "default", "--grid", "controller.U=6,8", "--runs", "2",
+                          "--steps", "10", "--out", str(out), "--scheduler", cluster.address],
+                         capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert (out / "results.csv").is_file()
+    assert "Dask cluster" in (out / "sweep.json").read_text()
+    fig = tmp_path / "fig3-5"
+    res = subprocess.run([sys.executable, "-m", "shoal", "reproduce", "fig3-5", "--runs", "1", "--out", str(fig),
+                          "--scheduler", cluster.address], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert "Dask cluster" in (fig / "summary.json").read_text()
+    reproduce("fig3-5", tmp_path / "local", runs=1, progress=False)
+    assert (fig / "runs.csv").read_bytes() == (tmp_path / "local" / "runs.csv").read_bytes()
+
+
+def test_without_dask_the_scheduler_option_says_what_to_install(tmp_path):
+    code = ("import sys; sys.modules['distributed'] = None; from shoal.app.cli import main; "
+            f"sys.exit(main(['sweep', 'default', '--grid', 'controller.U=6,8', '--out', {str(tmp_path / 'x')!r}, "
+            "'--scheduler', 'tcp://127.0.0.1:8786']))")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 2 and "shoal[cluster]" in res.stderr
