@@ -31,7 +31,7 @@ from .session import check_supported
 
 OBSTACLE_RADIUS = 0.7  # m: a new obstacle's default radius
 FOLLOW = ("world", "swarm", "robot")  # what the view keeps in the middle
-REBUILD_SECTIONS = ("world", "robot")  # changes here (and sim.robots) rebuild the fleet
+REBUILD_SECTIONS = ("world", "robot", "slo")  # changes here (and sim.robots) rebuild the fleet
 
 
 class EditRefused(ValueError):

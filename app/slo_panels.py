@@ -254,7 +254,7 @@ class SLOPanels(PanelsBase):
         """B with the other positions (oracle vs SLO, Chapter 3 swarm) or another selection."""
         slo = self.session.scenario.slo
         out: dict[str, dict[str, Any]] = {}
-        if slo.swarm == "chapter3":
+        if slo.swarm == "host":
             for label, value in POSITIONS.items():
                 if value != slo.positions:
                     out[f"positions: {label}"] = {"slo.positions": value}

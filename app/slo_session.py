@@ -5,7 +5,7 @@ Two engines come out of an ``[slo]`` scene (``presets.build.build_slo``):
 
 * ``slo.swarm = "slo"``: Mai's :class:`SLOSwarm` (SPSO 2011 in each robot's frame, or a
   random walk), one step = one generation;
-* ``slo.swarm = "chapter3"``: the Chapter 3 swarm driven by SLO-estimated positions
+* ``slo.swarm = "host"`` (free space): the Chapter 3 swarm driven by SLO-estimated positions
   (:class:`SLOSimulation`) or, with ``slo.positions = "oracle"``, by true positions (a plain
   :class:`Simulation`, same seed): the oracle-vs-SLO switch.
 
@@ -100,7 +100,8 @@ class SLOSession(BaseSession):
 
     @classmethod
     def accepts(cls, scenario: Scenario) -> bool:
-        return scenario.slo is not None
+        """Free-space [slo] scenes; a fleet or an acoustic swarm on SLO positions keeps its own view."""
+        return scenario.slo is not None and scenario.world is None and scenario.acoustics is None
 
     @classmethod
     def check(cls, scenario: Scenario) -> Scenario:
@@ -108,7 +109,7 @@ class SLOSession(BaseSession):
             raise PresetError([f"slo: {scenario.name} has no [slo] section"])
         if scenario.world is not None:
             raise PresetError(["world: the browser app runs SLO scenes in free space only"])
-        if scenario.slo.swarm == "chapter3" and scenario.sim.d != 2:  # type: ignore[union-attr]
+        if scenario.slo.swarm == "host" and scenario.sim.d != 2:  # type: ignore[union-attr]
             raise PresetError(["sim.d: SLO positions need d = 2"])
         return scenario
 

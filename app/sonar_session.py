@@ -86,7 +86,7 @@ class SonarSession(BaseSession):
 
     @classmethod
     def accepts(cls, scenario: Scenario) -> bool:
-        return scenario.acoustics is not None and getattr(scenario, "slo", None) is None
+        return scenario.acoustics is not None
 
     @classmethod
     def check(cls, scenario: Scenario) -> Scenario:
@@ -105,7 +105,7 @@ class SonarSession(BaseSession):
         """Does going to ``new`` rebuild the swarm (rather than change it at the next step)?"""
         old = self.scenario
         a, b = old.acoustics, new.acoustics
-        return (new.sim.robots != old.sim.robots or new.sim.seed != old.sim.seed
+        return (new.sim.robots != old.sim.robots or new.sim.seed != old.sim.seed or new.slo != old.slo
                 or any(getattr(a, f) != getattr(b, f) for f in REBUILD_FIELDS))
 
     def _adopt(self, new: Scenario) -> None:

@@ -15,10 +15,17 @@ import numpy as np
 from .sensing import SECTORS, SectorReading, sector_of
 
 
+def _centre(yg: np.ndarray) -> np.ndarray:
+    """The ring's centre per robot: y_g (R, 2) shared by the swarm, or (R, N, 2) where each
+    robot believes it is (SLO positions), broadcastable against (R, N, 2)."""
+    yg = np.asarray(yg, dtype=float)
+    return yg if yg.ndim == 3 else yg[:, None, :]
+
+
 def _ring(x: np.ndarray, heading: np.ndarray, yg: np.ndarray, r_trap: float, robot_radius: float):
     """Per robot: surface gap to the ring, sector index, and the vector to y_g."""
     x = np.asarray(x, dtype=float)
-    to = np.asarray(yg, dtype=float)[:, None, :] - x  # (R, N, 2)
+    to = _centre(yg) - x  # (R, N, 2)
     dist = np.linalg.norm(to, axis=-1)
     gap = np.maximum(dist - r_trap - robot_radius, 0.0)
     bearing = np.where(dist > 0, np.arctan2(to[..., 1], to[..., 0]) - np.asarray(heading, dtype=float), 0.0)
@@ -34,7 +41,8 @@ def escort_gap(
     sensing_range: float = np.inf,
     robot_radius: float = 0.0,
 ) -> np.ndarray:
-    """(R, N, 6) gaps the ring at ``yg`` (R, 2) adds, for ``x`` (R, N, 2) and ``heading`` (R, N).
+    """(R, N, 6) gaps the ring at ``yg`` (R, 2) adds, for ``x`` (R, N, 2) and ``heading`` (R, N);
+    ``yg`` may be (R, N, 2), each robot's own belief of the ring's centre.
 
     Every sector but the ring's reads ``sensing_range`` (and so does the ring's when it is
     further), so ``np.minimum(reading.gap, escort_gap(...))`` merges it into a reading.
@@ -66,7 +74,7 @@ def with_escort(
     closer = here & (gap <= sensing_range)[..., None] & (gap[..., None] < reading.gap)
     unit = np.where((dist > 0)[..., None], to / np.where(dist > 0, dist, 1.0)[..., None], 0.0)
     outside = (dist > r_trap)[..., None]
-    y = np.broadcast_to(np.asarray(yg, dtype=float)[:, None, :], to.shape)
+    y = np.broadcast_to(_centre(yg), to.shape)
     point = np.where(outside, y - r_trap * unit, y)
     c = closer[..., None]
     return SectorReading(

@@ -211,9 +211,15 @@ class Fleet:
         n = {"rpso": 3, "adapted-rpso": 3, "nonomni": 5, "robot-centred": 2}[self.params.law]
         return self._draw((n,) + (shape[:2] if self.params.law == "nonomni" else shape))
 
+    def _attractors(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each robot's vectors to its personal best and to the global best, (R, N, 2) each:
+        from the true positions here, from beliefs on SLO positions (``slo_fleet``)."""
+        s = self.state
+        return s.y - s.x, s.yg[:, None, :] - s.x
+
     def _velocity(self, omega: np.ndarray, c: np.ndarray, force: np.ndarray, r: np.ndarray) -> np.ndarray:
         p, s = self.params, self.state
-        g_p, g_g = s.y - s.x, s.yg[:, None, :] - s.x
+        g_p, g_g = self._attractors()
         if p.law == "rpso":  # [4.2], clipped to the top speed (spec §20 item 18)
             return rpso_velocity(s.cmd, g_p, g_g, force, c, omega, r, v_max=p.v_max)
         if p.law == "adapted-rpso":  # [4.5]

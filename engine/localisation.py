@@ -14,7 +14,7 @@ keep their personal best and its fitness decays by e^(−a) (spec A9).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar, Protocol
+from typing import ClassVar, Literal, Protocol
 
 import numpy as np
 
@@ -58,6 +58,7 @@ class LocInfo:
 
 
 Update = tuple[np.ndarray, np.ndarray, np.ndarray, LocInfo]
+GlobalBest = Literal["best", "centroid"]  # the best robot's y (Alg. 3/4) or the centroid of all y [7.11]
 
 
 class Strategy(Protocol):
@@ -66,6 +67,7 @@ class Strategy(Protocol):
     name: ClassVar[str]
     needs: ClassVar[tuple[str, ...]]
     hydrophones: ClassVar[int]
+    global_best: ClassVar[GlobalBest]
     a: float
 
     def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed, rng: Rngs) -> Update:
@@ -103,6 +105,7 @@ class APSO:
     name: ClassVar[str] = "a-pso"
     needs: ClassVar[tuple[str, ...]] = ("intensity",)
     hydrophones: ClassVar[int] = 1
+    global_best: ClassVar[GlobalBest] = "best"
 
     def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed, rng: Rngs | None = None) -> Update:
         return _own_position(f_hat, y, x, sensed.need("intensity"), self.a)
@@ -116,6 +119,7 @@ class XPSO:
     name: ClassVar[str] = "x-pso"
     needs: ClassVar[tuple[str, ...]] = ("rho",)
     hydrophones: ClassVar[int] = 2
+    global_best: ClassVar[GlobalBest] = "best"
 
     def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed, rng: Rngs | None = None) -> Update:
         return _own_position(f_hat, y, x, sensed.need("rho"), self.a)
@@ -130,6 +134,7 @@ class BPSO:
     name: ClassVar[str] = "b-pso"
     needs: ClassVar[tuple[str, ...]] = ("rays",)
     hydrophones: ClassVar[int] = 2
+    global_best: ClassVar[GlobalBest] = "centroid"
 
     def _keep(self, d_i: np.ndarray, d_j: np.ndarray, sensed: Sensed, partner: np.ndarray) -> np.ndarray:
         return np.ones(d_i.shape, bool)
@@ -178,6 +183,7 @@ class GTPSO:
     name: ClassVar[str] = "gt-pso"
     needs: ClassVar[tuple[str, ...]] = ("intensity",)
     hydrophones: ClassVar[int] = 1
+    global_best: ClassVar[GlobalBest] = "centroid"
 
     def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed, rng: Rngs) -> Update:
         x, f_hat = np.asarray(x, dtype=float), np.asarray(f_hat, dtype=float)

@@ -1,7 +1,8 @@
 """SLO-estimated positions for any Shoal swarm (spec §15): instead of reading oracle
 positions, each robot localises the others from noisy ranges and odometry and acts on what
 it believes. :class:`SLOPositionSource` follows a swarm given its true positions step by
-step; :class:`SLOSimulation` is the Chapter 3 :class:`~.sim.Simulation` driven by it.
+step; :class:`SLOSimulation` is the Chapter 3 :class:`~.sim.Simulation` driven by it (the
+fleet and the acoustic swarm: ``slo_fleet``, ``slo_sonar``; shared parts: ``slo_host``).
 
 With the None error set and true initial beliefs the believed vectors equal the oracle ones
 up to floating-point error, so an SLO run and an oracle run of the same seed coincide.
@@ -16,6 +17,7 @@ import numpy as np
 
 from .neighbourhoods import Neighbourhood, NeighbourhoodKind
 from .sim import Simulation
+from .slo_host import SLOHost
 from .slo_localiser import Beliefs, Localiser, LocaliserParams, random_estimates, relative_truth
 from .slo_sensors import ErrorModel, error_model
 from .slo_streams import component_generators
@@ -115,71 +117,41 @@ class SLOPositionSource:
         return anchor[:, :, None, :] + self.beliefs.est
 
 
-class SLOSimulation(Simulation):
+class SLOSimulation(SLOHost, Simulation):
     """The Chapter 3 swarm acting on SLO beliefs instead of oracle positions.
 
     Each robot steers towards its personal best, kept relative to itself from its odometry
     (gap A35, measured shift; reset to 0 when it improves), and the swarm's global best,
     located as x̂_i,owner + P_owner (the owner's estimate of its own best, communicated;
-    gap A36). ``slo`` holds the :class:`SLOPositionSource` keywords (errors, selection, …).
-    Fitness is still read at the true position; positions must be 2-D; only the "literal"
-    attractors use positions.
+    gap A36): :class:`~.slo_host.BelievedBests`. ``slo`` holds the
+    :class:`SLOPositionSource` keywords (errors, selection, …). Fitness is still read at
+    the true position; positions must be 2-D; only the "literal" attractors use positions.
     """
 
-    def __init__(self, *, slo: dict[str, Any] | None = None, **kwargs: Any) -> None:
-        self.slo_params: dict[str, Any] = dict(slo or {})
-        super().__init__(**kwargs)
-
-    def reset(self, seed: int | None = None) -> None:
-        super().reset(seed)
-        self._start_source()
-
-    def _start_source(self) -> None:
-        if self.d != 2:
-            raise ValueError(f"SLO positions need d = 2, got {self.d}")
-        s = self.state
-        self.source = SLOPositionSource(s.x, seed=self.seed, first_run=self.first_run, **self.slo_params)
-        self.believed_pbest = s.y - s.x  # known at the start (0 for a fresh swarm)
-        self._sensed_k = s.k
-
-    def _sense(self) -> None:
-        """Localise once per tick at the current true positions; shift the pbest by v*."""
-        s = self.state
-        if self._sensed_k == s.k:
-            return
-        self.source.observe(s.x)
-        self.believed_pbest = self.believed_pbest - self.source.odometry  # [3.13], measured
-        self._sensed_k = s.k
+    @property
+    def source(self) -> SLOPositionSource:
+        """The position source (``slo_source``)."""
+        return self.slo_source
 
     def _update_bests(self) -> None:
-        self._sense()
-        before = self.state.f_y.copy()
+        s = self.state
+        self.bests.sense(s.x, s.k)
+        before = s.f_y.copy()
         super()._update_bests()
-        improved = self.state.f_y != before
-        self.believed_pbest = np.where(improved[..., None], 0.0, self.believed_pbest)
+        self.bests.keep(self.state.f_y != before)
 
     def _directions(self) -> np.ndarray:
         if self.attractors != "literal":
             return super()._directions()
-        self._sense()
         s = self.state
+        self.bests.sense(s.x, s.k)
         owner = s.f_y.argmax(axis=1) if self.objective.maximise else s.f_y.argmin(axis=1)
-        own_best = np.take_along_axis(self.believed_pbest, owner[:, None, None], axis=1)  # (R, 1, 2)
-        to_best = self.source.relative(owner) + own_best
-        return np.stack([self.believed_pbest, to_best])
+        return np.stack([self.bests.pbest, self.bests.to_owner(owner)])
 
     def set_robots(self, n: int) -> None:
         super().set_robots(n)
         self._start_source()
 
-    def retune_slo(self, **slo: Any) -> None:
-        """Change the SLO keywords (errors, selection, …) mid-run; see :meth:`SLOPositionSource.retune`."""
-        merged = {**self.slo_params, **slo}
-        self.source.retune(**{k: merged[k] for k in slo if k != "unit"}, unit=merged.get("unit", 1.0),
-                           **({"neighbourhood_param": merged.get("neighbourhood_param")}
-                              if "neighbourhood" in slo and "neighbourhood_param" not in slo else {}))
-        self.slo_params = merged
-
     def set_objective(self, objective) -> None:  # type: ignore[no-untyped-def]
         super().set_objective(objective)
-        self.believed_pbest = np.zeros_like(self.state.x)
+        self.bests.pbest = np.zeros_like(self.state.x)

@@ -7,7 +7,8 @@
    waveform mode) → intensity, and the two-hydrophone ``receiver.bearing`` (ρ, τ, α, rays)
    when the strategy needs it. ``mode="surrogate"`` draws the same statistics directly
    (``acoustic_surrogate``): APPROXIMATE, not in the thesis.
-2. bests: ``strategy.update`` (A/X/B/XB/GT-PSO, forgetting a [7.2]/[7.9]/[8.6]).
+2. bests: ``strategy.update`` (A/X/B/XB/GT-PSO, forgetting a [7.2]/[7.9]/[8.6]) in ``_bests``,
+   which also gives the attractor vectors (from beliefs on SLO positions: ``slo_sonar``).
 3. velocity: ``adapted`` = Adapted PSO [3.11]/[3.10] in the global frame (Ch. 7: unbounded
    plane, kinematic, collisions ignored, heading = direction of u, spec §1.1), tuned by
    β: ω = 1 − β, ĉ = βU/√2 [4.15]; ``nonomni`` = non-omnidirectional controller
@@ -164,6 +165,19 @@ class SonarState:
         return self.f_hat.max(axis=1)
 
 
+@dataclass(frozen=True)
+class Decision:
+    """Step 2 of a tick for the runs that advance: new memory, global best, the strategy's
+    decision, the attractor vectors and the escort ring's centre."""
+
+    f_hat: np.ndarray  # (R', N)
+    y: np.ndarray  # (R', N, 2) personal bests
+    y_g: np.ndarray  # (R', 2) global best
+    loc: LocInfo
+    g: np.ndarray  # (2, R', N, 2) vectors to the personal and the global best
+    ring: np.ndarray  # (R', 2) y_g, or (R', N, 2) where each robot believes it is (SLO)
+
+
 @dataclass
 class SonarInfo:
     """Per-run metrics after a tick."""
@@ -271,26 +285,34 @@ class AcousticSwarm:
         )
         return sensed, power, b
 
-    def _adapted(self, idx: np.ndarray, x: np.ndarray, y: np.ndarray, yg: np.ndarray, rngs: list):
-        """Adapted PSO [3.11], [3.10]; heading = direction of u (spec §1.1)."""
+    def _bests(self, idx: np.ndarray, x: np.ndarray, sensed: Sensed, rngs: list) -> Decision:
+        """Step 2 for runs ``idx`` at positions ``x``: the strategy's memory and global best,
+        and the attractor vectors from the true positions."""
+        s = self.state
+        f_hat, y, yg, loc = self.strategy.update(s.f_hat[idx], s.y[idx], x, sensed, rngs)
+        return Decision(f_hat, y, yg, loc, np.stack([y - x, yg[:, None, :] - x]), yg)
+
+    def _adapted(self, idx: np.ndarray, x: np.ndarray, g: np.ndarray, rngs: list):
+        """Adapted PSO [3.11], [3.10] towards the attractor vectors ``g`` (2, R', N, 2);
+        heading = direction of u (spec §1.1)."""
         s, N = self.state, self._robots
-        g = np.stack([y - x, yg[:, None, :] - x])  # (2, R', N, 2)
         r = np.stack([gen.random((2, N, 2)) for gen in rngs], axis=1)  # r1, r2 per component
         u = adapted_velocity(s.cmd[idx], g, self.c, self.omega, r)  # [3.11]
         x_new = x + self.dt * u  # [3.10]
         return x_new, motion_heading(u, s.heading[idx]), u, u, None
 
-    def _nonomni(self, idx: np.ndarray, x: np.ndarray, y: np.ndarray, yg: np.ndarray, rngs: list, pair):
-        """Non-omni controller [8.7] = [5.13] with DVC [5.14]–[5.16], ring obstacle, energy limit."""
+    def _nonomni(self, idx: np.ndarray, x: np.ndarray, g: np.ndarray, ring: np.ndarray, rngs: list, pair):
+        """Non-omni controller [8.7] = [5.13] with DVC [5.14]–[5.16], ring obstacle round
+        ``ring`` (y_g), energy limit; attractor vectors ``g`` (2, R', N, 2)."""
         p, s, N = self.params, self.state, self._robots
         o = s.heading[idx]
         reading = sense_robots(x, o, robot_radius=p.robot_radius, sensing_range=p.sensing_range, pair=pair)
         if p.r_trap > 0:  # Ch. 8.2: y_g as a ring obstacle of radius r_trap
-            reading = with_escort(reading, x, o, yg, p.r_trap, sensing_range=p.sensing_range)
+            reading = with_escort(reading, x, o, ring, p.r_trap, sensing_range=p.sensing_range)
         omega, c = dvc_nonomni(reading.gap, alpha=p.alpha_dvc, beta=p.beta, dt=p.dt, sensing_range=p.sensing_range,
                                w_max=self.w_max, c1_share=p.c1_share, v_max=p.U)
         r = np.stack([gen.random((5, N)) for gen in rngs], axis=1)  # r1..r5
-        vw = nonomni_velocity(s.cmd[idx], to_body(y - x, o), to_body(yg[:, None, :] - x, o), c, omega, r)  # [5.13]
+        vw = nonomni_velocity(s.cmd[idx], to_body(g[0], o), to_body(g[1], o), c, omega, r)  # [5.13]
         v, w = energy_limit(vw[..., 0], vw[..., 1], p.U)  # [5.11], [5.12]
         if p.guard:
             v = forward_guard(v, reading.gap, alpha=p.alpha_dvc, dt=p.dt)
@@ -322,17 +344,17 @@ class AcousticSwarm:
         rngs = [self.rngs[i] for i in idx]
         x, src = s.x[idx], s.source[idx]
         sensed, power, b = self._listen(x, s.heading[idx], src, rngs)  # 1 listen
-        f_hat, y, yg, loc = self.strategy.update(s.f_hat[idx], s.y[idx], x, sensed, rngs)  # 2 bests
+        d = self._bests(idx, x, sensed, rngs)  # 2 bests
         if p.controller == "adapted":  # 3 velocity, 4 move
-            x_new, o_new, u, cmd, reading = self._adapted(idx, x, y, yg, rngs)
+            x_new, o_new, u, cmd, reading = self._adapted(idx, x, d.g, rngs)
         else:
-            x_new, o_new, u, cmd, reading = self._nonomni(idx, x, y, yg, rngs, pairwise(x))
+            x_new, o_new, u, cmd, reading = self._nonomni(idx, x, d.g, d.ring, rngs, pairwise(x))
         s.x[idx], s.heading[idx], s.u[idx], s.cmd[idx] = x_new, o_new, u, cmd
-        s.y[idx], s.f_hat[idx], s.y_g[idx] = y, f_hat, yg
+        s.y[idx], s.f_hat[idx], s.y_g[idx] = d.y, d.f_hat, d.y_g
         s.steps[idx] += 1
         if p.v_n > 0:  # [8.8]
             s.source[idx] = moving_source(self.source0[idx], p.source_heading, p.v_n, p.U, p.dt, s.steps[idx])
-        s.intensity, s.bearing, s.loc, s.reading, s.stepped = power, b, loc, reading, idx
+        s.intensity, s.bearing, s.loc, s.reading, s.stepped = power, b, d.loc, reading, idx
         self._refresh(idx)  # 5 metrics
         self._converge(idx)
         return self.info()

@@ -12,7 +12,9 @@ from shoal.engine.laws import Law
 from shoal.engine.objectives import Objective
 from shoal.engine.sim import Simulation
 from shoal.engine.slo import SLOSwarm
+from shoal.engine.slo_fleet import SLOFleet
 from shoal.engine.slo_sensors import ErrorModel, error_model
+from shoal.engine.slo_sonar import SLOAcousticSwarm
 from shoal.engine.slo_source import SLOSimulation
 from shoal.engine.sonar import AcousticSwarm, SonarParams
 from shoal.engine.world import WorldSpec, empty_arena, forest, obstacle_course
@@ -43,8 +45,11 @@ def objective_for(o: ObjectiveModel) -> Objective:
 def build_simulation(
     scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0
 ) -> Simulation:
-    """A Chapter 3 swarm for runs ``first_run … first_run + runs − 1`` of the seed."""
-    return Simulation(**_simulation_kwargs(scenario, runs=runs, seed=seed, first_run=first_run))
+    """A Chapter 3 swarm for runs ``first_run … first_run + runs − 1`` of the seed (on SLO
+    positions with ``[slo] swarm = "host"``)."""
+    kwargs = _simulation_kwargs(scenario, runs=runs, seed=seed, first_run=first_run)
+    slo = slo_host_params(scenario)
+    return Simulation(**kwargs) if slo is None else SLOSimulation(slo=slo, **kwargs)
 
 
 def _simulation_kwargs(scenario: Scenario, *, runs: int | None, seed: int | None, first_run: int) -> dict:
@@ -87,13 +92,15 @@ def fleet_params_for(s: Scenario) -> FleetParams:
 
 
 def build_fleet(scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0) -> Fleet:
-    """A Chapter 4–5 fleet (needs a ``[world]`` section)."""
+    """A Chapter 4–5 fleet (needs a ``[world]`` section; on SLO positions with ``[slo]
+    swarm = "host"``)."""
     if scenario.world is None:
         raise ValueError("this scenario has no [world] section")
-    return Fleet(
-        world=world_for(scenario.world), robots=scenario.sim.robots, params=fleet_params_for(scenario),
-        runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed, first_run=first_run,
-    )
+    world = world_for(scenario.world)
+    kwargs = dict(world=world, robots=scenario.sim.robots, params=fleet_params_for(scenario),
+                  runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed, first_run=first_run)
+    slo = slo_host_params(scenario, world)
+    return Fleet(**kwargs) if slo is None else SLOFleet(slo=slo, **kwargs)
 
 
 def sonar_params_for(a: Acoustics) -> SonarParams:
@@ -111,13 +118,15 @@ def sonar_params_for(a: Acoustics) -> SonarParams:
 
 def build_sonar(scenario: Scenario, *, runs: int | None = None, seed: int | None = None,
                 first_run: int = 0) -> AcousticSwarm:
-    """A Chapter 7–8 acoustic swarm (needs an ``[acoustics]`` section)."""
+    """A Chapter 7–8 acoustic swarm (needs an ``[acoustics]`` section; on SLO positions with
+    ``[slo] swarm = "host"``)."""
     if scenario.acoustics is None:
         raise ValueError("this scenario has no [acoustics] section")
-    return AcousticSwarm(
-        sonar_params_for(scenario.acoustics), robots=scenario.sim.robots, runs=runs or scenario.sim.runs,
-        seed=scenario.sim.seed if seed is None else seed, first_run=first_run,
-    )
+    kwargs = dict(robots=scenario.sim.robots, runs=runs or scenario.sim.runs,
+                  seed=scenario.sim.seed if seed is None else seed, first_run=first_run)
+    params = sonar_params_for(scenario.acoustics)
+    slo = slo_host_params(scenario)
+    return AcousticSwarm(params, **kwargs) if slo is None else SLOAcousticSwarm(params, slo=slo, **kwargs)
 
 
 def slo_errors_for(slo: SLO) -> str | ErrorModel:
@@ -126,8 +135,34 @@ def slo_errors_for(slo: SLO) -> str | ErrorModel:
     return error_model(slo.errors).with_values(**values) if values else slo.errors
 
 
+def slo_unit(scenario: Scenario, world: WorldSpec | None = None) -> float:
+    """Metres per thesis length unit (``slo.unit`` if set). The thesis area is 100 wide
+    (spec §15.1), so the area the swarm works in over 100: the larger side of a fleet's
+    world; for an acoustic swarm its deployment disc (2·d_0; the drawn arena is a window
+    several times larger, whose unit would make the additive odometry errors many times
+    a step); the arena's width otherwise."""
+    if scenario.slo is not None and scenario.slo.unit is not None:
+        return scenario.slo.unit
+    if scenario.world is not None:
+        x0, y0, x1, y1 = (world or world_for(scenario.world)).bounds
+        return max(x1 - x0, y1 - y0) / 100.0
+    if scenario.acoustics is not None and scenario.acoustics.d_0 > 0:
+        return 2.0 * scenario.acoustics.d_0 / 100.0
+    return 2.0 * scenario.arena.half_size / 100.0
+
+
+def slo_host_params(scenario: Scenario, world: WorldSpec | None = None) -> dict | None:
+    """The :class:`~shoal.engine.slo_source.SLOPositionSource` keywords when the scene's own
+    swarm runs on SLO positions (``[slo] swarm = "host"``, ``positions = "slo"``), else None."""
+    slo = scenario.slo
+    if slo is None or slo.swarm != "host" or slo.positions == "oracle":
+        return None
+    return {**slo_localiser_for(slo), "unit": slo_unit(scenario, world)}
+
+
 def slo_localiser_for(slo: SLO) -> dict:
-    """The localisation keywords shared by :class:`SLOSwarm` and :class:`SLOSimulation`."""
+    """The localisation keywords shared by :class:`SLOSwarm` and the host swarms on SLO
+    positions (:class:`SLOSimulation`, :class:`SLOFleet`, :class:`SLOAcousticSwarm`)."""
     return dict(
         errors=slo_errors_for(slo), selection=slo.selection, prediction_weight=slo.prediction_weight,
         delta_cos=slo.delta_cos, delta_v=slo.delta_v, literal_eq_3_1=slo.literal_eq_3_1, entry_policy=slo.entry_policy,
@@ -163,19 +198,22 @@ def slo_live_changes(old: Scenario, new: Scenario) -> dict[str, Any] | None:
     return out
 
 
+def _host_builder(scenario: Scenario):  # type: ignore[no-untyped-def]
+    """The builder of the scene's own swarm: acoustic (Ch. 7–8), fleet (Ch. 4–5) or Ch. 3."""
+    if scenario.acoustics is not None:
+        return build_sonar
+    return build_fleet if scenario.world is not None else build_simulation
+
+
 def build_slo(scenario: Scenario, *, runs: int | None = None, seed: int | None = None,
-              first_run: int = 0) -> SLOSwarm | SLOSimulation | Simulation:
-    """An ``[slo]`` scene: Mai's SLO swarm, or the Chapter 3 swarm on SLO-estimated
-    (or, with ``positions = "oracle"``, true) positions with the same seed."""
+              first_run: int = 0) -> SLOSwarm | Simulation | Fleet | AcousticSwarm:
+    """An ``[slo]`` scene: Mai's SLO swarm, or the scene's own swarm (``swarm = "host"``) on
+    SLO-estimated (or, with ``positions = "oracle"``, true) positions with the same seed."""
     slo = scenario.slo
     if slo is None:
         raise ValueError("this scenario has no [slo] section")
-    if slo.swarm == "chapter3":
-        kwargs = _simulation_kwargs(scenario, runs=runs, seed=seed, first_run=first_run)
-        if slo.positions == "oracle":
-            return Simulation(**kwargs)
-        unit = 2.0 * scenario.arena.half_size / 100.0  # thesis lengths on a 100-wide area (spec §15.1)
-        return SLOSimulation(slo={**slo_localiser_for(slo), "unit": unit}, **kwargs)
+    if slo.swarm == "host":
+        return _host_builder(scenario)(scenario, runs=runs, seed=seed, first_run=first_run)
     return SLOSwarm(
         runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed, first_run=first_run,
         particles=scenario.sim.robots, objective=slo.objective, motion=slo.motion, walk_speed=slo.walk_speed,
@@ -185,12 +223,8 @@ def build_slo(scenario: Scenario, *, runs: int | None = None, seed: int | None =
 
 def build(scenario: Scenario, *, runs: int | None = None, seed: int | None = None,
           first_run: int = 0) -> Simulation | Fleet | AcousticSwarm | SLOSwarm:
-    """Whatever the scenario describes: an SLO scene (Mai), an acoustic swarm (Ch. 7–8), a
-    fleet in a world (Ch. 4–5) or a free-space swarm (Ch. 3)."""
-    if scenario.slo is not None:
-        make = build_slo
-    elif scenario.acoustics is not None:
-        make = build_sonar
-    else:
-        make = build_fleet if scenario.world is not None else build_simulation
+    """Whatever the scenario describes: Mai's SLO swarm, an acoustic swarm (Ch. 7–8), a
+    fleet in a world (Ch. 4–5) or a free-space swarm (Ch. 3), the last three on SLO or
+    true positions as ``[slo]`` says."""
+    make = build_slo if scenario.slo is not None and scenario.slo.swarm == "slo" else _host_builder(scenario)
     return make(scenario, runs=runs, seed=seed, first_run=first_run)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from shoal.engine.laws import LawName
 
@@ -235,13 +235,17 @@ class SLO(_Model):
     from noisy ranges and odometry.
 
     ``swarm = "slo"`` runs Mai's SLO swarm (PSO or random-walk motion; ``sim.robots`` particles,
-    ``sim.steps`` generations). ``swarm = "chapter3"`` runs the Chapter 3 swarm of
-    ``[controller]``/``[objective]`` on SLO-estimated (``positions = "slo"``) or true
-    (``positions = "oracle"``) positions, same seed either way.
+    ``sim.steps`` generations). ``swarm = "host"`` runs the scene's own swarm (the Chapter 3
+    swarm of ``[controller]``/``[objective]``, the fleet of a ``[world]``, the acoustic swarm
+    of ``[acoustics]``) on SLO-estimated (``positions = "slo"``) or true
+    (``positions = "oracle"``) positions, same seed either way. ``"chapter3"`` is read as
+    ``"host"``. Lengths are in thesis units on a 100-wide area, rescaled to the scene
+    (spec §15.1).
     """
 
-    swarm: Literal["slo", "chapter3"] = Field("slo", description="Mai's SLO swarm, or the Chapter 3 swarm on SLO positions")
-    positions: Literal["slo", "oracle"] = Field("slo", description="chapter3 swarm: estimated or true positions")
+    swarm: Literal["slo", "host"] = Field(
+        "slo", description="Mai's SLO swarm, or the scene's own swarm (Ch. 3, [world] fleet, [acoustics]) on SLO positions")
+    positions: Literal["slo", "oracle"] = Field("slo", description="host swarm: estimated or true positions")
     motion: Literal["pso", "random_walk"] = Field("pso", description="SLO swarm: SPSO 2011 in each robot's frame or a random walk")
     objective: Literal["ackley", "griewank", "line", "plane", "rastrigin", "rosenbrock", "sphere"] = Field(
         "sphere", description="SLO swarm: 2-D benchmark, minimised (DEAP forms)")
@@ -257,7 +261,13 @@ class SLO(_Model):
     neighbourhood: Literal["knn", "radius", "full", "random", "ring"] = Field("knn", description="who localises whom")
     neighbourhood_param: Annotated[float | None, Field(ge=0.0, le=1e4, description="k (knn), r (radius), n (ring), p (random); unset = 5, 25, 2, 0.5")] = None
     walk_speed: Annotated[float, Field(gt=0.0, le=100.0, description="random walk: top step length (thesis units)")] = 5.0
+    unit: Annotated[float | None, Field(gt=0.0, le=1e4, description="host swarm: metres per thesis length unit (the thesis area is 100 wide); unset = the scene's size / 100")] = None
     quality_threshold: Annotated[float | None, Field(ge=-1e12, le=1e12, description="fitness T of 'first generation with best <= T'; unset = the benchmark's")] = None
+
+    @field_validator("swarm", mode="before")
+    @classmethod
+    def _chapter3_is_host(cls, value: object) -> object:
+        return "host" if value == "chapter3" else value  # the name before fleets and sonar took SLO
 
     @model_validator(mode="after")
     def _consistent(self) -> "SLO":
@@ -267,8 +277,8 @@ class SLO(_Model):
                 raise ValueError(f"neighbourhood_param = {p:g}: a random neighbourhood takes a probability in (0, 1]")
             if self.neighbourhood in ("knn", "ring") and (p < 1 or p != int(p)):
                 raise ValueError(f"neighbourhood_param = {p:g}: {self.neighbourhood} takes a whole number >= 1")
-        if self.positions == "oracle" and self.swarm != "chapter3":
-            raise ValueError("positions = 'oracle' needs swarm = 'chapter3' (the SLO swarm always localises)")
+        if self.positions == "oracle" and self.swarm != "host":
+            raise ValueError("positions = 'oracle' needs swarm = 'host' (the SLO swarm always localises)")
         return self
 
 
@@ -328,8 +338,9 @@ class Scenario(_Model):
             if self.sim.robots < need:
                 raise ValueError(f"sim.robots = {self.sim.robots}: acoustics.algorithm {a.algorithm!r} needs at least {need}")
         if self.slo is not None:
-            if self.world is not None or self.acoustics is not None:
-                raise ValueError("[slo] runs in free space: remove the [world] and [acoustics] sections")
+            if self.slo.swarm == "slo" and (self.world is not None or self.acoustics is not None):
+                raise ValueError("slo.swarm = 'slo': Mai's SLO swarm runs in free space; set slo.swarm = 'host' to "
+                                 "put the [world] fleet or the [acoustics] swarm on SLO positions")
             if self.sim.d != 2:
                 raise ValueError("sim.d must be 2 with [slo]")
             if self.sim.robots < 2:

@@ -59,7 +59,7 @@ def test_bad_slo_field_is_named(override, field):
 def test_inconsistent_slo_settings_say_why():
     with pytest.raises(PresetError, match="probability"):
         load("slo-walk", ["slo.neighbourhood=random", "slo.neighbourhood_param=3"])
-    with pytest.raises(PresetError, match="chapter3"):
+    with pytest.raises(PresetError, match="swarm = 'host'"):
         load("slo-walk", ["slo.positions=oracle"])
 
 
