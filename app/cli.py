@@ -9,6 +9,7 @@ from pathlib import Path
 from shoal import __version__
 
 EXIT_USAGE = 2
+DEFAULT_MAX_SESSIONS = 24  # as shoal.app.server.DEFAULT_MAX_SESSIONS (not imported: viser loads slowly)
 
 
 def _err(msg: str) -> int:
@@ -25,8 +26,10 @@ def _cmd_serve(args: argparse.Namespace) -> int:
         return _err("bad preset:\n  " + "\n  ".join(e.messages))
     from shoal.app.server import serve
 
+    if args.max_sessions < 1:
+        return _err("--max-sessions must be >= 1")
     try:
-        serve(preset=args.preset, host=args.host, port=args.port)
+        serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions)
     except OSError as e:
         return _err(str(e))
     return 0
@@ -191,6 +194,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--host", default="127.0.0.1", help="bind address (default loopback)")
     s.add_argument("--port", type=int, default=8080)
     s.add_argument("--preset", default="default", help="preset name or TOML/JSON file")
+    s.add_argument("--max-sessions", type=int, default=DEFAULT_MAX_SESSIONS, metavar="N",
+                   help=f"browser tabs with a simulation at once; more are told the server is full "
+                        f"(default {DEFAULT_MAX_SESSIONS})")
     s.set_defaults(func=_cmd_serve)
 
     r = sub.add_parser("run", help="headless seeded runs")

@@ -27,6 +27,10 @@ from .tab import TabApp, session_for
 
 TICK_HZ = 60.0
 LOOPBACK_NAMES = ("localhost",)
+DEFAULT_MAX_SESSIONS = 24  # browser tabs with a simulation at once (``shoal serve --max-sessions``)
+FULL_TITLE = "This Shoal server is full"
+FULL_MESSAGE = ("This server already runs {n} sessions (its maximum), so this tab has no simulation. "
+                "Close another Shoal tab or try again later: reload this page then.")
 
 
 class PortInUseError(OSError):
@@ -59,11 +63,21 @@ def _port_free(host: str, port: int) -> bool:
 
 
 class ShoalServer:
-    """A running app: ``port``, ``sessions`` (client id → Session), ``tabs`` (client id → TabApp), ``stop()``."""
+    """A running app: ``port``, ``sessions`` (client id → Session), ``tabs`` (client id → TabApp), ``stop()``.
 
-    def __init__(self, scenario: Scenario, host: str = "127.0.0.1", port: int = 8080) -> None:
+    At most ``max_sessions`` browser tabs get a session; a tab beyond that is told so in the
+    page (``turned_away``) and costs no simulation. A closed tab frees its session at once.
+    """
+
+    def __init__(self, scenario: Scenario, host: str = "127.0.0.1", port: int = 8080,
+                 max_sessions: int = DEFAULT_MAX_SESSIONS) -> None:
+        if max_sessions < 1:
+            raise ValueError(f"max_sessions must be >= 1 (got {max_sessions})")
         self.scenario = scenario
         self.host = host
+        self.max_sessions = max_sessions
+        self.turned_away: set[int] = set()  # client ids shown the "server is full" message
+        self._opening: set[int] = set()  # client ids whose session is being built
         self.viser = viser.ViserServer(host=host, port=port, verbose=False)
         self.port = self.viser.get_port()
         self.tabs: dict[int, TabApp] = {}
@@ -134,6 +148,30 @@ class ShoalServer:
     def _connect(self, client: viser.ClientHandle) -> None:
         if self._stopping.is_set():
             return
+        cid = client.client_id
+        with self._lock:  # count and reserve together: tabs connect on several pool threads at once
+            full = len(self.tabs) + len(self._opening) >= self.max_sessions
+            (self.turned_away if full else self._opening).add(cid)
+        if full:
+            self._turn_away(client)
+            if cid not in self.viser.get_clients():  # already gone again
+                self._disconnect(client)
+            return
+        try:
+            self._open_client(client)
+        finally:
+            with self._lock:
+                self._opening.discard(cid)
+        if cid not in self.viser.get_clients():  # it closed while its session was being built
+            self.close_tab(cid, gone=True)
+
+    def _turn_away(self, client: viser.ClientHandle) -> None:
+        text = FULL_MESSAGE.format(n=self.max_sessions)
+        client.gui.add_markdown(f"**{FULL_TITLE}.** {text}")
+        with client.gui.add_modal(FULL_TITLE):
+            client.gui.add_markdown(text)
+
+    def _open_client(self, client: viser.ClientHandle) -> None:
         client.camera.position = (0.0, 0.0, CAMERA_HEIGHT)
         client.camera.look_at = (0.0, 0.0, 0.0)
         client.camera.up_direction = (0.0, 1.0, 0.0)
@@ -150,6 +188,8 @@ class ShoalServer:
         tab.session.play()
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            self.turned_away.discard(client.client_id)
         self.close_tab(client.client_id, gone=True)
 
     # ------------------------------------------------------------------ ticking
@@ -174,7 +214,8 @@ class ShoalServer:
         self.viser.stop()
 
 
-def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080) -> ShoalServer:
+def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
+                 max_sessions: int = DEFAULT_MAX_SESSIONS) -> ShoalServer:
     """Start the app without blocking. ``port=0`` picks a free port (see ``.port``).
 
     Raises :class:`PresetError` for an unknown or invalid preset and :class:`PortInUseError`
@@ -183,17 +224,18 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
     scenario = check_supported(presets_io.load(preset))
     if port and not _port_free(host, port):
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
-    server = ShoalServer(scenario, host=host, port=port)
+    server = ShoalServer(scenario, host=host, port=port, max_sessions=max_sessions)
     if port and server.port != port:  # viser moved to the next free port: refuse instead
         server.stop()
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
     return server
 
 
-def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080) -> None:
+def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
+          max_sessions: int = DEFAULT_MAX_SESSIONS) -> None:
     """Run the browser app until Ctrl-C (``shoal serve``). Exits with a message if the port is taken."""
     try:
-        server = start_server(preset, host, port)
+        server = start_server(preset, host, port, max_sessions)
     except PortInUseError as err:
         raise SystemExit(f"shoal serve: {err}") from None
     except PresetError as err:

@@ -69,6 +69,7 @@ class TabApp:
     SCENE_HZ = 30.0
     PLOT_HZ = 4.0
     MAX_STEPS_PER_TICK = 25
+    STEP_BUDGET = 0.025  # s of engine steps per tick: a heavy scene plays slower, it never stalls the other tabs
 
     def __init__(
         self,
@@ -171,6 +172,14 @@ class TabApp:
         finally:
             self._ticking.release()
 
+    def _step(self, n: int) -> None:
+        """Up to ``n`` steps; ticked by the server, fewer once ``STEP_BUDGET`` is spent (the rest are
+        dropped, not queued). Tabs ticked by hand (tests) always take all ``n``."""
+        end = time.monotonic() + self.STEP_BUDGET if self.auto_tick else float("inf")
+        for _ in range(n):
+            if not self.session.step(1) or time.monotonic() >= end:
+                return
+
     def _tick(self, now: float) -> None:
         s = self.session
         elapsed = 0.0 if self._last is None else max(0.0, now - self._last)
@@ -181,7 +190,7 @@ class TabApp:
             n = int(self._acc)
             self._acc -= n
             if n:
-                s.step(min(n, self.MAX_STEPS_PER_TICK))
+                self._step(min(n, self.MAX_STEPS_PER_TICK))
             self._acc = min(self._acc, 1.0)
         else:
             self._acc = 0.0
@@ -192,17 +201,18 @@ class TabApp:
         if now >= self._next_scene and s.revision != self.arena.drawn_revision:
             snap = s.shown_snapshot()  # live, or the recorded frame the timeline points at
             twin = s.twin_view()
-            with self._atomic():
+            with self._atomic():  # one wake-up of viser's event loop for the scene and its readouts
                 self.arena.draw(snap)
                 self.arena.draw_twin(twin)
-            self.panels.on_snapshot(snap)
+                self.panels.on_snapshot(snap)
             self._next_scene = now + 1.0 / self.SCENE_HZ
         if now >= self._next_plot:
             key = (s.revision, s.selected_robot, getattr(s, "selected_dim", 0), s.playing)
             if key != self._plot_key:
-                self.panels.refresh_status()
-                self.panels.refresh_readout()
-                self.panels.refresh_plots()
-                self.panels.refresh_timeline()
+                with self._atomic():  # one wake-up for all of them (wake-ups cost the ticking thread the GIL)
+                    self.panels.refresh_status()
+                    self.panels.refresh_readout()
+                    self.panels.refresh_plots()
+                    self.panels.refresh_timeline()
                 self._plot_key = key
             self._next_plot = now + 1.0 / self.PLOT_HZ

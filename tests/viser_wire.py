@@ -1,0 +1,101 @@
+"""A browser tab without the browser: viser's websocket protocol spoken from Python.
+
+The viser server counts a websocket as a client once it reports its camera (the page does so
+right after connecting); from then on it builds the tab's GUI and scene and streams updates.
+:class:`WireClient` does exactly that much: it connects with viser's subprotocol, sends one
+camera message and counts (optionally decodes) the frames it receives. Load tests use it to
+measure the server alone (no rendering), and trust tests to open and drop many tabs fast.
+
+Frame layout (viser 1.x): 8-byte msgpack size, 8-byte compressed size, zstd-compressed
+msgpack ``{"messages": [...]}``, then raw binary buffers.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import msgspec
+import viser
+import zstandard
+from viser import _messages
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
+
+
+def decode_frame(payload: bytes) -> list[dict[str, Any]]:
+    """The messages of one viser frame (binary buffers left out)."""
+    size = int.from_bytes(payload[:8], "little")
+    csize = int.from_bytes(payload[8:16], "little")
+    inner = zstandard.ZstdDecompressor().decompress(payload[16:16 + csize], max_output_size=size)
+    return list(msgspec.msgpack.decode(inner).get("messages", ()))
+
+
+def _texts(value: Any) -> list[str]:
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, dict):
+        return [t for v in value.values() for t in _texts(v)]
+    if isinstance(value, (list, tuple)):
+        return [t for v in value for t in _texts(v)]
+    return []
+
+
+class WireClient:
+    """One tab on ``ws://127.0.0.1:port``: ``frames``/``nbytes`` received, ``texts`` seen
+    (with ``decode=True``: every string in the GUI messages, e.g. markdown and modal titles)."""
+
+    def __init__(self, port: int, *, decode: bool = False, width: int = 1280, height: int = 800) -> None:
+        self.decode = decode
+        self.frames = 0
+        self.nbytes = 0
+        self.robot_updates = 0
+        self.texts: list[str] = []
+        self.closed = threading.Event()
+        self._lock = threading.Lock()
+        self.ws = connect(f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"],
+                          max_size=None, open_timeout=30)
+        camera = _messages.ViewerCameraMessage(
+            wxyz=(1.0, 0.0, 0.0, 0.0), position=(0.0, 0.0, 40.0), fov=0.6, near=0.01, far=1000.0,
+            image_height=height, image_width=width, look_at=(0.0, 0.0, 0.0), up_direction=(0.0, 1.0, 0.0))
+        self.ws.send(msgspec.msgpack.encode(camera.as_serializable_dict()))
+        self._reader = threading.Thread(target=self._read, name="wire-client", daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        try:
+            for payload in self.ws:
+                if isinstance(payload, str):
+                    payload = payload.encode()
+                texts: list[str] = []
+                robots = 0
+                if self.decode:
+                    for m in decode_frame(payload):
+                        kind = m.get("type", "")
+                        if kind.startswith("Gui"):
+                            texts += _texts(m)
+                        elif (kind == "SceneNodeUpdateMessage" and str(m.get("name", "")).endswith("/robots")
+                              and "points" in (m.get("updates") or {})):
+                            robots += 1
+                with self._lock:
+                    self.frames += 1
+                    self.nbytes += len(payload)
+                    self.texts += texts
+                    self.robot_updates += robots
+        except ConnectionClosed:
+            pass
+        finally:
+            self.closed.set()
+
+    def counts(self) -> tuple[int, int, int]:
+        """(frames, bytes, robot point-cloud updates) received so far."""
+        with self._lock:
+            return self.frames, self.nbytes, self.robot_updates
+
+    def saw(self, text: str) -> bool:
+        with self._lock:
+            return any(text in t for t in self.texts)
+
+    def close(self) -> None:
+        self.ws.close()
+        self._reader.join(timeout=10)
