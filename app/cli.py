@@ -40,7 +40,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     from shoal.engine.runs import run_to_dir
     from shoal.presets.build import build
-    from shoal.presets.io import PresetError, load
+    from shoal.presets.io import PresetError, file_stem, load
 
     overrides = list(args.set or [])
     for flag, key in ((args.runs, "sim.runs"), (args.seed, "sim.seed"), (args.steps, "sim.steps")):
@@ -51,7 +51,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     except PresetError as e:
         return _err("bad preset:\n  " + "\n  ".join(e.messages))
     sim = build(scenario)
-    out = Path(args.out or f"out/{scenario.name}-seed{scenario.sim.seed}")
+    out = Path(args.out or f"out/{file_stem(scenario.name)}-seed{scenario.sim.seed}")  # a name is no path
     meta = {
         "shoal_version": __version__,
         "preset": scenario.model_dump(mode="json"),

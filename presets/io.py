@@ -165,6 +165,12 @@ def load(name_or_path: str | Path, overrides: list[str] | None = None) -> Scenar
     return validate(apply_overrides(read_raw(name_or_path), overrides or []))
 
 
+def file_stem(name: str) -> str:
+    """A preset's ``name`` made safe as a file or folder name: letters, digits, '-' and '_'
+    stay, anything else (path separators, dots, NUL) becomes '_'."""
+    return "".join(c if c.isalnum() or c in "-_" else "_" for c in name) or "shoal"
+
+
 def to_toml(scenario: Scenario) -> str:
     return tomli_w.dumps(scenario.model_dump(mode="json", exclude_none=True))
 
