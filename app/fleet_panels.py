@@ -20,6 +20,7 @@ from .fleet_edit import MODES as CLICK_MODES
 from .fleet_edit import WorldEditor
 from .fleet_session import FleetSession, FleetSnapshot
 from .panel_base import TRAIL, PanelsBase, SliderSpec, fmt, round_sig
+from .positions_panel import PositionsGui
 
 # label → (controller.law, controller.mode)
 CONTROLLERS: dict[str, tuple[str, str]] = {
@@ -103,6 +104,7 @@ class FleetPanels(PanelsBase):
                                         hint="whose sectors, force and budget are drawn; or click a robot")
             self.budget = gui.add_markdown("")
         self.top.append(folder)
+        self.positions_gui = PositionsGui(self)
 
     def _build_tabs(self) -> None:
         gui, sc = self.gui, self.session.scenario
@@ -246,6 +248,7 @@ class FleetPanels(PanelsBase):
         if self.robot.max != n - 1:
             self.robot.max = n - 1
         self._set(self.robot, min(self.session.selected_robot, n - 1))
+        self.positions_gui.sync(sc)
 
     def _visibility(self) -> None:
         sc = self.session.scenario
@@ -283,11 +286,12 @@ class FleetPanels(PanelsBase):
         self.apply(controller_changes(label, self.session.scenario), f"controller = {label}")
 
     def compare_choices(self) -> dict[str, dict[str, Any]]:
-        """B with another controller (law, coefficient policy and the drive it needs)."""
+        """B with another controller (law, coefficient policy and the drive it needs), or on
+        the other positions (oracle vs SLO)."""
         sc = self.session.scenario
         here = (sc.controller.law, sc.controller.mode)
-        return {f"controller: {label}": controller_changes(label, sc)
-                for label, key in CONTROLLERS.items() if key != here}
+        return {**{f"controller: {label}": controller_changes(label, sc)
+                   for label, key in CONTROLLERS.items() if key != here}, **self.positions_gui.compare_choices(sc)}
 
     def _budget_changed(self) -> None:
         """ĉ and c3/(c1+c2) → c1, c2, c3 (split by c1 : c2)."""
@@ -332,6 +336,7 @@ class FleetPanels(PanelsBase):
             with self._sync():
                 self._set(self.robot, i)
         self.budget.content = budget_markdown(snap.view, snap.params, int(snap.status[i]), snap.cmd[i])
+        self.positions_gui.refresh(snap.ghosts, snap.live)
 
     def refresh_readout(self) -> None:
         sc = self.session.scenario

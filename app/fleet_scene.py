@@ -20,6 +20,7 @@ from shoal.presets.models import Scenario
 
 from . import shapes
 from .fleet_session import FleetSnapshot
+from .ghosts import GhostLayer
 from .scene import VIEW_HALF
 from .twin_view import TwinLayer
 
@@ -60,7 +61,7 @@ ObstacleDrag = Callable[[int, float, float, str], None]
 _SERIAL = itertools.count()
 
 
-class FleetView(shapes.GroundFrame, TwinLayer):
+class FleetView(shapes.GroundFrame, TwinLayer, GhostLayer):
     """The scene of one tab showing a fleet. ``scene`` is a viser ``SceneApi``.
 
     ``follow`` and ``zoom`` (from the snapshot) pick the view: the whole world (zoom 1), or a
@@ -236,6 +237,7 @@ class FleetView(shapes.GroundFrame, TwinLayer):
             for key in PROBE_NODES:
                 if key in self.nodes:
                     self.nodes[key].visible = False
+        self.draw_ghosts(snap.ghosts if snap.live else None)  # SLO positions: the selected robot's beliefs
         self.drawn_revision = snap.revision
 
     def _follow(self, snap: FleetSnapshot) -> None:

@@ -3,8 +3,9 @@
 Playback, history and export come from :class:`BaseSession`. Here:
 
 * changes: controller and sensing fields are :class:`FleetParams` fields and apply at the
-  next step; the world, the robot model and the robot count rebuild the fleet (robots back
-  in the start box, world edits dropped);
+  next step; the world, the robot model, the robot count and the oracle/SLO positions switch
+  rebuild the fleet (robots back in the start box, world edits dropped); the SLO error set
+  and localisation settings retune the running fleet (:mod:`.positions`);
 * world edits: add, remove and move obstacles while the robots run (``Fleet.set_world``);
   they live in the running fleet only, since a preset describes its world by generator
   parameters;
@@ -27,11 +28,13 @@ from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .base_session import BaseSession
+from .ghosts import Ghosts, host_ghosts
+from .positions import slo_retune
 from .session import check_supported
 
 OBSTACLE_RADIUS = 0.7  # m: a new obstacle's default radius
 FOLLOW = ("world", "swarm", "robot")  # what the view keeps in the middle
-REBUILD_SECTIONS = ("world", "robot", "slo")  # changes here (and sim.robots) rebuild the fleet
+REBUILD_SECTIONS = ("world", "robot")  # changes here (and sim.robots, the positions switch) rebuild the fleet
 
 
 class EditRefused(ValueError):
@@ -60,6 +63,7 @@ class FleetSnapshot:
     follow: str = "world"  # one of FOLLOW
     zoom: float = 1.0  # 1 = the whole world on screen
     live: bool = True  # False: a recorded frame (timeline, replay): no bests, no sensing view
+    ghosts: Ghosts | None = None  # the selected robot's beliefs (SLO positions)
 
 
 def _world_error(msg: str) -> str:
@@ -120,7 +124,8 @@ class FleetSession(BaseSession):
     def rebuilds(self, new: Scenario) -> bool:
         """Does going to ``new`` rebuild the fleet (rather than change it at the next step)?"""
         old = self.scenario
-        return new.sim.robots != old.sim.robots or any(_changed(old, new, s) for s in REBUILD_SECTIONS)
+        return (new.sim.robots != old.sim.robots or any(_changed(old, new, s) for s in REBUILD_SECTIONS)
+                or slo_retune(old, new) is None)
 
     def _adopt(self, new: Scenario) -> None:
         if self.rebuilds(new):
@@ -137,6 +142,9 @@ class FleetSession(BaseSession):
             value = getattr(params, f.name)
             if getattr(fleet.params, f.name) != value:
                 setattr(fleet.params, f.name, value)  # in force from the next step
+        retune = slo_retune(old, new)
+        if retune:  # errors, selection, neighbourhood…: the running fleet keeps its beliefs
+            fleet.retune_slo(**retune)
         if new.sim.seed != old.sim.seed:
             self._reset_locked(new.sim.seed)
         self.revision += 1
@@ -244,6 +252,7 @@ class FleetSession(BaseSession):
                 world_revision=self.world_revision, world=self.sim.world,
                 params=dataclasses.replace(self.sim.params), view=self.view(), follow=self.follow,
                 zoom=self.zoom if self.follow != "world" else 1.0,
+                ghosts=host_ghosts(self.sim, min(self.selected_robot, self.sim.robots - 1), s.yg[0]),
             )
 
     def _replay_blanks(self, frame: Any) -> dict[str, Any]:

@@ -3,7 +3,8 @@
 Drawn with a few batched nodes under one frame ``/slo_<n>``: the true positions (red), the
 neighbourhood edges (grey), trails, and for the selected observer robot i (yellow ring) a
 ghost at ``x_i + x̂_ij`` for every neighbour j it localised this step, joined to the true
-``x_j`` by an error segment coloured from green (small) to red (large). The triangle
+``x_j`` by an error segment coloured from green (small) to red (large) (``ghosts.GhostLayer``,
+shared with the fleet and acoustic views). The triangle
 inspector adds, for one pair (i, j): the mirror pair x1/x2 (purple), dead reckoning x3
 (orange), the previous estimate (grey), the estimate kept (blue ring) and the true B (green).
 
@@ -21,6 +22,7 @@ import numpy as np
 from shoal.presets.models import Scenario
 
 from . import shapes
+from .ghosts import GhostLayer, Ghosts
 from .scene import ROBOT_SIZE, VIEW_HALF
 from .slo_session import SLOSnapshot
 from .twin_view import TwinLayer
@@ -30,9 +32,6 @@ TRAIL = (150, 175, 255)
 EDGE = (175, 175, 175)
 ARENA = (40, 40, 40)
 SELECTED = (255, 190, 0)
-GHOST = (60, 110, 230)
-ERR_LOW = np.array([40, 170, 70], float)
-ERR_HIGH = np.array([230, 40, 40], float)
 MIRROR = (150, 60, 200)
 DEAD_RECKONING = (240, 140, 20)
 PREVIOUS = (130, 130, 130)
@@ -45,13 +44,6 @@ Z = dict(grid=-0.02, edges=-0.01, trails=-0.005, errors=0.004, inspector=0.006, 
 _SERIAL = itertools.count()  # fresh node names for every build (see fleet_scene.py)
 
 
-def error_colors(err: np.ndarray, scale: float) -> np.ndarray:
-    """(G, 2, 3) uint8: green for no error to red at ``scale`` and beyond."""
-    f = np.clip(np.asarray(err, dtype=float) / max(scale, 1e-12), 0.0, 1.0)[:, None]
-    rgb = (ERR_LOW + (ERR_HIGH - ERR_LOW) * f).astype(np.uint8)
-    return np.repeat(rgb[:, None, :], 2, axis=1)
-
-
 def view_centre(scenario: Scenario) -> np.ndarray:
     """World point at the middle of the view: where the swarm starts."""
     slo = scenario.slo
@@ -60,7 +52,7 @@ def view_centre(scenario: Scenario) -> np.ndarray:
     return np.zeros(2)
 
 
-class SLOView(TwinLayer):
+class SLOView(TwinLayer, GhostLayer):
     """The scene of one tab showing an SLO scene. ``scene`` is a viser ``SceneApi``."""
 
     def __init__(self, scene: Any) -> None:
@@ -194,10 +186,8 @@ class SLOView(TwinLayer):
         xi = x[snap.selected]
         self._lines("selected", shapes.circle_segments(xi, 1.7 * ROBOT_SIZE / self.scale, 32), SELECTED, 3.0,
                     Z["selected"])
-        # the observer's beliefs: ghosts and their error segments
-        errs = np.stack([snap.ghosts, x[snap.ghost_of]], axis=1) if len(snap.ghost_of) else np.zeros((0, 2, 2))
-        self._lines("errors", errs, error_colors(snap.ghost_error, 10.0 * unit), 2.0, Z["errors"])
-        self._points("ghosts", snap.ghosts, GHOST, 0.8 * ROBOT_SIZE, "diamond", Z["ghosts"])
+        self.draw_ghosts(Ghosts(observer=snap.selected, points=snap.ghosts, of=snap.ghost_of,  # the observer's beliefs
+                                truth=x[snap.ghost_of], error=snap.ghost_error, scale=10.0 * unit))
         self._draw_pair(snap)
         self.drawn_revision = snap.revision
 

@@ -32,6 +32,7 @@ from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .base_session import BaseSession
+from .ghosts import ghosts_of
 
 KIND_NAMES = {0: "none", 1: "x1", 2: "x2", 3: "x3 (dead reckoning)", 4: "initial guess", 5: "oracle"}
 FLAG_NAMES = {0: "geometric {x1, x2, x3}", 1: "fallback {x3}: range failure or no movement",
@@ -237,9 +238,8 @@ class SLOSession(BaseSession):
                 ghosts, of, err = np.zeros((0, 2)), np.zeros(0, int), np.zeros(0)
                 edges, pair = np.zeros((0, 2, 2)), None
             else:
-                of = np.flatnonzero(b.valid[0, i])
-                ghosts = x[i] + b.est[0, i, of]
-                err = np.hypot(*(ghosts - x[of]).T) if len(of) else np.zeros(0)
+                g = ghosts_of(b, x, i, scale=0.0)  # the view picks the colour scale
+                ghosts, of, err = g.points, g.of, g.error
                 adj = b.adjacency[0] | b.adjacency[0].T
                 a, c = np.nonzero(np.triu(adj, 1))
                 edges = np.stack([x[a], x[c]], axis=1) if len(a) else np.zeros((0, 2, 2))

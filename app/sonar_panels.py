@@ -17,6 +17,7 @@ from shoal.presets.models import Scenario
 
 from . import sonar_plots
 from .panel_base import TRAIL, PanelsBase, SliderSpec, fmt
+from .positions_panel import PositionsGui
 from .sonar_session import SonarSession, SonarSnapshot
 
 ALGORITHMS = {"A-PSO": "a-pso", "X-PSO": "x-pso", "B-PSO": "b-pso", "XB-PSO": "xb-pso", "GT-PSO": "gt-pso"}
@@ -61,6 +62,7 @@ class SonarPanels(PanelsBase):
                                         hint="whose rays are drawn thick and whose R(τ) is plotted; or click a robot")
             self.hearing = gui.add_markdown("")
         self.top.append(folder)
+        self.positions_gui = PositionsGui(self)
 
     def _build_tabs(self) -> None:
         gui, sc = self.gui, self.session.scenario
@@ -118,6 +120,7 @@ class SonarPanels(PanelsBase):
         if self.robot.max != n - 1:
             self.robot.max = n - 1
         self._set(self.robot, min(self.session.selected_robot, n - 1))
+        self.positions_gui.sync(sc)
 
     def _visibility(self) -> None:
         ac = self.session.scenario.acoustics
@@ -169,6 +172,7 @@ class SonarPanels(PanelsBase):
         if snap.true_ray is not None:
             text += " · true ray: " + ("r₊" if snap.true_ray[i] == 0 else "r₋")
         self.hearing.content = text
+        self.positions_gui.refresh(snap.ghosts, snap.live)
 
     def refresh_readout(self) -> None:
         r = self.session.readout()
@@ -189,9 +193,11 @@ class SonarPanels(PanelsBase):
             f"step {int(r['k'])}/{sc.sim.steps} · |CoM − source| = {r['com_dist']:.0f} m{conv}{ring}")
 
     def compare_choices(self) -> dict[str, dict[str, Any]]:
-        """B with another localisation algorithm."""
-        here = self.session.scenario.acoustics.algorithm
-        return {f"algorithm: {label}": {"acoustics.algorithm": alg} for label, alg in ALGORITHMS.items() if alg != here}
+        """B with another localisation algorithm, or on the other positions (oracle vs SLO)."""
+        sc = self.session.scenario
+        here = sc.acoustics.algorithm
+        return {**{f"algorithm: {label}": {"acoustics.algorithm": alg} for label, alg in ALGORITHMS.items()
+                   if alg != here}, **self.positions_gui.compare_choices(sc)}
 
     def corr_plot_data(self) -> tuple[np.ndarray, ...]:
         c = self.session.correlation()

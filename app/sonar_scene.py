@@ -19,6 +19,7 @@ import numpy as np
 from shoal.presets.models import Scenario
 
 from . import shapes
+from .ghosts import GhostLayer
 from .scene import VIEW_HALF
 from .sonar_session import SonarSnapshot
 from .twin_view import TwinLayer
@@ -50,7 +51,7 @@ SourceDrag = Callable[[float, float, str], None]
 _SERIAL = itertools.count()
 
 
-class SonarView(shapes.GroundFrame, TwinLayer):
+class SonarView(shapes.GroundFrame, TwinLayer, GhostLayer):
     """The scene of one tab showing an acoustic swarm. ``scene`` is a viser ``SceneApi``."""
 
     RAY_SHARE = 0.3  # ray length as a share of the arena side
@@ -160,6 +161,7 @@ class SonarView(shapes.GroundFrame, TwinLayer):
         self._draw_rays(snap)
         self._draw_hits(snap)
         self._draw_triangles(snap)
+        self.draw_ghosts(snap.ghosts if snap.live else None)  # SLO positions: the selected robot's beliefs
         self.drawn_revision = snap.revision
 
     def _follow(self, snap: SonarSnapshot) -> None:

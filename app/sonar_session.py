@@ -5,7 +5,9 @@ Playback, history and export come from :class:`BaseSession`. Here:
 * changes: fields that only shape the next listen or the next move (Q, TBP, D/λ_c, the
   forgetting scale a, U, β, the escort ring r, the source speed and heading, the source
   and noise levels) go into the running swarm at its next step; the algorithm, the
-  controller, the swarm size, SNR_0 (which places the source) and the deployment rebuild it;
+  controller, the swarm size, SNR_0 (which places the source), the deployment and the
+  oracle/SLO positions switch rebuild it; the SLO error set and localisation settings retune
+  it (:mod:`.positions`);
 * the source can be moved by hand (a drag in the arena): the swarm keeps running and has
   to find it again; a moving source carries on from where it was put;
 * the snapshot carries what the view draws: bearing rays (which of the pair points nearer
@@ -30,6 +32,8 @@ from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .base_session import BaseSession
+from .ghosts import Ghosts, host_ghosts
+from .positions import slo_retune
 
 # acoustics fields whose change rebuilds the swarm (everything else applies at the next step)
 REBUILD_FIELDS = ("algorithm", "controller", "mode", "snr0_db", "d_0", "start", "source_bearing_deg",
@@ -67,6 +71,7 @@ class SonarSnapshot:
     tri_direction: np.ndarray | None  # (N, 2)
     tri_valid: np.ndarray | None  # (N,)
     live: bool = True  # False: a recorded frame (timeline, replay): no rays, hits or bests
+    ghosts: Ghosts | None = None  # the selected robot's beliefs (SLO positions)
 
 
 def true_ray_index(x: np.ndarray, rays: np.ndarray, source: np.ndarray) -> np.ndarray:
@@ -105,7 +110,7 @@ class SonarSession(BaseSession):
         """Does going to ``new`` rebuild the swarm (rather than change it at the next step)?"""
         old = self.scenario
         a, b = old.acoustics, new.acoustics
-        return (new.sim.robots != old.sim.robots or new.sim.seed != old.sim.seed or new.slo != old.slo
+        return (new.sim.robots != old.sim.robots or new.sim.seed != old.sim.seed or slo_retune(old, new) is None
                 or any(getattr(a, f) != getattr(b, f) for f in REBUILD_FIELDS))
 
     def _adopt(self, new: Scenario) -> None:
@@ -131,6 +136,9 @@ class SonarSession(BaseSession):
         sw.omega = tune.omega
         sw.c = np.array(split(tune.c_hat, params.c1_share))
         sw.w_max = w_max(params.U, params.dt)
+        retune = slo_retune(self.scenario, new)
+        if retune:  # errors, selection, neighbourhood…: the running swarm keeps its beliefs
+            sw.retune_slo(**retune)
         self.scenario = new
         self._refresh_snr()
         if new.arena != old_arena:
@@ -214,6 +222,7 @@ class SonarSession(BaseSession):
                 half_size=float(self.scenario.arena.half_size), r_trap=float(p.r_trap), d_c=float(p.dc),
                 rays=rays, true_ray=true_ray, points=pts, forward=fwd, kept=kept, pick=pick, partner=partner,
                 tri_members=tri[0], tri_centroid=tri[1], tri_direction=tri[2], tri_valid=tri[3],
+                ghosts=host_ghosts(self.sim, min(self.selected_robot, self.sim.robots - 1), s.y_g[0]),
             )
 
     def _replay_blanks(self, frame: Any) -> dict[str, Any]:

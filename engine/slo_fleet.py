@@ -31,7 +31,10 @@ class SLOFleet(SLOHost, Fleet):
         before = s.f_y.copy()
         super()._update_bests()
         self.bests.keep(s.f_y != before)  # a new best is where the robot stands
-        self._to_best = self.bests.to_owner(np.argmin(s.f_y, axis=1))
+        self._to_best = self._to_global()
+
+    def _to_global(self) -> np.ndarray:
+        return self.bests.to_owner(np.argmin(self.state.f_y, axis=1))
 
     def _attractors(self) -> tuple[np.ndarray, np.ndarray]:
         return self.bests.pbest, self._to_best

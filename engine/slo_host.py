@@ -92,6 +92,22 @@ class SLOHost:
         super().reset(seed)  # type: ignore[misc]
         self._start_source()
 
+    def step(self) -> Any:
+        """The host's tick, then localisation where the moves ended: the beliefs are current
+        for drawing, and the next tick's sensing finds them done (same positions, same draws)."""
+        info = super().step()  # type: ignore[misc]
+        s = self.state  # type: ignore[attr-defined]
+        self.bests.sense(s.x, s.k)
+        return info
+
+    def _to_global(self) -> np.ndarray:
+        """Each robot's vector to the global best as it believes it, (R, N, 2)."""
+        raise NotImplementedError
+
+    def believed_gbest(self) -> np.ndarray:
+        """(R, N, 2) where each robot believes the global best is, put at its true position."""
+        return self.state.x + self._to_global()  # type: ignore[attr-defined]
+
     def _start_source(self) -> None:
         """Fresh beliefs (and sensor streams) at the current true positions."""
         from .slo_source import SLOPositionSource

@@ -23,7 +23,7 @@ not combine the two):
 
 ``state.y`` holds x_i + P_i (where robot i's remembered best lies, as it believes, put at
 its true position), ``state.y_g`` the swarm's version of the global best (the owner's
-x + P, or the centroid of x + P) and :attr:`believed_gbest` (R, N, 2) each robot's own.
+x + P, or the centroid of x + P) and :meth:`believed_gbest` (R, N, 2) each robot's own.
 ``state.loc`` is robot i's own decision in its frame (intersections around its true
 position). With the None error set and true initial beliefs a run equals the oracle
 :class:`AcousticSwarm` run of the same seed up to floating-point error.
@@ -89,16 +89,16 @@ class SLOAcousticSwarm(SLOHost, AcousticSwarm):
     """An :class:`AcousticSwarm` whose robots localise each other with SLO (``slo``: the
     :class:`~.slo_source.SLOPositionSource` keywords, e.g. ``errors``, ``unit``)."""
 
-    believed_gbest: np.ndarray  # (R, N, 2) where each robot believes the global best is
-
-    def _start_source(self) -> None:
-        super()._start_source()
-        s = self.state
-        self.believed_gbest = np.repeat(s.y_g[:, None, :], s.x.shape[1], axis=1)
+    def _to_global(self, f_hat: np.ndarray | None = None) -> np.ndarray:
+        """From the memory ``f_hat`` (R, N) (default: the state's)."""
+        if self.strategy.global_best == "best":  # Alg. 3/4: the best robot's personal best
+            f = self.state.f_hat if f_hat is None else f_hat
+            return self.bests.to_owner(np.argmax(f, axis=1))
+        return self.bests.to_centroid()  # [7.11]: the centroid of the personal bests
 
     def _bests(self, idx: np.ndarray, x: np.ndarray, sensed: Sensed, rngs: list) -> Decision:
         s, strat = self.state, self.strategy
-        self.bests.sense(s.x, s.k - 1)  # the tick counter moved on at the start of this tick
+        self.bests.sense(s.x, s.k - 1)  # done at the end of the last tick (the counter moved on since)
         R, N = x.shape[:2]
         frames = (x[:, :, None, :] + self.bests.estimates()[idx]).reshape(R * N, N, 2)
 
@@ -114,19 +114,15 @@ class SLOAcousticSwarm(SLOHost, AcousticSwarm):
         f_hat, pbest = forget_update(f_old, p_old, mine["fitness"], offset, mine["valid"], strat.a)
         self.bests.pbest[idx] = pbest
         y = x + pbest
+        f_all = s.f_hat.copy()
+        f_all[idx] = f_hat
+        to_g = self._to_global(f_all)[idx]
         f_g = None
-        if strat.global_best == "best":  # Alg. 3/4: the best robot's personal best
-            f_all = s.f_hat.copy()
-            f_all[idx] = f_hat
-            owner = np.argmax(f_all, axis=1)
-            to_g = self.bests.to_owner(owner)[idx]
-            o = owner[idx][:, None]
-            y_g = y[np.arange(R)[:, None], o][:, 0]
-            f_g = f_all[idx, owner[idx]]
-        else:  # [7.11]: the centroid of the personal bests
-            to_g = self.bests.to_centroid()[idx]
+        if strat.global_best == "best":
+            owner = np.argmax(f_hat, axis=1)
+            y_g, f_g = y[np.arange(R), owner], f_hat[np.arange(R), owner]
+        else:
             y_g = y.mean(axis=1)
-        self.believed_gbest[idx] = x + to_g
         loc = LocInfo(improved=better, f_g=f_g, **mine)
         return Decision(f_hat, y, y_g, loc, np.stack([pbest, to_g]), x + to_g)
 

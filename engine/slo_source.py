@@ -145,8 +145,11 @@ class SLOSimulation(SLOHost, Simulation):
             return super()._directions()
         s = self.state
         self.bests.sense(s.x, s.k)
-        owner = s.f_y.argmax(axis=1) if self.objective.maximise else s.f_y.argmin(axis=1)
-        return np.stack([self.bests.pbest, self.bests.to_owner(owner)])
+        return np.stack([self.bests.pbest, self._to_global()])
+
+    def _to_global(self) -> np.ndarray:
+        f_y = self.state.f_y
+        return self.bests.to_owner(f_y.argmax(axis=1) if self.objective.maximise else f_y.argmin(axis=1))
 
     def set_robots(self, n: int) -> None:
         super().set_robots(n)

@@ -134,7 +134,9 @@ def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
                 raise PresetError([f"{where}: no such list item"])
             node = node[int(part)]
         elif isinstance(node, dict):
-            child = node.setdefault(part, {})
+            if node.get(part) is None:  # an absent or empty (null) section: the key creates it
+                node[part] = {}
+            child = node[part]
             if not isinstance(child, (dict, list)):
                 raise PresetError([f"{where}: is a value, not a table, so {key} does not exist"])
             node = child

@@ -92,7 +92,7 @@ def test_error_free_slo_sonar_follows_the_oracle_run(more, steps):
     assert np.array_equal(positions(oracle, steps), truth)
     np.testing.assert_allclose(positions(slo, steps), truth, rtol=0, atol=1e-8)
     np.testing.assert_allclose(slo.state.y_g, plain.state.y_g, rtol=0, atol=1e-6)
-    np.testing.assert_allclose(slo.believed_gbest, np.repeat(plain.state.y_g[:, None], 10, 1), rtol=0, atol=1e-6)
+    np.testing.assert_allclose(slo.believed_gbest(), np.repeat(plain.state.y_g[:, None], 10, 1), rtol=0, atol=1e-6)
 
 
 def test_high_error_sonar_differs_but_keeps_the_oracle_partners():
@@ -102,9 +102,9 @@ def test_high_error_sonar_differs_but_keeps_the_oracle_partners():
     oracle.step(), noisy.step()
     assert np.array_equal(noisy.state.loc.partner, oracle.state.loc.partner)  # the same draws
     a, b = positions(oracle, 60), positions(noisy, 60)
-    assert np.isfinite(b).all() and np.isfinite(noisy.believed_gbest).all()
+    assert np.isfinite(b).all() and np.isfinite(noisy.believed_gbest()).all()
     assert np.abs(a - b).max() > 1.0
-    spread = np.linalg.norm(noisy.believed_gbest - noisy.state.y_g[:, None], axis=-1)
+    spread = np.linalg.norm(noisy.believed_gbest() - noisy.state.y_g[:, None], axis=-1)
     assert spread.max() > 0.0  # each robot has its own belief of the global best
 
 

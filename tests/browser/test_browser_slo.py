@@ -1,6 +1,7 @@
 """SLO scenes in a real headless Chromium: switching to slo-walk through the preset dropdown
 draws the ghost overlay of the observer robot, and the oracle/SLO switch in the GUI changes
-the engine that runs. One server and one page for the module; tests run in file order."""
+the engine that runs, in an SLO scene and in a fleet scene (its Positions folder). One
+server and one page for the module; tests run in file order."""
 
 from __future__ import annotations
 
@@ -19,9 +20,12 @@ sync_api = pytest.importorskip("playwright.sync_api")
 
 from browser_helpers import choose, dismiss_toasts, wait_until  # noqa: E402
 
+from shoal.app.fleet_session import FleetSession  # noqa: E402
 from shoal.app.slo_session import SLOSession  # noqa: E402
+from shoal.engine.fleet import Fleet  # noqa: E402
 from shoal.engine.sim import Simulation  # noqa: E402
 from shoal.engine.slo import SLOSwarm  # noqa: E402
+from shoal.engine.slo_fleet import SLOFleet  # noqa: E402
 from shoal.engine.slo_source import SLOSimulation  # noqa: E402
 
 
@@ -53,3 +57,21 @@ def test_the_oracle_switch_in_the_gui_changes_the_engine(server, page, cid):
     wait_until(lambda: type(server.tabs[cid].session.sim) is Simulation, what="the oracle swarm")
     choose(page, "positions", "SLO (estimated)")
     wait_until(lambda: type(server.tabs[cid].session.sim) is SLOSimulation, what="SLO positions again")
+
+
+def test_the_positions_switch_of_a_fleet_scene_changes_the_engine(server, page, cid):
+    dismiss_toasts(page)
+    choose(page, "preset", "course-dvc")
+    wait_until(lambda: isinstance(server.tabs[cid].session, FleetSession), what="a fleet session")
+    session = server.tabs[cid].session
+    assert type(session.sim) is Fleet
+    page.get_by_text("Positions", exact=True).click()  # the folder starts closed on true positions
+    choose(page, "positions", "SLO (estimated)")
+    wait_until(lambda: type(session.sim) is SLOFleet, what="the fleet on SLO positions")
+    assert server.tabs[cid].session is session  # the fleet view stays
+    page.get_by_role("button", name="Step", exact=True).click()
+    wait_until(lambda: session.sim.state.k >= 1 and server.tabs[cid].arena.drawn_revision == session.revision,
+               what="a step drawn")
+    assert server.tabs[cid].arena.nodes["ghosts"].visible
+    choose(page, "positions", "oracle (true)")
+    wait_until(lambda: type(session.sim) is Fleet, what="the fleet on true positions")
