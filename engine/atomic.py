@@ -7,7 +7,7 @@ import shutil
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
-from typing import IO, Iterator
+from typing import IO, Any, ContextManager, Iterator
 
 
 @contextmanager
@@ -35,14 +35,14 @@ def atomic_output_dir(target: Path | str) -> Iterator[Path]:
 
 
 @contextmanager
-def atomic_text_writer(target: Path | str) -> Iterator[IO[str]]:
-    """Stream UTF-8 text into a temporary sibling of ``target`` that replaces it when the
-    block ends without error, so that readers see the old file or the whole new one."""
+def _atomic_file(target: Path | str, mode: str, **kw: Any) -> Iterator[IO[Any]]:
+    """An open temporary sibling of ``target`` that replaces it when the block ends without
+    error, so that readers see the old file or the whole new one, never a part."""
     target = Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.partial-", dir=target.parent)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
+        with os.fdopen(fd, mode, **kw) as f:
             yield f
         mask = os.umask(0o022)
         os.umask(mask)
@@ -53,22 +53,15 @@ def atomic_text_writer(target: Path | str) -> Iterator[IO[str]]:
         raise
 
 
+def atomic_text_writer(target: Path | str) -> ContextManager[IO[str]]:
+    """Stream UTF-8 text into ``target`` atomically (see :func:`_atomic_file`)."""
+    return _atomic_file(target, "w", encoding="utf-8", newline="")
+
+
 def atomic_write_bytes(target: Path | str, data: bytes) -> None:
-    """Write ``data`` to ``target`` through a temporary sibling file and a rename, so that
-    readers see the old file or the whole new one, never a part."""
-    target = Path(target)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.partial-", dir=target.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        mask = os.umask(0o022)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)  # mkstemp makes it private; the result is an ordinary file
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    """Write ``data`` to ``target`` atomically (see :func:`_atomic_file`)."""
+    with _atomic_file(target, "wb") as f:
+        f.write(data)
 
 
 def atomic_write_text(target: Path | str, text: str) -> None:
