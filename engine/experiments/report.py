@@ -59,9 +59,11 @@ WHY: dict[str, str] = {
               "percentile bands of CoM fitness, which our course makes narrow for both controllers.",
     "fig7-2": "With the spec's c1 = c2 split, A-PSO and X-PSO gather into a tight cluster whose intensity "
               "gradient at 10 dB is buried in the window-to-window noise, so they rarely converge within 6000 "
-              "steps; a 1:3 split (c1_share = 0.25) brings them to about 4750 and 3300 steps, close to the "
-              "thesis' 4500 and 3400. B-PSO and XB-PSO converge 2-2.5 times faster than the thesis reports; "
-              "we have not found why.",
+              "steps. A 1:3 split converges close to the thesis' 4500 and 3400: `shoal sweep sonar-xb-pso --grid "
+              "acoustics.algorithm=a-pso,x-pso --grid acoustics.c1_share=0.5,0.25 --set acoustics.snr0_db=10 "
+              "--runs 20 --steps 6000` gives median times of 4904 (A-PSO) and 3496 (X-PSO) steps with "
+              "c1_share = 0.25, and no median within 6000 steps with 0.5. B-PSO and XB-PSO converge 2-2.5 times "
+              "faster than the thesis reports; we have not found why.",
     "fig7-4": "X-PSO does not converge within 6000 steps at 10 dB in our model (see fig7-2), so the claims that Q "
               "and D do not affect it are judged on the final distance instead, which the noise dominates.",
     "fig7-5": "A-PSO and X-PSO converge only for U of 4 m/s and more (see fig7-2), so the 1/U law is checked "
