@@ -95,6 +95,16 @@ class Localiser:
             self.errors = errors
             self.permanent = permanent_errors(errors, self._z)
 
+    def resize(self, n: int) -> None:
+        """The swarm now has ``n`` robots, the first ones kept: they keep their calibration
+        offsets; robots beyond the old count get fresh ones from the permanent stream."""
+        m = min(n, self.n)
+        z = self._z[:, :, :m]
+        if n > m:
+            z = np.concatenate([z, permanent_normals(self.streams["permanent"], n - m)], axis=2)
+        self._z, self.n = z, n
+        self.permanent = permanent_errors(self.errors, z)
+
     def _ranges(self, x: np.ndarray, adjacency: np.ndarray) -> np.ndarray:
         d = measure_ranges(distances(x), self.errors.range, self.permanent, self.streams["range"],
                            self.params.max_range)

@@ -17,7 +17,7 @@ import numpy as np
 
 from .neighbourhoods import Neighbourhood, NeighbourhoodKind
 from .sim import Simulation
-from .slo_host import SLOHost
+from .slo_host import BelievedBests, SLOHost
 from .slo_localiser import Beliefs, Localiser, LocaliserParams, random_estimates, relative_truth
 from .slo_sensors import ErrorModel, error_model
 from .slo_streams import component_generators
@@ -63,10 +63,33 @@ class SLOPositionSource:
         rule = Neighbourhood(neighbourhood, neighbourhood_param)
         self.rule = Neighbourhood("radius", rule.value * unit) if neighbourhood == "radius" else rule
         self.localiser = Localiser(self.params, self.errors, self.streams, n)
-        lo, hi = init_area[0] * unit, init_area[1] * unit
-        est = relative_truth(x0) if initial_estimates == "truth" else random_estimates(self.streams["init"], n, lo, hi)
+        self.initial_estimates = initial_estimates
+        self.init_area = (init_area[0] * unit, init_area[1] * unit)
         self.x = x0.copy()
-        self.beliefs: Beliefs = self.localiser.start(x0, self.rule.adjacency(x0, self.streams["topology"]), est)
+        self.beliefs: Beliefs = self.localiser.start(x0, self.rule.adjacency(x0, self.streams["topology"]),
+                                                     self._initial(x0))
+
+    def _initial(self, x: np.ndarray) -> np.ndarray:
+        """x̂(−1) of a swarm deployed at ``x`` (R, N, 2): the truth or random vectors (gap A9)."""
+        if self.initial_estimates == "truth":
+            return relative_truth(x)
+        return random_estimates(self.streams["init"], x.shape[1], *self.init_area)
+
+    def resize(self, x: np.ndarray) -> Beliefs:
+        """The swarm grew or shrank to the robots at ``x`` (R, N', 2), the first ones kept.
+
+        Kept robots keep their beliefs of each other and their calibration offsets; a pair
+        with a new robot starts as at a deployment (``initial_estimates``); every robot then
+        measures its ranges afresh at ``x`` (no localisation, as at t = 0). The sensor streams
+        run on, so no noise is drawn twice."""
+        x = np.asarray(x, dtype=float)
+        n, m = x.shape[1], min(x.shape[1], self.x.shape[1])
+        self.localiser.resize(n)
+        est = self._initial(x) if n > m else np.zeros(x.shape[:2] + x.shape[1:])
+        est[:, :m, :m] = self.beliefs.est[:, :m, :m]
+        self.x = x.copy()
+        self.beliefs = self.localiser.start(x, self.rule.adjacency(x, self.streams["topology"]), est)
+        return self.beliefs
 
     def retune(self, *, errors: str | ErrorModel | None = None, neighbourhood: NeighbourhoodKind | None = None,
                neighbourhood_param: float | None = None, unit: float = 1.0, **localiser: Any) -> None:
@@ -152,8 +175,18 @@ class SLOSimulation(SLOHost, Simulation):
         return self.bests.to_owner(f_y.argmax(axis=1) if self.objective.maximise else f_y.argmin(axis=1))
 
     def set_robots(self, n: int) -> None:
+        """Grow or shrink the swarm mid-run (new robots spawn in the start region). The SLO
+        source goes on (:meth:`SLOPositionSource.resize`): kept robots keep their beliefs,
+        calibration and believed personal bests; a new robot's best is where it starts."""
+        cur, pbest = self.robots, self.bests.pbest
         super().set_robots(n)
-        self._start_source()
+        if n == cur:
+            return
+        s, m = self.state, min(n, cur)
+        self.slo_source.resize(s.x)
+        fresh = np.zeros_like(s.x)  # a new robot: y = x
+        fresh[:, :m] = pbest[:, :m]
+        self.bests = BelievedBests(self.slo_source, fresh, s.k)
 
     def set_objective(self, objective) -> None:  # type: ignore[no-untyped-def]
         super().set_objective(objective)

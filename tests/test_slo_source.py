@@ -72,3 +72,30 @@ def test_source_beliefs_follow_the_swarm():
     assert np.allclose(src.believed_positions()[:, 1], x, atol=1e-9)
     with pytest.raises(ValueError, match="2-D"):
         SLOPositionSource(np.zeros((1, 4, 3)))
+
+
+def test_a_resized_swarm_keeps_its_beliefs_and_the_error_free_run_the_oracle_one():
+    """set_robots mid-run (the app's robots slider): kept robots keep their estimates of each
+    other, their calibration offsets and their believed personal bests; a new robot starts
+    believing the truth (a calibrated deployment) with its best where it stands; an
+    error-free run still follows the oracle run through a grow and a shrink."""
+    oracle, exact = Simulation(**ch3_kwargs()), SLOSimulation(slo=dict(errors="none", unit=0.4), **ch3_kwargs())
+    for n in (12, 16, 7):
+        oracle.set_robots(n), exact.set_robots(n)
+        assert np.allclose(trajectories(exact, 25), trajectories(oracle, 25), rtol=0, atol=1e-9)
+
+    noisy = SLOSimulation(slo=dict(errors="high", unit=0.4), **ch3_kwargs())
+    trajectories(noisy, 10)
+    src = noisy.slo_source
+    est, z, pbest = src.beliefs.est.copy(), src.localiser._z.copy(), noisy.bests.pbest.copy()
+    noisy.set_robots(15)
+    b, x = noisy.slo_source.beliefs, noisy.state.x
+    assert noisy.slo_source is src and b.est.shape == (2, 15, 15, 2) and noisy.bests.sensed_k == 10
+    assert np.array_equal(b.est[:, :12, :12], est) and np.array_equal(noisy.bests.pbest[:, :12], pbest)
+    np.testing.assert_allclose(b.est[:, 12:, :12], x[:, None, :12] - x[:, 12:, None], atol=1e-12)
+    assert not np.any(noisy.bests.pbest[:, 12:])
+    assert np.array_equal(src.localiser._z[:, :, :12], z) and np.array_equal(src.x, x)
+    trajectories(noisy, 5)
+    noisy.set_robots(5)
+    assert np.array_equal(src.localiser._z, z[:, :, :5]) and src.beliefs.est.shape == (2, 5, 5, 2)
+    assert np.isfinite(trajectories(noisy, 5)).all()
