@@ -4,8 +4,8 @@ For an observer robot i on SLO positions, a ghost at x_i + x̂_ij stands for eve
 localised at its last step, joined to the true x_j by an error segment coloured from green
 (no error) to red (``scale`` and beyond); a host swarm adds where i believes the global best
 is. :func:`ghosts_of` reads them from an engine's beliefs; :class:`GhostLayer` draws them in
-any view built on ``_points`` helpers, a ``scene`` and a ``nodes`` dict (the SLO, fleet and
-acoustic views).
+any view built on ``_points`` helpers, a ``scene`` and a ``nodes`` dict (the SLO, Chapter 3,
+fleet and acoustic views).
 """
 
 from __future__ import annotations
@@ -61,8 +61,8 @@ def ghosts_of(beliefs: Any, x: np.ndarray, i: int, scale: float, *, best: np.nda
 
 def host_ghosts(sim: Any, i: int, true_best: np.ndarray) -> Ghosts | None:
     """The ghosts of observer ``i`` of a host swarm on SLO positions (:class:`~shoal.engine.
-    slo_host.SLOHost`: fleet, acoustic swarm), or None on oracle positions. Errors show fully
-    red at 10 thesis units."""
+    slo_host.SLOHost`: Chapter 3 swarm, fleet, acoustic swarm), or None on oracle positions.
+    Errors show fully red at 10 thesis units."""
     source = getattr(sim, "slo_source", None)
     if source is None:
         return None

@@ -1,6 +1,7 @@
 """The Chapter 3 control panel: controller sliders (raw ω, c1, c2 or physical U, A+, Δt), the
 (ω, ĉ) and phase-plane plots and the speed plot, on top of the shared header, Export and
-Notes of :class:`PanelsBase`.
+Notes of :class:`PanelsBase`; in 2-D the *Positions* folder (true or SLO-estimated
+positions, :mod:`.positions_panel`).
 """
 
 from __future__ import annotations
@@ -16,7 +17,8 @@ from . import plots
 from .panel_base import (
     TRAIL, PanelsBase, SliderSpec, field_bounds, fmt, get_path, notes_text, round_sig, slider_range,
 )
-from .session import Session
+from .positions_panel import PositionsGui
+from .session import Session, Snapshot
 
 __all__ = ["LAWS", "MODES", "Panels", "SLIDERS", "SPECS", "field_bounds", "get_path", "notes_text",
            "slider_range"]
@@ -52,6 +54,9 @@ class Panels(PanelsBase):
         super().__init__(gui, session, *args, **kwargs)
 
     # ------------------------------------------------------------------ building
+    def _build_above_tabs(self) -> None:
+        self.positions_gui = PositionsGui(self, observer=" The robot is the *particle* of the Plots tab.")
+
     def _build_tabs(self) -> None:
         gui, sc = self.gui, self.session.scenario
         with self.tabs.add_tab("Controller"):
@@ -102,8 +107,8 @@ class Panels(PanelsBase):
 
         @self.particle.on_update
         def _(event: Any) -> None:
-            n = self.session.scenario.sim.robots
-            self.session.selected_robot = int(min(max(int(self.particle.value), 0), n - 1))
+            if int(self.particle.value) != self.session.selected_robot:
+                self.session.select(int(self.particle.value))  # redraws its ghosts (SLO positions)
 
         @self.dimension.on_update
         def _(event: Any) -> None:
@@ -122,23 +127,32 @@ class Panels(PanelsBase):
             self.dimension.options = dims
         if self.dimension.value not in dims:
             self._set(self.dimension, dims[0])
+        self.positions_gui.sync(sc)
 
     def _visibility(self) -> None:
         c = self.session.scenario.controller
         self.raw_folder.visible = c.mode == "raw"
         self.physical_folder.visible = c.mode == "physical"
         self.sliders["controller.smooth_width"].visible = c.law in ("adapted-tanh", "adapted-logistic")
+        self.positions_gui.folder.visible = self.session.scenario.sim.d == 2  # SLO localises in the plane
 
     def compare_choices(self) -> dict[str, dict[str, Any]]:
-        """B with another law: the standard law at the same (ω, c1, c2), or an Adapted one."""
-        c = self.session.scenario.controller
+        """B with another law: the standard law at the same (ω, c1, c2), or an Adapted one;
+        in 2-D also on the other positions (oracle vs SLO)."""
+        sc = self.session.scenario
+        c = sc.controller
         out: dict[str, dict[str, Any]] = {}
         if c.law != "standard":
             out["standard PSO law (same ω, c1, c2)"] = {"controller.law": "standard", **self._raw_coefficients()}
         for law in LAWS[1:]:
             if law != c.law:
                 out[f"{law} law"] = {"controller.law": law}
+        if sc.sim.d == 2:
+            out.update(self.positions_gui.compare_choices(sc))
         return out
+
+    def on_snapshot(self, snap: Snapshot) -> None:
+        self.positions_gui.refresh(snap.ghosts, snap.live)
 
     def _raw_coefficients(self) -> dict[str, Any]:
         """The controller's current (ω, c1, c2) as raw-mode fields (physical mode derives them)."""

@@ -1,5 +1,6 @@
-"""Oracle or SLO-estimated positions for a fleet or an acoustic scene (spec §15.2 item 4):
-the scenario side of the "Positions" folder (:mod:`.positions_panel`), no GUI here.
+"""Oracle or SLO-estimated positions for a Chapter 3 swarm, a fleet or an acoustic scene
+(spec §15.2 item 4): the scenario side of the "Positions" folder (:mod:`.positions_panel`),
+no GUI here.
 
 The switch goes through the model like any control: SLO positions are ``[slo] swarm =
 "host"``, ``positions = "slo"`` (a scene without ``[slo]`` gets one: Low errors, CSS, every
@@ -18,6 +19,7 @@ from shoal.presets.models import Scenario
 
 from .ghosts import Ghosts
 
+POSITIONS = {"SLO (estimated)": "slo", "oracle (true)": "oracle"}  # the switch's labels
 NEW_SLO = {"slo.errors": "low", "slo.selection": "css", "slo.neighbourhood": "full"}  # a scene without [slo]
 ENGINE_ONLY = ("objective", "walk_speed", "quality_threshold")  # SLO_LIVE fields of Mai's swarm only
 

@@ -1,4 +1,4 @@
-"""The "Positions" folder of the fleet and acoustic panels: the switch between true
+"""The "Positions" folder of the Chapter 3, fleet and acoustic panels: the switch between true
 (oracle) and SLO-estimated positions, the error set, and a readout of the selected robot's
 beliefs (see :mod:`.positions` for what the switch changes in the scenario).
 """
@@ -10,15 +10,16 @@ from typing import Any
 from shoal.presets.models import Scenario
 
 from .ghosts import Ghosts
-from .positions import NEW_SLO, ghost_text, positions_of, switch_changes
-from .slo_panels import ERROR_SETS, POSITIONS, _key
+from .positions import NEW_SLO, POSITIONS, ghost_text, positions_of, switch_changes
+from .slo_panels import ERROR_SETS, _key
 
 
 class PositionsGui:
     """The folder, built into ``panels`` (a :class:`~.panel_base.PanelsBase`) where it is
     created; ``sync`` inside the panels' sync guard, ``refresh`` with each snapshot."""
 
-    def __init__(self, panels: Any) -> None:
+    def __init__(self, panels: Any, observer: str = "") -> None:
+        """``observer``: words on how to pick the robot whose ghosts are drawn."""
         self.panels = panels
         gui, sc = panels.gui, panels.session.scenario
         with gui.add_folder("Positions", expand_by_default=positions_of(sc) == "slo") as folder:
@@ -31,7 +32,7 @@ class PositionsGui:
             self.readout = gui.add_markdown("")
             gui.add_markdown("*Ghosts (blue diamonds): where the selected robot believes the others are; "
                              "segments join them to the truth, green to red. The large one: where it "
-                             "believes the global best is.*")
+                             f"believes the global best is.{observer}*")
         panels.top.append(folder)
         self.folder = folder
 

@@ -4,7 +4,8 @@ World coordinates (metres) are scaled so that the arena square always spans
 ``[-VIEW_HALF, VIEW_HALF]`` in view units; the camera therefore never needs to move when a
 preset with another arena size is loaded. Everything lives under one frame, ``/world``;
 when the swarm leaves the square (1-D runs drifting along x for ever) that frame is shifted
-so the view follows the swarm.
+so the view follows the swarm. On SLO-estimated positions the selected robot's ghosts are
+drawn too (:class:`~.ghosts.GhostLayer`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from shoal.engine.objectives import Objective
 from shoal.presets.build import objective_for
 from shoal.presets.models import Scenario
 
+from .ghosts import GhostLayer
 from .session import Snapshot
 from .twin_view import TWIN, TWIN_TRAIL, trail_segments
 
@@ -78,7 +80,7 @@ def _square(half: float) -> np.ndarray:
     return np.stack([c, np.roll(c, -1, axis=0)], axis=1)
 
 
-class ArenaView:
+class ArenaView(GhostLayer):
     """The scene of one tab. ``scene`` is a viser ``SceneApi`` (``client.scene`` or ``server.scene``)."""
 
     def __init__(self, scene: Any) -> None:
@@ -155,6 +157,29 @@ class ArenaView:
         """World (…, d) → view (…, 3) float32, before the follow offset (which moves ``/world``)."""
         return _z(np.asarray(world, dtype=float) * self.scale, z)
 
+    to_view = view_points  # the name GhostLayer draws with
+
+    def _name(self, key: str) -> str:
+        return f"/world/{key}"
+
+    def _twin_size(self) -> float:
+        return ROBOT_SIZE
+
+    def _points(self, key: str, xy: np.ndarray, color: tuple[int, int, int], size: float, shape: str,
+                z: float) -> None:
+        """A point cloud ``key`` at the finite rows of ``xy``, created on first use; hidden when empty."""
+        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+        xy = xy[np.all(np.isfinite(xy), axis=1)]
+        pts = self.view_points(xy, z) if len(xy) else np.zeros((1, 3), np.float32)
+        node = self.nodes.get(key)
+        if node is None:
+            self.nodes[key] = self.scene.add_point_cloud(
+                self._name(key), pts, colors=color, point_size=size, point_shape=shape, precision="float32",
+                point_shading="flat")
+        else:
+            node.points = pts
+        self.nodes[key].visible = bool(len(xy))
+
     def to_scene(self, xy: np.ndarray) -> np.ndarray:
         """World (…, d) → scene (…, 2) coordinates, the follow offset included (as the camera sees them)."""
         return (_z(np.asarray(xy, dtype=float))[..., :2] - self.offset) * self.scale
@@ -206,6 +231,7 @@ class ArenaView:
         else:
             segs = np.repeat(start[:1, None, :], 2, axis=1) if len(start) else np.zeros((1, 2, 3), np.float32)
         n["trails"].points = segs
+        self.draw_ghosts(snap.ghosts if snap.live else None)  # SLO positions: the selected robot's beliefs
         self.drawn_revision = snap.revision
 
     def draw_twin(self, view: tuple[np.ndarray, np.ndarray] | None) -> None:

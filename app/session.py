@@ -4,6 +4,12 @@ Playback, history and export come from :class:`BaseSession`; this module adds wh
 particular to the Chapter 3 swarm: its controller changes without restart, the (ω, ĉ)
 readout, the phase-plane history and the arena snapshot.
 
+The swarm may act on SLO-estimated positions (``[slo] swarm = "host"``: an
+:class:`~shoal.engine.slo_source.SLOSimulation`, the *Positions* folder of
+:mod:`.positions_panel`). Controller, swarm size and objective changes reach it like the
+oracle swarm; the error set and the localisation settings retune its running SLO source;
+the oracle/SLO switch (and the SLO unit) rebuild it with the same seed.
+
 Every change goes through the pydantic :class:`Scenario` first (``apply``): a value the model
 refuses raises :class:`PresetError` and leaves both the scenario and the swarm untouched.
 """
@@ -20,11 +26,13 @@ import numpy as np
 from shoal.engine.recorder import TRAJECTORY_COLUMNS
 from shoal.engine.sim import Simulation
 from shoal.presets import io as presets_io
-from shoal.presets.build import build_simulation, law_for, objective_for, policy_for
+from shoal.presets.build import build_simulation, law_for, objective_for, policy_for, slo_unit
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .base_session import MAX_UPLOAD_BYTES, BaseSession, Frame
+from .ghosts import Ghosts, host_ghosts
+from .positions import positions_of, slo_retune
 
 __all__ = ["MAX_UPLOAD_BYTES", "TRAJECTORY_COLUMNS", "Frame", "Session", "Snapshot", "app_presets",
            "check_supported"]
@@ -65,6 +73,7 @@ class Snapshot:
     trails: np.ndarray  # (M, L, d) oldest first, M ≤ N
     revision: int
     live: bool = True  # False: a recorded frame (timeline, replay): bests not known
+    ghosts: Ghosts | None = None  # the selected robot's beliefs (SLO positions)
 
 
 def _section_changed(old: Scenario, new: Scenario, name: str) -> bool:
@@ -83,13 +92,17 @@ class Session(BaseSession):
 
     @classmethod
     def accepts(cls, scenario: Scenario) -> bool:
-        return scenario.world is None
+        """Free-space swarms, on true or (``[slo] swarm = "host"``) SLO-estimated positions."""
+        return scenario.world is None and (scenario.slo is None or scenario.slo.swarm == "host")
 
     @classmethod
     def check(cls, scenario: Scenario) -> Scenario:
         check_supported(scenario)
-        if not cls.accepts(scenario):
+        if scenario.world is not None:
             raise PresetError([f"world: {scenario.name} has obstacles; it runs as a fleet, not a free swarm"])
+        if not cls.accepts(scenario):
+            raise PresetError([f"slo.swarm: {scenario.name} runs Mai's SLO swarm (swarm = 'slo'), not the "
+                               "Chapter 3 swarm; set slo.swarm = 'host' for the Chapter 3 swarm on SLO positions"])
         return scenario
 
     def _build(self, scenario: Scenario) -> Simulation:
@@ -103,16 +116,21 @@ class Session(BaseSession):
     # ------------------------------------------------------------------ changes
     def _adopt(self, new: Scenario) -> None:
         old, sim = self.scenario, self.sim
-        if (new.sim.d != old.sim.d or _section_changed(old, new, "init")):
+        retune = slo_retune(old, new)  # None: the positions switch or the SLO unit changed
+        if (new.sim.d != old.sim.d or _section_changed(old, new, "init") or retune is None
+                or (positions_of(new) == "slo" and slo_unit(new) != slo_unit(old))):
             self._load(new)
+            self.selected_robot = min(self.selected_robot, new.sim.robots - 1)
             self.revision += 1
             return
         self.scenario = new
-        if _section_changed(old, new, "controller"):
+        if _section_changed(old, new, "controller"):  # an SLOSimulation too: the same attributes
             self._keep_clock()
             sim.policy = policy_for(new.controller)
             sim.law = law_for(new.controller)
             sim.dt = float(new.controller.dt)
+        if retune:  # errors, selection, neighbourhood…: the running SLO source keeps its beliefs
+            sim.retune_slo(**retune)
         if new.sim.robots != old.sim.robots:
             sim.set_robots(new.sim.robots)
             self.selected_robot = min(self.selected_robot, new.sim.robots - 1)
@@ -179,7 +197,8 @@ class Session(BaseSession):
             s = self.sim.state
             return Snapshot(k=s.k, t=self.clock(), x=s.x[0].copy(), heading=s.heading[0].copy(), y=s.y[0].copy(),
                             yg=s.yg[0].copy(), trails=self.trails(max_trails, max_trail_points),
-                            revision=self.revision)
+                            revision=self.revision,
+                            ghosts=host_ghosts(self.sim, min(self.selected_robot, self.sim.robots - 1), s.yg[0]))
 
     def particle_history(self, robot: int, dim: int, n: int = 120) -> tuple[np.ndarray, np.ndarray]:
         """The last ``n`` (u_j, a_j) of one particle and dimension, oldest first."""

@@ -1,10 +1,11 @@
-"""The SLO control panel (spec §15.2, item 4): oracle vs SLO positions, candidate selection,
+"""The SLO control panel of Mai's swarm (spec §15.2, item 4): candidate selection,
 prediction weight and mitigation thresholds, the error set and its single errors, the
 neighbourhood, objective, motion and swarm size; the observer robot and the pair whose
 triangle is inspected; live plots. On top of the shared header, Export and Notes.
 
-Every control is a preset field and goes through the model; an SLO change rebuilds the
-engine with the same seed (the panel says so).
+Every control is a preset field and goes through the model; a change that needs a new swarm
+rebuilds it with the same seed (the panel says so). The oracle/SLO switch of a scene's own
+swarm lives in that scene's *Positions* folder (:mod:`.positions_panel`).
 """
 
 from __future__ import annotations
@@ -21,7 +22,6 @@ from . import slo_plots
 from .panel_base import TRAIL, PanelsBase, SliderSpec, fmt
 from .slo_session import FLAG_NAMES, KIND_NAMES, SLOSession
 
-POSITIONS = {"SLO (estimated)": "slo", "oracle (true)": "oracle"}
 SELECTIONS = {"CSS (closest solution)": "css", "RTS (round trip)": "rts", "Akcan (GDL)": "akcan"}
 ERROR_SETS = {"None": "none", "Low": "low", "High": "high"}
 NEIGHBOURHOODS = ("knn", "radius", "full", "random", "ring")
@@ -70,9 +70,6 @@ class SLOPanels(PanelsBase):
         gui, sc = self.gui, self.session.scenario
         slo = sc.slo
         with self.tabs.add_tab("SLO"):
-            self.positions = gui.add_dropdown(
-                "positions", tuple(POSITIONS), initial_value=_key(POSITIONS, slo.positions),
-                hint="the Chapter 3 swarm acts on SLO-estimated or true (oracle) positions; same seed")
             self.selection = gui.add_dropdown(
                 "selection", tuple(SELECTIONS), initial_value=_key(SELECTIONS, slo.selection),
                 hint="which candidate becomes the estimate [3.7]-[3.9]")
@@ -150,10 +147,6 @@ class SLOPanels(PanelsBase):
         return float(getattr(getattr(model, part), field))
 
     def _wire(self) -> None:
-        @self.positions.on_update
-        def _(event: Any) -> None:
-            self._mapped("slo.positions", POSITIONS, self.positions)
-
         @self.selection.on_update
         def _(event: Any) -> None:
             self._mapped("slo.selection", SELECTIONS, self.selection)
@@ -221,7 +214,6 @@ class SLOPanels(PanelsBase):
     # ------------------------------------------------------------------ sync
     def _sync_body(self, sc: Scenario) -> None:
         slo = sc.slo
-        self._set(self.positions, _key(POSITIONS, slo.positions))
         self._set(self.selection, _key(SELECTIONS, slo.selection))
         self._set(self.errors, _key(ERROR_SETS, slo.errors))
         for name, h in self.error_sliders.items():
@@ -243,21 +235,14 @@ class SLOPanels(PanelsBase):
 
     def _visibility(self) -> None:
         slo = self.session.scenario.slo
-        own = slo.swarm == "slo"
-        self.positions.visible = not own
-        self.motion.visible = own
-        self.objective.visible = own and slo.motion == "pso"
-        self.sliders["slo.walk_speed"].visible = own and slo.motion == "random_walk"
+        self.objective.visible = slo.motion == "pso"
+        self.sliders["slo.walk_speed"].visible = slo.motion == "random_walk"
         self.neigh_param.visible = slo.neighbourhood != "full"
 
     def compare_choices(self) -> dict[str, dict[str, Any]]:
-        """B with the other positions (oracle vs SLO, Chapter 3 swarm) or another selection."""
+        """B with another candidate selection."""
         slo = self.session.scenario.slo
         out: dict[str, dict[str, Any]] = {}
-        if slo.swarm == "host":
-            for label, value in POSITIONS.items():
-                if value != slo.positions:
-                    out[f"positions: {label}"] = {"slo.positions": value}
         for label, value in SELECTIONS.items():
             if value != slo.selection:
                 out[f"selection: {label}"] = {"slo.selection": value}
@@ -293,18 +278,15 @@ class SLOPanels(PanelsBase):
     def refresh_readout(self) -> None:
         s = self.session
         sc = s.scenario
-        what = {"SLOSwarm": "Mai's SLO swarm", "SLOSimulation": "Chapter 3 swarm on SLO-estimated positions",
-                "Simulation": "Chapter 3 swarm on true (oracle) positions"}.get(s.engine_name, s.engine_name)
-        self.engine.content = f"engine: **{s.engine_name}**, {what} · selection {sc.slo.selection.upper()}"
+        what = "SPSO 2011 in each robot's frame" if sc.slo.motion == "pso" else "a random walk"
+        self.engine.content = (f"engine: **{s.engine_name}**, Mai's SLO swarm ({what}) · "
+                               f"selection {sc.slo.selection.upper()}")
 
     def on_snapshot(self, snap: Any) -> None:
         if self.robot.value != snap.selected:
             with self._sync():
                 self._set(self.robot, snap.selected)
         p = snap.pair
-        if not snap.localising:
-            self.inspector.content = "Oracle mode: every robot reads true positions, nothing to estimate."
-            return
         if p is None:
             self.inspector.content = f"Robot {snap.selected} has no neighbour this step."
             return

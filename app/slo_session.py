@@ -1,20 +1,17 @@
 """The SLO session (Mai: Simultaneous Localisation and Optimisation): one browser tab's swarm
 whose robots act on positions they estimate from noisy ranges and odometry.
 
-Two engines come out of an ``[slo]`` scene (``presets.build.build_slo``):
-
-* ``slo.swarm = "slo"``: Mai's :class:`SLOSwarm` (SPSO 2011 in each robot's frame, or a
-  random walk), one step = one generation;
-* ``slo.swarm = "host"`` (free space): the Chapter 3 swarm driven by SLO-estimated positions
-  (:class:`SLOSimulation`) or, with ``slo.positions = "oracle"``, by true positions (a plain
-  :class:`Simulation`, same seed): the oracle-vs-SLO switch.
+It runs Mai's own swarm, ``[slo] swarm = "slo"`` (:class:`SLOSwarm`: SPSO 2011 in each
+robot's frame, or a random walk; one step = one generation). A scene's own swarm on SLO
+positions (``swarm = "host"``: the Chapter 3 swarm, a fleet, an acoustic swarm) is shown by
+that scene's session, with the oracle/SLO switch in its *Positions* folder (:mod:`.positions`).
 
 Changes of the localisation (selection, w, δ_cos, δ_v, entry), the sensor errors, the
 neighbourhood and the objective apply to the running swarm: positions and beliefs are kept
-and the learner sees the swarm react. Other changes (swarm size, motion, the oracle switch,
-the seed) rebuild the engine with the same seed, so two settings can be compared run against
-run. The snapshot carries what the overlay draws: truth, the selected robot's
-beliefs (ghosts), neighbourhood edges and the candidate triangle of one selected pair.
+and the learner sees the swarm react. Other changes (swarm size, motion, the seed) rebuild
+the engine with the same seed, so two settings can be compared run against run. The
+snapshot carries what the overlay draws: truth, the selected robot's beliefs (ghosts),
+neighbourhood edges and the candidate triangle of one selected pair.
 """
 
 from __future__ import annotations
@@ -25,8 +22,6 @@ from typing import Any
 import numpy as np
 
 from shoal.engine.slo import SLOSwarm
-from shoal.engine.slo_metrics import dead_reckoning_share, pair_distances, pair_errors, stats
-from shoal.engine.slo_source import SLOSimulation
 from shoal.presets.build import build_slo, slo_live_changes
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
@@ -80,12 +75,8 @@ class SLOSnapshot:
 
 
 def beliefs_of(sim: Any) -> Any | None:
-    """The :class:`Beliefs` of an SLO engine, or None (oracle positions)."""
-    if isinstance(sim, SLOSwarm):
-        return sim.state.beliefs
-    if isinstance(sim, SLOSimulation):
-        return sim.source.beliefs
-    return None
+    """The :class:`Beliefs` of an SLO engine, or None (nothing localises)."""
+    return sim.state.beliefs if isinstance(sim, SLOSwarm) else None
 
 
 class SLOSession(BaseSession):
@@ -101,17 +92,16 @@ class SLOSession(BaseSession):
 
     @classmethod
     def accepts(cls, scenario: Scenario) -> bool:
-        """Free-space [slo] scenes; a fleet or an acoustic swarm on SLO positions keeps its own view."""
-        return scenario.slo is not None and scenario.world is None and scenario.acoustics is None
+        """Mai's SLO swarm (``[slo] swarm = "slo"``); a host swarm on SLO positions keeps its own view."""
+        return scenario.slo is not None and scenario.slo.swarm == "slo"
 
     @classmethod
     def check(cls, scenario: Scenario) -> Scenario:
-        if not cls.accepts(scenario):
+        if scenario.slo is None:
             raise PresetError([f"slo: {scenario.name} has no [slo] section"])
-        if scenario.world is not None:
-            raise PresetError(["world: the browser app runs SLO scenes in free space only"])
-        if scenario.slo.swarm == "host" and scenario.sim.d != 2:  # type: ignore[union-attr]
-            raise PresetError(["sim.d: SLO positions need d = 2"])
+        if not cls.accepts(scenario):
+            raise PresetError([f"slo.swarm: {scenario.name} puts its own swarm on SLO positions (swarm = "
+                               "'host'); its own scene shows it, with a Positions folder"])
         return scenario
 
     def _build(self, scenario: Scenario) -> Any:
@@ -129,8 +119,8 @@ class SLOSession(BaseSession):
         return type(self.sim).__name__
 
     def clock(self) -> float:
-        """Seconds (Chapter 3 swarm) or generations (SLO swarm) since reset."""
-        return self._t0 + (self.sim.state.k - self._k0) * float(getattr(self.sim, "dt", 1.0))
+        """Generations since reset."""
+        return self._t0 + float(self.sim.state.k - self._k0)
 
     def _clear_history(self) -> None:
         self._prev_est = None
@@ -143,24 +133,13 @@ class SLOSession(BaseSession):
         live = None if same else slo_live_changes(old, new)
         if same:  # only the view: keep running
             self.scenario = new
-        elif live is not None and self._retune(live):  # errors, selection, w, δ, neighbourhood…: keep running
+        elif live is not None:  # errors, selection, w, δ, neighbourhood…: keep running
+            self.sim.retune(**live)
             self.scenario = new
-        else:  # a new swarm, motion, oracle switch or seed: rebuild with the (same) seed
+        else:  # a new swarm, motion or seed: rebuild with the (same) seed
             self._load(new)
             self.selected_robot = min(self.selected_robot, self.robots - 1)
         self.revision += 1
-
-    def _retune(self, changes: dict[str, Any]) -> bool:
-        """Apply live changes to the running engine; False if this engine cannot take them."""
-        if isinstance(self.sim, SLOSwarm):
-            self.sim.retune(**changes)
-            return True
-        if isinstance(self.sim, SLOSimulation):
-            ch3 = {k: v for k, v in changes.items() if k not in ("objective", "walk_speed", "quality_threshold")}
-            if ch3:
-                self.sim.retune_slo(**ch3)
-            return True
-        return False  # oracle positions: nothing localises, the switch rebuilds
 
     def step(self, n: int = 1) -> int:
         done = 0
@@ -187,21 +166,10 @@ class SLOSession(BaseSession):
 
     # ------------------------------------------------------------------ history
     def _metric_row(self, info: Any) -> tuple[float, ...]:
-        s = self.sim.state
-        if isinstance(self.sim, SLOSwarm):
-            info = info if info is not None else self.sim.info()
-            return (self.clock(), float(info.e_abs["mean"][0]), float(info.e_abs["median"][0]),
-                    float(info.e_rel["median"][0]), float(info.distance["median"][0]),
-                    float(info.best_fitness[0]), float(info.dead_reckoning[0]))
-        dist = float(stats(pair_distances(s.x[:, :, :2]))["median"][0])
-        best = float(s.f_yg[0])
-        b = beliefs_of(self.sim)
-        if b is None:
-            return (self.clock(), 0.0, 0.0, 0.0, dist, best, 0.0)
-        err = pair_errors(s.x, b.est, b.valid)
-        return (self.clock(), float(stats(err["abs"])["mean"][0]), float(stats(err["abs"])["median"][0]),
-                float(stats(err["rel"])["median"][0]), dist, best,
-                float(dead_reckoning_share(b.kind, b.valid)[0]))
+        info = info if info is not None else self.sim.info()
+        return (self.clock(), float(info.e_abs["mean"][0]), float(info.e_abs["median"][0]),
+                float(info.e_rel["median"][0]), float(info.distance["median"][0]),
+                float(info.best_fitness[0]), float(info.dead_reckoning[0]))
 
     # ------------------------------------------------------------------ views
     def _pair(self, i: int, b: Any, x: np.ndarray) -> PairView | None:

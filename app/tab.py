@@ -5,8 +5,10 @@ at most ``SCENE_HZ`` times a second and the plots and readouts at most ``PLOT_HZ
 so that plot traffic never holds up the scene.
 
 A tab shows one kind of scene at a time: a Chapter 3 swarm (``Session``, ``Panels``,
-``ArenaView``) or a Chapter 4–5 fleet (``FleetSession``, ``FleetPanels``, ``FleetView``).
-Loading a scene of the other kind (preset dropdown, upload) swaps all three in place.
+``ArenaView``), a Chapter 4–5 fleet (``FleetSession``, ``FleetPanels``, ``FleetView``), a
+Chapter 6–8 acoustic swarm (``SonarSession``…) or Mai's SLO swarm (``SLOSession``…); the
+first three run on true or SLO-estimated positions (``[slo] swarm = "host"``) in their own
+scene. Loading a scene of another kind (preset dropdown, upload) swaps all three in place.
 """
 
 from __future__ import annotations
@@ -49,7 +51,7 @@ class Kind:
 
 
 KINDS = (Kind(FleetSession, FleetPanels, FleetView), Kind(Session, Panels, ArenaView))
-KINDS = (Kind(SLOSession, SLOPanels, SLOView),) + KINDS  # [slo] scenes first: they have no [world]
+KINDS = (Kind(SLOSession, SLOPanels, SLOView),) + KINDS  # Mai's swarm (slo.swarm = "slo") before the free swarm
 KINDS = KINDS[:1] + (Kind(SonarSession, SonarPanels, SonarView),) + KINDS[1:]  # [acoustics] scenes
 
 

@@ -14,15 +14,16 @@ import json
 import numpy as np
 import pytest
 
+from shoal.app.panels import Panels
 from shoal.app.server import start_server
 from shoal.app.session import Session, TRAJECTORY_COLUMNS
 from shoal.app.slo_panels import SLOPanels
 from shoal.app.slo_scene import SLOView
 from shoal.app.slo_session import SLOSession
-from shoal.engine.sim import Simulation
 from shoal.engine.slo import SLOSwarm
 from shoal.engine.slo_source import SLOSimulation
 from shoal.presets import io as presets_io
+from shoal.presets.io import PresetError
 
 
 @pytest.fixture(scope="module")
@@ -117,23 +118,17 @@ def test_bad_values_are_refused_and_the_run_is_untouched(tab):
     assert s.sim is sim and s.scenario is scenario and s.sim.state.k == 4
 
 
-def test_oracle_switch_on_slo_adapted_changes_the_simulation_class(tab):
-    p = tab.panels
-    p.preset.value = "slo-adapted"
-    s = tab.session
-    assert isinstance(s, SLOSession) and type(s.sim) is SLOSimulation
-    x0 = s.sim.state.x.copy()
-    tab.panels.positions.value = "oracle (true)"
-    assert type(s.sim) is Simulation and s.scenario.slo.positions == "oracle"
-    np.testing.assert_array_equal(s.sim.state.x, x0)  # same seed, same start
-    s.step(3)
-    tab.tick(1.0)
-    assert not tab.arena.nodes["ghosts"].visible and "Oracle" in tab.panels.inspector.content
-    tab.panels.positions.value = "SLO (estimated)"
-    assert type(s.sim) is SLOSimulation and s.sim.seed == presets_io.load("slo-adapted").sim.seed
-    s.step(3)
-    tab.tick(2.0)
-    assert tab.arena.nodes["ghosts"].visible
+def test_slo_adapted_opens_in_the_chapter3_scene_and_the_slo_session_keeps_mais_swarm(tab):
+    """The Chapter 3 swarm on SLO positions has its own scene (its Positions folder, see
+    test_app_positions.py); the SLO session runs Mai's swarm only and says why."""
+    tab.panels.preset.value = "slo-adapted"
+    assert isinstance(tab.session, Session) and isinstance(tab.panels, Panels)
+    assert type(tab.session.sim) is SLOSimulation
+    with pytest.raises(PresetError, match="slo.swarm"):
+        SLOSession(presets_io.load("slo-adapted"))
+    tab.panels.preset.value = "slo-walk"
+    assert isinstance(tab.session, SLOSession) and isinstance(tab.session.sim, SLOSwarm)
+    assert not hasattr(tab.panels, "positions")  # no oracle switch for Mai's swarm: it always localises
 
 
 def test_plots_notes_and_export(tab):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from shoal.app.session import Session
 from shoal.app.slo_session import SLOSession
 from shoal.engine.slo import SLOSwarm
 from shoal.engine.slo_source import SLOSimulation
@@ -82,7 +83,7 @@ def test_the_session_retunes_live_and_rebuilds_only_when_it_must():
 
 
 def test_the_chapter3_swarm_on_slo_positions_retunes_its_source():
-    s = SLOSession(presets_io.load("slo-adapted"))
+    s = Session(presets_io.load("slo-adapted"))  # the Chapter 3 scene runs it (Positions folder)
     assert isinstance(s.sim, SLOSimulation)
     s.step(4)
     engine, x = s.sim, s.sim.state.x.copy()

@@ -1,7 +1,8 @@
 """SLO scenes in a real headless Chromium: switching to slo-walk through the preset dropdown
-draws the ghost overlay of the observer robot, and the oracle/SLO switch in the GUI changes
-the engine that runs, in an SLO scene and in a fleet scene (its Positions folder). One
-server and one page for the module; tests run in file order."""
+draws the ghost overlay of the observer robot, and the oracle/SLO switch of a Positions
+folder changes the engine that runs, in the Chapter 3 scene (slo-adapted, whose controller
+still changes live) and in a fleet scene. One server and one page for the module; tests run
+in file order."""
 
 from __future__ import annotations
 
@@ -18,9 +19,10 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import choose, dismiss_toasts, wait_until  # noqa: E402
+from browser_helpers import choose, dismiss_toasts, number_box, wait_until  # noqa: E402
 
 from shoal.app.fleet_session import FleetSession  # noqa: E402
+from shoal.app.session import Session  # noqa: E402
 from shoal.app.slo_session import SLOSession  # noqa: E402
 from shoal.engine.fleet import Fleet  # noqa: E402
 from shoal.engine.sim import Simulation  # noqa: E402
@@ -48,15 +50,28 @@ def test_the_dropdown_switches_to_slo_walk_and_the_ghosts_are_drawn(server, page
     assert tab.arena.nodes["ghosts"].visible and len(j) >= 1
 
 
-def test_the_oracle_switch_in_the_gui_changes_the_engine(server, page, cid):
+def test_the_chapter3_positions_switch_and_controller_in_the_gui(server, page, cid):
     dismiss_toasts(page)
     choose(page, "preset", "slo-adapted")
-    wait_until(lambda: type(server.tabs[cid].session.sim) is SLOSimulation, what="SLO positions")
-    page.get_by_role("tab", name="SLO", exact=True).click()
-    choose(page, "positions", "oracle (true)")
-    wait_until(lambda: type(server.tabs[cid].session.sim) is Simulation, what="the oracle swarm")
+    wait_until(lambda: isinstance(server.tabs[cid].session, Session), what="the Chapter 3 scene")
+    session = server.tabs[cid].session
+    assert type(session.sim) is SLOSimulation
+    page.get_by_role("tab", name="Controller", exact=True).click()
+    sim = session.sim
+    box = number_box(page, "U [m/s]")  # physical mode: A+ = 30, Δt = 0.1, so ω = 1 − 3/U
+    box.fill("4")
+    box.press("Enter")
+    wait_until(lambda: session.scenario.controller.U == 4.0, what="U = 4")
+    assert session.sim is sim and session.coefficients()[0] == pytest.approx(0.25)  # no rebuild
+    choose(page, "positions", "oracle (true)")  # the Positions folder starts open on SLO positions
+    wait_until(lambda: type(session.sim) is Simulation, what="the oracle swarm")
+    assert server.tabs[cid].session is session and session.scenario.controller.U == 4.0
     choose(page, "positions", "SLO (estimated)")
-    wait_until(lambda: type(server.tabs[cid].session.sim) is SLOSimulation, what="SLO positions again")
+    wait_until(lambda: type(session.sim) is SLOSimulation, what="SLO positions again")
+    page.get_by_role("button", name="Step", exact=True).click()
+    wait_until(lambda: session.sim.state.k >= 1 and server.tabs[cid].arena.drawn_revision == session.revision,
+               what="a step drawn")
+    assert server.tabs[cid].arena.nodes["ghosts"].visible
 
 
 def test_the_positions_switch_of_a_fleet_scene_changes_the_engine(server, page, cid):
