@@ -26,6 +26,7 @@ from .session import check_supported
 from .tab import TabApp, session_for
 
 TICK_HZ = 60.0
+PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round
 LOOPBACK_NAMES = ("localhost",)
 DEFAULT_MAX_SESSIONS = 24  # browser tabs with a simulation at once (``shoal serve --max-sessions``)
 FULL_TITLE = "This Shoal server is full"
@@ -194,14 +195,21 @@ class ShoalServer:
 
     # ------------------------------------------------------------------ ticking
     def _run(self) -> None:
+        """Tick every tab, round after round. Scenes come first: once a round has spent
+        ``PLOT_SHARE`` of a period, the (costly) plots still due wait for a later round, and
+        each round starts one tab further on, so with many tabs every scene keeps moving and
+        the plots of all tabs refresh in turn, less often."""
         period = 1.0 / TICK_HZ
+        turn = 0
         while not self._stopping.is_set():
             start = time.monotonic()
             with self._lock:
                 tabs = [tab for tab in self.tabs.values() if tab.auto_tick]
-            for tab in tabs:
+            turn = (turn + 1) % max(len(tabs), 1)
+            plots_until = start + PLOT_SHARE * period
+            for tab in tabs[turn:] + tabs[:turn]:
                 try:
-                    tab.tick(start)
+                    tab.tick(start, plots=time.monotonic() < plots_until)
                 except Exception as err:  # one broken tab must not stop the others
                     print(f"shoal: tab update failed: {err!r}", file=sys.stderr)
             self._stopping.wait(max(0.0, period - (time.monotonic() - start)))

@@ -165,12 +165,13 @@ class TabApp:
         if self._send_client is not None:
             self._send_client(name, content)
 
-    def tick(self, now: float | None = None) -> None:
-        """Advance playback and redraw what is due (a call while another runs is skipped)."""
+    def tick(self, now: float | None = None, plots: bool = True) -> None:
+        """Advance playback and redraw what is due (a call while another runs is skipped). With
+        ``plots=False`` the plots and readouts wait, still due, for a later tick (a busy server)."""
         if not self._ticking.acquire(blocking=False):
             return
         try:
-            self._tick(time.monotonic() if now is None else now)
+            self._tick(time.monotonic() if now is None else now, plots)
         finally:
             self._ticking.release()
 
@@ -182,7 +183,7 @@ class TabApp:
             if not self.session.step(1) or time.monotonic() >= end:
                 return
 
-    def _tick(self, now: float) -> None:
+    def _tick(self, now: float, plots: bool = True) -> None:
         s = self.session
         elapsed = 0.0 if self._last is None else max(0.0, now - self._last)
         self._last = now
@@ -208,7 +209,7 @@ class TabApp:
                 self.arena.draw_twin(twin)
                 self.panels.on_snapshot(snap)
             self._next_scene = now + 1.0 / self.SCENE_HZ
-        if now >= self._next_plot:
+        if plots and now >= self._next_plot:
             key = (s.revision, s.selected_robot, getattr(s, "selected_dim", 0), s.playing)
             if key != self._plot_key:
                 with self._atomic():  # one wake-up for all of them (wake-ups cost the ticking thread the GIL)

@@ -139,6 +139,24 @@ def test_a_heavy_tab_steps_within_its_budget_and_drops_the_rest(server):
         server.viser.scene.reset()
 
 
+def test_a_busy_round_lets_plots_wait_but_not_the_scene(server):
+    """The server ticks a tab with ``plots=False`` once its round has spent its plot share: the
+    arena still moves; status and plots stay due and refresh on a later tick."""
+    tab = TabApp(session_for(load("default")), server.viser.gui, server.viser.scene)
+    try:
+        tab.tick(0.0)
+        status, drawn = tab.panels.status.content, tab.arena.drawn_revision
+        tab.session.step(5)
+        tab.tick(1.0, plots=False)
+        assert tab.arena.drawn_revision != drawn and tab.panels.status.content == status
+        tab.tick(1.01)
+        assert tab.panels.status.content != status
+    finally:
+        tab.close()
+        server.viser.gui.reset()
+        server.viser.scene.reset()
+
+
 def test_max_sessions_is_a_serve_option_with_a_checked_value():
     assert build_parser().parse_args(["serve"]).max_sessions == DEFAULT_MAX_SESSIONS
     assert build_parser().parse_args(["serve", "--max-sessions", "3"]).max_sessions == 3
