@@ -12,6 +12,7 @@ import socket
 import sys
 import threading
 import time
+import weakref
 from typing import Any
 
 import viser
@@ -20,14 +21,17 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from .base_session import BaseSession
+from .base_session import MAX_UPLOAD_BYTES, BaseSession
+from .replay import MAX_REPLAY_BYTES
 from .scene import CAMERA_FOV, CAMERA_HEIGHT, camera_height
 from .session import check_supported
 from .tab import TabApp, session_for
+from .upload_guard import guard_uploads
 
 TICK_HZ = 60.0
 PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round
 LOOPBACK_NAMES = ("localhost",)
+MAX_TRANSFER_BYTES = max(MAX_UPLOAD_BYTES, MAX_REPLAY_BYTES)  # any upload; bigger ones are dropped as they arrive
 DEFAULT_MAX_SESSIONS = 24  # browser tabs with a simulation at once (``shoal serve --max-sessions``)
 FULL_TITLE = "This Shoal server is full"
 FULL_MESSAGE = ("This server already runs {n} sessions (its maximum), so this tab has no simulation. "
@@ -79,6 +83,7 @@ class ShoalServer:
         self.max_sessions = max_sessions
         self.turned_away: set[int] = set()  # client ids shown the "server is full" message
         self._opening: set[int] = set()  # client ids whose session is being built
+        self._errors: weakref.WeakKeyDictionary[TabApp, str] = weakref.WeakKeyDictionary()  # last error per tab
         self.viser = viser.ViserServer(host=host, port=port, verbose=False)
         self.port = self.viser.get_port()
         self.tabs: dict[int, TabApp] = {}
@@ -185,6 +190,9 @@ class ShoalServer:
             fitted.set()  # once: the first report tells the canvas' aspect; later moves are the user's
             camera.position = (0.0, 0.0, camera_height(camera.aspect))
 
+        guard_uploads(client.gui, MAX_TRANSFER_BYTES, lambda name, size: client.add_notification(
+            f"Refused: uploaded {name}", f"{size / 2**20:.1f} MiB is more than the {MAX_TRANSFER_BYTES // 2**20} MiB "
+            "an upload may have", color="red", auto_close_seconds=10.0))
         tab = self.open_tab(client.client_id, client.gui, client.scene, client)
         tab.session.play()
 
@@ -211,7 +219,9 @@ class ShoalServer:
                 try:
                     tab.tick(start, plots=time.monotonic() < plots_until)
                 except Exception as err:  # one broken tab must not stop the others
-                    print(f"shoal: tab update failed: {err!r}", file=sys.stderr)
+                    if self._errors.get(tab) != repr(err):  # said once per tab and error, not 60 times a second
+                        self._errors[tab] = repr(err)
+                        print(f"shoal: tab update failed: {err!r}", file=sys.stderr)
             self._stopping.wait(max(0.0, period - (time.monotonic() - start)))
 
     def stop(self) -> None:

@@ -144,9 +144,9 @@ class TickLog:
         self.stamps[cid], self.draws[cid] = [], 0
         tick, draw = tab.tick, tab.arena.draw
 
-        def counted_tick(now: float | None = None) -> None:
+        def counted_tick(now: float | None = None, **kwargs: Any) -> None:
             self.stamps[cid].append(time.monotonic())
-            tick(now)
+            tick(now, **kwargs)
 
         def counted_draw(snap: Any) -> None:
             self.draws[cid] += 1

@@ -157,6 +157,69 @@ def test_a_busy_round_lets_plots_wait_but_not_the_scene(server):
         server.viser.scene.reset()
 
 
+def test_a_tab_that_keeps_failing_is_reported_once_and_the_others_go_on(server, capfd):
+    broken = server.open_tab(-5, server.viser.gui, server.viser.scene)
+    try:
+        def fail(snap):
+            raise RuntimeError("broken arena")
+
+        broken.arena.draw = fail
+        broken.session.play()
+        client = WireClient(server.port)
+        try:
+            wait_until(lambda: len(server.tabs) == 2, what="a healthy tab beside the broken one")
+            healthy = next(s for cid, s in server.sessions.items() if cid != -5)
+            k = healthy.sim.state.k
+            wait_until(lambda: healthy.sim.state.k > k + 10 and broken.session.sim.state.k > 10,
+                       what="both to advance")
+        finally:
+            client.close()
+    finally:
+        server.close_tab(-5)
+        server.viser.gui.reset()
+        server.viser.scene.reset()
+    assert capfd.readouterr().err.count("tab update failed: RuntimeError('broken arena')") == 1
+
+
+def test_an_oversized_upload_is_dropped_while_it_arrives(server):
+    """A client that declares, or just sends, more than any upload may have: viser's buffer for
+    it is dropped at once and the tab is told; an ordinary upload still works."""
+    import uuid
+
+    from viser import _messages as m
+
+    from shoal.app.server import MAX_TRANSFER_BYTES
+    from shoal.presets.io import to_toml
+
+    c = WireClient(server.port, decode=True)
+    try:
+        wait_until(lambda: c.uuid_of("Upload preset"), what="the upload button")
+        button = c.uuid_of("Upload preset")
+        cid = next(iter(server.tabs))
+        states = server.viser.get_clients()[cid].gui._current_file_upload_states
+
+        def start(name: str, size: int, parts: int) -> str:
+            tid = str(uuid.uuid4())
+            c.send(m.FileTransferStartUpload(source_component_uuid=button, transfer_uuid=tid, filename=name,
+                                             mime_type="application/toml", part_count=parts, size_bytes=size))
+            return tid
+
+        start("declared.toml", 10 * MAX_TRANSFER_BYTES, 1000)
+        wait_until(lambda: c.saw("Refused: uploaded declared.toml"), what="the refusal of a declared giant")
+        liar = start("liar.toml", 1000, 1000)
+        part = b"#" * (MAX_TRANSFER_BYTES // 8)
+        for i in range(12):
+            c.send(m.FileTransferPart(source_component_uuid=button, transfer_uuid=liar, part_index=i, content=part))
+        wait_until(lambda: c.saw("Refused: uploaded liar.toml"), what="the refusal of a growing upload")
+        assert not states
+        data = to_toml(load("rastrigin")).encode()
+        good = start("mine.toml", len(data), 1)
+        c.send(m.FileTransferPart(source_component_uuid=button, transfer_uuid=good, part_index=0, content=data))
+        wait_until(lambda: server.sessions[cid].scenario.name == "rastrigin", what="the good upload loaded")
+    finally:
+        c.close()
+
+
 def test_max_sessions_is_a_serve_option_with_a_checked_value():
     assert build_parser().parse_args(["serve"]).max_sessions == DEFAULT_MAX_SESSIONS
     assert build_parser().parse_args(["serve", "--max-sessions", "3"]).max_sessions == 3

@@ -51,6 +51,7 @@ class WireClient:
         self.nbytes = 0
         self.robot_updates = 0
         self.texts: list[str] = []
+        self.gui: list[dict[str, Any]] = []  # (decode=True) every GUI message received
         self.closed = threading.Event()
         self._lock = threading.Lock()
         self.ws = connect(f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"],
@@ -68,12 +69,14 @@ class WireClient:
                 if isinstance(payload, str):
                     payload = payload.encode()
                 texts: list[str] = []
+                gui: list[dict[str, Any]] = []
                 robots = 0
                 if self.decode:
                     for m in decode_frame(payload):
                         kind = m.get("type", "")
-                        if kind.startswith("Gui"):
+                        if kind.startswith(("Gui", "Notification")):
                             texts += _texts(m)
+                            gui.append(m)
                         elif (kind == "SceneNodeUpdateMessage" and str(m.get("name", "")).endswith("/robots")
                               and "points" in (m.get("updates") or {})):
                             robots += 1
@@ -81,6 +84,7 @@ class WireClient:
                     self.frames += 1
                     self.nbytes += len(payload)
                     self.texts += texts
+                    self.gui += gui
                     self.robot_updates += robots
         except ConnectionClosed:
             pass
@@ -95,6 +99,15 @@ class WireClient:
     def saw(self, text: str) -> bool:
         with self._lock:
             return any(text in t for t in self.texts)
+
+    def uuid_of(self, label: str) -> str | None:
+        """The id of the GUI element labelled ``label`` (decode=True), if it arrived."""
+        with self._lock:
+            return next((m["uuid"] for m in self.gui if (m.get("props") or {}).get("label") == label), None)
+
+    def send(self, message: Any) -> None:
+        """Send one viser message as a page would."""
+        self.ws.send(msgspec.msgpack.encode(message.as_serializable_dict()))
 
     def close(self) -> None:
         self.ws.close()
