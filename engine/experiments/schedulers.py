@@ -78,7 +78,7 @@ class LocalPool:
                         res = fut.result()
                     except BrokenProcessPool:
                         continue  # every unfinished item fails alike; retried by the next pool
-                    i = futures[fut]
+                    i = futures.pop(fut)  # a finished future keeps its result: drop it
                     del pending[i]
                     yield i, res
             finally:
