@@ -118,7 +118,9 @@ class DaskCluster:
         }  # earlier items first, so earlier jobs finish (and are saved) first
         try:
             for fut in dask_completed(list(futures), loop=self.client.loop):
-                yield futures[fut], fut.result()
+                i, res = futures.pop(fut), fut.result()  # a held future keeps its result on a worker
+                del fut
+                yield i, res
         finally:
             self.client.cancel([f for f in futures if not f.done()])
 
