@@ -24,6 +24,7 @@ min(playback steps/s, 30).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import shutil
 import sys
 import tempfile
@@ -120,7 +121,7 @@ def measure(preset: str, overrides: list[str], seconds: float, warmup: float) ->
 
     from shoal.app.server import start_server
 
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as tmp, contextlib.redirect_stdout(sys.stderr):  # viser's banner
         server = start_server(str(write_preset(preset, overrides, Path(tmp))), port=0)
     counter = FrameCounter()
     try:
@@ -131,9 +132,11 @@ def measure(preset: str, overrides: list[str], seconds: float, warmup: float) ->
                 page.add_init_script(COUNT_RAF)
                 page.on("websocket", lambda ws: ws.on("framereceived", counter.on_frame))
                 page.goto(f"http://127.0.0.1:{server.port}/")
-                page.wait_for_selector("label:has-text('robots')", timeout=120_000)
-                wait_until(lambda: len(server.tabs) == 1, timeout=60, what="the tab")
+                page.wait_for_selector("canvas", timeout=120_000)
+                wait_until(lambda: len(server.tabs) == 1, timeout=120, what="the tab")
                 tab = next(iter(server.tabs.values()))
+                wait_until(lambda: tab.arena.drawn_revision >= 0, timeout=120, what="the first scene")
+                page.wait_for_selector("button:has-text('Play'), button:has-text('Pause')", timeout=120_000)
                 draws = [0]
                 draw = tab.arena.draw
 
@@ -164,7 +167,8 @@ def measure(preset: str, overrides: list[str], seconds: float, warmup: float) ->
             finally:
                 browser.close()
     finally:
-        server.stop()
+        with contextlib.redirect_stdout(sys.stderr):
+            server.stop()
     t = [s[0] for s in samples]
     span = t[-1] - t[0]
 
@@ -185,8 +189,9 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="6 s per case instead of --seconds, first case only")
     ap.add_argument("--seconds", type=float, default=20.0, help="measuring window per case")
     ap.add_argument("--warmup", type=float, default=5.0, help="seconds of play before counting")
+    ap.add_argument("--cases", type=int, nargs="*", help="indices of the cases to run (0-based)")
     args = ap.parse_args()
-    cases = CASES[:1] if args.quick else CASES
+    cases = [CASES[i] for i in args.cases] if args.cases else CASES[:1] if args.quick else CASES
     seconds = 6.0 if args.quick else args.seconds
     rows = []
     for label, preset, overrides in cases:

@@ -3,24 +3,27 @@
 Run: python benchmarks/bench_memory.py [--quick] [--minutes 60] [--runs 10000] [--skip-session]
      [--skip-batch] [--png benchmarks/memory.png]
 
-(a) For each scene kind (Ch. 3 swarm, Ch. 4–5 fleet, Ch. 7 acoustic swarm, SLO walk) the
-    app's tab (session, panels, plots and arena on a real viser server, no browser) is ticked
+(a) For each scene kind (Ch. 3 swarm, Ch. 4–5 fleet, Ch. 7 acoustic swarm, SLO walk), in a
+    fresh Python process each, the app's tab (session, panels, plots and arena on a real viser server, no browser) is ticked
     headless as the server's 60 Hz ticking thread would, on a simulated clock, with playback
     at 30 steps/s and a run that never ends: ``--minutes`` of session time are
     1800 × minutes scene frames. The resident set size (RSS) of the process, the history
     lengths and the number of messages viser keeps for late-joining clients are recorded
     every simulated minute; the plot shows RSS against scene frames.
-(b) ``iter_jobs``/``run_jobs`` over ``--runs`` one-run jobs of a cheap scene (``default``,
-    10 robots, 20 steps; every job another start spread, as in a parameter sweep), with one
-    worker and with 2 worker processes: RSS of this process (plus the workers') after every
-    1000 finished runs, streaming the results away (``iter_jobs``) and keeping them all
-    (``run_jobs``).
+(b) ``shoal sweep`` (``run_sweep``, in this process) of ``default`` with 10 robots and 20 steps
+    over 100 start spreads × ``--runs``/100 runs per cell, with 1 and 2 worker processes: RSS
+    of this process plus its workers, sampled every 0.05 s, against the runs of the cells
+    saved so far. Also the runner underneath: ``iter_jobs``/``run_jobs`` over ``--runs``
+    one-run jobs of the same scene (every job another spread), RSS after every 1000 finished
+    runs, streaming the results away (``iter_jobs``) and keeping them all (``run_jobs``).
 """
 
 from __future__ import annotations
 
 import argparse
 import gc
+import json
+import subprocess
 import sys
 import threading
 import time
@@ -41,6 +44,14 @@ def viser_backlog(server) -> int:
         return len(server.viser._websock_server._broadcast_buffer.message_from_id)
     except AttributeError:
         return -1
+
+
+def session_memory_isolated(preset: str, minutes: float) -> list[dict]:
+    """:func:`session_memory` in a fresh Python process, so every scene starts from the same
+    baseline (memory an earlier scene freed is not reused by the next)."""
+    out = subprocess.run([sys.executable, __file__, "--one-session", preset, "--minutes", str(minutes)],
+                         check=True, capture_output=True, text=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
 
 def session_memory(preset: str, minutes: float) -> list[dict]:
@@ -136,6 +147,50 @@ def batch_memory(runs: int, workers: int, keep: bool) -> list[dict]:
     return samples
 
 
+def sweep_memory(runs: int, workers: int) -> list[dict]:
+    """RSS (this process + workers) against runs saved, over a ``runs``-run ``run_sweep``."""
+    import tempfile
+
+    from shoal.engine.sweep.run import run_sweep
+
+    cells, per_cell = 100, max(1, runs // 100)
+    grid = ["init.spread=" + ",".join(f"{1 + i / 10:g}" for i in range(cells))]
+    samples: list[dict] = []
+    gc.collect()
+    with tempfile.TemporaryDirectory() as tmp, RssSampler() as sampler:
+        out = Path(tmp) / "sweep"
+        stop = threading.Event()
+        t0 = time.perf_counter()
+
+        def watch() -> None:
+            while not stop.is_set():
+                saved = len(list((out / "cells").glob("*.csv"))) if (out / "cells").is_dir() else 0
+                samples.append({"runs": saved * per_cell, "rss": sampler.total(), "wall": time.perf_counter() - t0})
+                stop.wait(0.05)
+
+        watcher = threading.Thread(target=watch, daemon=True)
+        watcher.start()
+        try:
+            run_sweep("default", grid, out, runs=per_cell, steps=20, sets=["sim.robots=10"], workers=workers,
+                      progress=False)
+        finally:
+            stop.set()
+            watcher.join()
+        samples.append({"runs": cells * per_cell, "rss": sampler.total(), "wall": time.perf_counter() - t0,
+                        "peak": sampler.peak})
+    return samples
+
+
+def per_thousand(samples: list[dict]) -> list[dict]:
+    """The first sample at or past every 1000 runs (and the last)."""
+    out, mark = [samples[0]], 1000
+    for s in samples:
+        if s["runs"] >= mark:
+            out.append(s)
+            mark = (s["runs"] // 1000 + 1) * 1000
+    return out + ([samples[-1]] if out[-1] is not samples[-1] else [])
+
+
 def plot(sessions: dict[str, list[dict]], batches: dict[str, list[dict]], path: Path) -> None:
     import io
 
@@ -165,7 +220,7 @@ def plot(sessions: dict[str, list[dict]], batches: dict[str, list[dict]], path: 
             ax.plot([s["runs"] for s in samples], [s["rss"] for s in samples], marker=".", label=label)
         ax.set_xlabel("runs finished")
         ax.set_ylabel("RSS (MiB), main process + workers")
-        ax.set_title("(b) batch of one-run jobs")
+        ax.set_title("(b) 10,000-run sweep and batch")
         ax.set_ylim(bottom=0)
         ax.legend(fontsize=7)
         ax.grid(True, alpha=0.3)
@@ -184,14 +239,18 @@ def main() -> None:
     ap.add_argument("--skip-session", action="store_true")
     ap.add_argument("--skip-batch", action="store_true")
     ap.add_argument("--png", type=Path, default=Path(__file__).resolve().parent / "memory.png")
+    ap.add_argument("--one-session", metavar="PRESET", help=argparse.SUPPRESS)  # child process of (a)
     args = ap.parse_args()
+    if args.one_session:
+        print(json.dumps(session_memory(args.one_session, args.minutes)))
+        return
     minutes, runs = (5.0, 2000) if args.quick else (args.minutes, args.runs)
     scenes = dict(list(SCENES.items())[:1]) if args.quick else SCENES
     sessions: dict[str, list[dict]] = {}
     if not args.skip_session:
         rows = []
         for label, preset in scenes.items():
-            s = session_memory(preset, minutes)
+            s = session_memory_isolated(preset, minutes)
             sessions[label] = s
             first, tenth, last = s[1] if len(s) > 1 else s[0], s[min(10, len(s) - 1)], s[-1]
             rows.append([label, str(last["frames"]), fmt(first["rss"]), fmt(tenth["rss"]), fmt(last["rss"]),
@@ -203,7 +262,20 @@ def main() -> None:
                      "history steps", "metric rows", "viser backlog msgs", "wall s"], rows))
     batches: dict[str, list[dict]] = {}
     if not args.skip_batch:
+        import matplotlib.pyplot  # noqa: F401  (imported once up front: the sweep plots its medians at the end)
+
+        import shoal.engine.sweep.run  # noqa: F401
+
         rows = []
+        for workers in (1, 2):
+            label = f"shoal sweep (100 cells), {workers} worker{'s' * (workers > 1)}"
+            s = sweep_memory(runs, workers)
+            batches[label] = s
+            marks = per_thousand(s)
+            rows.append([label, str(s[-1]["runs"]), fmt(s[0]["rss"]), fmt(marks[1]["rss"] if len(marks) > 1 else s[0]["rss"]),
+                         fmt(s[-1]["rss"]), fmt(s[-1]["peak"]), " ".join(str(round(x["rss"])) for x in marks[1:]),
+                         fmt(s[-1]["wall"])])
+            print(f"  {label}: {[(x['runs'], round(x['rss'])) for x in marks]}", file=sys.stderr)
         for workers in (1, 2):
             for keep in (False, True):
                 label = f"{'run_jobs (keep all)' if keep else 'iter_jobs (stream)'}, {workers} worker{'s' * (workers > 1)}"
@@ -213,7 +285,7 @@ def main() -> None:
                 rows.append([label, str(s[-1]["runs"]), fmt(s[0]["rss"]), fmt(s[1]["rss"]), fmt(s[-1]["rss"]),
                              fmt(s[-1]["peak"]), " ".join(map(str, per_k)), fmt(s[-1]["wall"])])
                 print(f"  {label}: {per_k}", file=sys.stderr)
-        print(f"\n(b) {runs} one-run jobs (default, 10 robots, 20 steps); RSS of this process + workers, MiB\n")
+        print(f"\n(b) {runs} runs (default, 10 robots, 20 steps); RSS of this process + workers, MiB\n")
         print(table(["how", "runs", "RSS before", "after 1000 runs", "at the end", "peak",
                      "RSS after each 1000 runs", "wall s"], rows))
     if sessions or batches:
