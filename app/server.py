@@ -12,6 +12,7 @@ import socket
 import sys
 import threading
 import time
+import traceback
 import weakref
 from typing import Any
 
@@ -221,7 +222,9 @@ class ShoalServer:
                 except Exception as err:  # one broken tab must not stop the others
                     if self._errors.get(tab) != repr(err):  # said once per tab and error, not 60 times a second
                         self._errors[tab] = repr(err)
-                        print(f"shoal: tab update failed: {err!r}", file=sys.stderr)
+                        where = traceback.extract_tb(err.__traceback__)[-3:]
+                        at = " < ".join(f"{f.filename.rsplit('/', 1)[-1]}:{f.lineno} {f.name}" for f in reversed(where))
+                        print(f"shoal: tab update failed: {err!r} at {at}", file=sys.stderr)
             self._stopping.wait(max(0.0, period - (time.monotonic() - start)))
 
     def stop(self) -> None:
