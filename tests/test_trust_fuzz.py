@@ -36,12 +36,6 @@ def leaf_paths(data: Any, prefix: str = "") -> list[str]:
     return [prefix[:-1]]
 
 
-def resolves(data: Any, dotted: str) -> bool:
-    """Does at least the first part of ``dotted`` exist in ``data``?"""
-    head = dotted.split(".")[0]
-    return isinstance(data, dict) and head in data
-
-
 def check_refusal(err: PresetError, data: Any = None, path: str | None = None) -> None:
     """Messages are plain lines that each name a field: a key of the input, a section of the model
     or (with ``path``) the changed field's section."""
