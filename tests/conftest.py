@@ -4,3 +4,24 @@ from hypothesis import settings
 
 settings.register_profile("shoal", deadline=None)
 settings.load_profile("shoal")
+
+
+import pytest  # noqa: E402
+from app_helpers import hand_tab  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def server(request):
+    """An app server on a free port showing the test module's ``APP_PRESET`` (default "default")."""
+    from shoal.app.server import start_server
+
+    srv = start_server(getattr(request.module, "APP_PRESET", "default"), port=0)
+    yield srv
+    srv.stop()
+
+
+@pytest.fixture
+def tab(server):
+    """A hand-ticked tab (see :func:`app_helpers.hand_tab`)."""
+    with hand_tab(server) as t:
+        yield t

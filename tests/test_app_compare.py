@@ -14,7 +14,6 @@ from shoal.app import replay
 from shoal.app.compare import parse_overrides, twin_scenario
 from shoal.app.fleet_scene import PROBE_NODES
 from shoal.app.fleet_session import FleetSession
-from shoal.app.server import start_server
 from shoal.app.session import Session
 from shoal.app.tab import session_for
 from shoal.app.timeline import verify_replay
@@ -31,23 +30,6 @@ def session(name: str = "default", **overrides):
 
 def positions(s) -> dict[int, np.ndarray]:
     return {f.k: f.x for f in s.frames}
-
-
-@pytest.fixture(scope="module")
-def server():
-    srv = start_server("default", port=0)
-    yield srv
-    srv.stop()
-
-
-@pytest.fixture
-def tab(server):
-    t = server.open_tab(-3, server.viser.gui, server.viser.scene, auto_tick=False)
-    t.tick(0.0)
-    yield t
-    server.close_tab(-3)
-    server.viser.gui.reset()
-    server.viser.scene.reset()
 
 
 # ---------------------------------------------------------------------------- overrides

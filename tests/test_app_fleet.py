@@ -15,13 +15,13 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from app_helpers import HAND_TAB
 
 from shoal.app.fleet_panels import CONTROLLERS
 from shoal.app.fleet_scene import FleetView
 from shoal.app.fleet_session import EditRefused, FleetSession
 from shoal.app.panels import Panels
 from shoal.app.scene import ArenaView
-from shoal.app.server import start_server
 from shoal.app.session import Session, TRAJECTORY_COLUMNS, app_presets
 from shoal.engine.fleet import Fleet
 from shoal.engine.sensing import sense
@@ -37,21 +37,7 @@ class Click:
     modifier: str | None = None
 
 
-@pytest.fixture(scope="module")
-def server():
-    srv = start_server("course-dvc", port=0)
-    yield srv
-    srv.stop()
-
-
-@pytest.fixture
-def tab(server):
-    t = server.open_tab(-2, server.viser.gui, server.viser.scene, auto_tick=False)
-    t.tick(0.0)
-    yield t
-    server.close_tab(-2)
-    server.viser.gui.reset()
-    server.viser.scene.reset()
+APP_PRESET = "course-dvc"  # the shared ``server`` fixture (conftest.py) shows this scene
 
 
 def _last(tab):
@@ -369,7 +355,7 @@ def test_switching_between_chapter_3_and_fleet_scenes_in_one_tab(tab, server):
     tab.panels.preset.value = "rastrigin"
     assert isinstance(tab.session, Session) and isinstance(tab.panels, Panels)
     assert isinstance(tab.arena, ArenaView)
-    assert server.sessions[-2] is tab.session
+    assert server.sessions[HAND_TAB] is tab.session
     tab.tick(1.0)
     assert "landscape" in tab.arena.nodes and not any(n.startswith("obstacle") for n in tab.arena.nodes)
     tab.panels.mode.value = "raw"

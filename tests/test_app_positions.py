@@ -17,7 +17,6 @@ from shoal.app.fleet_scene import FleetView
 from shoal.app.fleet_session import FleetSession
 from shoal.app.panels import Panels
 from shoal.app.scene import ArenaView
-from shoal.app.server import start_server
 from shoal.app.session import Session
 from shoal.app.sonar_session import SonarSession
 from shoal.app.tab import session_for
@@ -31,21 +30,7 @@ from shoal.engine.sonar import AcousticSwarm
 from shoal.presets.io import validate
 
 
-@pytest.fixture(scope="module")
-def server():
-    srv = start_server("course-dvc", port=0)
-    yield srv
-    srv.stop()
-
-
-@pytest.fixture
-def tab(server):
-    t = server.open_tab(-5, server.viser.gui, server.viser.scene, auto_tick=False)
-    t.tick(0.0)
-    yield t
-    server.close_tab(-5)
-    server.viser.gui.reset()
-    server.viser.scene.reset()
+APP_PRESET = "course-dvc"  # the shared ``server`` fixture (conftest.py) shows this scene
 
 
 def _drawn(tab, key: str) -> np.ndarray:

@@ -15,6 +15,7 @@ import threading
 
 import numpy as np
 import pytest
+from app_helpers import HAND_TAB
 
 from shoal.app import plots
 from shoal.app.panels import field_bounds, slider_range, SPECS
@@ -26,24 +27,6 @@ from shoal.engine.coeffs import Constant, Physical
 from shoal.engine.objectives import Objective
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
-
-
-@pytest.fixture(scope="module")
-def server():
-    srv = start_server("default", port=0)
-    yield srv
-    srv.stop()
-
-
-@pytest.fixture
-def tab(server):
-    """A tab whose panels live on ``server.gui``; ticked only by the test."""
-    t = server.open_tab(-1, server.viser.gui, server.viser.scene, auto_tick=False)
-    t.tick(0.0)
-    yield t
-    server.close_tab(-1)
-    server.viser.gui.reset()
-    server.viser.scene.reset()
 
 
 def _raw(tab):
@@ -480,7 +463,7 @@ def test_speed_series_bounds():
 
 # ---------------------------------------------------------------------------- server
 def test_sessions_are_listed_per_tab(server, tab):
-    assert server.sessions[-1] is tab.session
+    assert server.sessions[HAND_TAB] is tab.session
 
 
 def test_taken_port_is_refused_clearly():

@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 from shoal.app.panels import Panels
-from shoal.app.server import start_server
 from shoal.app.session import Session, TRAJECTORY_COLUMNS
 from shoal.app.slo_panels import SLOPanels
 from shoal.app.slo_scene import SLOView
@@ -26,21 +25,7 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 
 
-@pytest.fixture(scope="module")
-def server():
-    srv = start_server("slo-walk", port=0)
-    yield srv
-    srv.stop()
-
-
-@pytest.fixture
-def tab(server):
-    t = server.open_tab(-3, server.viser.gui, server.viser.scene, auto_tick=False)
-    t.tick(0.0)
-    yield t
-    server.close_tab(-3)
-    server.viser.gui.reset()
-    server.viser.scene.reset()
+APP_PRESET = "slo-walk"  # the shared ``server`` fixture (conftest.py) shows this scene
 
 
 def _last(tab):

@@ -14,7 +14,6 @@ import pytest
 
 from shoal.app import sonar_plots
 from shoal.app.fleet_session import FleetSession
-from shoal.app.server import start_server
 from shoal.app.sonar_panels import SonarPanels
 from shoal.app.sonar_scene import SonarView
 from shoal.app.sonar_session import SonarSession, true_ray_index
@@ -30,21 +29,7 @@ class Drag:
     instance_index: int = 0
 
 
-@pytest.fixture(scope="module")
-def server():
-    srv = start_server("sonar-xb-pso", port=0)
-    yield srv
-    srv.stop()
-
-
-@pytest.fixture
-def tab(server):
-    t = server.open_tab(-3, server.viser.gui, server.viser.scene, auto_tick=False)
-    t.tick(0.0)
-    yield t
-    server.close_tab(-3)
-    server.viser.gui.reset()
-    server.viser.scene.reset()
+APP_PRESET = "sonar-xb-pso"  # the shared ``server`` fixture (conftest.py) shows this scene
 
 
 def _drawn(tab, now: float):

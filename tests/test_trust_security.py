@@ -16,6 +16,7 @@ import threading
 import time
 
 import pytest
+from app_helpers import hand_tab
 
 from shoal.app.base_session import MAX_UPLOAD_BYTES
 from shoal.app.cli import build_parser
@@ -120,22 +121,12 @@ class Writes:
 WRITES = Writes()
 
 
-@pytest.fixture(scope="module")
-def server():
-    srv = start_server("default", port=0)
-    yield srv
-    srv.stop()
-
-
 @pytest.fixture
 def tab(server, tmp_path, monkeypatch):
+    """A hand-ticked tab of the shared ``server`` (conftest.py), run from an empty folder."""
     monkeypatch.chdir(tmp_path)
-    t = server.open_tab(-9, server.viser.gui, server.viser.scene, auto_tick=False)
-    t.tick(0.0)
-    yield t
-    server.close_tab(-9)
-    server.viser.gui.reset()
-    server.viser.scene.reset()
+    with hand_tab(server) as t:
+        yield t
 
 
 def _evil_preset(name: str, filename: str) -> bytes:

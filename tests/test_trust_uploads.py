@@ -12,30 +12,20 @@ import json
 
 import numpy as np
 import pytest
+from app_helpers import hand_tab
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from shoal.app.base_session import MAX_UPLOAD_BYTES
-from shoal.app.server import start_server
 from shoal.presets import io as presets_io
-
-
-@pytest.fixture(scope="module")
-def server():
-    srv = start_server("default", port=0)
-    yield srv
-    srv.stop()
 
 
 @pytest.fixture
 def tab(server):
-    t = server.open_tab(-7, server.viser.gui, server.viser.scene, auto_tick=False)
-    t.tick(0.0)
-    t.session.step(4)
-    yield t
-    server.close_tab(-7)
-    server.viser.gui.reset()
-    server.viser.scene.reset()
+    """A hand-ticked tab (the shared ``server`` of conftest.py) four steps into its run."""
+    with hand_tab(server) as t:
+        t.session.step(4)
+        yield t
 
 
 def refused_untouched(tab, name: str, content: bytes) -> str:

@@ -1,0 +1,22 @@
+"""A hand-ticked app tab on a real viser server, shared by the app-level tests."""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+from typing import Any, Iterator
+
+HAND_TAB = -3  # client id of the tab a test drives (no browser behind it)
+
+
+@contextmanager
+def hand_tab(server: Any, cid: int = HAND_TAB) -> Iterator[Any]:
+    """A tab whose panels live on ``server.viser.gui``, ticked only by the test; closed (and
+    the server's GUI and scene cleared) afterwards."""
+    t = server.open_tab(cid, server.viser.gui, server.viser.scene, auto_tick=False)
+    t.tick(0.0)
+    try:
+        yield t
+    finally:
+        server.close_tab(cid)
+        server.viser.gui.reset()
+        server.viser.scene.reset()
