@@ -51,7 +51,7 @@ def test_walk_targets_write_their_files_and_name_every_case(tmp_path):
 
 
 def test_fig4_8_runs_both_entry_readings_and_they_differ(tmp_path):
-    reproduce("slo-neighbourhood", tmp_path, runs=2, workers=2, progress=False, generations=12)
+    reproduce("slo-neighbourhood", tmp_path, runs=2, workers=2, progress=False, generations=30)
     rows = _rows(tmp_path / "runs.csv")
     head = rows[0]
     err = {(r[0], r[1]): float(r[head.index("e_abs_avg")]) for r in rows[1:]}
