@@ -212,7 +212,8 @@ def render(outcomes: Sequence[Outcome], *, image_prefix: str = "") -> str:
         f"(Shoal {__version__}). For each target: the thesis' figure or table it stands for, Shoal's own "
         "figures, each check with the thesis' claim beside Shoal's measured value, and where and why the two "
         "differ. A check that does not hold is reported as not passed, never hidden. Each target folder also "
-        "holds `runs.csv`, the series behind the figures and `summary.json`.", "",
+        "holds `runs.csv` and `summary.json`; a fresh run also writes the series behind the figures. Times are wall-clock seconds with the "
+        "workers named in each section.", "",
         "| target | thesis | runs | checks passed | time (s) |", "|---|---|---:|---:|---:|",
     ]
     for o in outcomes:
