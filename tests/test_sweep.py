@@ -210,9 +210,9 @@ def test_cli_sweep_writes_and_names_bad_fields(tmp_path):
 
 
 def test_killed_or_interrupted_sweeps_keep_their_finished_cells(tmp_path):
-    """Cell 0 takes 5 steps, cell 1 a hundred thousand: stop the sweep while it is in cell 1."""
+    """Cell 0 takes 5 steps, cell 1 ten million: stop the sweep while it is in cell 1."""
     out = tmp_path / "stop"
-    cmd = [sys.executable, "-m", "shoal", "sweep", "default", "--grid", "sim.steps=5,100000", "--runs", "2",
+    cmd = [sys.executable, "-m", "shoal", "sweep", "default", "--grid", "sim.steps=5,10000000", "--runs", "2",
            "--out", str(out)]
 
     def start_and_wait_for_cell_0() -> subprocess.Popen:
@@ -231,11 +231,12 @@ def test_killed_or_interrupted_sweeps_keep_their_finished_cells(tmp_path):
     first = (out / "cells" / "cell-00000.csv").stat().st_mtime_ns
     assert [p.name for p in (out / "cells").iterdir()] == ["cell-00000.csv"]
     assert len(_rows(out / "cells" / "cell-00000.csv")) == 2
-    opened = (out / "sweep.json").stat().st_ino  # an atomic rewrite is a new file
+    opened = (out / "sweep.json").stat().st_mtime_ns
     proc = start_and_wait_for_cell_0()  # resumes: cell 0 is kept, cell 1 starts
-    while (out / "sweep.json").stat().st_ino == opened and proc.poll() is None:
-        time.sleep(0.02)  # until the rerun has opened the folder
-    time.sleep(0.3)
+    deadline = time.monotonic() + 60
+    while (out / "sweep.json").stat().st_mtime_ns == opened and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)  # until the rerun has opened the folder (rewritten its manifest)
+    time.sleep(1.0)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130 and "rerun the same command to resume" in err
