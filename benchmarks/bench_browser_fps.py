@@ -38,7 +38,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "browser"
 from bench_common import fmt, table  # noqa: E402
 from browser_helpers import ARGS, VIEWPORT, wait_until  # noqa: E402
 
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+CHROMIUM = shutil.which("chromium")
 LONG = "sim.steps=10000000"
 # (label, preset, overrides)
 CASES = [
@@ -49,6 +49,8 @@ CASES = [
     ("Ch. 4 fleet, 100 robots + trails, obstacles, pymunk physics, 20 steps/s", "course-physics",
      ["sim.robots=100", "world.length=80", "world.width=40", "world.start_size=14",
       "view.steps_per_second=20", LONG]),
+    ("for comparison: Ch. 3 swarm, 100 robots, NO trails, playback 60 steps/s", "default",
+     ["sim.robots=100", "view.steps_per_second=60", "view.trail_seconds=0", LONG]),
 ]
 
 COUNT_RAF = """
@@ -185,6 +187,8 @@ def measure(preset: str, overrides: list[str], seconds: float, warmup: float) ->
 
 
 def main() -> None:
+    if CHROMIUM is None:
+        raise SystemExit("bench_browser_fps: needs Debian's chromium on the PATH (apt-get install chromium)")
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="6 s per case instead of --seconds, first case only")
     ap.add_argument("--seconds", type=float, default=20.0, help="measuring window per case")
