@@ -61,7 +61,7 @@ ObstacleDrag = Callable[[int, float, float, str], None]
 _SERIAL = itertools.count()
 
 
-class FleetView(shapes.GroundFrame, TwinLayer, GhostLayer):
+class FleetView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
     """The scene of one tab showing a fleet. ``scene`` is a viser ``SceneApi``.
 
     ``follow`` and ``zoom`` (from the snapshot) pick the view: the whole world (zoom 1), or a
@@ -124,17 +124,8 @@ class FleetView(shapes.GroundFrame, TwinLayer, GhostLayer):
             node.points = pts
         self.nodes[key].visible = bool(len(segs))
 
-    def _points(self, key: str, xy: np.ndarray, color: tuple[int, int, int], size_m: float, shape: str,
-                z: float) -> None:
-        pts = self.to_view(xy, z) if len(xy) else self.to_view(np.zeros((1, 2)), z)
-        node = self.nodes.get(key)
-        if node is None:
-            self.nodes[key] = self.scene.add_point_cloud(
-                self._name(key), pts, colors=color, point_size=size_m * self.scale, point_shape=shape,
-                precision="float32", point_shading="flat")
-        else:
-            node.points = pts
-        self.nodes[key].visible = bool(len(xy))
+    def _point_size(self, size_m: float) -> float:
+        return size_m * self.scale  # markers sized in metres
 
     # ------------------------------------------------------------------ static scene
     def _build_static(self, world: WorldSpec) -> None:

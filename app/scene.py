@@ -20,6 +20,7 @@ from shoal.presets.build import objective_for
 from shoal.presets.models import Scenario
 
 from .ghosts import GhostLayer
+from .shapes import PointLayer
 from .session import Snapshot
 from .twin_view import TWIN, TWIN_TRAIL, trail_segments
 
@@ -80,7 +81,7 @@ def _square(half: float) -> np.ndarray:
     return np.stack([c, np.roll(c, -1, axis=0)], axis=1)
 
 
-class ArenaView(GhostLayer):
+class ArenaView(PointLayer, GhostLayer):
     """The scene of one tab. ``scene`` is a viser ``SceneApi`` (``client.scene`` or ``server.scene``)."""
 
     def __init__(self, scene: Any) -> None:
@@ -164,21 +165,6 @@ class ArenaView(GhostLayer):
 
     def _twin_size(self) -> float:
         return ROBOT_SIZE
-
-    def _points(self, key: str, xy: np.ndarray, color: tuple[int, int, int], size: float, shape: str,
-                z: float) -> None:
-        """A point cloud ``key`` at the finite rows of ``xy``, created on first use; hidden when empty."""
-        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
-        xy = xy[np.all(np.isfinite(xy), axis=1)]
-        pts = self.view_points(xy, z) if len(xy) else np.zeros((1, 3), np.float32)
-        node = self.nodes.get(key)
-        if node is None:
-            self.nodes[key] = self.scene.add_point_cloud(
-                self._name(key), pts, colors=color, point_size=size, point_shape=shape, precision="float32",
-                point_shading="flat")
-        else:
-            node.points = pts
-        self.nodes[key].visible = bool(len(xy))
 
     def to_scene(self, xy: np.ndarray) -> np.ndarray:
         """World (…, d) → scene (…, 2) coordinates, the follow offset included (as the camera sees them)."""

@@ -121,3 +121,27 @@ class GroundFrame:
         """Where a click ray meets the ground (z = 0), in world metres; None if it misses."""
         p = ray_ground(origin, direction)
         return None if p is None else self.to_world(p)
+
+
+class PointLayer:
+    """``_points`` for views with ``to_view``, ``_name``, ``scene`` and ``nodes``: one point
+    cloud per key, created on first use and hidden when it has no finite point."""
+
+    nodes: dict[str, Any]
+
+    def _point_size(self, size: float) -> float:
+        """The marker size in scene units (a view that sizes markers in metres scales it)."""
+        return size
+
+    def _points(self: Any, key: str, xy: np.ndarray, color: Any, size: float, shape: str, z: float) -> None:
+        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+        xy = xy[np.all(np.isfinite(xy), axis=1)]
+        pts = self.to_view(xy, z) if len(xy) else self.to_view(np.zeros((1, 2)), z)
+        node = self.nodes.get(key)
+        if node is None:
+            self.nodes[key] = self.scene.add_point_cloud(
+                self._name(key), pts, colors=color, point_size=self._point_size(size), point_shape=shape,
+                precision="float32", point_shading="flat")
+        else:
+            node.points = pts
+        self.nodes[key].visible = bool(len(xy))

@@ -52,7 +52,7 @@ def view_centre(scenario: Scenario) -> np.ndarray:
     return np.zeros(2)
 
 
-class SLOView(TwinLayer, GhostLayer):
+class SLOView(shapes.PointLayer, TwinLayer, GhostLayer):
     """The scene of one tab showing an SLO scene. ``scene`` is a viser ``SceneApi``."""
 
     def __init__(self, scene: Any) -> None:
@@ -130,20 +130,6 @@ class SLOView(TwinLayer, GhostLayer):
             if isinstance(color, np.ndarray):
                 node.colors = color
         self.nodes[key].visible = bool(len(segs))
-
-    def _points(self, key: str, xy: np.ndarray, color: tuple[int, int, int], size: float, shape: str,
-                z: float) -> None:
-        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
-        xy = xy[np.all(np.isfinite(xy), axis=1)]
-        pts = self.to_view(xy, z) if len(xy) else np.zeros((1, 3), np.float32)
-        node = self.nodes.get(key)
-        if node is None:
-            self.nodes[key] = self.scene.add_point_cloud(
-                self._name(key), pts, colors=color, point_size=size, point_shape=shape, precision="float32",
-                point_shading="flat")
-        else:
-            node.points = pts
-        self.nodes[key].visible = bool(len(xy))
 
     def _label(self, key: str, text: str, xy: np.ndarray | None) -> None:
         node = self.nodes.get(key)

@@ -51,7 +51,7 @@ SourceDrag = Callable[[float, float, str], None]
 _SERIAL = itertools.count()
 
 
-class SonarView(shapes.GroundFrame, TwinLayer, GhostLayer):
+class SonarView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
     """The scene of one tab showing an acoustic swarm. ``scene`` is a viser ``SceneApi``."""
 
     RAY_SHARE = 0.3  # ray length as a share of the arena side
@@ -104,19 +104,6 @@ class SonarView(shapes.GroundFrame, TwinLayer, GhostLayer):
         else:
             node.points = pts
         self.nodes[key].visible = bool(len(segs))
-
-    def _points(self, key: str, xy: np.ndarray, color: tuple[int, int, int], size: float, shape: str,
-                z: float) -> None:
-        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
-        pts = self.to_view(xy, z) if len(xy) else self.to_view(np.zeros((1, 2)), z)
-        node = self.nodes.get(key)
-        if node is None:
-            self.nodes[key] = self.scene.add_point_cloud(
-                self._name(key), pts, colors=color, point_size=size, point_shape=shape, precision="float32",
-                point_shading="flat")
-        else:
-            node.points = pts
-        self.nodes[key].visible = bool(len(xy))
 
     def _build_static(self) -> None:
         sc = self.scene
