@@ -216,7 +216,9 @@ def test_killed_or_interrupted_sweeps_keep_their_finished_cells(tmp_path):
            "--out", str(out)]
 
     def start_and_wait_for_cell_0() -> subprocess.Popen:
-        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        # a pytest-xdist worker ignores SIGINT and a child would inherit that: give it a shell's default
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         deadline = time.monotonic() + 120
         while not (out / "cells" / "cell-00001.csv").exists() and time.monotonic() < deadline:
             if (out / "cells" / "cell-00000.csv").exists() and proc.poll() is None:
