@@ -103,6 +103,11 @@ def test_compare_runs_b_in_lock_step_and_draws_it_in_teal(server, page, cid):
     session = server.tabs[cid].session
     page.get_by_role("button", name="Pause", exact=True).click()
     wait_until(lambda: not session.playing, what="pause")
+    page.get_by_role("tab", name="Controller").click()  # no trails: A's would be drawn over B's robots
+    box = number_box(page, "trail [s]")
+    box.fill("0")
+    box.press("Enter")
+    wait_until(lambda: session.scenario.view.trail_seconds == 0, what="trails off")
     page.get_by_role("tab", name="Compare").click()
     root_for(page, "compare with swarm B").click()
     wait_until(lambda: session.twin is not None, what="swarm B")
