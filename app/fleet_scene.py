@@ -22,7 +22,7 @@ from . import shapes
 from .fleet_session import FleetSnapshot
 from .ghosts import GhostLayer
 from .scene import VIEW_HALF
-from .twin_view import TwinLayer
+from .twin_view import TwinLayer, trail_segments
 
 GRID_CELL = (228, 228, 224)
 GRID_SECTION = (205, 205, 200)
@@ -267,12 +267,7 @@ class FleetView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
         along = np.where(snap.params.body_frame | (speed < 1e-9), snap.heading, np.arctan2(snap.u[:, 1], snap.u[:, 0]))
         tip = snap.x + 1.3 * r * np.column_stack([np.cos(along), np.sin(along)])
         self._lines("headings", np.stack([snap.x, tip], axis=1), HEADING, 2.0, Z["headings"])
-        tr = snap.trails
-        if tr.ndim == 3 and tr.shape[0] and tr.shape[1] >= 2:
-            segs = np.stack([tr[:, :-1], tr[:, 1:]], axis=2).reshape(-1, 2, 2)
-        else:
-            segs = np.zeros((0, 2, 2))
-        self._lines("trails", segs, TRAIL, 1.5, Z["trails"])
+        self._lines("trails", trail_segments(snap.trails), TRAIL, 1.5, Z["trails"])
         none = np.zeros((0, 2))
         self._points("pbests", snap.y if snap.live else none, PBEST, 0.25, "square", Z["pbests"])
         self._points("gbest", snap.yg[None] if snap.live else none, GBEST, 0.75, "diamond", Z["gbest"])

@@ -25,7 +25,7 @@ from . import shapes
 from .ghosts import GhostLayer, Ghosts
 from .scene import ROBOT_SIZE, VIEW_HALF
 from .slo_session import SLOSnapshot
-from .twin_view import TwinLayer
+from .twin_view import TwinLayer, trail_segments
 
 ROBOT = (220, 50, 50)
 TRAIL = (150, 175, 255)
@@ -164,10 +164,7 @@ class SLOView(shapes.PointLayer, TwinLayer, GhostLayer):
         self._follow(x)
         unit = snap.half_size / 50.0  # thesis units on screen
         self._lines("edges", snap.edges, EDGE, 1.0, Z["edges"])
-        tr = snap.trails
-        segs = (np.stack([tr[:, :-1], tr[:, 1:]], axis=2).reshape(-1, 2, 2)
-                if tr.ndim == 3 and tr.shape[0] and tr.shape[1] >= 2 else np.zeros((0, 2, 2)))
-        self._lines("trails", segs, TRAIL, 1.2, Z["trails"])
+        self._lines("trails", trail_segments(snap.trails), TRAIL, 1.2, Z["trails"])
         self._points("robots", x, ROBOT, ROBOT_SIZE, "circle", Z["robots"])
         xi = x[snap.selected]
         self._lines("selected", shapes.circle_segments(xi, 1.7 * ROBOT_SIZE / self.scale, 32), SELECTED, 3.0,

@@ -22,7 +22,7 @@ from . import shapes
 from .ghosts import GhostLayer
 from .scene import VIEW_HALF
 from .sonar_session import SonarSnapshot
-from .twin_view import TwinLayer
+from .twin_view import TwinLayer, trail_segments
 
 GRID_CELL = (228, 228, 224)
 GRID_SECTION = (205, 205, 200)
@@ -177,12 +177,7 @@ class SonarView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
         self._points("robots", snap.x, ROBOT, 0.009 * VIEW_HALF * 2, "circle", Z["robots"])
         tip = snap.x + 0.025 * self.half * np.column_stack([np.cos(snap.heading), np.sin(snap.heading)])
         self._lines("headings", np.stack([snap.x, tip], axis=1), HEADING, 2.0, Z["headings"])
-        tr = snap.trails
-        if tr.ndim == 3 and tr.shape[0] and tr.shape[1] >= 2:
-            segs = np.stack([tr[:, :-1], tr[:, 1:]], axis=2).reshape(-1, 2, 2)
-        else:
-            segs = np.zeros((0, 2, 2))
-        self._lines("trails", segs, TRAIL, 1.2, Z["trails"])
+        self._lines("trails", trail_segments(snap.trails), TRAIL, 1.2, Z["trails"])
         self._points("pbests", snap.y, PBEST, 0.006 * VIEW_HALF * 2, "square", Z["pbests"])
         self._points("gbest", snap.yg[None] if snap.live else np.zeros((0, 2)), GBEST, 0.016 * VIEW_HALF * 2,
                      "diamond", Z["gbest"])
