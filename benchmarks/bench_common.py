@@ -114,3 +114,17 @@ def rate(x: float) -> str:
     if x >= 1e3:
         return f"{x / 1e3:.3g} k"
     return f"{x:.3g}"
+
+
+def save_png(fig, path) -> None:  # type: ignore[no-untyped-def]
+    """Write a matplotlib figure as a PNG, completely or not at all, and close it."""
+    import io
+
+    import matplotlib.pyplot as plt
+
+    from shoal.engine.atomic import atomic_write_bytes
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    atomic_write_bytes(path, buf.getvalue())

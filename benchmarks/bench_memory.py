@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_common import fmt, peak_rss_mib, rss_mib, table  # noqa: E402
+from bench_common import fmt, peak_rss_mib, rss_mib, save_png, table  # noqa: E402
 
 SCENES = {"Ch. 3 swarm (default, 20 robots)": "default", "Ch. 4 fleet (course-dvc, 6 robots)": "course-dvc",
           "Ch. 7 acoustic swarm (sonar-xb-pso, 10 robots)": "sonar-xb-pso", "SLO walk (slo-walk)": "slo-walk"}
@@ -192,14 +192,10 @@ def per_thousand(samples: list[dict]) -> list[dict]:
 
 
 def plot(sessions: dict[str, list[dict]], batches: dict[str, list[dict]], path: Path) -> None:
-    import io
-
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from shoal.engine.atomic import atomic_write_bytes
 
     panels = [p for p in (sessions, batches) if p]
     fig, axes = plt.subplots(1, len(panels), figsize=(5.6 * len(panels), 4.0), squeeze=False)
@@ -225,10 +221,7 @@ def plot(sessions: dict[str, list[dict]], batches: dict[str, list[dict]], path: 
         ax.legend(fontsize=7)
         ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    atomic_write_bytes(path, buf.getvalue())
+    save_png(fig, path)
 
 
 def main() -> None:

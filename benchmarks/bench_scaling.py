@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_common import fmt, load_note, rate, summary, table  # noqa: E402
+from bench_common import fmt, load_note, rate, save_png, summary, table  # noqa: E402
 
 SIZES = (10, 100, 1000)
 BATCHES = (1, 10, 100)
@@ -74,14 +74,10 @@ def measure(budget_s: float) -> list[dict]:
 
 
 def plot(points: list[dict], path: Path) -> None:
-    import io
-
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from shoal.engine.atomic import atomic_write_bytes
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(10.5, 4.2), sharey=True)
     engines = [CH3, *FLEETS]
@@ -102,10 +98,7 @@ def plot(points: list[dict], path: Path) -> None:
         ax.legend(fontsize=7)
     left.set_ylabel("robot-steps per second (one process)")
     fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    atomic_write_bytes(path, buf.getvalue())
+    save_png(fig, path)
 
 
 def main() -> None:
