@@ -78,6 +78,10 @@ class Neighbourhood:
     def value(self) -> float:
         return DEFAULT_PARAM[self.kind] if self.param is None else float(self.param)
 
+    def scaled(self, unit: float) -> "Neighbourhood":
+        """The rule in an arena ``unit`` times the thesis' 100 × 100: only a radius is a length."""
+        return Neighbourhood("radius", self.value * unit) if self.kind == "radius" else self
+
     def adjacency(self, x: np.ndarray, rngs: Sequence[np.random.Generator] | None = None) -> np.ndarray:
         """Adjacency (R, N, N) at true positions ``x`` (R, N, 2); ``rngs`` (one per run) feed
         the random topology, which is redrawn at every call."""

@@ -113,8 +113,7 @@ class SLOConfig:
                         self.spso_self_best_halving)
 
     def neighbourhood_rule(self) -> Neighbourhood:
-        rule = Neighbourhood(self.neighbourhood, self.neighbourhood_param)
-        return Neighbourhood("radius", rule.value * self.unit) if self.neighbourhood == "radius" else rule
+        return Neighbourhood(self.neighbourhood, self.neighbourhood_param).scaled(self.unit)
 
     def formation(self) -> AttractionRepulsion:
         return AttractionRepulsion(self.ar_gain, self.ar_a, self.ar_b, self.ar_c * self.unit**2,

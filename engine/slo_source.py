@@ -60,8 +60,7 @@ class SLOPositionSource:
         if "max_range" in localiser:
             localiser["max_range"] = float(localiser["max_range"]) * unit
         self.params = LocaliserParams(**localiser)
-        rule = Neighbourhood(neighbourhood, neighbourhood_param)
-        self.rule = Neighbourhood("radius", rule.value * unit) if neighbourhood == "radius" else rule
+        self.rule = Neighbourhood(neighbourhood, neighbourhood_param).scaled(unit)
         self.localiser = Localiser(self.params, self.errors, self.streams, n)
         self.initial_estimates = initial_estimates
         self.init_area = (init_area[0] * unit, init_area[1] * unit)
@@ -100,8 +99,7 @@ class SLOPositionSource:
         params = replace(self.params, **localiser) if localiser else None
         new_errors = error_model(errors).scaled(unit) if errors is not None else None
         if neighbourhood is not None:
-            rule = Neighbourhood(neighbourhood, neighbourhood_param)
-            self.rule = Neighbourhood("radius", rule.value * unit) if neighbourhood == "radius" else rule
+            self.rule = Neighbourhood(neighbourhood, neighbourhood_param).scaled(unit)
         if params is not None:
             self.params = params
         if new_errors is not None:

@@ -69,3 +69,11 @@ def test_random_links_are_symmetric_with_probability_p(x):
 def test_default_parameters():
     assert Neighbourhood("knn").value == 5 and Neighbourhood("radius").value == 25.0
     assert Neighbourhood("random").value == 0.5 and Neighbourhood("ring").value == 2
+
+
+def test_only_a_radius_scales_with_the_arena():
+    from shoal.engine.neighbourhoods import Neighbourhood
+
+    assert Neighbourhood("radius", 25.0).scaled(2.0) == Neighbourhood("radius", 50.0)
+    assert Neighbourhood("radius").scaled(0.5).value == Neighbourhood("radius").value * 0.5
+    assert Neighbourhood("knn", 5).scaled(3.0) == Neighbourhood("knn", 5)
