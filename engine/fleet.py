@@ -16,8 +16,14 @@ import numpy as np
 from .dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
 from .motion import Drive, Kinematic, Physics
 from .robot_laws import (
-    Inertia, adapted_rpso_velocity, energy_limit, min_turning_radius, nonomni_velocity,
-    robot_centred_velocity, rpso_velocity, to_body, to_world,
+    Inertia,
+    adapted_rpso_velocity,
+    energy_limit,
+    min_turning_radius,
+    nonomni_velocity,
+    robot_centred_velocity,
+    rpso_velocity,
+    to_body,
 )
 from .sensing import SectorReading, sense, virtual_force
 from .world import RunSpace, WorldSpec
@@ -140,9 +146,11 @@ class Fleet:
         if seed is not None:
             self.seed = int(seed)
         children = range(self.first_run, self.first_run + self.runs)
-        self.rngs = [np.random.Generator(np.random.PCG64(np.random.SeedSequence(self.seed, spawn_key=(i,)))) for i in children]
+        self.rngs = [np.random.Generator(np.random.PCG64(np.random.SeedSequence(self.seed, spawn_key=(i,))))
+                     for i in children]
         p = self.params
-        x = np.stack([spawn_positions(g, self.world.start_box, self._robots, p.robot_radius, p.spawn_gap) for g in self.rngs])
+        x = np.stack([spawn_positions(g, self.world.start_box, self._robots, p.robot_radius, p.spawn_gap)
+                      for g in self.rngs])
         body = "dynamic" if p.motion == "physics" else "kinematic"
         self.spaces = [RunSpace(self.world, x[r], p.robot_radius, body_type=body) for r in range(self.runs)]
         self.motion = Physics(p.drive, p.v_max, p.a_max) if p.motion == "physics" else Kinematic(p.drive, p.v_max)

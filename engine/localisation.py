@@ -107,7 +107,8 @@ class APSO:
     hydrophones: ClassVar[int] = 1
     global_best: ClassVar[GlobalBest] = "best"
 
-    def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed, rng: Rngs | None = None) -> Update:
+    def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed,
+               rng: Rngs | None = None) -> Update:
         return _own_position(f_hat, y, x, sensed.need("intensity"), self.a)
 
 
@@ -121,7 +122,8 @@ class XPSO:
     hydrophones: ClassVar[int] = 2
     global_best: ClassVar[GlobalBest] = "best"
 
-    def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed, rng: Rngs | None = None) -> Update:
+    def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed,
+               rng: Rngs | None = None) -> Update:
         return _own_position(f_hat, y, x, sensed.need("rho"), self.a)
 
 
@@ -194,7 +196,8 @@ class GTPSO:
         partner = random_partner(rng, (R, N), exclude=own)  # step 3: o ∉ {i, j, h}
         o = np.maximum(partner, 0)
         runs = np.arange(R)[:, None]
-        p, _, _, forward = intersect(tri.centroid, tri.direction, tri.centroid[runs, o], tri.direction[runs, o], self.eps)
+        p, _, _, forward = intersect(tri.centroid, tri.direction, tri.centroid[runs, o], tri.direction[runs, o],
+                                     self.eps)
         forward = forward & (partner >= 0) & tri.valid & tri.valid[runs, o]
         dist = np.linalg.norm(x - p, axis=-1)
         valid = forward & (dist > self.eps)  # fitness 1/0 is not offered

@@ -113,7 +113,7 @@ class SonarParams:
                 raise ValueError(f"{name}: must be > 0, got {getattr(self, name)!r}")
         if not self.d0 >= 0:
             raise ValueError(f"d0: must be >= 0, got {self.d0!r}")
-        self.band  # validates f_c, Q, tbp, c, fs
+        _ = self.band  # validates f_c, Q, tbp, c, fs
 
     @property
     def band(self) -> Band:
@@ -157,7 +157,7 @@ class SonarState:
     bearing: Bearing | None = None  # last receiver output (rays, corr, lags), two-hydrophone strategies
     loc: LocInfo | None = None  # last strategy decision (intersections, selected, triangles)
     reading: SectorReading | None = None  # last six-sector reading (nonomni)
-    stepped: np.ndarray = field(default_factory=lambda: np.zeros(0, int))  # runs R' that intensity/bearing/loc/reading cover
+    stepped: np.ndarray = field(default_factory=lambda: np.zeros(0, int))  # runs R' intensity…reading cover
 
     @property
     def f_yg(self) -> np.ndarray:
@@ -265,7 +265,8 @@ class AcousticSwarm:
         self._converge(np.arange(R))
 
     # ------------------------------------------------------------------ pieces
-    def _listen(self, x: np.ndarray, heading: np.ndarray, src: np.ndarray, rngs: list) -> tuple[Sensed, np.ndarray, Bearing | None]:
+    def _listen(self, x: np.ndarray, heading: np.ndarray, src: np.ndarray,
+                rngs: list) -> tuple[Sensed, np.ndarray, Bearing | None]:
         """Step 1 for runs with positions ``x`` (R', N, 2): the Sensed arrays, the per-hydrophone
         intensity and (two hydrophones) the receiver output."""
         p, strat = self.params, self.strategy

@@ -32,6 +32,7 @@ def test_same_seed_same_trajectories_and_runs_do_not_depend_on_the_batch():
     for xa, xb in zip(_state(a), _state(b)):
         np.testing.assert_array_equal(xa, xb)
     np.testing.assert_array_equal(a.state.x[1:], tail.state.x)
+    np.testing.assert_array_equal(ia.com_fitness, ib.com_fitness)
     np.testing.assert_array_equal(ia.com_fitness[1:], it.com_fitness)
     assert not np.array_equal(a.state.x, other.state.x)
 

@@ -313,7 +313,8 @@ def convergence_sweep(
 ) -> tuple[dict[Any, Any], float]:
     """Run (algorithm, SNR_0) jobs, write runs.csv and series.csv; return results and wall time."""
     t0 = time.perf_counter()
-    res = run_jobs(jobs, workers=workers, progress=progress, desc=desc, simulate=simulate_sonar, merge=merge, chunk=runs)
+    res = run_jobs(jobs, workers=workers, progress=progress, desc=desc, simulate=simulate_sonar, merge=merge,
+                   chunk=runs)
     wall = time.perf_counter() - t0
     rows, series = [], []
     for j in jobs:
