@@ -8,11 +8,12 @@ metrics. Arrays are (runs, robots, …); run ``i`` draws from child ``i`` of
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Literal
+from dataclasses import dataclass, field, replace
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
+from .contract import check_live
 from .dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
 from .motion import Drive, Kinematic, Physics
 from .robot_laws import (
@@ -26,6 +27,7 @@ from .robot_laws import (
     to_body,
 )
 from .sensing import SectorReading, sense, virtual_force
+from .sim import run_generators
 from .world import RunSpace, WorldSpec
 
 FleetLaw = Literal["rpso", "adapted-rpso", "robot-centred", "nonomni"]
@@ -72,7 +74,7 @@ class FleetState:
     y: np.ndarray  # (R, N, 2) personal bests
     f_y: np.ndarray  # (R, N)
     yg: np.ndarray  # (R, 2)
-    f_yg: np.ndarray  # (R,)
+    best_fitness: np.ndarray  # (R,) cost of y_g
     f: np.ndarray  # (R, N) cost at x
     status: np.ndarray  # (R, N) int8: 0 active, 1 collided
     k: int = 0
@@ -92,6 +94,11 @@ class FleetInfo:
     layers_passed: np.ndarray  # (R,) layers with x below the CoM
     best_fitness: np.ndarray  # (R,) distance of the global best to the source
     max_speed: np.ndarray  # (R,)
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """CoM fitness [4.17], collided and operational robots, obstacle layers passed."""
+        return {"com_fitness": self.com_fitness, "collided": self.collided, "operational": self.operational,
+                "layers_passed": self.layers_passed}
 
 
 def spawn_positions(
@@ -115,7 +122,16 @@ def spawn_positions(
 
 
 class Fleet:
-    """A seeded swarm of robots in a world, for ``runs`` Monte-Carlo runs at once."""
+    """A seeded swarm of robots in a world, for ``runs`` Monte-Carlo runs at once.
+
+    Implements :class:`~.contract.Engine`; :meth:`retune` takes the :class:`FleetParams` of the
+    controller and the sensing (in force from the next tick) and, on SLO positions, the
+    localisation keywords (``slo``). The world, the robots' bodies and drive and their number
+    need a new fleet."""
+
+    LIVE: ClassVar[frozenset[str]] = frozenset(
+        {"law", "dvc", "dt", "omega", "c", "alpha", "beta", "gamma", "c1_share", "sensing_range", "r_min", "s_min",
+         "rotational_energy", "update", "guard", "slo"})
 
     def __init__(self, *, world: WorldSpec, robots: int, params: FleetParams | None = None,
                  runs: int = 1, seed: int = 0, first_run: int = 0) -> None:
@@ -145,9 +161,7 @@ class Fleet:
     def reset(self, seed: int | None = None) -> None:
         if seed is not None:
             self.seed = int(seed)
-        children = range(self.first_run, self.first_run + self.runs)
-        self.rngs = [np.random.Generator(np.random.PCG64(np.random.SeedSequence(self.seed, spawn_key=(i,))))
-                     for i in children]
+        self.rngs = run_generators(self.seed, self.first_run, self.runs)
         p = self.params
         x = np.stack([spawn_positions(g, self.world.start_box, self._robots, p.robot_radius, p.spawn_gap)
                       for g in self.rngs])
@@ -160,8 +174,27 @@ class Fleet:
         best = np.argmin(f, axis=1)
         self.state = FleetState(
             x=x, heading=heading, u=np.zeros_like(x), cmd=np.zeros_like(x), y=x.copy(), f_y=f.copy(),
-            yg=x[np.arange(R), best], f_yg=f[np.arange(R), best], f=f, status=np.zeros((R, N), np.int8),
+            yg=x[np.arange(R), best], best_fitness=f[np.arange(R), best], f=f, status=np.zeros((R, N), np.int8),
         )
+
+    def retune(self, **changes: Any) -> list[str]:
+        """Change :data:`LIVE` settings from the next tick on, keeping the fleet; returns the names
+        that changed. Refused (``ValueError``, nothing changed) for other keywords."""
+        check_live(self.LIVE, changes)
+        slo = changes.pop("slo", None)
+        params = replace(self.params, **changes)
+        if not params.dt > 0:
+            raise ValueError(f"dt: must be > 0, got {params.dt}")
+        changed = [k for k in changes if getattr(params, k) != getattr(self.params, k)]
+        if slo:
+            self._retune_positions(slo)
+            changed.append("slo")
+        self.params = params
+        return changed
+
+    def _retune_positions(self, slo: dict[str, Any]) -> None:
+        """New localisation settings: only a fleet on SLO positions has any."""
+        raise ValueError("slo: this fleet acts on true positions; switch it to SLO positions first")
 
     def cost(self, x: np.ndarray) -> np.ndarray:
         """Distance to the source, the cost of Algorithms 1 and 2."""
@@ -195,7 +228,7 @@ class Fleet:
         s.f_y = np.where(better, s.f, s.f_y)
         idx = np.argmin(s.f_y, axis=1)
         runs = np.arange(self.runs)
-        s.yg, s.f_yg = s.y[runs, idx], s.f_y[runs, idx]
+        s.yg, s.best_fitness = s.y[runs, idx], s.f_y[runs, idx]
 
     def _coefficients(self, gap: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         p, shape = self.params, gap.shape[:2]
@@ -338,5 +371,6 @@ class Fleet:
         passed = (layers[None, :] < com[:, None]).sum(axis=1) if layers.size else np.zeros(self.runs, int)
         return FleetInfo(
             t=self.t, com_fitness=com, collided=collided, operational=self.robots - collided,
-            layers_passed=passed, best_fitness=s.f_yg.copy(), max_speed=np.linalg.norm(s.u, axis=-1).max(axis=1),
+            layers_passed=passed, best_fitness=s.best_fitness.copy(),
+            max_speed=np.linalg.norm(s.u, axis=-1).max(axis=1),
         )

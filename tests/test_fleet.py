@@ -117,7 +117,7 @@ def test_dvc_with_guard_never_reaches_the_nearest_sensed_body_in_one_step(circle
     u0 = speed * np.array([np.cos(direction), np.sin(direction)])
     s.u[0, 0] = s.cmd[0, 0] = u0  # any prior velocity up to the top speed
     s.y[0, 0] = s.yg[0] = best
-    s.f_y[0, 0] = s.f_yg[0] = f.cost(s.y)[0, 0]
+    s.f_y[0, 0] = s.best_fitness[0] = f.cost(s.y)[0, 0]
     f.spaces[0].set_positions(s.x[0])
     gaps = np.hypot(c[:, 0], c[:, 1]) - c[:, 2] - r_robot
     k = int(np.argmin(gaps))
@@ -154,7 +154,7 @@ def test_without_the_guard_dvc_can_reach_the_nearest_body():
         s.x[:, 0] = (0.0, 0.0)
         s.u[:, 0] = s.cmd[:, 0] = (3.0, 0.0)
         s.y[:, 0] = s.yg[:] = (20.0, 0.5)
-        s.f_y[:, 0] = s.f_yg[:] = f.cost(s.y)[:, 0]
+        s.f_y[:, 0] = s.best_fitness[:] = f.cost(s.y)[:, 0]
         for sp, x in zip(f.spaces, s.x):
             sp.set_positions(x)
         f.step()
