@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from shoal.engine import tuning
+from shoal.engine.laws import LAWS as VELOCITY_LAWS
 from shoal.presets.models import Scenario
 
 from . import plots
@@ -21,7 +22,7 @@ from .session import Session, Snapshot
 __all__ = ["LAWS", "MODES", "Panels", "SLIDERS", "SPECS", "field_bounds", "get_path", "notes_text",
            "slider_range"]
 
-LAWS = ("standard", "adapted-sgn", "adapted-tanh", "adapted-logistic")
+LAWS = VELOCITY_LAWS.names()
 MODES = ("raw", "physical")
 
 SLIDERS = (

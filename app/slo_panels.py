@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from shoal.engine.slo_selection import SELECTIONS as SLO_SELECTIONS
 from shoal.engine.slo_sensors import error_model
 from shoal.presets.models import Scenario, SLOErrorValues
 
@@ -22,7 +23,7 @@ from . import slo_plots
 from .panel_base import TRAIL, PanelsBase, SliderSpec, fmt
 from .slo_session import FLAG_NAMES, KIND_NAMES, SLOSession
 
-SELECTIONS = {"CSS (closest solution)": "css", "RTS (round trip)": "rts", "Akcan (GDL)": "akcan"}
+SELECTIONS = SLO_SELECTIONS.labels()
 ERROR_SETS = {"None": "none", "Low": "low", "High": "high"}
 NEIGHBOURHOODS = ("knn", "radius", "full", "random", "ring")
 OBJECTIVES = ("sphere", "ackley", "griewank", "rastrigin", "rosenbrock", "plane", "line")

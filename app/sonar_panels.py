@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from shoal.engine.localisation import STRATEGIES
 from shoal.presets.models import Scenario
 
 from . import sonar_plots
@@ -20,7 +21,7 @@ from .panel_base import TRAIL, PanelsBase, SliderSpec, fmt
 from .positions_panel import PositionsGui
 from .sonar_session import SonarSession, SonarSnapshot
 
-ALGORITHMS = {"A-PSO": "a-pso", "X-PSO": "x-pso", "B-PSO": "b-pso", "XB-PSO": "xb-pso", "GT-PSO": "gt-pso"}
+ALGORITHMS = STRATEGIES.labels()
 LABELS = {v: k for k, v in ALGORITHMS.items()}
 
 SLIDERS = (

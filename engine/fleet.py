@@ -16,21 +16,11 @@ import numpy as np
 from .contract import check_live
 from .dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
 from .motion import Drive, Kinematic, Physics
-from .robot_laws import (
-    Inertia,
-    adapted_rpso_velocity,
-    energy_limit,
-    min_turning_radius,
-    nonomni_velocity,
-    robot_centred_velocity,
-    rpso_velocity,
-    to_body,
-)
+from .robot_laws import ROBOT_LAWS, Inertia, Limits
 from .sensing import SectorReading, sense, virtual_force
 from .sim import run_generators
 from .world import RunSpace, WorldSpec
 
-FleetLaw = Literal["rpso", "adapted-rpso", "robot-centred", "nonomni"]
 ACTIVE, COLLIDED = 0, 1
 
 
@@ -38,7 +28,7 @@ ACTIVE, COLLIDED = 0, 1
 class FleetParams:
     """Controller and robot parameters of a fleet (Tables 4.1 and 5.1 by default)."""
 
-    law: FleetLaw = "adapted-rpso"
+    law: str = "adapted-rpso"  # a key of robot_laws.ROBOT_LAWS
     dvc: bool = True
     dt: float = 1.0
     omega: float = 0.1  # constant mode; ω = 1 − β (spec §20 item 17)
@@ -60,9 +50,19 @@ class FleetParams:
     guard: bool = False  # DVC inertia guard (ours): see dvc.approach_guard
     spawn_gap: float = 0.3  # free space between robots at the start [m]
 
+    def __post_init__(self) -> None:
+        if ROBOT_LAWS.pick(self.law).dvc is None and self.dvc:
+            raise ValueError(f"dvc: law {self.law!r} has no DVC form")
+        if not self.dt > 0:
+            raise ValueError(f"dt: must be > 0, got {self.dt}")
+
     @property
     def body_frame(self) -> bool:
-        return self.law in ("robot-centred", "nonomni")
+        return ROBOT_LAWS[self.law].body_frame
+
+    @property
+    def limits(self) -> Limits:
+        return Limits(self.v_max, self.rotational_energy, self.robot_radius, self.r_min)
 
 
 @dataclass
@@ -182,9 +182,7 @@ class Fleet:
         that changed. Refused (``ValueError``, nothing changed) for other keywords."""
         check_live(self.LIVE, changes)
         slo = changes.pop("slo", None)
-        params = replace(self.params, **changes)
-        if not params.dt > 0:
-            raise ValueError(f"dt: must be > 0, got {params.dt}")
+        params = replace(self.params, **changes)  # validates
         changed = [k for k in changes if getattr(params, k) != getattr(self.params, k)]
         if slo:
             self._retune_positions(slo)
@@ -232,25 +230,21 @@ class Fleet:
 
     def _coefficients(self, gap: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         p, shape = self.params, gap.shape[:2]
-        if p.law == "nonomni":
-            if p.dvc:
-                wm = w_max(p.v_max, p.dt, p.rotational_energy, p.robot_radius)
-                return dvc_nonomni(gap, alpha=p.alpha, beta=p.beta, dt=p.dt, sensing_range=p.sensing_range,
-                                   w_max=wm, c1_share=p.c1_share, v_max=p.v_max)
-            c = np.asarray((tuple(p.c) + (0.0,) * 5)[:5], dtype=float)
-        elif p.law in ("rpso", "adapted-rpso") and p.dvc:
+        law = ROBOT_LAWS[p.law]
+        if p.dvc and law.dvc == "nonomni":
+            wm = w_max(p.v_max, p.dt, p.rotational_energy, p.robot_radius)
+            return dvc_nonomni(gap, alpha=p.alpha, beta=p.beta, dt=p.dt, sensing_range=p.sensing_range,
+                               w_max=wm, c1_share=p.c1_share, v_max=p.v_max)
+        if p.dvc and law.dvc == "omni":
             return dvc_omni(gap, alpha=p.alpha, beta=p.beta, dt=p.dt, c1_share=p.c1_share)
-        else:
-            n = 2 if p.law == "robot-centred" else 3
-            c = np.asarray((tuple(p.c) + (0.0,) * 3)[:n], dtype=float)
+        c = np.asarray((tuple(p.c) + (0.0,) * law.terms)[: law.terms], dtype=float)  # constant c_1..c_n
         return np.full(shape, p.omega), np.broadcast_to(c.reshape((-1, 1, 1)), (c.size,) + shape).copy()
 
     def _draws(self) -> np.ndarray:
         """This tick's U(0,1) draws for every robot, drawn once so the update order does not
         change the random stream."""
-        shape = self.state.x.shape
-        n = {"rpso": 3, "adapted-rpso": 3, "nonomni": 5, "robot-centred": 2}[self.params.law]
-        return self._draw((n,) + (shape[:2] if self.params.law == "nonomni" else shape))
+        shape, law = self.state.x.shape, ROBOT_LAWS[self.params.law]
+        return self._draw((law.terms,) + (shape[:2] if law.draws == "robot" else shape))
 
     def _attractors(self) -> tuple[np.ndarray, np.ndarray]:
         """Each robot's vectors to its personal best and to the global best, (R, N, 2) each:
@@ -261,19 +255,7 @@ class Fleet:
     def _velocity(self, omega: np.ndarray, c: np.ndarray, force: np.ndarray, r: np.ndarray) -> np.ndarray:
         p, s = self.params, self.state
         g_p, g_g = self._attractors()
-        if p.law == "rpso":  # [4.2], clipped to the top speed (spec §20 item 18)
-            return rpso_velocity(s.cmd, g_p, g_g, force, c, omega, r, v_max=p.v_max)
-        if p.law == "adapted-rpso":  # [4.5]
-            return adapted_rpso_velocity(s.cmd, g_p, g_g, force, c, omega, r)
-        y_t, yg_t = to_body(g_p, s.heading), to_body(g_g, s.heading)
-        if p.law == "nonomni":  # [5.13]
-            vw = nonomni_velocity(s.cmd, y_t, yg_t, c, omega, r)
-        else:  # robot-centred Generalised Adapted PSO [5.4], same c_n for v and w
-            cc = np.repeat(c[..., None], 2, axis=-1)
-            vw = robot_centred_velocity(s.cmd, np.stack([y_t, yg_t]), cc, omega[..., None], r)
-        v, w = energy_limit(vw[..., 0], vw[..., 1], p.v_max, p.rotational_energy, p.robot_radius)  # §14
-        w = min_turning_radius(v, w, p.r_min)  # §5.4
-        return np.stack([v, w], axis=-1)
+        return ROBOT_LAWS[p.law].command(s.cmd, g_p, g_g, force, s.heading, c, omega, r, p.limits)
 
     def _guard(self, cmd: np.ndarray, reading: SectorReading, gap: np.ndarray) -> np.ndarray:
         p = self.params

@@ -226,10 +226,8 @@ class AcousticSwarm:
         self._tune()
         if self.strategy.hydrophones == 2 and p.mode == "waveform" and not p.D > 0:
             raise ValueError("d_over_lambda: must be > 0 for two hydrophones")
-        if p.algorithm == "gt-pso" and robots < 4:
-            raise ValueError("gt-pso needs at least 4 robots (a triplet and a partner outside it)")
-        if p.algorithm in ("b-pso", "xb-pso") and robots < 2:
-            raise ValueError(f"{p.algorithm} needs at least 2 robots")
+        if robots < self.strategy.min_robots:
+            raise ValueError(f"{p.algorithm} needs at least {self.strategy.min_robots} robots")
         self.runs, self.first_run, self._robots = runs, first_run, robots
         self.reset(seed)
 

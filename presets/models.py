@@ -1,7 +1,8 @@
 """Pydantic models of a Shoal scenario (one preset file = one ``Scenario``).
 
 Every field has a range; unknown fields are refused; error locations are dotted paths
-such as ``controller.omega`` so the CLI and the UI can name the bad field.
+such as ``controller.omega`` so the CLI and the UI can name the bad field. The choices of
+variants (laws, strategies, selections) and their rules come from the engine's registries.
 """
 
 from __future__ import annotations
@@ -10,11 +11,13 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from shoal.engine.laws import LawName
+from shoal.engine.laws import LAWS
+from shoal.engine.localisation import STRATEGIES
 from shoal.engine.objectives import ObjectiveName
+from shoal.engine.robot_laws import ROBOT_LAWS
+from shoal.engine.slo_selection import SELECTIONS
 
-RobotLawName = Literal["rpso", "adapted-rpso", "robot-centred", "nonomni"]
-ROBOT_LAWS = ("rpso", "adapted-rpso", "robot-centred", "nonomni")
+DVC_LAWS = tuple(name for name, law in ROBOT_LAWS.items() if law.dvc is not None)
 
 Coefficient = Annotated[float, Field(ge=0.0, le=100.0)]
 
@@ -52,7 +55,7 @@ class StepChange(_Model):
 class Controller(_Model):
     """Velocity law and its coefficients, raw (ω, c1, c2) or physical (U, A+, Δt)."""
 
-    law: Literal[LawName, RobotLawName] = "adapted-sgn"
+    law: Literal[LAWS.names() + ROBOT_LAWS.names()] = "adapted-sgn"
     mode: Literal["raw", "physical", "dvc"] = "physical"
     dt: Annotated[float, Field(ge=1e-6, le=10.0, description="controller period Δt [s]")] = 0.1
     omega: Annotated[float, Field(ge=-1.0, le=1.2, description="inertia weight ω (raw mode)")] = 0.5
@@ -82,11 +85,11 @@ class Controller(_Model):
         robot_law = self.law in ROBOT_LAWS
         if robot_law and self.mode == "physical":
             raise ValueError(f"law {self.law!r} takes mode 'raw' (constant c1..c3, omega) or 'dvc'")
-        if self.mode == "dvc" and self.law not in ("adapted-rpso", "nonomni"):
-            raise ValueError("mode 'dvc' needs law 'adapted-rpso' or 'nonomni'")
+        if self.mode == "dvc" and self.law not in DVC_LAWS:
+            raise ValueError(f"mode 'dvc' needs law {' or '.join(map(repr, DVC_LAWS))}")
         if robot_law:
             return self
-        adapted = self.law != "standard"
+        adapted = LAWS[self.law].adapted
         if self.mode == "raw" and adapted and not (0.0 <= self.omega < 1.0):
             raise ValueError(f"omega = {self.omega:g}: an Adapted law needs 0 <= omega < 1 [3.14]")
         if self.mode == "physical":
@@ -158,7 +161,7 @@ class Acoustics(_Model):
     ``[robot]`` and ``[sensing]`` sections do not apply (their values are here).
     """
 
-    algorithm: Literal["a-pso", "x-pso", "b-pso", "xb-pso", "gt-pso"] = Field(
+    algorithm: Literal[STRATEGIES.names()] = Field(
         "xb-pso", description="best-location strategy: A-/X-/B-/XB-PSO (Ch. 7) or GT-PSO (Ch. 8)")
     controller: Literal["adapted", "nonomni"] = Field(
         "adapted",
@@ -262,7 +265,7 @@ class SLO(_Model):
         "pso", description="SLO swarm: SPSO 2011 in each robot's frame or a random walk")
     objective: Literal["ackley", "griewank", "line", "plane", "rastrigin", "rosenbrock", "sphere"] = Field(
         "sphere", description="SLO swarm: 2-D benchmark, minimised (DEAP forms)")
-    selection: Literal["css", "rts", "akcan"] = Field("css", description="candidate selection [3.7]-[3.9]")
+    selection: Literal[SELECTIONS.names()] = Field("css", description="candidate selection [3.7]-[3.9]")
     errors: Literal["none", "low", "high"] = Field("low", description="sensor error set of Tab. 4.3")
     error_values: SLOErrorValues = Field(default_factory=SLOErrorValues,
                                          description="single error parameters replacing the set's")
@@ -346,7 +349,8 @@ class Scenario(_Model):
         if self.world is not None and 2.0 * self.robot.radius >= self.world.start_size:
             raise ValueError(f"robot.radius = {self.robot.radius:g}: a robot must fit the start square "
                              f"(world.start_size = {self.world.start_size:g})")
-        if self.controller.law in ("robot-centred", "nonomni") and self.robot.drive != "differential":
+        law = ROBOT_LAWS.get(self.controller.law)
+        if law is not None and law.body_frame and self.robot.drive != "differential":
             raise ValueError(f"controller.law {self.controller.law!r} needs robot.drive = 'differential'")
         if self.world is not None and self.sim.d != 2:
             raise ValueError("sim.d must be 2 with a [world]")
@@ -356,7 +360,7 @@ class Scenario(_Model):
                 raise ValueError("[acoustics] runs in an open sea: remove the [world] section")
             if self.sim.d != 2:
                 raise ValueError("sim.d must be 2 with [acoustics]")
-            need = {"gt-pso": 4, "b-pso": 2, "xb-pso": 2}.get(a.algorithm, 1)
+            need = STRATEGIES[a.algorithm].min_robots
             if self.sim.robots < need:
                 raise ValueError(f"sim.robots = {self.sim.robots}: acoustics.algorithm {a.algorithm!r} "
                                  f"needs at least {need}")
