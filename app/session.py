@@ -123,22 +123,17 @@ class Session(BaseSession):
             self.selected_robot = min(self.selected_robot, new.sim.robots - 1)
             self.revision += 1
             return
-        self.scenario = new
-        if _section_changed(old, new, "controller"):  # an SLOSimulation too: the same attributes
+        if _section_changed(old, new, "controller"):
             self._keep_clock()
-            sim.policy = policy_for(new.controller)
-            sim.law = law_for(new.controller)
-            sim.dt = float(new.controller.dt)
-        if retune:  # errors, selection, neighbourhood…: the running SLO source keeps its beliefs
-            sim.retune_slo(**retune)
-        if new.sim.robots != old.sim.robots:
-            sim.set_robots(new.sim.robots)
+        # errors, selection, neighbourhood… (``slo``): the running SLO source keeps its beliefs
+        changed = sim.retune(policy=policy_for(new.controller), law=law_for(new.controller),
+                             dt=float(new.controller.dt), robots=new.sim.robots, attractors=new.bests.attractors,
+                             pbest_order=new.bests.pbest_order, objective=objective_for(new.objective),
+                             **({"slo": retune} if retune else {}))
+        self.scenario = new
+        if "robots" in changed:
             self.selected_robot = min(self.selected_robot, new.sim.robots - 1)
-        if _section_changed(old, new, "bests"):
-            sim.attractors = new.bests.attractors
-            sim.pbest_order = new.bests.pbest_order
-        if _section_changed(old, new, "objective"):
-            sim.set_objective(objective_for(new.objective))
+        if "objective" in changed:
             self.scene_revision += 1
         if _section_changed(old, new, "arena"):
             self.scene_revision += 1
@@ -181,7 +176,7 @@ class Session(BaseSession):
             return {
                 "omega": omega, "c_hat": c_hat, "beta": (1.0 - omega) if bounded else math.nan,
                 "U": U_j * math.sqrt(d), "U_j": U_j, "A_plus": A_plus, "A_minus": 2 * A_plus,
-                "t": self.clock(), "k": float(self.sim.state.k), "best": float(self.sim.state.f_yg[0]),
+                "t": self.clock(), "k": float(self.sim.state.k), "best": float(self.sim.state.best_fitness[0]),
                 "outside": float(self.outside_arena()),
             }
 

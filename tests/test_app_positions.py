@@ -29,7 +29,6 @@ from shoal.engine.slo_source import SLOSimulation
 from shoal.engine.sonar import AcousticSwarm
 from shoal.presets.io import validate
 
-
 APP_PRESET = "course-dvc"  # the shared ``server`` fixture (conftest.py) shows this scene
 
 

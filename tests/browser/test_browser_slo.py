@@ -19,8 +19,6 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import choose, dismiss_toasts, number_box, wait_until  # noqa: E402
-
 from shoal.app.fleet_session import FleetSession  # noqa: E402
 from shoal.app.session import Session  # noqa: E402
 from shoal.app.slo_session import SLOSession  # noqa: E402
@@ -29,6 +27,8 @@ from shoal.engine.sim import Simulation  # noqa: E402
 from shoal.engine.slo import SLOSwarm  # noqa: E402
 from shoal.engine.slo_fleet import SLOFleet  # noqa: E402
 from shoal.engine.slo_source import SLOSimulation  # noqa: E402
+
+from browser_helpers import choose, dismiss_toasts, number_box, wait_until  # noqa: E402
 
 
 def test_the_dropdown_switches_to_slo_walk_and_the_ghosts_are_drawn(server, page, cid):
