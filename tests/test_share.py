@@ -10,6 +10,7 @@ from __future__ import annotations
 import html as html_lib
 import os
 import re
+import subprocess
 import sys
 import urllib.parse
 
@@ -21,10 +22,12 @@ from share_pages import data_block, recorded
 
 import shoal
 from shoal.app import replay
+from shoal.app.cli import main
 from shoal.app.share import MAX_FRAMES, preset_html, recording_html, session_html, write_html
 from shoal.app.share.draw import new_session
 from shoal.app.share.frames import MAX_ROBOT_FRAMES, frame_budget, plan, run_plan
 from shoal.presets import io as presets_io
+from shoal.presets.build import build_simulation
 from shoal.presets.io import PresetError
 
 CLIENT_BYTES = 900_000  # viser's client (about 0.82 MB) and the page around it
@@ -233,3 +236,51 @@ def test_a_page_is_written_completely_or_not_at_all(tmp_path, monkeypatch):
     assert target.read_text() == "old page" and sorted(p.name for p in tmp_path.iterdir()) == ["run.html"]
     write_html(target, "<html>new</html>")
     assert target.read_text() == "<html>new</html>"
+
+
+# ---------------------------------------------------------------------------- shoal export-replay
+def shoal_cli(*args: str, cwd=None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "shoal", *args], capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+def test_export_replay_writes_a_page_the_preset_in_it_reproduces(tmp_path):
+    out = tmp_path / "course" / "run.html"  # a missing folder is made, as `shoal run` does
+    res = shoal_cli("export-replay", "default", "--seed", "4", "--steps", "30", "--set", "sim.robots=7",
+                    "--out", str(out))
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.startswith(f"wrote {out} (") and "seed 4" in res.stdout
+    page = out.read_text(encoding="utf-8")
+    block = data_block(page)
+    assert block["run"]["seed"] == 4 and block["preset"]["sim"]["robots"] == 7 and block["run"]["last"] == 30
+    sim = build_simulation(presets_io.validate(block["preset"]))  # the engine alone, no app
+    positions = {0: sim.state.x[0].copy()}
+    for k in range(1, 31):
+        sim.step()
+        positions[k] = sim.state.x[0].copy()
+    assert_robots_as_run(page, positions)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["nope"], "bad preset: no preset or file named 'nope'"),
+    (["default", "--set", "sim.robots=-1"], "bad preset: sim.robots"),
+    (["default", "--set", "sim.robots=5000"], "sim.robots = 5000: the browser app runs at most"),
+    (["default", "--set", "controller.mode=dvc"], "bad preset: controller"),
+])
+def test_export_replay_refuses_a_bad_preset_in_one_line_and_leaves_out_as_it_was(tmp_path, capsys, args, words):
+    out = tmp_path / "run.html"
+    out.write_text("the old page")
+    assert main(["export-replay", *args, "--steps", "3", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("shoal: error: ") and words in err and err.count("\n") == 1, err
+    assert out.read_text() == "the old page" and [p.name for p in tmp_path.iterdir()] == ["run.html"]
+
+
+def test_export_replay_refuses_a_bad_out_before_running(tmp_path, capsys):
+    (tmp_path / "a-file").write_text("x")
+    (tmp_path / "a-folder").mkdir()
+    for out, words in ((tmp_path / "a-folder", "is a folder"), (tmp_path / "a-file" / "run.html", "is not a folder"),
+                       (tmp_path / "run.txt", "ending in .html")):
+        assert main(["export-replay", "default", "--steps", "3", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"shoal: error: --out {out}: ") and words in err and err.count("\n") == 1, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file", "a-folder"]
