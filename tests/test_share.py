@@ -238,6 +238,52 @@ def test_a_page_is_written_completely_or_not_at_all(tmp_path, monkeypatch):
     assert target.read_text() == "<html>new</html>"
 
 
+# ---------------------------------------------------------------------------- the Share button
+class Writes:
+    """Files this process opens for writing while ``active`` (an audit hook; it cannot be removed)."""
+
+    def __init__(self) -> None:
+        self.active = False
+        self.seen: list[tuple] = []
+        sys.addaudithook(self._hook)
+
+    def _hook(self, event: str, args: tuple) -> None:
+        if not self.active:
+            return
+        if event == "open" and len(args) >= 3 and isinstance(args[0], (str, bytes, os.PathLike)):
+            mode, flags = args[1], args[2]
+            if (isinstance(mode, str) and any(c in mode for c in "wax+")) or (
+                    isinstance(flags, int) and flags & (os.O_WRONLY | os.O_RDWR | os.O_CREAT)):
+                self.seen.append(args[:2])
+        elif event in ("os.rename", "os.replace", "os.remove", "os.mkdir"):
+            self.seen.append((event, args[:2]))
+
+
+WRITES = Writes()
+
+
+def test_share_sends_the_history_as_a_page_and_writes_no_file(tab, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    evil = "../../" + "x" * 10 + "/page"
+    tab.panels.upload_preset("p.toml", presets_io.to_toml(presets_io.validate(
+        {**presets_io.load("default", ["sim.robots=4"]).model_dump(mode="json"), "name": evil})).encode())
+    s = tab.session
+    s.step(15)
+    tab.tick(1.0)
+    WRITES.seen.clear()
+    WRITES.active = True
+    try:
+        tab.panels.replay_gui.share.value = True  # a click from Python runs the same callback
+    finally:
+        WRITES.active = False
+    assert WRITES.seen == [] and list(tmp_path.iterdir()) == []
+    name, content = tab.downloads[-1]
+    assert name == presets_io.file_stem(evil) + "-run.html" and "/" not in name
+    page = content.decode("utf-8")
+    assert data_block(page)["run"]["name"] == evil
+    assert_robots_as_run(page, {f.k: f.x for f in s.frames})
+
+
 # ---------------------------------------------------------------------------- shoal export-replay
 def shoal_cli(*args: str, cwd=None) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "shoal", *args], capture_output=True, text=True, cwd=cwd, timeout=300)
