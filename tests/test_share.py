@@ -163,7 +163,7 @@ def test_a_session_history_with_swarm_b_is_shared_as_recorded():
     assert_robots_as_run(page, {f.k: f.x for f in s.twin.frames}, "twin")
     run = data_block(page)["run"]
     assert run["origin"] == "recorded history" and run["live_edits"] == 1 and run["last"] == 30
-    assert "changed 1 time(s) while it ran" in page
+    assert "Changed 1 time(s) while it ran" in page
 
 
 def test_a_loaded_replay_keeps_the_version_that_ran_it():

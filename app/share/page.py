@@ -57,7 +57,8 @@ def recording_scene() -> Iterator[tuple[Any, Any]]:
 
 def step_label(scene: Any) -> Any:
     """A label above the arena's top-left corner that the exporter sets to each frame's step."""
-    return scene.add_label(STEP_LABEL, "", position=(-VIEW_HALF, VIEW_HALF + 0.25, 0.0), anchor="bottom-left")
+    return scene.add_label(STEP_LABEL, "", position=(-VIEW_HALF, VIEW_HALF + 0.25, 0.0), anchor="bottom-left",
+                           font_screen_scale=1.25)
 
 
 def step_text(k: int, t: float) -> str:
@@ -95,7 +96,7 @@ class PageInfo:
 
 
 STYLE = """
-#shoal-run{position:fixed;top:12px;right:12px;z-index:20;max-width:21rem;max-height:calc(100vh - 90px);
+#shoal-run{position:fixed;top:12px;right:12px;z-index:20;max-width:17rem;max-height:calc(100vh - 90px);
  overflow:auto;background:rgba(255,255,255,.94);border:1px solid #d5d7de;border-radius:6px;
  box-shadow:0 2px 10px rgba(0,0,0,.12);font:13px/1.45 system-ui,-apple-system,"Segoe UI",sans-serif;
  color:#222;padding:.45rem .7rem}
@@ -104,6 +105,7 @@ STYLE = """
 #shoal-run td{padding:0 .6rem 0 0;vertical-align:top}
 #shoal-run td:first-child{color:#666;white-space:nowrap}
 #shoal-run p{margin:.35rem 0}
+#shoal-run details details{margin-top:.3rem}
 #shoal-run pre{font-size:11px;max-height:16rem;overflow:auto;background:#f5f6f8;padding:.3rem}
 #shoal-run code{font-size:12px}
 #shoal-run .twin{color:#14aab4;font-weight:600}
@@ -121,33 +123,33 @@ def _ordinal(n: int) -> str:
 
 
 def panel(info: PageInfo, file_stem: str) -> str:
-    """The run's panel as HTML (every value escaped)."""
+    """The run's panel as HTML (every value escaped): the facts at a glance, the rest folded."""
     e = html.escape
     rows = [("preset", e(info.name)), ("seed", str(info.seed)), ("scene", e(info.kind)),
-            ("steps", f"{info.first}–{info.last}"), ("ran with", f"shoal {e(info.shoal)}"),
-            ("page by", f"shoal {e(info.exported_by)}, viser's player")]
+            ("steps", f"{info.first}–{info.last}"), ("ran with", f"shoal {e(info.shoal)}")]
     table = "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in rows)
     every = "every step" if info.stride == 1 else f"every {_ordinal(info.stride)} step and the last"
     pace = "the app's pace" if info.stride == 1 else f"{info.stride}× the app's pace"
-    parts = [
-        f"<details open><summary>Shoal · {e(info.name)}, seed {info.seed}</summary><table>{table}</table>",
-        f"<p>{info.frames} frames of a {e(info.origin)} of {info.robots} robots ({every}). A page keeps at most "
-        f"{MAX_FRAMES} frames and {MAX_ROBOT_FRAMES:,} robot positions (here {info.max_frames} frames), so that "
-        f"it stays a few MB. At 1× the player shows {1.0 / info.seconds_per_frame:.3g} frames a second, {pace}.</p>",
-    ]
-    if info.live_edits:
-        parts.append(f"<p>The run was changed {info.live_edits} time(s) while it ran: a fresh run of this preset "
-                     "and seed differs from it.</p>")
+    parts = [f"<details open><summary>Shoal · {e(info.name)}, seed {info.seed}</summary><table>{table}</table>"]
     if info.twin_toml is not None:
         lines = ", ".join(f"<code>{e(k)}={e(literal(v))}</code>" for k, v in info.twin_overrides.items())
         parts.append(f'<p><span class="twin">Teal: swarm B</span>, the same preset and seed with {lines or "no change"}'
                      f" ({_download(f'{file_stem}-B.toml', info.twin_toml, 'its preset')}).</p>")
-    parts.append("<p>▶/❚❚ plays and pauses (or the space bar), the bar scrubs, the menu sets the speed; "
-                 "drag to turn the view, scroll to zoom.</p>")
-    parts.append(f"<p>{_download(f'{file_stem}.toml', info.preset_toml, 'Download the preset (TOML)')} and run it "
-                 f"with <code>shoal run {e(file_stem)}.toml --seed {info.seed}</code>.</p>")
-    parts.append(f"<details><summary>Preset</summary><pre>{e(info.preset_toml)}</pre></details></details>")
-    return '<div id="shoal-run">' + "".join(parts) + "</div>"
+    if info.live_edits:
+        parts.append(f"<p>Changed {info.live_edits} time(s) while it ran: a fresh run of this preset and seed "
+                     "differs from it.</p>")
+    parts.append(f"<p>{_download(f'{file_stem}.toml', info.preset_toml, 'Download the preset (TOML)')}</p>")
+    parts.append(
+        "<details><summary>About this page</summary>"
+        f"<p>{info.frames} frames of a {e(info.origin)} of {info.robots} robots ({every}). A page keeps at most "
+        f"{MAX_FRAMES} frames and {MAX_ROBOT_FRAMES:,} robot positions (here {info.max_frames} frames), so that "
+        f"it stays a few MB. At 1× the player shows {1.0 / info.seconds_per_frame:.3g} frames a second, {pace}.</p>"
+        "<p>▶/❚❚ plays and pauses (or the space bar), the bar scrubs, the menu sets the speed; drag to turn the "
+        "view, scroll to zoom.</p>"
+        f"<p>Run it yourself: <code>shoal run {e(file_stem)}.toml --seed {info.seed}</code>. Page by shoal "
+        f"{e(info.exported_by)} with viser's player; nothing to install, no server.</p>"
+        f"<details><summary>Preset</summary><pre>{e(info.preset_toml)}</pre></details></details>")
+    return '<div id="shoal-run">' + "".join(parts) + "</details></div>"
 
 
 def _json_script(data: dict[str, Any]) -> str:
