@@ -64,7 +64,7 @@ class ReplayGui:
         def _(event: Any) -> None:
             try:
                 page = share.session_html(self.session)
-            except (PresetError, ReplayError) as err:
+            except (PresetError, ReplayError, share.Busy) as err:
                 self.panels._refuse(err, "share")
                 return
             self.panels.send_file(f"{self.panels._stem()}-run.html", page)

@@ -330,3 +330,21 @@ def test_export_replay_refuses_a_bad_out_before_running(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.startswith(f"shoal: error: --out {out}: ") and words in err and err.count("\n") == 1, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file", "a-folder"]
+
+
+def test_share_on_a_busy_server_is_refused_and_sends_nothing(tab):
+    from shoal.app.share import page
+
+    tab.session.step(5)
+    held = [page._QUEUE.acquire(blocking=False) for _ in range(2)]  # one export running, one waiting
+    try:
+        assert all(held)
+        tab.panels.replay_gui.share.value = True
+    finally:
+        for _ in held:
+            page._QUEUE.release()
+    title, body, color = tab.messages[-1]
+    assert color == "red" and title == "Refused: share" and "try again in a moment" in body
+    assert not tab.downloads
+    tab.panels.replay_gui.share.value = True  # free again
+    assert tab.downloads[-1][0] == "default-run.html"

@@ -13,5 +13,6 @@ preset, seed and versions and offers the preset to download.
 
 from .export import preset_html, recording_html, session_html, write_html
 from .frames import MAX_FRAMES
+from .page import Busy
 
-__all__ = ["MAX_FRAMES", "preset_html", "recording_html", "session_html", "write_html"]
+__all__ = ["MAX_FRAMES", "Busy", "preset_html", "recording_html", "session_html", "write_html"]

@@ -24,7 +24,16 @@ from ..scene import CAMERA_FOV, CAMERA_HEIGHT, VIEW_HALF
 from .frames import MAX_FRAMES, MAX_ROBOT_FRAMES
 
 _LOCK = threading.Lock()  # one export at a time per process: CPU, and stdout is swapped while viser prints
+_QUEUE = threading.BoundedSemaphore(2)  # exports running or waiting: a shared server's callback threads stay free
 STEP_LABEL = "/shoal_step"
+
+
+class Busy(RuntimeError):
+    """Another export is running and one more is waiting (``messages`` as a preset error's)."""
+
+    def __init__(self) -> None:
+        self.messages = ["another page is being made on this server; try again in a moment"]
+        super().__init__(self.messages[0])
 
 
 @contextlib.contextmanager
@@ -38,21 +47,27 @@ def _quiet() -> Iterator[None]:
 @contextlib.contextmanager
 def recording_scene() -> Iterator[tuple[Any, Any]]:
     """(scene, serializer) of a private viser server whose camera looks straight down on the
-    arena as the app's does; the server is stopped on the way out."""
+    arena as the app's does; the server is stopped on the way out. One export runs at a time
+    and one more may wait; a third is refused (:class:`Busy`)."""
     import viser
 
-    with _LOCK:
-        with _quiet():
-            server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
-        try:
-            cam = server.initial_camera
-            cam.position, cam.look_at, cam.up = (0.0, 0.0, CAMERA_HEIGHT), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0)
-            cam.fov, cam.near, cam.far = CAMERA_FOV, 1.0, 4.0 * CAMERA_HEIGHT
-            server.scene.set_up_direction("+z")
-            yield server.scene, server.get_scene_serializer()
-        finally:
+    if not _QUEUE.acquire(blocking=False):
+        raise Busy()
+    try:
+        with _LOCK:
             with _quiet():
-                server.stop()
+                server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+            try:
+                cam = server.initial_camera
+                cam.position, cam.look_at, cam.up = (0.0, 0.0, CAMERA_HEIGHT), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0)
+                cam.fov, cam.near, cam.far = CAMERA_FOV, 1.0, 4.0 * CAMERA_HEIGHT
+                server.scene.set_up_direction("+z")
+                yield server.scene, server.get_scene_serializer()
+            finally:
+                with _quiet():
+                    server.stop()
+    finally:
+        _QUEUE.release()
 
 
 def step_label(scene: Any) -> Any:
