@@ -348,3 +348,37 @@ def test_share_on_a_busy_server_is_refused_and_sends_nothing(tab):
     assert not tab.downloads
     tab.panels.replay_gui.share.value = True  # free again
     assert tab.downloads[-1][0] == "default-run.html"
+
+
+def test_a_tab_that_floods_share_gets_refusals_and_the_other_tabs_go_on():
+    """A hostile page is not limited to one click at a time: forty Share clicks sent on the wire
+    at once take at most two export slots; the rest are refused at once, so viser's callback
+    threads stay free and another tab's Pause still lands."""
+    from viser import _messages as m
+    from viser_wire import WireClient
+
+    from browser.browser_helpers import wait_until
+    from shoal.app.server import start_server
+
+    srv = start_server("default", port=0)
+    flood, other = WireClient(srv.port, decode=True), WireClient(srv.port, decode=True)
+    try:
+        wait_until(lambda: flood.uuid_of("Share") and other.uuid_of("playback") and len(srv.tabs) == 2, what="two tabs")
+        wait_until(lambda: all(s.playing for s in srv.sessions.values()), what="both tabs playing")
+        share = flood.uuid_of("Share")
+        for _ in range(40):
+            flood.send(m.GuiUpdateMessage(share, {"value": True}))
+        other.send(m.GuiUpdateMessage(other.uuid_of("playback"), {"value": "Pause"}))
+        wait_until(lambda: sum(not s.playing for s in srv.sessions.values()) == 1, timeout=60, what="the other pause")
+
+        def outcomes():
+            tab = next(t for t in srv.tabs.values() if t.session.playing)
+            refused = sum("try again in a moment" in body for _, body, _ in tab.messages)
+            return (refused, len(tab.downloads)) if refused + len(tab.downloads) == 40 else None
+
+        refused, sent = wait_until(outcomes, timeout=120, what="every Share answered")
+        assert refused >= 1 and sent >= 1
+    finally:
+        flood.close()
+        other.close()
+        srv.stop()
