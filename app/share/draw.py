@@ -46,7 +46,7 @@ def new_view(scenario: Scenario, scene: Any) -> Any:
     return view
 
 
-def draw(view: Any, frame: Drawn) -> None:
+def draw_frame(view: Any, frame: Drawn) -> None:
     """One kept step, as the app's tab draws it."""
     snap, twin = frame
     view.draw(snap)

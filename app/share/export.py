@@ -23,7 +23,7 @@ def _page(scenario: Scenario, frames: Iterable[draw.Drawn], info: page.PageInfo)
         view = draw.new_view(scenario, scene)
         label = page.step_label(scene)
         for frame in frames:
-            draw.draw(view, frame)
+            draw.draw_frame(view, frame)
             label.text = page.step_text(frame[0].k, frame[0].t)
             serializer.insert_sleep(info.seconds_per_frame)
         return page.to_html(serializer, info, stem)
