@@ -355,10 +355,11 @@ def test_a_tab_that_floods_share_gets_refusals_and_the_other_tabs_go_on():
     at once take at most two export slots; the rest are refused at once, so viser's callback
     threads stay free and another tab's Pause still lands."""
     from viser import _messages as m
-    from viser_wire import WireClient
+
+    from shoal.app.server import start_server
 
     from browser.browser_helpers import wait_until
-    from shoal.app.server import start_server
+    from viser_wire import WireClient
 
     srv = start_server("default", port=0)
     flood, other = WireClient(srv.port, decode=True), WireClient(srv.port, decode=True)
