@@ -7,10 +7,10 @@ import numpy as np
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.fleet import ACTIVE, COLLIDED, Fleet, FleetParams
-from shoal.engine.motion import Kinematic
-from shoal.engine.sensing import sense
-from shoal.engine.world import RunSpace, WorldSpec, box_walls
+from shoal.engine.kinds.fleet import ACTIVE, COLLIDED, Fleet, FleetParams
+from shoal.engine.robots.motion import Kinematic
+from shoal.engine.robots.sensing import sense
+from shoal.engine.robots.world import RunSpace, WorldSpec, box_walls
 from shoal.presets.build import build_fleet
 from shoal.presets.io import load
 

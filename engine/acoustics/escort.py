@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .sensing import SECTORS, SectorReading, sector_of
+from ..robots.sensing import SECTORS, SectorReading, sector_of
 
 
 def _centre(yg: np.ndarray) -> np.ndarray:

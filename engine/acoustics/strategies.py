@@ -19,10 +19,10 @@ from typing import ClassVar, Literal, Protocol
 
 import numpy as np
 
+from ..core.registry import Registry
 from .forgetting import best_of, centroid_of, forget_update, improves
 from .intersections import EPS, furthest, intersect, pair_intersections, rho_consistent
 from .partners import Rngs, random_partner
-from .registry import Registry
 from .triangulation import Triangles, triangles
 
 

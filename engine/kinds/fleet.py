@@ -3,7 +3,7 @@
 One tick (Algorithms 1 and 2): bests → sense → coefficients (constant or DVC) →
 velocity (RPSO, Adapted RPSO, robot-centred, non-omni) → move (kinematic or pymunk) →
 metrics. Arrays are (runs, robots, …); run ``i`` draws from child ``i`` of
-``SeedSequence(seed)``, like :class:`shoal.engine.sim.Simulation`.
+``SeedSequence(seed)``, like :class:`shoal.engine.kinds.swarm.Simulation`.
 """
 
 from __future__ import annotations
@@ -13,13 +13,13 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from .contract import check_live
-from .dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
-from .motion import Drive, Kinematic, Physics
-from .robot_laws import ROBOT_LAWS, Inertia, Limits
-from .sensing import SectorReading, sense, virtual_force
-from .sim import run_generators
-from .world import RunSpace, WorldSpec
+from ..core.contract import check_live
+from ..core.rng import run_generators
+from ..robots.dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
+from ..robots.laws import ROBOT_LAWS, Inertia, Limits
+from ..robots.motion import Drive, Kinematic, Physics
+from ..robots.sensing import SectorReading, sense, virtual_force
+from ..robots.world import RunSpace, WorldSpec
 
 ACTIVE, COLLIDED = 0, 1
 
@@ -124,7 +124,7 @@ def spawn_positions(
 class Fleet:
     """A seeded swarm of robots in a world, for ``runs`` Monte-Carlo runs at once.
 
-    Implements :class:`~.contract.Engine`; :meth:`retune` takes the :class:`FleetParams` of the
+    Implements :class:`~shoal.engine.core.contract.Engine`; :meth:`retune` takes the :class:`FleetParams` of the
     controller and the sensing (in force from the next tick) and, on SLO positions, the
     localisation keywords (``slo``). The world, the robots' bodies and drive and their number
     need a new fleet."""

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..robots.sensing import sense, virtual_force
 from .fleet import Fleet
-from .sensing import sense, virtual_force
 
 
 @dataclass(frozen=True)

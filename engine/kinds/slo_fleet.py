@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..slo.positions import SLOHost
 from .fleet import Fleet
-from .slo_host import SLOHost
 
 
 class SLOFleet(SLOHost, Fleet):

@@ -35,11 +35,11 @@ from typing import Any
 
 import numpy as np
 
-from .forgetting import forget_update, improves
-from .localisation import LocInfo, Sensed
-from .slo_host import SLOHost
+from ..acoustics.forgetting import forget_update, improves
+from ..acoustics.strategies import LocInfo, Sensed
+from ..acoustics.triangulation import Triangles
+from ..slo.positions import SLOHost
 from .sonar import AcousticSwarm, Decision
-from .triangulation import Triangles
 
 
 class SharedDraws:

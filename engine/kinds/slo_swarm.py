@@ -6,7 +6,7 @@ One :meth:`SLOSwarm.step` = one generation t → t+1 for every run:
 PSO or random-walk command from the beliefs at t, perfect move, then at t+1 neighbourhoods
 from truth, ranges, odometry, candidates and selection, and the metrics of §11.
 Arrays are (runs R, particles N, 2); run i draws from the children of
-``SeedSequence(seed, spawn_key=(i,))`` (:mod:`.slo_streams`), one per component.
+``SeedSequence(seed, spawn_key=(i,))`` (:mod:`~shoal.engine.core.rng`), one per component.
 """
 
 from __future__ import annotations
@@ -16,17 +16,17 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from .contract import check_live
-from .neighbourhoods import Neighbourhood, NeighbourhoodKind
-from .slo_formation import AttractionRepulsion
-from .slo_localisation import Candidates
-from .slo_localiser import Beliefs, EntryPolicy, Localiser, LocaliserParams, Selection, random_estimates, relative_truth
-from .slo_metrics import dead_reckoning_share, pair_distances, pair_errors, round_trip_errors, stats
-from .slo_objectives import QUALITY_THRESHOLDS, Fitness, slo_objective
-from .slo_selection import RTSTriangle
-from .slo_sensors import ErrorModel, error_model
-from .slo_streams import component_generators
-from .spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
+from ..core.contract import check_live
+from ..core.rng import component_generators
+from ..pso.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
+from ..slo.beliefs import Beliefs, EntryPolicy, Localiser, LocaliserParams, Selection, random_estimates, relative_truth
+from ..slo.candidates import Candidates
+from ..slo.formation import AttractionRepulsion
+from ..slo.metrics import dead_reckoning_share, pair_distances, pair_errors, round_trip_errors, stats
+from ..slo.neighbourhoods import Neighbourhood, NeighbourhoodKind
+from ..slo.objectives import QUALITY_THRESHOLDS, Fitness, slo_objective
+from ..slo.selection import RTSTriangle
+from ..slo.sensors import ErrorModel, error_model
 
 Motion = Literal["pso", "random_walk", "formation"]
 LocalBest = Literal["current", "pbest"]
@@ -167,12 +167,12 @@ class SLOState:
 
     @property
     def kind(self) -> np.ndarray:
-        """(R, N, N) int8 :class:`~.slo_selection.Kind` of each estimate."""
+        """(R, N, N) int8 :class:`~shoal.engine.slo.selection.Kind` of each estimate."""
         return self.beliefs.kind
 
     @property
     def flag(self) -> np.ndarray:
-        """(R, N, N) int8 :class:`~.slo_localisation.Flag` of each candidate set."""
+        """(R, N, N) int8 :class:`~shoal.engine.slo.candidates.Flag` of each candidate set."""
         return self.beliefs.flag
 
     @property
@@ -221,7 +221,7 @@ class SLOSwarm:
     """Seeded SLO swarms of ``runs`` runs (``first_run`` … ``first_run + runs − 1``).
 
     Keyword parameters are the fields of :class:`SLOConfig`. Implements
-    :class:`~.contract.Engine` (one tick is one generation); :meth:`retune` takes the
+    :class:`~shoal.engine.core.contract.Engine` (one tick is one generation); :meth:`retune` takes the
     localisation choices, the errors, the neighbourhood, the objective, the walk speed and the
     quality threshold."""
 

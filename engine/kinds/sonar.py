@@ -6,7 +6,7 @@
    for X-/B-/XB-PSO, spec §5.5) → band spectra (``signals.synthesise``, the default
    waveform mode) → intensity, and the two-hydrophone ``receiver.bearing`` (ρ, τ, α, rays)
    when the strategy needs it. ``mode="surrogate"`` draws the same statistics directly
-   (``acoustic_surrogate``): APPROXIMATE, not in the thesis.
+   (``acoustics.surrogate``): APPROXIMATE, not in the thesis.
 2. bests: ``strategy.update`` (A/X/B/XB/GT-PSO, forgetting a [7.2]/[7.9]/[8.6]) in ``_bests``,
    which also gives the attractor vectors (from beliefs on SLO positions: ``slo_sonar``).
 3. velocity: ``adapted`` = Adapted PSO [3.11]/[3.10] in the global frame (Ch. 7: unbounded
@@ -42,21 +42,21 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from .acoustic_surrogate import surrogate
-from .band import Band
-from .contract import check_live
-from .dvc import dvc_nonomni, forward_guard, w_max
-from .escort import moving_source, with_escort
-from .laws import adapted_velocity, motion_heading
-from .localisation import LocInfo, Sensed, Strategy, initial_memory, make_strategy
-from .propagation import r_ref, snr_db, source_distance_for_snr
-from .receiver import Bearing, bearing
-from .robot_laws import arc_pose_update, energy_limit, nonomni_velocity, to_body
-from .sensing import SectorReading
-from .signals import hydrophone_positions, intensity, synthesise
-from .sim import run_generators
-from .swarm_sensing import contacts, pairwise, sense_robots
-from .tuning import from_beta, split
+from ..acoustics.band import Band
+from ..acoustics.escort import moving_source, with_escort
+from ..acoustics.propagation import r_ref, snr_db, source_distance_for_snr
+from ..acoustics.receiver import Bearing, bearing
+from ..acoustics.signals import hydrophone_positions, intensity, synthesise
+from ..acoustics.strategies import LocInfo, Sensed, Strategy, initial_memory, make_strategy
+from ..acoustics.surrogate import surrogate
+from ..core.contract import check_live
+from ..core.rng import run_generators
+from ..pso.laws import adapted_velocity, motion_heading
+from ..pso.tuning import from_beta, split
+from ..robots.dvc import dvc_nonomni, forward_guard, w_max
+from ..robots.laws import arc_pose_update, energy_limit, nonomni_velocity, to_body
+from ..robots.sensing import SectorReading
+from ..robots.swarm_sensing import contacts, pairwise, sense_robots
 
 ControllerName = Literal["adapted", "nonomni"]
 AcousticMode = Literal["waveform", "surrogate"]
@@ -211,7 +211,7 @@ _FIXED = frozenset({"algorithm", "controller", "mode", "snr0_db", "d0", "start",
 class AcousticSwarm:
     """``runs`` seeded swarms of ``robots`` robots localising one acoustic source each.
 
-    Implements :class:`~.contract.Engine`; :meth:`retune` takes the :class:`SonarParams` that
+    Implements :class:`~shoal.engine.core.contract.Engine`; :meth:`retune` takes the :class:`SonarParams` that
     shape the next listen or the next move (band, levels, forgetting, U, β, Δt, the escort ring,
     the source's motion, …) and, on SLO positions, the localisation keywords (``slo``)."""
 

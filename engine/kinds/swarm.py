@@ -12,12 +12,13 @@ from typing import Any, ClassVar, Literal, get_args
 
 import numpy as np
 
-from .bests import global_best, update_personal
-from .coeffs import CoefficientPolicy
-from .contract import check_live
-from .laws import Law
-from .laws import motion_heading as _heading
-from .objectives import Objective
+from ..core.contract import check_live
+from ..core.objectives import Objective
+from ..core.rng import run_generators
+from ..pso.bests import global_best, update_personal
+from ..pso.coeffs import CoefficientPolicy
+from ..pso.laws import Law
+from ..pso.laws import motion_heading as _heading
 
 Attractors = Literal["literal", "ahead"]
 PbestOrder = Literal["before_velocity", "after_velocity"]
@@ -70,17 +71,10 @@ def _per_run(value: np.ndarray | float, R: int) -> np.ndarray:
     return np.full(R, float(v)) if v.ndim == 0 else v.reshape(R, -1).mean(axis=1)
 
 
-def run_generators(seed: int, first_run: int, runs: int) -> list[np.random.Generator]:
-    """One generator per run: run i draws from child i of ``SeedSequence(seed)``, wherever
-    it is simulated (alone, in a batch, in another process)."""
-    children = range(first_run, first_run + runs)
-    return [np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(i,)))) for i in children]
-
-
 class Simulation:
     """A seeded swarm: positions, velocities and bests of ``runs`` independent runs.
 
-    Implements :class:`~.contract.Engine`; :meth:`retune` takes the controller (``policy``,
+    Implements :class:`~shoal.engine.core.contract.Engine`; :meth:`retune` takes the controller (``policy``,
     ``law``, ``dt``), the swarm size (``robots``), the bests' bookkeeping (``attractors``,
     ``pbest_order``), the ``objective`` and, on SLO positions, the localisation keywords
     (``slo``)."""

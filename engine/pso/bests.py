@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .objectives import Objective
+from ..core.objectives import Objective
 
 
 def update_personal(

@@ -14,7 +14,7 @@ from typing import Callable, Literal
 import numpy as np
 from scipy.special import expit
 
-from .registry import Registry
+from ..core.registry import Registry
 
 Squash = Literal["sgn", "tanh", "logistic"]
 

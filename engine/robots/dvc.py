@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from .robot_laws import Inertia, rotational_energy_factor
+from .laws import Inertia, rotational_energy_factor
 
 RIGHT = slice(0, 3)
 LEFT = slice(3, 6)

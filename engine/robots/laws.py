@@ -1,7 +1,7 @@
 """Velocity laws and motion helpers of Rossides Ch. 4 (RPSO) and Ch. 5 (robot frame), and the
 registry of the fleet's laws :data:`ROBOT_LAWS`.
 
-Shapes follow ``laws.py``: positions and velocities ``(runs, robots, 2)``, headings and
+Shapes follow :mod:`shoal.engine.pso.laws`: positions and velocities ``(runs, robots, 2)``, headings and
 scalar speeds ``(runs, robots)``; the ``n`` accelerating terms are stacked on a leading
 axis. Body frame: x along the heading, y to the left; w > 0 turns left (CCW), §13.
 """
@@ -13,8 +13,8 @@ from typing import Callable, Literal
 
 import numpy as np
 
-from .laws import Squash, adapted_velocity, squash, standard_velocity
-from .registry import Registry
+from ..core.registry import Registry
+from ..pso.laws import Squash, adapted_velocity, squash, standard_velocity
 
 Inertia = Literal["pi", "disc"]
 

@@ -13,7 +13,7 @@ from typing import Literal, Sequence
 import numpy as np
 import pymunk
 
-from .robot_laws import arc_pose_update, mecanum_limit, to_world, wrap_angle
+from .laws import arc_pose_update, mecanum_limit, to_world, wrap_angle
 from .world import OBSTACLE, ROBOT, RunSpace
 
 Drive = Literal["holonomic", "mecanum", "differential"]

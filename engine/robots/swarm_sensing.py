@@ -1,6 +1,6 @@
 """Six-sector sensing in an open sea: robots are the only bodies (Ch. 8; spec §1.2, §7.6).
 
-The same reading as :func:`shoal.engine.sensing.sense` gives for a world without circles,
+The same reading as :func:`shoal.engine.robots.sensing.sense` gives for a world without circles,
 polygons or walls, where every robot is a disc of radius ``robot_radius``, computed from
 pairwise distances in numpy instead of pymunk point queries (about 50× cheaper per
 robot-step; tests/test_sonar.py checks both agree):

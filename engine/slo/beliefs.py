@@ -12,11 +12,11 @@ from typing import Literal
 
 import numpy as np
 
+from ..core.rng import Streams
+from .candidates import Candidates, Flag, candidates
 from .neighbourhoods import distances
-from .slo_localisation import Candidates, Flag, candidates
-from .slo_selection import SELECTIONS, Kind, RTSTriangle, css
-from .slo_sensors import ErrorModel, measure_odometry, measure_ranges, permanent_errors, permanent_normals
-from .slo_streams import Streams
+from .selection import SELECTIONS, Kind, RTSTriangle, css
+from .sensors import ErrorModel, measure_odometry, measure_ranges, permanent_errors, permanent_normals
 
 PERFECT = "perfect"  # the oracle baseline: every estimate is the truth
 Selection = str  # a key of slo_selection.SELECTIONS, or PERFECT

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .slo_selection import Kind, first_triangle
+from .selection import Kind, first_triangle
 
 
 def _wrap(angle: np.ndarray) -> np.ndarray:

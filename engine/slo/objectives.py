@@ -7,7 +7,7 @@ from typing import Callable, Literal
 
 import numpy as np
 
-from .objectives import ackley, griewank, line, linear, rastrigin, rosenbrock, sphere
+from ..core.objectives import ackley, griewank, line, linear, rastrigin, rosenbrock, sphere
 
 SLOObjectiveName = Literal["ackley", "griewank", "line", "plane", "rastrigin", "rosenbrock", "sphere"]
 Fitness = Callable[[np.ndarray], np.ndarray]

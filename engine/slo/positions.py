@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:  # slo_source's SLOSimulation is itself an SLOHost
-    from .slo_source import SLOPositionSource
+    from .tracker import SLOPositionSource
 
 
 class BelievedBests:
@@ -110,7 +110,7 @@ class SLOHost:
 
     def _start_source(self) -> None:
         """Fresh beliefs (and sensor streams) at the current true positions."""
-        from .slo_source import SLOPositionSource
+        from .tracker import SLOPositionSource
 
         s = self.state  # type: ignore[attr-defined]
         if s.x.shape[-1] != 2:

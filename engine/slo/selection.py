@@ -15,8 +15,8 @@ from typing import Callable, Literal, Protocol
 
 import numpy as np
 
-from .registry import Registry
-from .slo_localisation import Candidates
+from ..core.registry import Registry
+from .candidates import Candidates
 
 RTSTriangle = Literal["first", "best"]
 
@@ -196,7 +196,7 @@ def rts(
 
 
 class RTSOptions(Protocol):
-    """The localisation choices a selection may read (:class:`~.slo_localiser.LocaliserParams`)."""
+    """The localisation choices a selection may read (:class:`~.beliefs.LocaliserParams`)."""
 
     rts_triangle: RTSTriangle
     rts_prefer_geometric: bool

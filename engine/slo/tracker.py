@@ -15,12 +15,12 @@ from typing import Any, Literal
 
 import numpy as np
 
+from ..core.rng import component_generators
+from ..kinds.swarm import Simulation
+from .beliefs import Beliefs, Localiser, LocaliserParams, random_estimates, relative_truth
 from .neighbourhoods import Neighbourhood, NeighbourhoodKind
-from .sim import Simulation
-from .slo_host import BelievedBests, SLOHost
-from .slo_localiser import Beliefs, Localiser, LocaliserParams, random_estimates, relative_truth
-from .slo_sensors import ErrorModel, error_model
-from .slo_streams import component_generators
+from .positions import BelievedBests, SLOHost
+from .sensors import ErrorModel, error_model
 
 # Component keys of an SLO layer inside another simulation: children (i, 100 + k) of run i,
 # clear of anything the host draws.

@@ -4,7 +4,7 @@ A *case* is a shipped preset plus ``--set``-style overrides, so every case can a
 by hand: ``shoal run course-dvc --set controller.law=rpso ...``. A :class:`FleetJob` is one
 case (in one motion mode) for ``runs`` seeded runs; :func:`simulate_fleet` advances a chunk
 of its runs and records per-step metrics, and :func:`merge` glues chunks back together, so
-:func:`shoal.engine.experiments.runner.run_jobs` can spread the runs over processes with
+:func:`shoal.engine.studies.experiments.runner.run_jobs` can spread the runs over processes with
 results that do not depend on the number of workers.
 
 Run ``i`` of a case uses child ``i`` of ``SeedSequence(seed)`` where ``seed`` is the preset
@@ -22,7 +22,7 @@ from shoal.presets.build import build_fleet
 from shoal.presets.io import load
 from shoal.presets.models import Scenario
 
-from ..dvc import TABLE_4_1
+from ...robots.dvc import TABLE_4_1
 from .output import num
 from .output import percentile_band as band
 

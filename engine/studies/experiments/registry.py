@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-from ..atomic import atomic_output_dir
+from ...core.atomic import atomic_output_dir
 from .schedulers import Scheduler, current, using
 
 

@@ -19,7 +19,7 @@ from typing import Any, Callable, Iterable, Sequence
 
 from shoal import __version__
 
-from ..atomic import atomic_write_text
+from ...core.atomic import atomic_write_text
 from .registry import TARGETS, reproduce
 
 REPORT = "REPRODUCTION.md"

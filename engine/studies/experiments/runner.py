@@ -1,7 +1,7 @@
 """Seeded Monte-Carlo batches: advance many runs of one scenario and keep per-step series.
 
 Run ``i`` of a batch seeded with ``seed`` always draws from child ``i`` of
-``SeedSequence(seed)`` (see :mod:`shoal.engine.sim`), so a batch may be cut into chunks of
+``SeedSequence(seed)`` (see :mod:`shoal.engine.kinds.swarm`), so a batch may be cut into chunks of
 runs, simulated in any order or in other processes, and glued back together: the result
 is the same, bit for bit.
 """
@@ -18,7 +18,7 @@ from shoal.presets.build import build_simulation
 from shoal.presets.io import load
 from shoal.presets.models import Scenario
 
-from ..sim import Simulation, StepInfo
+from ...kinds.swarm import Simulation, StepInfo
 from . import schedulers
 from .schedulers import Scheduler
 

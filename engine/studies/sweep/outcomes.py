@@ -16,7 +16,7 @@ import numpy as np
 from shoal.presets.build import build
 from shoal.presets.models import Scenario
 
-from ..recorder import metric_table
+from ...core.recorder import metric_table
 
 # first-passage times: a run that never got there has none (NaN/inf), and a median counts it as +inf
 FIRST_PASSAGE = frozenset({"steps_to_converge", "time_to_converge_s", "quality_met_at"})

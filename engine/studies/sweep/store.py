@@ -16,7 +16,7 @@ from typing import Any, Iterable, Iterator, Sequence
 
 import numpy as np
 
-from ..atomic import atomic_text_writer, atomic_write_text
+from ...core.atomic import atomic_text_writer, atomic_write_text
 from .grid import SweepError
 from .outcomes import INTEGER
 
