@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.dvc import TABLE_4_1
-from shoal.engine.robot_laws import ROBOT_LAWS
+from shoal.engine.robots.dvc import TABLE_4_1
+from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.presets.models import Scenario
 
 from . import fleet_plots

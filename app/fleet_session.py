@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.fleet import Fleet, FleetParams
-from shoal.engine.fleet_probe import RobotView, robot_view
-from shoal.engine.world import WorldSpec
+from shoal.engine.kinds.fleet import Fleet, FleetParams
+from shoal.engine.kinds.fleet_probe import RobotView, robot_view
+from shoal.engine.robots.world import WorldSpec
 from shoal.presets.build import build_fleet, fleet_params_for, world_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario

@@ -49,7 +49,7 @@ class Ghosts:
 
 def ghosts_of(beliefs: Any, x: np.ndarray, i: int, scale: float, *, best: np.ndarray | None = None,
               true_best: np.ndarray | None = None) -> Ghosts:
-    """Observer ``i``'s ghosts (run 0) from :class:`~shoal.engine.slo_localiser.Beliefs` and
+    """Observer ``i``'s ghosts (run 0) from :class:`~shoal.engine.slo.beliefs.Beliefs` and
     the true positions ``x`` (N, 2): every neighbour it localised at its last step."""
     of = np.flatnonzero(beliefs.valid[0, i])
     points = x[i] + beliefs.est[0, i, of]

@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine import tuning
-from shoal.engine.laws import LAWS as VELOCITY_LAWS
+from shoal.engine.pso import tuning
+from shoal.engine.pso.laws import LAWS as VELOCITY_LAWS
 from shoal.presets.models import Scenario
 
 from . import plots

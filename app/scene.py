@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.objectives import Objective
+from shoal.engine.core.objectives import Objective
 from shoal.presets.build import objective_for
 from shoal.presets.models import Scenario
 

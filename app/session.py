@@ -5,7 +5,7 @@ particular to the Chapter 3 swarm: its controller changes without restart, the (
 readout, the phase-plane history and the arena snapshot.
 
 The swarm may act on SLO-estimated positions (``[slo] swarm = "host"``: an
-:class:`~shoal.engine.slo_source.SLOSimulation`, the *Positions* folder of
+:class:`~shoal.engine.slo.tracker.SLOSimulation`, the *Positions* folder of
 :mod:`.positions_panel`). Controller, swarm size and objective changes reach it like the
 oracle swarm; the error set and the localisation settings retune its running SLO source;
 the oracle/SLO switch (and the SLO unit) rebuild it with the same seed.
@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.recorder import TRAJECTORY_COLUMNS
-from shoal.engine.sim import Simulation
+from shoal.engine.core.recorder import TRAJECTORY_COLUMNS
+from shoal.engine.kinds.swarm import Simulation
 from shoal.presets import io as presets_io
 from shoal.presets.build import build_simulation, law_for, objective_for, policy_for, slo_unit
 from shoal.presets.io import PresetError

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.slo_selection import SELECTIONS as SLO_SELECTIONS
-from shoal.engine.slo_sensors import error_model
+from shoal.engine.slo.selection import SELECTIONS as SLO_SELECTIONS
+from shoal.engine.slo.sensors import error_model
 from shoal.presets.models import Scenario, SLOErrorValues
 
 from . import slo_plots

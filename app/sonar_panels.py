@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.localisation import STRATEGIES
+from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.presets.models import Scenario
 
 from . import sonar_plots

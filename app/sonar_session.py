@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.propagation import snr_db
-from shoal.engine.sonar import AcousticSwarm
+from shoal.engine.acoustics.propagation import snr_db
+from shoal.engine.kinds.sonar import AcousticSwarm
 from shoal.presets.build import build_sonar, sonar_params_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario

@@ -21,12 +21,12 @@ from shoal.app.session import Session
 from shoal.app.sonar_session import SonarSession
 from shoal.app.tab import session_for
 from shoal.app.timeline import verify_replay
-from shoal.engine.fleet import Fleet
-from shoal.engine.sim import Simulation
-from shoal.engine.slo_fleet import SLOFleet
-from shoal.engine.slo_sonar import SLOAcousticSwarm
-from shoal.engine.slo_source import SLOSimulation
-from shoal.engine.sonar import AcousticSwarm
+from shoal.engine.kinds.fleet import Fleet
+from shoal.engine.kinds.slo_fleet import SLOFleet
+from shoal.engine.kinds.slo_sonar import SLOAcousticSwarm
+from shoal.engine.kinds.sonar import AcousticSwarm
+from shoal.engine.kinds.swarm import Simulation
+from shoal.engine.slo.tracker import SLOSimulation
 from shoal.presets.io import validate
 
 APP_PRESET = "course-dvc"  # the shared ``server`` fixture (conftest.py) shows this scene

@@ -19,8 +19,8 @@ from shoal.app.session import TRAJECTORY_COLUMNS, Session
 from shoal.app.slo_panels import SLOPanels
 from shoal.app.slo_scene import SLOView
 from shoal.app.slo_session import SLOSession
-from shoal.engine.slo import SLOSwarm
-from shoal.engine.slo_source import SLOSimulation
+from shoal.engine.kinds.slo_swarm import SLOSwarm
+from shoal.engine.slo.tracker import SLOSimulation
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 

@@ -6,12 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shoal.engine.fleet import Fleet
-from shoal.engine.slo_fleet import SLOFleet
-from shoal.engine.slo_host import BelievedBests
-from shoal.engine.slo_sonar import SLOAcousticSwarm, frame_draws
-from shoal.engine.slo_source import SLOPositionSource
-from shoal.engine.sonar import AcousticSwarm
+from shoal.engine.kinds.fleet import Fleet
+from shoal.engine.kinds.slo_fleet import SLOFleet
+from shoal.engine.kinds.slo_sonar import SLOAcousticSwarm, frame_draws
+from shoal.engine.kinds.sonar import AcousticSwarm
+from shoal.engine.slo.positions import BelievedBests
+from shoal.engine.slo.tracker import SLOPositionSource
 from shoal.presets.build import build
 from shoal.presets.io import PresetError, load
 

@@ -7,8 +7,8 @@ import pytest
 
 from shoal.app.session import Session
 from shoal.app.slo_session import SLOSession
-from shoal.engine.slo import SLOSwarm
-from shoal.engine.slo_source import SLOSimulation
+from shoal.engine.kinds.slo_swarm import SLOSwarm
+from shoal.engine.slo.tracker import SLOSimulation
 from shoal.presets import io as presets_io
 
 

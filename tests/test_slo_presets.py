@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from shoal.app.cli import main
-from shoal.engine.sim import Simulation
-from shoal.engine.slo import SLOSwarm
-from shoal.engine.slo_source import SLOSimulation
+from shoal.engine.kinds.slo_swarm import SLOSwarm
+from shoal.engine.kinds.swarm import Simulation
+from shoal.engine.slo.tracker import SLOSimulation
 from shoal.presets.build import build
 from shoal.presets.io import PresetError, list_presets, load
 

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shoal.engine.coeffs import Constant
-from shoal.engine.laws import Law
-from shoal.engine.objectives import Objective
-from shoal.engine.sim import Simulation
-from shoal.engine.slo_source import SLOPositionSource, SLOSimulation
+from shoal.engine.core.objectives import Objective
+from shoal.engine.kinds.swarm import Simulation
+from shoal.engine.pso.coeffs import Constant
+from shoal.engine.pso.laws import Law
+from shoal.engine.slo.tracker import SLOPositionSource, SLOSimulation
 from shoal.presets.build import build_simulation
 from shoal.presets.io import load
 

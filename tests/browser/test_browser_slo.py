@@ -22,11 +22,11 @@ sync_api = pytest.importorskip("playwright.sync_api")
 from shoal.app.fleet_session import FleetSession  # noqa: E402
 from shoal.app.session import Session  # noqa: E402
 from shoal.app.slo_session import SLOSession  # noqa: E402
-from shoal.engine.fleet import Fleet  # noqa: E402
-from shoal.engine.sim import Simulation  # noqa: E402
-from shoal.engine.slo import SLOSwarm  # noqa: E402
-from shoal.engine.slo_fleet import SLOFleet  # noqa: E402
-from shoal.engine.slo_source import SLOSimulation  # noqa: E402
+from shoal.engine.kinds.fleet import Fleet  # noqa: E402
+from shoal.engine.kinds.slo_fleet import SLOFleet  # noqa: E402
+from shoal.engine.kinds.slo_swarm import SLOSwarm  # noqa: E402
+from shoal.engine.kinds.swarm import Simulation  # noqa: E402
+from shoal.engine.slo.tracker import SLOSimulation  # noqa: E402
 
 from browser_helpers import choose, dismiss_toasts, number_box, wait_until  # noqa: E402
 
