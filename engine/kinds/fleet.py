@@ -29,7 +29,7 @@ ACTIVE, COLLIDED = 0, 1
 class FleetParams:
     """Controller and robot parameters of a fleet (Tables 4.1 and 5.1 by default)."""
 
-    law: str = "adapted-rpso"  # a key of robot_laws.ROBOT_LAWS
+    law: str = "adapted-rpso"  # a key of robots.laws.ROBOT_LAWS
     dvc: bool = True
     dt: float = 1.0
     omega: float = 0.1  # constant mode; ω = 1 − β (spec §20 item 17)

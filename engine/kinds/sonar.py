@@ -71,7 +71,7 @@ Start = Literal["origin", "source"]
 class SonarParams:
     """Everything an acoustic swarm needs (spec §8 defaults: Table 7.1, Table 8.1)."""
 
-    algorithm: str = "xb-pso"  # a key of localisation.STRATEGIES
+    algorithm: str = "xb-pso"  # a key of acoustics.strategies.STRATEGIES
     controller: ControllerName = "adapted"
     mode: AcousticMode = "waveform"
     snr0_db: float = 10.0  # SNR at the origin, sets d_s (spec §4.2)

@@ -75,14 +75,14 @@ def _per_run(value: np.ndarray | float, R: int) -> np.ndarray:
 class Simulation:
     """A seeded swarm: positions, velocities and bests of ``runs`` independent runs.
 
-    Implements :class:`~shoal.engine.core.contract.Engine`; :meth:`retune` takes the controller (``policy``,
-    ``law``, ``dt``), the swarm size (``robots``), the bests' bookkeeping (``attractors``,
-    ``pbest_order``), the ``objective`` and, on SLO positions, the localisation keywords
-    (``slo``).
+    Implements :class:`~shoal.engine.core.contract.Engine`; :meth:`retune` takes the controller
+    (``policy``, ``law``, ``dt``), the swarm size (``robots``), the bests' bookkeeping
+    (``attractors``, ``pbest_order``), the ``objective`` and, on SLO positions, the localisation
+    keywords (``slo``).
 
-    ``positions`` is where the robots' positions come from: the truth (:class:`~shoal.engine.slo.
-    positions.Oracle`, the default) or their SLO estimates. Only the "literal" attractors read
-    positions; fitness is always read at the true position."""
+    ``positions`` says where the robots' positions come from: the truth (``Oracle``, the
+    default) or their SLO estimates (``Estimated``, :mod:`shoal.engine.slo.positions`). Only the
+    "literal" attractors read positions; fitness is always read at the true position."""
 
     LIVE: ClassVar[frozenset[str]] = frozenset(
         {"policy", "law", "dt", "slo", "robots", "attractors", "pbest_order", "objective"})
