@@ -1,4 +1,5 @@
-"""Lesson files: the format, the loader's messages for bad files, scenes and checks."""
+"""Lesson files: the format, the loader's messages for bad files, and that every shipped lesson
+reads, names only scenes the preset model and the app accept, and passes its checks."""
 
 from __future__ import annotations
 
@@ -9,9 +10,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from shoal.app.lessons import LessonError, parse_lesson
-from shoal.app.lessons.library import read_lesson
+from shoal.app.lessons.library import read_lesson, shipped
 from shoal.app.lessons.scenes import load_scene, overrides, scene_errors, toml_literal
-from shoal.app.lessons.verify import lesson_check_failures, run_metrics
+from shoal.app.lessons.verify import check_failures, lesson_check_failures, run_metrics
+from shoal.app.tab import kind_for
 from shoal.presets.io import PresetError, parse_value
 
 GOOD = '''+++
@@ -202,3 +204,42 @@ def test_a_check_reports_what_does_not_hold():
 def test_run_metrics_counts_robots_outside_the_arena():
     m = run_metrics("standard-pso", {"controller.omega": 1.1}, 60)
     assert m["outside"].shape == (60, 1) and m["outside"][0, 0] == 0 and m["outside"][-1, 0] == 20
+
+
+# ---------------------------------------------------------------------------- shipped lessons
+LESSONS, PROBLEMS = shipped()
+
+
+def test_every_shipped_lesson_reads():
+    assert PROBLEMS == ()
+    chapters = {lesson.chapter for lesson in LESSONS.values()}
+    assert {"3", "4", "5", "6", "7", "8", "Mai SLO"} <= chapters
+
+
+@pytest.mark.parametrize("lesson_id", sorted(LESSONS))
+def test_every_scene_of_a_shipped_lesson_validates(lesson_id):
+    lesson = LESSONS[lesson_id]
+    assert scene_errors(lesson) == []
+    for i in range(len(lesson.steps)):
+        scene = lesson.scene(i)
+        if scene is not None:
+            kind_for(load_scene(*scene))  # the app has a view for it
+
+
+@pytest.mark.parametrize("lesson_id", sorted(LESSONS))
+def test_every_check_of_a_shipped_lesson_holds(lesson_id):
+    """What each step says the student will see, run headless on the step's scene."""
+    assert lesson_check_failures(LESSONS[lesson_id]) == []
+
+
+def test_every_step_with_numbers_in_its_answer_is_checked():
+    """A step whose scene the student sets up carries a check (the text's numbers stay true)."""
+    unchecked = [f"{lid}: {s.title}" for lid, lesson in LESSONS.items() for s in lesson.steps
+                 if s.setup is not None and s.setup.check is None]
+    assert unchecked == []
+
+
+def test_check_failures_uses_run_zero_as_the_app_shows_it():
+    lesson = LESSONS["03a-stability"]
+    scene = lesson.scene(0)
+    assert check_failures(*scene, lesson.steps[0].setup.check) == []
