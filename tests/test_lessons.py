@@ -10,6 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from shoal.app.lessons import LessonError, parse_lesson
+from shoal.app.lessons import library
 from shoal.app.lessons.library import read_lesson, shipped
 from shoal.app.lessons.scenes import load_scene, overrides, scene_errors, toml_literal
 from shoal.app.lessons.verify import check_failures, lesson_check_failures, run_metrics
@@ -147,6 +148,21 @@ def test_two_setup_blocks_in_one_step_are_refused():
 
 def test_a_huge_file_is_refused_before_it_is_parsed():
     assert "characters; a lesson has at most" in _messages(GOOD + "x" * 50_000)[0]
+
+
+def test_a_bad_shipped_file_is_left_out_and_reported(tmp_path, monkeypatch):
+    (tmp_path / "01-good.md").write_text(GOOD, encoding="utf-8")
+    (tmp_path / "02-bad.md").write_text(GOOD.replace("+++\n", "", 1), encoding="utf-8")
+    (tmp_path / "03-binary.md").write_bytes(b"\xff\xfe+++")
+    monkeypatch.setattr(library, "_folder", lambda: tmp_path)
+    library.shipped.cache_clear()
+    try:
+        lessons, problems = library.shipped()
+    finally:
+        library.shipped.cache_clear()
+    assert list(lessons) == ["01-good"]
+    assert problems[0].startswith("02-bad.md: must start with a +++ line")
+    assert problems[1].startswith("03-binary.md: cannot read")
 
 
 def test_read_lesson_names_an_unreadable_file(tmp_path):

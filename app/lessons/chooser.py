@@ -19,6 +19,7 @@ from .model import PRESET_NAME, FieldValue
 from .parse import LessonError
 
 FILE = "lessons/chooser.toml"
+MAX_ANSWERS = 4  # per question: the panel shows one button per answer
 Name = Annotated[str, Field(pattern=PRESET_NAME, max_length=40)]
 
 
@@ -34,7 +35,7 @@ class Answer(_Model):
 class Question(_Model):
     question: Annotated[str, Field(min_length=1, max_length=200)]
     detail: Annotated[str, Field(max_length=800)] = ""
-    answers: Annotated[list[Answer], Field(min_length=2, max_length=4)]
+    answers: Annotated[list[Answer], Field(min_length=2, max_length=MAX_ANSWERS)]
 
 
 class Leaf(_Model):

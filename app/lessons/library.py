@@ -17,14 +17,18 @@ def _folder() -> Any:
     return resources.files("shoal.static").joinpath(FOLDER)
 
 
+def _parse_file(file: Any, name: str) -> Lesson:
+    """The lesson in ``file`` (a path or a package resource) named ``name``."""
+    try:
+        text = file.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        raise LessonError([f"{name}: cannot read: {err}"]) from None
+    return parse_lesson(text, name.removesuffix(".md"))
+
+
 def read_lesson(path: str | Path) -> Lesson:
     """A lesson file anywhere (for authors and tests), validated; :class:`LessonError` if bad."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        raise LessonError([f"{path.name}: cannot read: {err}"]) from None
-    return parse_lesson(text, path.stem)
+    return _parse_file(Path(path), Path(path).name)
 
 
 @functools.lru_cache(maxsize=1)
@@ -34,15 +38,13 @@ def shipped() -> tuple[dict[str, Lesson], tuple[str, ...]]:
     problems: list[str] = []
     try:
         files = sorted((f for f in _folder().iterdir() if f.name.endswith(".md")), key=lambda f: f.name)
-    except (FileNotFoundError, OSError):
+    except OSError:
         return {}, (f"the {FOLDER} folder is not installed",)
     for f in files:
         try:
-            lesson = parse_lesson(f.read_text(encoding="utf-8"), f.name.removesuffix(".md"))
+            lesson = _parse_file(f, f.name)
         except LessonError as err:
             problems += err.messages
-        except (OSError, UnicodeDecodeError) as err:
-            problems.append(f"{f.name}: cannot read: {err}")
         else:
             lessons[lesson.id] = lesson
     return lessons, tuple(problems)

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from . import chooser, library
-from .chooser import Leaf, Question, Tree
+from .chooser import MAX_ANSWERS, Leaf, Question, Tree
 from .model import Lesson
 from .parse import LessonError
 from .scenes import describe
@@ -31,7 +31,6 @@ SetUp = Callable[[str, dict[str, Any]], list[str]]
 Notify = Callable[[str, str, str], None]
 NAV = ("◀ Back", "Next ▶")
 CHOOSER_NAV = ("◀ Back", "Start over")
-MAX_ANSWERS = 4
 INTRO = "Set up a step, read its question, predict, press **Play**, then reveal the answer."
 
 
@@ -222,7 +221,7 @@ class LessonsPanel:
             return None
         try:
             return chooser.walk(self.tree, self.progress.choices)
-        except (IndexError, KeyError):
+        except IndexError:  # answers from another tree: start over
             self.progress.choices = []
             return chooser.walk(self.tree, [])
 
