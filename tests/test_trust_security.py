@@ -1,6 +1,9 @@
-"""Where the app listens and what it writes.
+"""Where the app listens, what it reads and what it writes.
 
 - ``shoal serve`` binds to loopback unless ``--host`` says otherwise, and warns when it does;
+- a value from the browser never becomes a file path: the preset dropdown loads only the
+  shipped presets and those uploaded into that tab (held in memory), and anything else is
+  refused without touching the file system or echoing a file;
 - uploads (presets, replays) are size-limited and read in memory: nothing the client sends is
   ever written to disk, and a name the client chose (file name or preset ``name``) never
   becomes a path: downloads and ``shoal run`` folders use a sanitised stem.
@@ -8,6 +11,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -22,7 +26,7 @@ from shoal.app.base_session import MAX_UPLOAD_BYTES
 from shoal.app.cli import build_parser
 from shoal.app.server import is_loopback, start_server
 from shoal.presets import io as presets_io
-from shoal.presets.io import file_stem
+from shoal.presets.io import PresetError, file_stem
 
 EVIL_NAMES = ["../../x.toml", "/etc/passwd.toml", "..\\..\\x.json", "a\x00b.toml", "x.toml\x00.png",
               "~/.bashrc.toml", "C:\\Windows\\x.toml", "." * 300 + ".toml"]
@@ -198,3 +202,77 @@ def test_the_size_limit_is_checked_before_parsing():
 
     with pytest.raises(presets_io.PresetError, match="KiB limit"):
         parse_upload("x.json", b"{" * (MAX_UPLOAD_BYTES + 1))  # would be a nesting bomb if it were parsed
+
+
+# ------------------------------------------------------------------ the preset dropdown is no path
+class Touches:
+    """Every path under ``root`` this process opens (any mode) or lists while active (audit hooks)."""
+
+    def __init__(self) -> None:
+        self.root: str | None = None
+        self.seen: list[tuple[str, str]] = []
+        sys.addaudithook(self._hook)
+
+    def _hook(self, event: str, args: tuple) -> None:
+        if self.root is None or event not in ("open", "os.listdir", "os.scandir", "os.mkdir", "os.remove"):
+            return
+        path = args[0] if args else None
+        if isinstance(path, (str, bytes, os.PathLike)) and str(os.fsdecode(path)).startswith(self.root):
+            self.seen.append((event, os.fsdecode(path)))
+
+
+TOUCHES = Touches()
+TOKEN = "api-token-0123456789"
+
+
+@pytest.fixture
+def secrets(tmp_path, monkeypatch):
+    """A folder of files a hostile page would like to read, and the process run from deep below it."""
+    folder = tmp_path / "private"
+    folder.mkdir()
+    (folder / "secret.json").write_text(json.dumps({"api_token": TOKEN}), encoding="utf-8")
+    (folder / "secret.toml").write_text(f'api_token = "{TOKEN}"\n', encoding="utf-8")
+    (folder / "valid.toml").write_text(presets_io.to_toml(presets_io.load("default", ["sim.robots=3"]))
+                                       .replace('name = "default"', 'name = "stolen"'), encoding="utf-8")
+    deep = tmp_path / "a" / "b" / "c" / "d"
+    deep.mkdir(parents=True)
+    monkeypatch.chdir(deep)
+    TOUCHES.seen.clear()
+    TOUCHES.root = str(folder)
+    yield folder
+    TOUCHES.root = None
+
+
+def _hostile_choices(folder) -> list[str]:
+    return [str(folder / "secret.json"), str(folder / "secret.toml"), str(folder / "valid.toml"),
+            str(folder / "secret"), "../../../../private/secret.json", "../../../../private/valid.toml",
+            "../../../../private/valid", "default.toml", "default/../default", "./default", "x" * 100_000,
+            "default\x00", "~/.ssh/id_rsa"]
+
+
+def test_the_shipped_loader_takes_only_shipped_names(secrets):
+    for choice in _hostile_choices(secrets):
+        with pytest.raises(PresetError, match="no shipped preset named") as err:
+            presets_io.load_shipped(choice)
+        assert TOKEN not in str(err.value) and len(str(err.value)) < 1500
+    assert TOUCHES.seen == []
+    assert presets_io.load_shipped("rastrigin").name == "rastrigin"
+
+
+def test_a_command_line_user_may_still_name_a_file(secrets):
+    assert presets_io.load(str(secrets / "valid.toml")).name == "stolen"
+    with pytest.raises(PresetError, match="longer than 4096 characters"):
+        presets_io.load("x" * 100_000)
+    with pytest.raises(PresetError, match="no preset or file named"):
+        presets_io.load("y" * 300 + ".toml")  # a name the file system cannot hold: no OSError
+
+
+def test_the_panels_refuse_a_path_as_a_preset_choice(tab, secrets):
+    """The panel's own check, behind the input guard: a value that reached it is still only a choice."""
+    scenario = tab.session.scenario
+    for choice in _hostile_choices(secrets):
+        assert not tab.panels.load_preset(choice)
+        title, body, color = tab.messages[-1]
+        assert color == "red" and "not one of this tab's presets" in body and TOKEN not in body, body
+        assert len(body) < 300
+    assert tab.session.scenario is scenario and TOUCHES.seen == []
