@@ -24,12 +24,18 @@ def _cmd_serve(args: argparse.Namespace) -> int:
         load(args.preset)
     except PresetError as e:
         return _err("bad preset:\n  " + "\n  ".join(e.messages))
+    from shoal.app.origin_guard import check_origin_url
     from shoal.app.server import serve
 
     if args.max_sessions < 1:
         return _err("--max-sessions must be >= 1")
     try:
-        serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions)
+        origins = tuple(check_origin_url(url) for url in args.allow_origin or ())
+    except ValueError as e:
+        return _err(str(e))
+    try:
+        serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions,
+              allow_origins=origins)
     except OSError as e:
         return _err(str(e))
     return 0
@@ -197,6 +203,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--max-sessions", type=int, default=DEFAULT_MAX_SESSIONS, metavar="N",
                    help=f"browser tabs with a simulation at once; more are told the server is full "
                         f"(default {DEFAULT_MAX_SESSIONS})")
+    s.add_argument("--allow-origin", action="append", metavar="URL",
+                   help="also accept pages of this origin, e.g. http://192.168.1.10:8080 or a proxy's "
+                        "https://shoal.example.org (repeatable; by default only this server's own pages)")
     s.set_defaults(func=_cmd_serve)
 
     r = sub.add_parser("run", help="headless seeded runs")

@@ -7,7 +7,6 @@ and meet the ticking thread only through each session's lock.
 
 from __future__ import annotations
 
-import ipaddress
 import socket
 import sys
 import threading
@@ -23,6 +22,7 @@ from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .base_session import MAX_UPLOAD_BYTES, BaseSession
+from .origin_guard import OriginPolicy, guarded_viser, is_loopback
 from .replay import MAX_REPLAY_BYTES
 from .scene import CAMERA_FOV, CAMERA_HEIGHT, camera_height
 from .session import check_supported
@@ -31,7 +31,6 @@ from .upload_guard import guard_uploads
 
 TICK_HZ = 60.0
 PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round
-LOOPBACK_NAMES = ("localhost",)
 MAX_TRANSFER_BYTES = max(MAX_UPLOAD_BYTES, MAX_REPLAY_BYTES)  # any upload; bigger ones are dropped as they arrive
 DEFAULT_MAX_SESSIONS = 24  # browser tabs with a simulation at once (``shoal serve --max-sessions``)
 FULL_TITLE = "This Shoal server is full"
@@ -41,15 +40,6 @@ FULL_MESSAGE = ("This server already runs {n} sessions (its maximum), so this ta
 
 class PortInUseError(OSError):
     """The requested port is taken (viser would silently move to the next free one)."""
-
-
-def is_loopback(host: str) -> bool:
-    if host in LOOPBACK_NAMES:
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 def _port_free(host: str, port: int) -> bool:
@@ -73,10 +63,12 @@ class ShoalServer:
 
     At most ``max_sessions`` browser tabs get a session; a tab beyond that is told so in the
     page (``turned_away``) and costs no simulation. A closed tab frees its session at once.
+    Requests from pages of other origins are refused (``allow_origins`` lets some in; see
+    :mod:`.origin_guard`).
     """
 
     def __init__(self, scenario: Scenario, host: str = "127.0.0.1", port: int = 8080,
-                 max_sessions: int = DEFAULT_MAX_SESSIONS) -> None:
+                 max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = ()) -> None:
         if max_sessions < 1:
             raise ValueError(f"max_sessions must be >= 1 (got {max_sessions})")
         self.scenario = scenario
@@ -85,7 +77,8 @@ class ShoalServer:
         self.turned_away: set[int] = set()  # client ids shown the "server is full" message
         self._opening: set[int] = set()  # client ids whose session is being built
         self._errors: weakref.WeakKeyDictionary[TabApp, str] = weakref.WeakKeyDictionary()  # last error per tab
-        self.viser = viser.ViserServer(host=host, port=port, verbose=False)
+        self.policy = OriginPolicy(host, allow_origins)
+        self.viser = guarded_viser(host, port, self.policy)
         self.port = self.viser.get_port()
         self.tabs: dict[int, TabApp] = {}
         self._lock = threading.Lock()
@@ -236,7 +229,7 @@ class ShoalServer:
 
 
 def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
-                 max_sessions: int = DEFAULT_MAX_SESSIONS) -> ShoalServer:
+                 max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = ()) -> ShoalServer:
     """Start the app without blocking. ``port=0`` picks a free port (see ``.port``).
 
     Raises :class:`PresetError` for an unknown or invalid preset and :class:`PortInUseError`
@@ -245,7 +238,7 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
     scenario = check_supported(presets_io.load(preset))
     if port and not _port_free(host, port):
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
-    server = ShoalServer(scenario, host=host, port=port, max_sessions=max_sessions)
+    server = ShoalServer(scenario, host=host, port=port, max_sessions=max_sessions, allow_origins=allow_origins)
     if port and server.port != port:  # viser moved to the next free port: refuse instead
         server.stop()
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
@@ -253,10 +246,10 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
 
 
 def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
-          max_sessions: int = DEFAULT_MAX_SESSIONS) -> None:
+          max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = ()) -> None:
     """Run the browser app until Ctrl-C (``shoal serve``). Exits with a message if the port is taken."""
     try:
-        server = start_server(preset, host, port, max_sessions)
+        server = start_server(preset, host, port, max_sessions, allow_origins)
     except PortInUseError as err:
         raise SystemExit(f"shoal serve: {err}") from None
     except PresetError as err:

@@ -1,6 +1,9 @@
-"""Where the app listens, what it reads and what it writes.
+"""Where the app listens, who may talk to it, what it reads and what it writes.
 
 - ``shoal serve`` binds to loopback unless ``--host`` says otherwise, and warns when it does;
+- only the server's own pages get a session: a websocket upgrade or HTTP request whose
+  ``Origin`` or ``Host`` is another site's is refused (403) before viser sees it, unless
+  ``--allow-origin`` names it;
 - a value from the browser never becomes a file path: the preset dropdown loads only the
   shipped presets and those uploaded into that tab (held in memory), and anything else is
   refused without touching the file system or echoing a file;
@@ -18,15 +21,20 @@ import subprocess
 import sys
 import threading
 import time
+import urllib.error
+import urllib.request
 
 import pytest
 from app_helpers import hand_tab
+from websockets.exceptions import InvalidStatus
 
+from browser.browser_helpers import wait_until  # noqa: E402  (tests/ is on sys.path)
 from shoal.app.base_session import MAX_UPLOAD_BYTES
 from shoal.app.cli import build_parser
 from shoal.app.server import is_loopback, start_server
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError, file_stem
+from viser_wire import WireClient
 
 EVIL_NAMES = ["../../x.toml", "/etc/passwd.toml", "..\\..\\x.json", "a\x00b.toml", "x.toml\x00.png",
               "~/.bashrc.toml", "C:\\Windows\\x.toml", "." * 300 + ".toml"]
@@ -276,3 +284,82 @@ def test_the_panels_refuse_a_path_as_a_preset_choice(tab, secrets):
         assert color == "red" and "not one of this tab's presets" in body and TOKEN not in body, body
         assert len(body) < 300
     assert tab.session.scenario is scenario and TOUCHES.seen == []
+
+
+# ------------------------------------------------------------------ origins and hosts
+def _refused(port: int, **headers) -> int:
+    with pytest.raises(InvalidStatus) as err:
+        WireClient(port, decode=True, **headers)
+    return err.value.response.status_code
+
+
+FOREIGN = [dict(origin="http://evil.example"), dict(origin="null"), dict(origin="http://localhost:1"),
+           dict(origin="https://127.0.0.1"), dict(host="evil.example"),
+           dict(origin="http://rebound.example:{port}", host="rebound.example:{port}")]
+
+
+@pytest.mark.parametrize("headers", FOREIGN, ids=lambda h: ",".join(f"{k}={v}" for k, v in h.items()))
+def test_a_foreign_origin_or_host_gets_no_session_and_no_messages(server, headers, capfd):
+    headers = {k: v.format(port=server.port) for k, v in headers.items()}
+    assert _refused(server.port, **headers) == 403
+    time.sleep(0.3)
+    assert not server.tabs and not server.turned_away and not server.viser.get_clients()
+    assert "refused a connection" in capfd.readouterr().err
+
+
+@pytest.mark.parametrize("origin", ["http://127.0.0.1:{port}", "http://localhost:{port}", "http://[::1]:{port}", None])
+def test_the_servers_own_pages_and_plain_clients_get_a_session(server, origin):
+    client = WireClient(server.port, origin=origin and origin.format(port=server.port))
+    try:
+        wait_until(lambda: len(server.tabs) == 1, what="a session")
+    finally:
+        client.close()
+    wait_until(lambda: not server.tabs, what="the session to go")
+
+
+def test_a_page_reached_through_a_tunnel_is_its_own_origin(server):
+    """``ssh -L 9000:localhost:PORT``: the page is http://localhost:9000 and its websocket says so."""
+    client = WireClient(server.port, origin="http://localhost:9000", host="localhost:9000")
+    try:
+        wait_until(lambda: len(server.tabs) == 1, what="a session")
+    finally:
+        client.close()
+    assert _refused(server.port, origin="http://localhost:9000", host=f"localhost:{server.port}") == 403
+
+
+def _get(port: int, **headers) -> int:
+    request = urllib.request.Request(f"http://127.0.0.1:{port}/", headers=headers)
+    try:
+        with urllib.request.urlopen(request, timeout=30) as r:
+            return r.status
+    except urllib.error.HTTPError as err:
+        return err.code
+
+
+def test_http_requests_of_foreign_hosts_or_origins_are_refused(server):
+    assert _get(server.port) == 200
+    assert _get(server.port, Host=f"localhost:{server.port}") == 200
+    assert _get(server.port, Host=f"rebound.example:{server.port}") == 403  # DNS rebinding
+    assert _get(server.port, Origin="http://evil.example") == 403
+
+
+def test_allow_origin_lets_a_named_origin_in_and_no_other():
+    srv = start_server("default", port=0, allow_origins=("https://shoal.example.org",))
+    try:
+        client = WireClient(srv.port, origin="https://shoal.example.org", host="shoal.example.org")
+        try:
+            wait_until(lambda: len(srv.tabs) == 1, what="a session through the allowed origin")
+        finally:
+            client.close()
+        assert _refused(srv.port, origin="https://other.example.org", host="shoal.example.org") == 403
+        assert _refused(srv.port, origin="https://shoal.example.org", host="other.example.org") == 403
+    finally:
+        srv.stop()
+
+
+def test_allow_origin_is_a_checked_serve_option():
+    args = build_parser().parse_args(["serve", "--allow-origin", "http://a.lan:8080", "--allow-origin", "https://b"])
+    assert args.allow_origin == ["http://a.lan:8080", "https://b"]
+    out = subprocess.run([*CLI, "serve", "--port", "0", "--allow-origin", "evil.example"], capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 2 and "--allow-origin 'evil.example': expected an origin" in out.stderr

@@ -12,6 +12,7 @@ msgpack ``{"messages": [...]}``, then raw binary buffers.
 
 from __future__ import annotations
 
+import socket
 import threading
 from typing import Any
 
@@ -43,9 +44,14 @@ def _texts(value: Any) -> list[str]:
 
 class WireClient:
     """One tab on ``ws://127.0.0.1:port``: ``frames``/``nbytes`` received, ``texts`` seen
-    (with ``decode=True``: every string in the GUI messages, e.g. markdown and modal titles)."""
+    (with ``decode=True``: every string in the GUI messages, e.g. markdown and modal titles).
 
-    def __init__(self, port: int, *, decode: bool = False, width: int = 1280, height: int = 800) -> None:
+    ``origin`` sends an ``Origin`` header as a browser page would; ``host`` connects to
+    127.0.0.1 all the same but names ``host`` in the ``Host`` header (a DNS name pointed at
+    this machine). A refused upgrade raises ``websockets.exceptions.InvalidStatus``."""
+
+    def __init__(self, port: int, *, decode: bool = False, width: int = 1280, height: int = 800,
+                 origin: str | None = None, host: str | None = None) -> None:
         self.decode = decode
         self.frames = 0
         self.nbytes = 0
@@ -54,8 +60,9 @@ class WireClient:
         self.gui: list[dict[str, Any]] = []  # (decode=True) every GUI message received
         self.closed = threading.Event()
         self._lock = threading.Lock()
-        self.ws = connect(f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"],
-                          max_size=None, open_timeout=30)
+        sock = socket.create_connection(("127.0.0.1", port)) if host else None
+        self.ws = connect(f"ws://{host or f'127.0.0.1:{port}'}", subprotocols=[f"viser-v{viser.__version__}"],
+                          max_size=None, open_timeout=30, origin=origin, sock=sock)  # type: ignore[arg-type]
         camera = _messages.ViewerCameraMessage(
             wxyz=(1.0, 0.0, 0.0, 0.0), position=(0.0, 0.0, 40.0), fov=0.6, near=0.01, far=1000.0,
             image_height=height, image_width=width, look_at=(0.0, 0.0, 0.0), up_direction=(0.0, 1.0, 0.0))
