@@ -22,6 +22,7 @@ from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .base_session import MAX_UPLOAD_BYTES, BaseSession
+from .input_guard import guard_inputs
 from .origin_guard import OriginPolicy, guarded_viser, is_loopback
 from .replay import MAX_REPLAY_BYTES
 from .scene import CAMERA_FOV, CAMERA_HEIGHT, camera_height
@@ -184,9 +185,13 @@ class ShoalServer:
             fitted.set()  # once: the first report tells the canvas' aspect; later moves are the user's
             camera.position = (0.0, 0.0, camera_height(camera.aspect))
 
-        guard_uploads(client.gui, MAX_TRANSFER_BYTES, lambda name, size: client.add_notification(
+        def refuse(title: str, body: str) -> None:
+            client.add_notification(title, body, color="red", auto_close_seconds=10.0)
+
+        guard_inputs(client.gui, refuse)
+        guard_uploads(client.gui, MAX_TRANSFER_BYTES, lambda name, size: refuse(
             f"Refused: uploaded {name}", f"{size / 2**20:.1f} MiB is more than the {MAX_TRANSFER_BYTES // 2**20} MiB "
-            "an upload may have", color="red", auto_close_seconds=10.0))
+            "an upload may have"))
         tab = self.open_tab(client.client_id, client.gui, client.scene, client)
         tab.session.play()
 

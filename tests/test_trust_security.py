@@ -10,6 +10,9 @@
 - uploads (presets, replays) are size-limited and read in memory: nothing the client sends is
   ever written to disk, and a name the client chose (file name or preset ``name``) never
   becomes a path: downloads and ``shoal run`` folders use a sanitised stem.
+
+The hostile messages go over a real websocket (``viser_wire.WireClient``), as a client that
+is not a browser would send them.
 """
 
 from __future__ import annotations
@@ -363,3 +366,51 @@ def test_allow_origin_is_a_checked_serve_option():
     out = subprocess.run([*CLI, "serve", "--port", "0", "--allow-origin", "evil.example"], capture_output=True,
                          text=True, timeout=120)
     assert out.returncode == 2 and "--allow-origin 'evil.example': expected an origin" in out.stderr
+
+
+# ------------------------------------------------------------------ hostile choices over the wire
+def test_hostile_dropdown_values_over_the_wire_read_no_file(server, secrets, capfd):
+    client = WireClient(server.port, decode=True)
+    try:
+        wait_until(lambda: client.uuid_of("preset") and len(server.tabs) == 1, what="the tab's preset dropdown")
+        session = next(iter(server.sessions.values()))
+        scenario = session.scenario
+        for choice in _hostile_choices(secrets):
+            before = len(client.notifications())
+            client.set_value("preset", choice)
+            wait_until(lambda: len(client.notifications()) > before, what=f"the refusal of {choice[:40]!r}")
+            title, body, color = client.notifications()[-1]
+            assert color == "red" and "not one of the choices" in body, (title, body)
+            wait_until(lambda: client.value_of(client.uuid_of("preset")) == "default", what="the dropdown back")
+        assert next(iter(server.sessions.values())) is session and session.scenario is scenario
+        assert not any(TOKEN in t or "stolen" in t for t in client.texts)
+        assert TOUCHES.seen == [], TOUCHES.seen
+    finally:
+        client.close()
+    assert "Traceback" not in capfd.readouterr().err
+
+
+def test_an_uploaded_preset_stays_a_choice_of_its_tab_only(server):
+    data = presets_io.to_toml(presets_io.load("rastrigin", ["sim.robots=7"])).replace(
+        'name = "rastrigin"', 'name = "mine"').encode()
+    a, b = WireClient(server.port, decode=True), WireClient(server.port, decode=True)
+    try:
+        wait_until(lambda: a.uuid_of("Upload preset") and b.uuid_of("Upload preset") and len(server.tabs) == 2,
+                   what="two tabs")
+        cid_a, cid_b = sorted(server.tabs)  # (the tabs' ids in the order they connected)
+        a.upload("Upload preset", "mine.toml", data)
+        wait_until(lambda: server.sessions[cid_a].scenario.name == "mine", what="the upload loaded")
+        wait_until(lambda: a.value_of(a.uuid_of("preset")) == "mine (uploaded)", what="the upload shown as a choice")
+        a.set_value("preset", "default")
+        wait_until(lambda: server.sessions[cid_a].scenario.name == "default", what="back to default")
+        a.set_value("preset", "mine (uploaded)")
+        wait_until(lambda: server.sessions[cid_a].scenario.name == "mine" and server.sessions[cid_a].sim.robots == 7,
+                   what="the uploaded preset chosen again, from memory")
+        assert "mine (uploaded)" not in server.tabs[cid_b].panels.preset.options
+        before = len(b.notifications())
+        b.set_value("preset", "mine (uploaded)")
+        wait_until(lambda: len(b.notifications()) > before, what="the other tab's refusal")
+        assert "not one of the choices" in b.notifications()[-1][1] and server.sessions[cid_b].scenario.name == "default"
+    finally:
+        a.close()
+        b.close()

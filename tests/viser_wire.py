@@ -112,6 +112,47 @@ class WireClient:
         with self._lock:
             return next((m["uuid"] for m in self.gui if (m.get("props") or {}).get("label") == label), None)
 
+    def notifications(self) -> list[tuple[str, str, Any]]:
+        """(title, body, colour) of every notification shown so far (decode=True)."""
+        with self._lock:
+            return [(m["props"]["title"], m["props"]["body"], m["props"]["color"]) for m in self.gui
+                    if m.get("type") == "NotificationShowMessage"]
+
+    def value_of(self, uuid: str) -> Any:
+        """The value the server last gave the GUI element ``uuid`` (decode=True)."""
+        with self._lock:
+            for m in reversed(self.gui):
+                if m.get("uuid") == uuid and "value" in (m.get("updates") or {}):
+                    return m["updates"]["value"]
+                if m.get("uuid") == uuid and "value" in m:
+                    return m["value"]
+        raise KeyError(uuid)
+
+    def set_value(self, label: str, value: Any) -> None:
+        """Send ``value`` for the control labelled ``label``, as the page does when it changes."""
+        uuid = self.uuid_of(label)
+        assert uuid is not None, f"no control labelled {label!r} arrived"
+        self.send(_messages.GuiUpdateMessage(uuid, {"value": value}))
+
+    def upload(self, label: str, name: str, data: bytes, *, parts: int = 1, declared: int | None = None,
+               send: int | None = None) -> str:
+        """Upload ``data`` as file ``name`` through the upload button ``label`` in ``parts`` parts,
+        declaring ``declared`` bytes (default: its size) and sending only the first ``send``
+        parts (default: all). Returns the transfer's id."""
+        import uuid as _uuid
+
+        button = self.uuid_of(label)
+        assert button is not None, f"no upload button {label!r} arrived"
+        tid = str(_uuid.uuid4())
+        self.send(_messages.FileTransferStartUpload(
+            source_component_uuid=button, transfer_uuid=tid, filename=name, mime_type="application/octet-stream",
+            part_count=parts, size_bytes=len(data) if declared is None else declared))
+        step = -(-len(data) // parts) if data else 0
+        for i in range(parts if send is None else send):
+            self.send(_messages.FileTransferPart(source_component_uuid=button, transfer_uuid=tid, part_index=i,
+                                                 content=data[i * step:(i + 1) * step]))
+        return tid
+
     def send(self, message: Any) -> None:
         """Send one viser message as a page would."""
         self.ws.send(msgspec.msgpack.encode(message.as_serializable_dict()))
