@@ -23,6 +23,7 @@ from shoal.presets.models import Scenario
 
 from .base_session import MAX_UPLOAD_BYTES, BaseSession
 from .input_guard import guard_inputs
+from .native_memory import keep_large_blocks_returnable
 from .origin_guard import OriginPolicy, guarded_viser, is_loopback
 from .replay import MAX_REPLAY_BYTES
 from .scene import CAMERA_FOV, CAMERA_HEIGHT, camera_height
@@ -33,6 +34,7 @@ from .upload_guard import guard_uploads
 TICK_HZ = 60.0
 PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round
 MAX_TRANSFER_BYTES = max(MAX_UPLOAD_BYTES, MAX_REPLAY_BYTES)  # any upload; bigger ones are dropped as they arrive
+MAX_PENDING_BYTES = 2 * MAX_TRANSFER_BYTES  # one tab's unfinished uploads together
 DEFAULT_MAX_SESSIONS = 24  # browser tabs with a simulation at once (``shoal serve --max-sessions``)
 FULL_TITLE = "This Shoal server is full"
 FULL_MESSAGE = ("This server already runs {n} sessions (its maximum), so this tab has no simulation. "
@@ -78,6 +80,7 @@ class ShoalServer:
         self.turned_away: set[int] = set()  # client ids shown the "server is full" message
         self._opening: set[int] = set()  # client ids whose session is being built
         self._errors: weakref.WeakKeyDictionary[TabApp, str] = weakref.WeakKeyDictionary()  # last error per tab
+        keep_large_blocks_returnable()  # tabs that come and go give their memory back
         self.policy = OriginPolicy(host, allow_origins)
         self.viser = guarded_viser(host, port, self.policy)
         self.port = self.viser.get_port()
@@ -189,9 +192,8 @@ class ShoalServer:
             client.add_notification(title, body, color="red", auto_close_seconds=10.0)
 
         guard_inputs(client.gui, refuse)
-        guard_uploads(client.gui, MAX_TRANSFER_BYTES, lambda name, size: refuse(
-            f"Refused: uploaded {name}", f"{size / 2**20:.1f} MiB is more than the {MAX_TRANSFER_BYTES // 2**20} MiB "
-            "an upload may have"))
+        guard_uploads(client.gui, MAX_TRANSFER_BYTES, MAX_PENDING_BYTES,
+                      lambda name, why: refuse(f"Refused: uploaded {name}", why))
         tab = self.open_tab(client.client_id, client.gui, client.scene, client)
         tab.session.play()
 
@@ -223,6 +225,7 @@ class ShoalServer:
                         where = traceback.extract_tb(err.__traceback__)[-3:]
                         at = " < ".join(f"{f.filename.rsplit('/', 1)[-1]}:{f.lineno} {f.name}" for f in reversed(where))
                         print(f"shoal: tab update failed: {err!r} at {at}", file=sys.stderr)
+            tabs = tab = None  # a closed tab must not stay referenced from here until a later round
             self._stopping.wait(max(0.0, period - (time.monotonic() - start)))
 
     def stop(self) -> None:
