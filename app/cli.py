@@ -8,13 +8,19 @@ from pathlib import Path
 
 from shoal import __version__
 
+EXIT_FAILED = 1
 EXIT_USAGE = 2
 DEFAULT_MAX_SESSIONS = 24  # as shoal.app.server.DEFAULT_MAX_SESSIONS (not imported: viser loads slowly)
 
 
-def _err(msg: str) -> int:
+def _err(msg: str, code: int = EXIT_USAGE) -> int:
     print(f"shoal: error: {msg}", file=sys.stderr)
-    return EXIT_USAGE
+    return code
+
+
+def _cannot_write(out: Path, err: OSError) -> int:
+    """One line naming the output folder and why it cannot be written (a full disk, say)."""
+    return _err(f"cannot write {out}: {err.strerror or err}", EXIT_FAILED)
 
 
 def _cmd_serve(args: argparse.Namespace) -> int:
@@ -66,8 +72,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
         "steps": scenario.sim.steps,
     }
     steps = scenario.sim.steps
-    with tqdm(total=steps, desc=f"run {scenario.name}", unit="step", disable=steps < 200 or None) as bar:
-        run_to_dir(sim, steps, out, meta, on_step=lambda _k: bar.update())
+    try:
+        with tqdm(total=steps, desc=f"run {scenario.name}", unit="step", disable=steps < 200 or None) as bar:
+            run_to_dir(sim, steps, out, meta, on_step=lambda _k: bar.update())
+    except OSError as e:
+        return _cannot_write(out, e)
     print(f"wrote {out}/run.json, trajectories.csv, metrics.csv")
     return 0
 
@@ -92,6 +101,8 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
         summary = reproduce(args.target, out, runs=args.runs, workers=args.workers, progress=True)
     except OutputDirError as e:
         return _err(f"{e} (choose another --out)")
+    except OSError as e:
+        return _cannot_write(out, e)
     failed = [c["name"] for c in summary["checks"] if not c["pass"]]
     print(f"wrote {out}/summary.json ({len(summary['checks'])} checks, {len(failed)} not passed)")
     for name in failed:
@@ -127,6 +138,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         return _err("bad sweep:\n  " + "\n  ".join(e.messages))
     except SchedulerError as e:
         return _err(str(e))
+    except OSError as e:
+        return _cannot_write(out, e)
     except KeyboardInterrupt:
         print(f"interrupted: finished cells are kept in {out}/cells; rerun the same command to resume",
               file=sys.stderr)
@@ -155,7 +168,7 @@ def _reproduce_all(args: argparse.Namespace) -> int:
     try:
         report = run_all(out, runs=args.runs, workers=args.workers, resume=args.resume)
     except OSError as e:
-        return _err(str(e))
+        return _cannot_write(out, e)
     print(f"wrote {report}")
     return 0
 
@@ -250,9 +263,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from shoal.app.terminate import EXIT_TERMINATED, Terminated, terminate_as_interrupt
+
     args = build_parser().parse_args(argv)
-    try:
-        return args.func(args)
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+    with terminate_as_interrupt():  # SIGTERM cleans up as Ctrl-C does (serve: tabs told, run: no partial folder)
+        try:
+            return args.func(args)
+        except Terminated:
+            print("terminated", file=sys.stderr)
+            return EXIT_TERMINATED
+        except KeyboardInterrupt:
+            print("interrupted", file=sys.stderr)
+            return 130

@@ -35,6 +35,8 @@ TICK_HZ = 60.0
 PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round
 MAX_TRANSFER_BYTES = max(MAX_UPLOAD_BYTES, MAX_REPLAY_BYTES)  # any upload; bigger ones are dropped as they arrive
 MAX_PENDING_BYTES = 2 * MAX_TRANSFER_BYTES  # one tab's unfinished uploads together
+STOPPED_TITLE = "This Shoal server has stopped"
+STOP_NOTICE_SECONDS = 0.3
 DEFAULT_MAX_SESSIONS = 24  # browser tabs with a simulation at once (``shoal serve --max-sessions``)
 FULL_TITLE = "This Shoal server is full"
 FULL_MESSAGE = ("This server already runs {n} sessions (its maximum), so this tab has no simulation. "
@@ -229,10 +231,18 @@ class ShoalServer:
             self._stopping.wait(max(0.0, period - (time.monotonic() - start)))
 
     def stop(self) -> None:
-        """Stop ticking, then the viser server (in that order: no updates on closed connections)."""
+        """Stop ticking, tell the open tabs, then stop the viser server (in that order: no
+        updates on closed connections)."""
         self._stopping.set()
         if self._thread.is_alive() and threading.current_thread() is not self._thread:
             self._thread.join(timeout=5.0)
+        clients = list(self.viser.get_clients().values())
+        for client in clients:
+            client.add_notification(STOPPED_TITLE, "Its simulations have ended; reload this page once it runs again.",
+                                    color="yellow")
+            client.flush()
+        if clients:
+            time.sleep(STOP_NOTICE_SECONDS)  # the notices leave before the connections close
         self.viser.stop()
 
 

@@ -9,10 +9,11 @@ row per cell) and pictures of the medians.
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -68,7 +69,7 @@ def _medians(store: SweepDir, axes: Sequence[Axis], n_cells: int) -> tuple[list[
     return names, medians
 
 
-def run_sweep(
+def _sweep(
     preset: str | Path,
     grid: Sequence[str],
     out: Path | str,
@@ -143,3 +144,9 @@ def run_sweep(
                       "scheduler": scheduler.describe() if scheduler is not None else f"local, {workers} worker(s)"},
     })
     return SweepReport(store.out, len(scenarios), len(pending), runs, columns, plots)
+
+
+@functools.wraps(_sweep)
+def run_sweep(preset: str | Path, grid: Sequence[str], out: Path | str, **options: Any) -> SweepReport:
+    with SweepDir(out).locked():  # a second sweep into ``out`` meanwhile is refused
+        return _sweep(preset, grid, out, **options)
