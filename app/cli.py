@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from shoal import __version__
 
@@ -16,6 +17,11 @@ DEFAULT_MAX_SESSIONS = 24  # as shoal.app.server.DEFAULT_MAX_SESSIONS (not impor
 def _err(msg: str, code: int = EXIT_USAGE) -> int:
     print(f"shoal: error: {msg}", file=sys.stderr)
     return code
+
+
+def _too_big(scenario: Any) -> int:
+    return _err(f"not enough memory for {scenario.name} with sim.robots = {scenario.sim.robots} and "
+                f"sim.runs = {scenario.sim.runs}; choose fewer", EXIT_FAILED)
 
 
 def _cannot_write(out: Path, err: OSError) -> int:
@@ -60,9 +66,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
             overrides.append(f"{key}={flag}")
     try:
         scenario = load(args.preset, overrides)
+        sim = build(scenario)  # (a world that cannot be laid out is refused here, by field)
     except PresetError as e:
         return _err("bad preset:\n  " + "\n  ".join(e.messages))
-    sim = build(scenario)
+    except MemoryError:
+        return _too_big(scenario)
     out = Path(args.out or f"out/{file_stem(scenario.name)}-seed{scenario.sim.seed}")  # a name is no path
     meta = {
         "shoal_version": __version__,
@@ -77,6 +85,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
             run_to_dir(sim, steps, out, meta, on_step=lambda _k: bar.update())
     except OSError as e:
         return _cannot_write(out, e)
+    except MemoryError:  # (its partial folder is gone already)
+        return _too_big(scenario)
     print(f"wrote {out}/run.json, trajectories.csv, metrics.csv")
     return 0
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import errno
 import os
+import resource
 import signal
 import socket
 import subprocess
@@ -113,6 +114,18 @@ def test_a_folder_without_write_permission_is_named(tmp_path):
         _one_line_naming(res, place / "out", "Permission denied")
     finally:
         place.chmod(0o755)
+
+
+def test_run_names_a_world_that_cannot_be_laid_out_and_a_scene_too_big_for_memory(tmp_path):
+    res = shoal("run", "course-dvc", "--set", "world.width=5.5", "--steps", "2", "--out", str(tmp_path / "w"))
+    assert res.returncode == 2 and "world.width: must exceed start_size" in res.stderr and "Traceback" not in res.stderr
+    limited = subprocess.run([sys.executable, "-c", CHILD, "-", "0", "-", "run", "slo-walk", "--set",
+                              "sim.robots=100000", "--steps", "2", "--out", str(tmp_path / "big")],
+                             capture_output=True, text=True, timeout=300,
+                             preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (6 * 2**30, 6 * 2**30)))
+    assert limited.returncode == 1 and "Traceback" not in limited.stderr, limited.stderr[-2000:]
+    assert "not enough memory for slo-walk with sim.robots = 100000" in limited.stderr
+    assert list(tmp_path.iterdir()) == []
 
 
 # ------------------------------------------------------------------ SIGTERM
