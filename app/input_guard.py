@@ -19,16 +19,14 @@ keeps it elsewhere, :func:`guard_inputs` installs nothing and says so.
 from __future__ import annotations
 
 import math
-import reprlib
 from typing import Any, Callable
 
 from viser import _messages
 
+from shoal.presets.io import short
+
 MAX_TEXT = 10_000  # characters of a text control's value
 Refuse = Callable[[str, str], None]  # (title, body) of the red message
-_SHORT = reprlib.Repr()
-_SHORT.maxstring = _SHORT.maxother = _SHORT.maxlong = 40
-_SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxdict = 4
 
 
 def _number(value: Any, whole: bool) -> str | None:
@@ -56,11 +54,6 @@ def problem(current: Any, value: Any, options: tuple[str, ...] | None = None) ->
             return f"expected {len(current)} values"
         return next((p for c, v in zip(current, value) if (p := problem(c, v)) is not None), None)
     return "this control takes no value from the page"
-
-
-def short(value: Any) -> str:
-    """A value as a message shows it: a few characters, a few items."""
-    return _SHORT.repr(value)
 
 
 def guard_inputs(gui: Any, refuse: Refuse) -> bool:

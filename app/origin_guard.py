@@ -118,8 +118,8 @@ ProcessRequest = Callable[[Any, Any], Any]
 
 def _guard(policy: OriginPolicy, inner: ProcessRequest | None) -> ProcessRequest:
     def process_request(connection: Any, request: Any) -> Any:
-        local = connection.local_address or ("", 0)
-        why = policy.refusal(request.headers.get("Host"), request.headers.get("Origin"), (str(local[0]), int(local[1])))
+        address, port = (connection.local_address or ("", 0))[:2]
+        why = policy.refusal(request.headers.get("Host"), request.headers.get("Origin"), (str(address), int(port)))
         if why is not None:
             policy.report(why)
             return connection.respond(http.HTTPStatus.FORBIDDEN, f"Forbidden: {why}\n")

@@ -7,18 +7,14 @@ or any other value is refused with a message and never reaches the file system.
 
 from __future__ import annotations
 
-import reprlib
-
 from shoal.presets import io as presets_io
-from shoal.presets.io import PresetError
+from shoal.presets.io import PresetError, short
 from shoal.presets.models import Scenario
 
 from .session import app_presets
 
 UPLOADED = " (uploaded)"  # an uploaded preset's choice is its name and this
 MAX_UPLOADED = 8  # uploads a tab keeps to choose again (the oldest goes first)
-_SHORT = reprlib.Repr()
-_SHORT.maxstring = 60
 
 
 class PresetMenu:
@@ -38,7 +34,7 @@ class PresetMenu:
             return self._uploaded[choice]
         if isinstance(choice, str) and choice in self.shipped:
             return presets_io.load_shipped(choice)
-        raise PresetError([f"preset {_SHORT.repr(choice)}: not one of this tab's presets "
+        raise PresetError([f"preset {short(choice)}: not one of this tab's presets "
                            "(the shipped ones and those uploaded here)"])
 
     def add_upload(self, scenario: Scenario) -> str:

@@ -7,8 +7,8 @@ anything that speaks the websocket protocol can declare or send gigabytes, or st
 thousand uploads and never finish them. This guard drops a transfer as soon as its declared
 or received size passes a limit (or what it declared), or when the client's unfinished
 uploads together would pass ``pending_limit``; it frees the parts already received and
-tells the tab why (each kind of refusal at most every few seconds). Viser itself drops a client's unfinished
-uploads when it disconnects.
+tells the tab why (each kind of refusal at most every few seconds). Viser itself drops a
+client's unfinished uploads when it disconnects.
 
 It reads viser's bookkeeping of transfers in progress (``GuiApi._current_file_upload_states``,
 viser 1.x). If a viser version keeps them elsewhere, :func:`guard_uploads` installs nothing

@@ -31,6 +31,11 @@ _SHORT.maxstring = _SHORT.maxother = _SHORT.maxlong = 40
 MAX_NAME = 60  # characters of a field name shown in a message
 
 
+def short(value: Any) -> str:
+    """A value as a message shows it: a few characters, a few items, a few levels."""
+    return _SHORT.repr(value)
+
+
 def _short_name(part: object) -> str:
     text = str(part)
     return text if len(text) <= MAX_NAME else text[: MAX_NAME - 3] + "..."
@@ -107,7 +112,7 @@ def read_shipped(name: str) -> dict[str, Any]:
     :func:`shipped_names` is read; anything else (a path, a long or odd string) is refused
     without touching the file system."""
     if not isinstance(name, str) or name not in shipped_names():
-        raise PresetError([f"no shipped preset named {_SHORT.repr(name)} "
+        raise PresetError([f"no shipped preset named {short(name)} "
                            f"(shipped presets: {', '.join(shipped_names())})"])
     return parse_text(_files().joinpath(f"{name}.toml").read_text(encoding="utf-8"))
 
@@ -121,7 +126,7 @@ def read_raw(name_or_path: str | Path) -> dict[str, Any]:
     """The unvalidated dict of a shipped preset name or a TOML/JSON file path (what a
     command-line user names; a value from the browser goes through :func:`read_shipped`)."""
     if len(str(name_or_path)) > MAX_PRESET_NAME:
-        raise PresetError([f"preset name or file {_SHORT.repr(str(name_or_path))}: longer than "
+        raise PresetError([f"preset name or file {short(str(name_or_path))}: longer than "
                            f"{MAX_PRESET_NAME} characters"])
     path = Path(name_or_path)
     try:
@@ -137,7 +142,7 @@ def read_raw(name_or_path: str | Path) -> dict[str, Any]:
     if str(name_or_path) in shipped_names():
         return read_shipped(str(name_or_path))
     names = ", ".join(shipped_names())
-    raise PresetError([f"no preset or file named {_SHORT.repr(str(name_or_path))} (shipped presets: {names})"])
+    raise PresetError([f"no preset or file named {short(str(name_or_path))} (shipped presets: {names})"])
 
 
 def parse_value(text: str) -> Any:

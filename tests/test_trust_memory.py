@@ -41,6 +41,19 @@ def _handles(obj: Any, kind: type, depth: int = 3) -> Iterator[Any]:
             stack += [(v, level + 1) for v in vars(node).values()]
 
 
+def _weak_parts(server: Any, cid: int) -> dict[str, weakref.ref]:
+    """Weak references to everything of tab ``cid`` that must go with it (none kept strongly here)."""
+    tab = server.tabs[cid]
+    scene = list(_handles(tab.arena, SceneNodeHandle))
+    gui = list(_handles(tab.panels, _GuiHandle))
+    assert len(scene) >= 3 and len(gui) >= 15, (len(scene), len(gui))
+    parts = {"tab": tab, "session": tab.session, "sim": tab.session.sim, "panels": tab.panels,
+             "arena": tab.arena, "client": server.viser.get_clients()[cid],
+             **{f"scene node {h.name}": h for h in scene},
+             **{f"GUI {type(h).__name__} {i}": h for i, h in enumerate(gui)}}
+    return {name: weakref.ref(obj) for name, obj in parts.items()}
+
+
 @pytest.mark.parametrize("preset", ["default", "course-dvc", "sonar-xb-pso", "slo-walk"])
 def test_a_closed_tab_leaves_nothing_behind(preset):
     from shoal.app.server import start_server
@@ -49,16 +62,10 @@ def test_a_closed_tab_leaves_nothing_behind(preset):
     try:
         client = WireClient(server.port, decode=True)
         wait_until(lambda: client.uuid_of("Upload preset") and len(server.tabs) == 1, what="the tab's panels")
-        cid, tab = next(iter(server.tabs.items()))
-        wait_until(lambda: tab.session.sim.state.k > 5 and tab.arena.drawn_revision > 0, what="the tab playing")
-        scene = list(_handles(tab.arena, SceneNodeHandle))
-        gui = list(_handles(tab.panels, _GuiHandle))
-        assert len(scene) >= 3 and len(gui) >= 15, (len(scene), len(gui))
-        refs = {"tab": tab, "session": tab.session, "sim": tab.session.sim, "panels": tab.panels,
-                "arena": tab.arena, "client": server.viser.get_clients()[cid],
-                **{f"scene node {h.name}": h for h in scene}, **{f"GUI {type(h).__name__} {i}": h for i, h in enumerate(gui)}}
-        refs = {name: weakref.ref(obj) for name, obj in refs.items()}
-        del tab, scene, gui
+        cid = next(iter(server.tabs))
+        wait_until(lambda: server.tabs[cid].session.sim.state.k > 5 and server.tabs[cid].arena.drawn_revision > 0,
+                   what="the tab playing")
+        refs = _weak_parts(server, cid)
         client.close()
         wait_until(lambda: not server.tabs and not server.viser.get_clients(), what="the tab to be forgotten")
 

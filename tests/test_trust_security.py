@@ -410,7 +410,8 @@ def test_an_uploaded_preset_stays_a_choice_of_its_tab_only(server):
         before = len(b.notifications())
         b.set_value("preset", "mine (uploaded)")
         wait_until(lambda: len(b.notifications()) > before, what="the other tab's refusal")
-        assert "not one of the choices" in b.notifications()[-1][1] and server.sessions[cid_b].scenario.name == "default"
+        assert "not one of the choices" in b.notifications()[-1][1]
+        assert server.sessions[cid_b].scenario.name == "default"
     finally:
         a.close()
         b.close()
