@@ -128,6 +128,16 @@ def test_run_names_a_world_that_cannot_be_laid_out_and_a_scene_too_big_for_memor
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("command", ["run", "sweep", "serve", "presets"])
+def test_a_preset_name_of_100000_characters_is_refused_in_a_line(command, tmp_path):
+    name = "x" * 100_000
+    argv = {"run": ["run", name, "--out", str(tmp_path / "o")], "sweep": ["sweep", name, "--grid", "sim.seed=1,2"],
+            "serve": ["serve", "--preset", name, "--port", "0"], "presets": ["presets", "show", name]}[command]
+    res = shoal(*argv)
+    assert res.returncode in (1, 2) and "longer than 4096 characters" in res.stderr, res.stderr[-500:]
+    assert "Traceback" not in res.stderr and len(res.stderr) < 1000
+
+
 # ------------------------------------------------------------------ SIGTERM
 def _start(*argv: str) -> tuple[subprocess.Popen, list[str]]:
     proc = subprocess.Popen([sys.executable, "-c", CHILD, "-", "0", "-", *argv], stdout=subprocess.PIPE,

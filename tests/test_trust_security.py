@@ -415,3 +415,35 @@ def test_an_uploaded_preset_stays_a_choice_of_its_tab_only(server):
     finally:
         a.close()
         b.close()
+
+
+def test_hostile_file_names_over_the_wire_write_nothing_and_name_no_download(server, tmp_path, monkeypatch):
+    """Upload and replay names, and a preset ``name`` of path pieces, from a real websocket
+    client: nothing is written, and every download the server sends has a plain name."""
+    monkeypatch.chdir(tmp_path)
+    client = WireClient(server.port, decode=True)
+    try:
+        wait_until(lambda: client.uuid_of("Export replay") and len(server.tabs) == 1, what="the tab's panels")
+        cid = next(iter(server.tabs))
+        WRITES.seen.clear()
+        WRITES.active = True
+        try:
+            for filename in EVIL_NAMES:
+                before = len(client.notifications())
+                client.upload("Upload preset", filename, _evil_preset("../../" + filename.replace("\x00", "")[:60],
+                                                                      filename))
+                wait_until(lambda: len(client.notifications()) > before, what=f"the upload of {filename[:30]!r}")
+                assert client.notifications()[-1][2] == "green", client.notifications()[-1]
+            for label in ("Export CSV", "Export JSON", "Download preset", "Export replay"):
+                client.set_value(label, True)  # a click
+            wait_until(lambda: len(client.downloads) >= 4, what="four downloads")
+            before = len(client.notifications())
+            client.upload("Load replay", EVIL_NAMES[0], server.tabs[cid].downloads[-1][1])
+            wait_until(lambda: len(client.notifications()) > before, what="the replay loaded")
+        finally:
+            WRITES.active = False
+    finally:
+        client.close()
+    assert WRITES.seen == [] and list(tmp_path.iterdir()) == []
+    for name in client.downloads:
+        assert "/" not in name and "\\" not in name and "\x00" not in name and not name.startswith("."), name

@@ -58,6 +58,7 @@ class WireClient:
         self.robot_updates = 0
         self.texts: list[str] = []
         self.gui: list[dict[str, Any]] = []  # (decode=True) every GUI message received
+        self.downloads: list[str] = []  # (decode=True) names of the files the server sent
         self.closed = threading.Event()
         self._lock = threading.Lock()
         sock = socket.create_connection(("127.0.0.1", port)) if host else None
@@ -77,6 +78,7 @@ class WireClient:
                     payload = payload.encode()
                 texts: list[str] = []
                 gui: list[dict[str, Any]] = []
+                files: list[str] = []
                 robots = 0
                 if self.decode:
                     for m in decode_frame(payload):
@@ -84,6 +86,8 @@ class WireClient:
                         if kind.startswith(("Gui", "Notification")):
                             texts += _texts(m)
                             gui.append(m)
+                        elif kind == "FileTransferStartDownload":
+                            files.append(str(m.get("filename")))
                         elif (kind == "SceneNodeUpdateMessage" and str(m.get("name", "")).endswith("/robots")
                               and "points" in (m.get("updates") or {})):
                             robots += 1
@@ -92,6 +96,7 @@ class WireClient:
                     self.nbytes += len(payload)
                     self.texts += texts
                     self.gui += gui
+                    self.downloads += files
                     self.robot_updates += robots
         except ConnectionClosed:
             pass
