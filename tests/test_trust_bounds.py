@@ -7,7 +7,7 @@ of the range inside it. The scene is built as ``shoal run`` builds it and runs a
 either it is refused with a :class:`PresetError` that names the field (or its section, for a
 rule across fields), or the robots' positions and velocities stay finite and so does every
 metric that is finite in the preset as shipped (the SLO's error statistics are NaN by design
-while no neighbour is in range).
+while no neighbour is in range, and its round-trip error [3.8] with fewer than three robots).
 
 The top ends of the sizes (``sim.robots``, ``sim.runs``, ``sim.steps``) are a matter of memory
 and time, not of numbers (100 000 robots of an acoustic swarm need 149 GiB of pairwise
@@ -108,7 +108,8 @@ def test_any_preset_at_the_edge_of_any_field_runs_finite_or_is_refused_by_name(c
     except PresetError as err:
         assert named(err, path), (preset, path, value, err.messages)
         return
-    bad = [k for k in finite_as_shipped(preset) if not np.isfinite(outputs[k]).all()]
+    by_design = {"metric round_trip"} if path == "sim.robots" and value < 3 else set()  # no triangle to close
+    bad = [k for k in finite_as_shipped(preset) - by_design if not np.isfinite(outputs[k]).all()]
     assert not bad, f"{preset} with {path} = {value!r}: {bad} not finite"
 
 
