@@ -28,8 +28,11 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 
     if args.max_sessions < 1:
         return _err("--max-sessions must be >= 1")
+    if args.experiment_workers < 1:
+        return _err("--experiment-workers must be >= 1")
     try:
-        serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions)
+        serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions,
+              scheduler=args.scheduler, experiment_workers=args.experiment_workers)
     except OSError as e:
         return _err(str(e))
     return 0
@@ -207,6 +210,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--max-sessions", type=int, default=DEFAULT_MAX_SESSIONS, metavar="N",
                    help=f"browser tabs with a simulation at once; more are told the server is full "
                         f"(default {DEFAULT_MAX_SESSIONS})")
+    s.add_argument("--scheduler", help="run the Experiment tab's sweeps on this Dask scheduler (tcp://HOST:PORT)")
+    s.add_argument("--experiment-workers", type=int, default=1, metavar="W",
+                   help="without --scheduler: local worker processes for the Experiment tab (default 1)")
     s.set_defaults(func=_cmd_serve)
 
     r = sub.add_parser("run", help="headless seeded runs")
