@@ -112,9 +112,10 @@ def experiment_pool(workers: int) -> LocalPool:
 class ExperimentService:
     """The server's queue of experiments and the thread that runs them on ``scheduler``."""
 
-    def __init__(self, scheduler: Scheduler, limits: Limits | None = None, *,
-                 simulate: Any = outcomes.simulate_cell, chunk: int = CHUNK) -> None:
+    def __init__(self, scheduler: Scheduler, limits: Limits | None = None, *, simulate: Any = outcomes.simulate_cell,
+                 chunk: int = CHUNK, owns_scheduler: bool = False) -> None:
         self.scheduler, self.limits = scheduler, limits or Limits()
+        self.owns_scheduler = owns_scheduler  # stop() closes it (a Dask client made for this service)
         self.simulate, self.chunk = simulate, chunk
         self._cond = threading.Condition()
         self._queue: deque[Experiment] = deque()
@@ -248,7 +249,7 @@ class ExperimentService:
         exp.phase = FINISHED if len(exp.table) == len(exp.plan) else CANCELLED
 
     def stop(self) -> None:
-        """Cancel everything, stop the thread, close a Dask client."""
+        """Cancel everything, stop the thread, close the scheduler if it is this service's."""
         with self._cond:
             self._stopping = True
             queued, running = list(self._queue), self._running
@@ -263,5 +264,5 @@ class ExperimentService:
         if threading.current_thread() is not self._thread:
             self._thread.join(timeout=60)
         close = getattr(self.scheduler, "close", None)
-        if close is not None:
+        if self.owns_scheduler and close is not None:
             close()
