@@ -155,3 +155,44 @@ def test_a_field_that_is_not_offered_is_refused(tab, bad):
     p.axes[0].field.value = bad  # viser takes any value set on a dropdown; the service does not
     p.run.value = True
     assert p.experiment is None and "Refused" in tab.messages[-1][0]
+
+
+def test_the_panel_stands_alone_and_its_plot_keeps_up_with_the_cells(server):
+    """The panel module on a bare viser GUI with its own service: while a cell is held back,
+    the plot already shows every cell finished before it."""
+    import threading
+
+    from shoal.app.experiment import ExperimentService
+    from shoal.app.experiment.panel import ExperimentPanel
+    from shoal.engine.studies.experiments.schedulers import InProcess
+
+    import gates as held
+
+    held.reset()
+    held.GATES[2] = threading.Event()
+    service = ExperimentService(InProcess(), simulate=held.gated)
+    sent, said = [], []
+    panel = ExperimentPanel(server.viser.gui, service, "alone", scenario=lambda: load("default"),
+                            open_cell=lambda sc: None, notify=lambda *m: said.append(m),
+                            send_file=lambda name, data: sent.append(name))
+    try:
+        _ask(panel, "controller.U", "6, 8, 10, 12", runs=2, steps=5)
+        panel.run.value = True
+        wait_until(lambda: 2 in held.STARTED, what="cell 2 held back")
+
+        def shown():
+            data = panel.plot.figure.data  # the median is the last trace (none before a cell is in)
+            return sum(v is not None for v in data[-1].y) if data else 0
+
+        wait_until(lambda: shown() == 2, timeout=5, what="the plot with the two finished cells")
+        assert "running: 2 of 4 cells" in panel.status.content and panel.run.disabled
+        held.GATES[2].set()
+        exp = _settle(panel)
+        assert shown() == 4 and exp.phase == FINISHED and not said
+        panel.download_csv.value = True
+        assert sent == ["default-experiment.csv"]
+    finally:
+        held.reset()
+        panel.remove()
+        service.stop()
+        server.viser.gui.reset()

@@ -14,31 +14,18 @@ import pytest
 from shoal.app.experiment import AxisRequest, ExperimentRequest, ExperimentService, Limits, Refused, experiment_pool
 from shoal.app.experiment.service import CANCELLED, FINISHED, QUEUED, RUNNING
 from shoal.engine.studies.experiments.schedulers import InProcess
-from shoal.engine.studies.sweep import run_sweep, simulate_cell
+from shoal.engine.studies.sweep import run_sweep
 from shoal.presets.io import load, to_toml
 
 from browser.browser_helpers import wait_until
-
-GATES: dict[int, threading.Event] = {}  # cell index → released when set (in-process tests only)
-STARTED: list[int] = []
-
-
-def gated(job, first_run, runs):
-    """``simulate_cell`` that waits at the gate of its cell, if it has one."""
-    STARTED.append(job.key)
-    gate = GATES.get(job.key)
-    if gate is not None:
-        assert gate.wait(60), "gate never opened"
-    return simulate_cell(job, first_run, runs)
+from gates import GATES, STARTED, gated, reset
 
 
 @pytest.fixture
 def gates():
-    GATES.clear()
-    STARTED.clear()
+    reset()
     yield GATES
-    for g in GATES.values():
-        g.set()
+    reset()
 
 
 def _request(*axes, runs=3, steps=20, outcome=None):

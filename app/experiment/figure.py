@@ -32,10 +32,11 @@ def _numeric(values: tuple[Any, ...]) -> bool:
     return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
 
 
-def title(exp: Experiment, outcome: Outcome) -> str:
+def title(exp: Experiment, outcome: Outcome, sep: str = " ") -> str:
+    """``median <outcome>``, then (after ``sep``) the runs per cell and, while it runs, the cells done."""
     done, cells = len(exp.table), len(exp.plan)
     part = "" if done == cells else f" · {done} of {cells} cells"
-    return f"median {outcome.title} over {exp.plan.runs} runs per cell{part}"
+    return f"median {outcome.title}{sep}over {exp.plan.runs} runs per cell{part}"
 
 
 def page_figure(exp: Experiment, outcome: Outcome) -> go.Figure:
@@ -68,8 +69,8 @@ def page_figure(exp: Experiment, outcome: Outcome) -> go.Figure:
                                                "<extra></extra>"))
         fig.update_xaxes(title_text=ax_x.key, type="category")
         fig.update_yaxes(title_text=ax_y.key, type="category")
-    fig.update_layout(title={"text": title(exp, outcome), "font": {"size": 12}}, margin={"l": 50, "r": 10, "t": 40,
-                      "b": 50}, uirevision=f"experiment-{exp.number}")
+    fig.update_layout(title={"text": title(exp, outcome, "<br>"), "font": {"size": 12}},
+                      margin={"l": 50, "r": 10, "t": 50, "b": 50}, uirevision=f"experiment-{exp.number}")
     return fig
 
 

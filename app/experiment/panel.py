@@ -33,10 +33,9 @@ from .service import RUNNING, Experiment, ExperimentService
 
 NONE = "none"
 AS_LIST, AS_RANGE = "list", "range and count"
-PLOT_PERIOD = 0.25  # s between plot redraws while cells come in
-INTRO = ("Vary one or two fields of this scene and compare an outcome over seeded runs. Every cell runs the "
-         "same runs (run *i* uses child *i* of `SeedSequence(seed)`, as `shoal sweep` does), so cells differ "
-         "only by the fields' values. The server runs one experiment at a time, first come first served.")
+PLOT_PERIOD = 0.25  # s at least between plot redraws while cells come in
+INTRO = ("Vary one or two fields and compare an outcome over seeded runs: every cell runs the same runs "
+         "(as `shoal sweep`), so cells differ only by the fields' values.")
 
 
 def _short(key: str) -> str:
@@ -107,7 +106,8 @@ class ExperimentPanel:
         self._outcomes: dict[str, Outcome] = {}  # offered in the dropdown, by title
         self._scene_outcomes: set[str] = set()  # the names the scene records
         self._cells: dict[str, int] = {}  # cell option → index
-        self._drawn = 0.0
+        self._drawn, self._drawn_cells = 0.0, 0  # when the plot was drawn, with how many cells
+        self._timer: threading.Timer | None = None  # a redraw waiting for PLOT_PERIOD to pass
         self._build()
         self._wire()
         with self._sync():
@@ -188,6 +188,8 @@ class ExperimentPanel:
         with self._lock:
             if self.experiment is not None:
                 self.experiment.listen(None)
+            if self._timer is not None:
+                self._timer.cancel()
 
     def remove(self) -> None:
         """Take the tab's handles off the page and stop listening to the experiment."""
@@ -282,8 +284,16 @@ class ExperimentPanel:
             self.progress.value = 100.0 * exp.runs_done / max(exp.cost, 1)
             self.progress.animated = exp.phase == RUNNING
             self.status.content = f"**Experiment {exp.number}** ({exp.name}): {exp.status()}"
-            if new or exp.over or time.monotonic() - self._drawn >= PLOT_PERIOD:
+            if new or exp.over:
                 self._redraw()
+            elif len(exp.table) != self._drawn_cells:  # a new cell: drawn now, or soon if just drawn
+                wait = PLOT_PERIOD - (time.monotonic() - self._drawn)
+                if wait <= 0:
+                    self._redraw()
+                elif self._timer is None:
+                    self._timer = threading.Timer(wait, self._deferred)
+                    self._timer.daemon = True
+                    self._timer.start()
             self.run.disabled = not exp.over  # last: a page that sees Run again sees the final plot
             self.cancel.disabled = exp.over or exp.cancelling
 
@@ -299,6 +309,12 @@ class ExperimentPanel:
         self._cells = {}
         self.command.content = _command(exp)
 
+    def _deferred(self) -> None:
+        with self._lock:
+            self._timer = None
+            if not self.removed:
+                self._redraw()
+
     def _outcome_changed(self) -> None:
         if self.outcome.value not in self._outcomes:
             self.notify("Refused: outcome", f"{str(self.outcome.value)[:60]}: not an outcome offered here", "red")
@@ -311,7 +327,7 @@ class ExperimentPanel:
             exp, outcome = self.experiment, self._outcomes.get(self.outcome.value)
             if exp is None or outcome is None:
                 return
-            self._drawn = time.monotonic()
+            self._drawn, self._drawn_cells = time.monotonic(), len(exp.table)
             self.plot.figure = (figure.page_figure(exp, outcome) if len(exp.table)
                                 else figure.empty_figure(exp.status()))
             finished = exp.table.finished()

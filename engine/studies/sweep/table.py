@@ -23,6 +23,7 @@ class CellTable:
     def __init__(self, plan: SweepPlan) -> None:
         self.plan = plan
         self._cells: dict[int, CellBatch] = {}
+        self._stats: dict[tuple[int, str], tuple[float, float, float]] = {}  # a finished cell's never change
         self._lock = threading.Lock()
 
     def add(self, index: int, batch: CellBatch) -> None:
@@ -75,8 +76,10 @@ class CellTable:
         shape = self.plan.shape
         out = [np.full(shape, np.nan) for _ in range(3)]
         for i in self.finished():
-            v = self.runs_of(i, name)
+            stats = self._stats.get((i, name))
+            if stats is None:
+                v = self.runs_of(i, name)
+                stats = self._stats[(i, name)] = (median(name, v), *median_interval(name, v))
             where = np.unravel_index(i, shape)
-            out[0][where] = median(name, v)
-            out[1][where], out[2][where] = median_interval(name, v)
+            out[0][where], out[1][where], out[2][where] = stats
         return out[0], out[1], out[2]
