@@ -393,7 +393,6 @@ class ExperimentPanel:
             return
         self.send_file(f"{file_stem(exp.name)}-experiment-{outcome.name}.png", figure.png(exp, outcome))
 
-
     def send_preset(self) -> None:
         exp = self.experiment
         if exp is None:
