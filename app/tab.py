@@ -32,6 +32,7 @@ from .fleet_session import FleetSession
 from .lessons.panel import LessonProgress
 from .panel_base import PanelsBase
 from .panels import Panels
+from .preset_menu import PresetMenu
 from .scene import ArenaView
 from .session import Session
 from .slo_panels import SLOPanels
@@ -101,12 +102,13 @@ class TabApp:
         self._clicks: list[Callable[[Any], None]] = []
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
         self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
+        self.menu = PresetMenu()  # the preset dropdown's choices, uploads included, across swaps
         self._build_kind()
 
     def _build_kind(self) -> None:
         kind = next(k for k in KINDS if isinstance(self.session, k.session))
         self.panels = kind.panels(self.gui, self.session, self.notify, self.send_file, replace=self.replace,
-                                  lessons=self.lesson_progress)
+                                  lessons=self.lesson_progress, menu=self.menu)
         self.arena = kind.view(self.scene)
         if self.experiments is not None:
             with self.panels.tabs.add_tab("Experiment"):

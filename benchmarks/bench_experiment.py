@@ -55,9 +55,13 @@ def main() -> None:
                 table = (Path(tmp) / "s" / "results.csv").read_text(encoding="utf-8")
             idle = steps_per_s(5.0)
             ended: list[tuple[float, int]] = []  # (time, live tab's step) when the experiment ended
+
+            def note(e, ended=ended) -> None:
+                if e.over:
+                    ended.append((time.perf_counter(), tab.session.sim.state.k))
+
             k0, t0 = tab.session.sim.state.k, time.perf_counter()
-            srv.experiments.submit(f"bench-{rep}", load("default"), ask, listener=lambda e: ended.append(
-                (time.perf_counter(), tab.session.sim.state.k)) if e.over else None)
+            srv.experiments.submit(f"bench-{rep}", load("default"), ask, listener=note)
             while not ended:
                 time.sleep(0.01)
             exp_s = ended[0][0] - t0

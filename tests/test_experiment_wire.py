@@ -1,6 +1,7 @@
 """The Experiment tab against a hostile page: values no page would send, spoken on viser's raw
-websocket, are refused with messages and queue nothing; a flood of Run clicks queues one
-experiment; a tab that closes cancels its experiment."""
+websocket, are refused with messages (by the server's input guard, or by the experiment
+service) and queue nothing; a flood of Run clicks queues one experiment; a tab that closes
+cancels its experiment."""
 
 from __future__ import annotations
 
@@ -12,22 +13,25 @@ from shoal.app.server import start_server
 from browser.browser_helpers import wait_until
 from viser_wire import WireClient
 
-HOSTILE = [  # (label, value), then Run: the notification that must come back
-    ([("field 1", "name")], "name: not a field this scene can vary"),
-    ([("field 1", "view.trail_seconds")], "not a field this scene can vary"),
-    ([("field 1", {"$gt": ""})], "not a field this scene can vary"),
+# Values no control of the tab can hold: the server's input guard refuses them before the tab
+# sees them (wrong kind, not finite, not among a dropdown's options), and the control keeps
+# the value in force.
+MALFORMED = [
+    ("field 1", "name"), ("field 1", "view.trail_seconds"), ("field 1", {"$gt": ""}), ("field 2", "../x"),
+    ("values 1 as", "cubes"), ("outcome", "../../etc/passwd"), ("runs per cell", float("inf")),
+    ("runs per cell", "lots"), ("from 1", float("nan")), ("values 1", ["6", "9"]),
+]
+# Values the controls can hold that the experiment service refuses (then Run), with its message.
+HOSTILE = [
     ([("values 1", "6, 1e400")], "controller.U: inf is not a finite number"),
     ([("values 1", "6, " + "9" * 5000)], "longer than 1000 characters"),
     ([("values 1", "[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[")], "controller.U"),
     ([("values 1", ", ".join(str(6 + i) for i in range(40)))], "40 values; this server takes at most 12"),
     ([("runs per cell", -5)], "runs per cell: -5 is outside 1..100"),
     ([("runs per cell", 10**12)], "runs per cell: 1000000000000 is outside 1..100"),
-    ([("runs per cell", float("inf"))], "runs per cell: inf is not a whole number"),
     ([("steps per run", 2.5)], "steps per run: 2.5 is not a whole number"),
     ([("values 1 as", "range and count"), ("count 1", 10**9)], "count: 1000000000 is outside 2..12"),
-    ([("values 1 as", "range and count"), ("from 1", float("nan"))], "from: nan is not a finite number"),
-    ([("values 1 as", "cubes")], "controller.U: no values"),
-    ([("outcome", "../../etc/passwd")], "../../etc/passwd: not an outcome of this scene"),
+    ([("values 1 as", "range and count"), ("from 1", -1e300)], "controller.U: -1e+300 is outside 0 < U ≤ 1000"),
     ([("field 2", "controller.U")], "controller.U: chosen twice"),
 ]
 
@@ -39,16 +43,36 @@ def served():
     srv.stop()
 
 
-def _tab(srv):
-    """A new tab, once the server has built it (its handles reach the page a little earlier)."""
+def _tab(srv, with_tab=False):
+    """A new tab, once the server has built it (its handles reach the page a little earlier);
+    with ``with_tab``, also the server's side of it."""
     before = set(srv.tabs)
     c = WireClient(srv.port, decode=True)
     wait_until(lambda: set(srv.tabs) - before and c.uuid_of("Run experiment"), what="the Experiment tab")
+    if with_tab:
+        (key,) = set(srv.tabs) - before
+        return c, srv.tabs[key]
     return c
 
 
 def _set(c, label, value):
     c.send(m.GuiUpdateMessage(c.uuid_of(label), {"value": value}))
+
+
+@pytest.mark.parametrize("label, value", MALFORMED)
+def test_values_no_control_can_hold_are_refused_before_the_tab_sees_them(served, label, value):
+    c, tab = _tab(served, with_tab=True)
+    try:
+        panel = tab.experiment_panel
+        handle = {"field 1": panel.axes[0].field, "field 2": panel.axes[1].field, "values 1 as": panel.axes[0].given,
+                  "outcome": panel.outcome, "runs per cell": panel.runs, "from 1": panel.axes[0].start,
+                  "values 1": panel.axes[0].values}[label]
+        before = handle.value
+        _set(c, label, value)
+        wait_until(lambda: c.saw(f"Refused: {label} = "), what="the input guard's refusal")
+        assert handle.value == before and served.experiments.queued_runs() == 0
+    finally:
+        c.close()
 
 
 @pytest.mark.parametrize("changes, words", HOSTILE)
