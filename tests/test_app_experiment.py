@@ -184,7 +184,7 @@ def test_the_panel_stands_alone_and_its_plot_keeps_up_with_the_cells(server):
             data = panel.plot.figure.data  # the median is the last trace (none before a cell is in)
             return sum(v is not None for v in data[-1].y) if data else 0
 
-        wait_until(lambda: shown() == 2, timeout=5, what="the plot with the two finished cells")
+        wait_until(lambda: shown() == 2, timeout=30, what="the plot with the two finished cells")  # (held 60 s)
         assert "running: 2 of 4 cells" in panel.status.content and panel.run.disabled
         held.GATES[2].set()
         exp = _settle(panel)
