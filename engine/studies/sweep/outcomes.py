@@ -90,13 +90,6 @@ def merge(parts: Sequence[CellBatch]) -> CellBatch:
     return CellBatch(parts[0].first_run, {k: np.concatenate([b.columns[k] for b in parts]) for k in names})
 
 
-def median(name: str, values: np.ndarray) -> float:
-    """Median over runs: a first-passage time counts a missing one as +inf (``inf`` when
-    fewer than half got there); any other metric ignores missing values."""
-    v = _over_runs(name, values)
-    return float(np.median(v)) if v.size else float("nan")
-
-
 MEDIAN_LEVEL = 0.95  # confidence of the interval drawn round a median
 
 
@@ -105,6 +98,13 @@ def _over_runs(name: str, values: np.ndarray) -> np.ndarray:
     missing value is left out."""
     v = np.asarray(values, dtype=float)
     return np.where(np.isnan(v), np.inf, v) if name in FIRST_PASSAGE else v[~np.isnan(v)]
+
+
+def median(name: str, values: np.ndarray) -> float:
+    """Median over runs: a first-passage time counts a missing one as +inf (``inf`` when
+    fewer than half got there); any other metric ignores missing values."""
+    v = _over_runs(name, values)
+    return float(np.median(v)) if v.size else float("nan")
 
 
 def median_interval(name: str, values: np.ndarray, level: float = MEDIAN_LEVEL) -> tuple[float, float]:
@@ -119,4 +119,3 @@ def median_interval(name: str, values: np.ndarray, level: float = MEDIAN_LEVEL) 
     m = float(np.median(v))
     ci = quantile_test(v, q=m if np.isfinite(m) else 0.0, p=0.5).confidence_interval(level)
     return float(ci.low), float(ci.high)
-
