@@ -41,13 +41,15 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 
     if args.max_sessions < 1:
         return _err("--max-sessions must be >= 1")
+    if args.experiment_workers < 1:
+        return _err("--experiment-workers must be >= 1")
     try:
         origins = tuple(check_origin_url(url) for url in args.allow_origin or ())
     except ValueError as e:
         return _err(str(e))
     try:
         serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions,
-              allow_origins=origins)
+              allow_origins=origins, scheduler=args.scheduler, experiment_workers=args.experiment_workers)
     except OSError as e:
         return _err(str(e))
     return 0
@@ -239,6 +241,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--allow-origin", action="append", metavar="URL",
                    help="also accept pages of this origin, e.g. http://192.168.1.10:8080 or a proxy's "
                         "https://shoal.example.org (repeatable; by default only this server's own pages)")
+    s.add_argument("--scheduler", help="run the Experiment tab's sweeps on this Dask scheduler (tcp://HOST:PORT)")
+    s.add_argument("--experiment-workers", type=int, default=1, metavar="W",
+                   help="without --scheduler: local worker processes for the Experiment tab (default 1)")
     s.set_defaults(func=_cmd_serve)
 
     r = sub.add_parser("run", help="headless seeded runs")

@@ -17,11 +17,13 @@ from typing import Any
 
 import viser
 
+from shoal.engine.studies.experiments.schedulers import DaskCluster, SchedulerError
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .base_session import MAX_UPLOAD_BYTES, BaseSession
+from .experiment import ExperimentService, Limits, experiment_pool
 from .input_guard import guard_inputs
 from .native_memory import keep_large_blocks_returnable
 from .origin_guard import OriginPolicy, guarded_viser, is_loopback
@@ -73,10 +75,13 @@ class ShoalServer:
     """
 
     def __init__(self, scenario: Scenario, host: str = "127.0.0.1", port: int = 8080,
-                 max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = ()) -> None:
+                 max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
+                 experiments: ExperimentService | None = None) -> None:
         if max_sessions < 1:
             raise ValueError(f"max_sessions must be >= 1 (got {max_sessions})")
         self.scenario = scenario
+        # the Experiment tab's sweeps: by default on one worker process beside the server
+        self.experiments = experiments or ExperimentService(experiment_pool(1))
         self.host = host
         self.max_sessions = max_sessions
         self.turned_away: set[int] = set()  # client ids shown the "server is full" message
@@ -138,14 +143,16 @@ class ShoalServer:
                 send_file=lambda name, data: client.send_file_download(name, data, save_immediately=True),
                 atomic=client.atomic,
             )
-        tab = TabApp(session, gui, scene, **kwargs)
+        tab = TabApp(session, gui, scene, experiments=self.experiments, owner=key, **kwargs)
         tab.auto_tick = auto_tick
         with self._lock:
             self.tabs[key] = tab
         return tab
 
     def close_tab(self, key: int, *, gone: bool = False) -> None:
-        """Forget a tab; unless its client is ``gone``, also stop listening to its scene."""
+        """Forget a tab and cancel its experiment; unless its client is ``gone``, also stop
+        listening to its scene."""
+        self.experiments.close_owner(key)
         with self._lock:
             tab = self.tabs.pop(key, None)
         if tab is not None and not gone:
@@ -231,9 +238,10 @@ class ShoalServer:
             self._stopping.wait(max(0.0, period - (time.monotonic() - start)))
 
     def stop(self) -> None:
-        """Stop ticking, tell the open tabs, then stop the viser server (in that order: no
-        updates on closed connections)."""
+        """Stop the experiments and the ticking, tell the open tabs, then stop the viser server
+        (in that order: no updates on closed connections)."""
         self._stopping.set()
+        self.experiments.stop()
         if self._thread.is_alive() and threading.current_thread() is not self._thread:
             self._thread.join(timeout=5.0)
         clients = list(self.viser.get_clients().values())
@@ -247,16 +255,25 @@ class ShoalServer:
 
 
 def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
-                 max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = ()) -> ShoalServer:
+                 max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
+                 scheduler: str | None = None, experiment_workers: int = 1,
+                 limits: Limits | None = None) -> ShoalServer:
     """Start the app without blocking. ``port=0`` picks a free port (see ``.port``).
 
-    Raises :class:`PresetError` for an unknown or invalid preset and :class:`PortInUseError`
-    when ``port`` is taken.
+    The Experiment tab's sweeps run on the Dask cluster at ``scheduler`` (``tcp://HOST:PORT``)
+    or on a local pool of ``experiment_workers`` processes, within ``limits``.
+
+    Raises :class:`PresetError` for an unknown or invalid preset, :class:`PortInUseError`
+    when ``port`` is taken and :class:`SchedulerError` when the cluster cannot be reached.
     """
     scenario = check_supported(presets_io.load(preset))
     if port and not _port_free(host, port):
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
-    server = ShoalServer(scenario, host=host, port=port, max_sessions=max_sessions, allow_origins=allow_origins)
+    if experiment_workers < 1:
+        raise ValueError(f"experiment_workers must be >= 1 (got {experiment_workers})")
+    pool = DaskCluster(scheduler) if scheduler else experiment_pool(experiment_workers)
+    server = ShoalServer(scenario, host=host, port=port, max_sessions=max_sessions, allow_origins=allow_origins,
+                         experiments=ExperimentService(pool, limits, owns_scheduler=True))
     if port and server.port != port:  # viser moved to the next free port: refuse instead
         server.stop()
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
@@ -264,18 +281,21 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
 
 
 def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
-          max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = ()) -> None:
-    """Run the browser app until Ctrl-C (``shoal serve``). Exits with a message if the port is taken."""
+          max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
+          scheduler: str | None = None, experiment_workers: int = 1) -> None:
+    """Run the browser app until Ctrl-C (``shoal serve``). Exits with a message if the port is
+    taken or the Dask scheduler cannot be reached."""
     try:
-        server = start_server(preset, host, port, max_sessions, allow_origins)
-    except PortInUseError as err:
+        server = start_server(preset, host, port, max_sessions, allow_origins, scheduler, experiment_workers)
+    except (PortInUseError, SchedulerError) as err:
         raise SystemExit(f"shoal serve: {err}") from None
     except PresetError as err:
         raise SystemExit("shoal serve: bad preset:\n" + "\n".join(err.messages)) from None
     if not is_loopback(host):
         print(f"warning: serving on {host}: anyone who can reach this machine on port {server.port} "
               "can open and drive the app", file=sys.stderr)
-    print(f"Shoal is running at {server.url}  (Ctrl-C to stop)", flush=True)
+    print(f"Shoal is running at {server.url}  (Ctrl-C to stop); experiments run on "
+          f"{server.experiments.scheduler.describe()}", flush=True)
     try:
         while True:
             time.sleep(0.5)

@@ -14,7 +14,7 @@ import csv
 import io
 import json
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Sequence
+from typing import Any, Iterable, Iterator, Sequence, TextIO
 
 import numpy as np
 from filelock import FileLock, Timeout
@@ -44,6 +44,27 @@ def fmt(name: str, v: float) -> str:
     if name in INTEGER and v == int(v):
         return str(int(v))
     return f"{v + 0.0:.12g}"
+
+
+def written(name: str, values: np.ndarray) -> np.ndarray:
+    """``values`` as a cell file holds them (:func:`fmt`, read back): what medians are taken of."""
+    return np.array([float(s) if s else np.nan for s in (fmt(name, v) for v in np.asarray(values).ravel())])
+
+
+def cell_rows(prefix: dict[str, str], first_run: int, seed: int,
+              columns: dict[str, np.ndarray]) -> tuple[list[str], list[list[str]]]:
+    """The header and rows of one cell: its grid values, ``run``, ``seed``, then the outcomes."""
+    runs = len(next(iter(columns.values())))
+    rows = [[*prefix.values(), str(first_run + r), str(seed), *(fmt(k, v[r]) for k, v in columns.items())]
+            for r in range(runs)]
+    return [*prefix, "run", "seed", *columns], rows
+
+
+def write_tidy(fh: TextIO, columns: Sequence[str], rows: Iterable[dict[str, str]]) -> None:
+    """The tidy table (``results.csv``): ``columns`` as header, a missing value left empty."""
+    w = csv.DictWriter(fh, columns, restval="", lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
 
 
 def _canonical(obj: Any) -> Any:
@@ -107,12 +128,11 @@ class SweepDir:
     def write_cell(self, index: int, prefix: dict[str, str], first_run: int, seed: int,
                    columns: dict[str, np.ndarray]) -> None:
         """One row per run: the cell's grid values, ``run``, ``seed``, then the outcomes."""
+        header, rows = cell_rows(prefix, first_run, seed, columns)
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
-        w.writerow([*prefix, "run", "seed", *columns])
-        runs = len(next(iter(columns.values())))
-        for r in range(runs):
-            w.writerow([*prefix.values(), str(first_run + r), str(seed), *(fmt(k, v[r]) for k, v in columns.items())])
+        w.writerow(header)
+        w.writerows(rows)
         atomic_write_text(self.path(index), buf.getvalue())
 
     def read_cell(self, index: int) -> tuple[list[str], Iterator[dict[str, str]]]:
@@ -131,10 +151,7 @@ class SweepDir:
                     if name not in columns:
                         columns.append(name)
         with atomic_text_writer(self.out / RESULTS) as fh:
-            w = csv.DictWriter(fh, columns, restval="", lineterminator="\n")
-            w.writeheader()
-            for i in indices:
-                w.writerows(self.read_cell(i)[1])
+            write_tidy(fh, columns, (row for i in indices for row in self.read_cell(i)[1]))
         return columns
 
     def write_table(self, name: str, header: Sequence[str], rows: Iterable[Sequence[str]]) -> None:
