@@ -63,7 +63,7 @@ def test_a_closed_tab_leaves_nothing_behind(preset):
     try:
         client = WireClient(server.port, decode=True)
         wait_until(lambda: client.uuid_of("Upload preset") and len(server.tabs) == 1, what="the tab's panels")
-        cid = next(iter(server.tabs))
+        cid = max(server.tabs)
         wait_until(lambda: server.tabs[cid].session.sim.state.k > 5 and server.tabs[cid].arena.drawn_revision > 0,
                    what="the tab playing")
         refs = _weak_parts(server, cid)
@@ -83,7 +83,7 @@ def test_unfinished_uploads_are_capped_per_tab_and_dropped_when_it_leaves(server
     client = WireClient(server.port, decode=True)
     try:
         wait_until(lambda: client.uuid_of("Upload preset") and len(server.tabs) == 1, what="the upload button")
-        cid = next(iter(server.tabs))
+        cid = max(server.tabs)
         gui = server.viser.get_clients()[cid].gui
         states = gui._current_file_upload_states
         half = b"#" * (512 * 1024)

@@ -425,7 +425,7 @@ def test_hostile_file_names_over_the_wire_write_nothing_and_name_no_download(ser
     client = WireClient(server.port, decode=True)
     try:
         wait_until(lambda: client.uuid_of("Export replay") and len(server.tabs) == 1, what="the tab's panels")
-        cid = next(iter(server.tabs))
+        cid = max(server.tabs)
         WRITES.seen.clear()
         WRITES.active = True
         try:
