@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from shoal.presets.io import PresetError
 
-from .compare import override_text, parse_overrides
+from .session.twin import override_text, parse_overrides
 
 if TYPE_CHECKING:
     from .panel_base import PanelsBase

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Callable
 
-from .fleet_session import EditRefused, FleetSession
+from .kinds.fleet import EditRefused, FleetDriver
 
 MODES = ("add obstacle", "remove obstacle", "move obstacle", "select robot")
 REMOVE_MODIFIERS = ("shift", "cmd/ctrl")
@@ -21,7 +21,7 @@ Notify = Callable[[str, str, str], None]
 
 
 class WorldEditor:
-    def __init__(self, session: FleetSession, notify: Notify, select: Callable[[int], None]) -> None:
+    def __init__(self, session: FleetDriver, notify: Notify, select: Callable[[int], None]) -> None:
         self.session, self.notify, self.select = session, notify, select
         self.picked: int | None = None  # "move" mode: the obstacle waiting for its new place
         self._drag_refused: str | None = None

@@ -18,7 +18,9 @@ from . import fleet_plots
 from .budget import budget_markdown
 from .fleet_edit import MODES as CLICK_MODES
 from .fleet_edit import WorldEditor
-from .fleet_session import FleetSession, FleetSnapshot
+from .kinds.fleet import driver
+from .session.session import Session
+from .session.snapshot import Snapshot
 from .panel_base import TRAIL, PanelsBase, SliderSpec, fmt, round_sig
 from .positions_panel import PositionsGui
 
@@ -86,10 +88,10 @@ class FleetPanels(PanelsBase):
     SLIDERS = SLIDERS
     EXPORT_NOTE = (" Obstacles added, removed or moved by hand are not part of the preset (it names its "
                    "world by generator and seed); the JSON export lists the obstacles as they are.")
-    session: FleetSession
+    session: Session
 
-    def __init__(self, gui: Any, session: FleetSession, notify: Any, *args: Any, **kwargs: Any) -> None:
-        self.editor = WorldEditor(session, notify, self.select_robot)
+    def __init__(self, gui: Any, session: Session, notify: Any, *args: Any, **kwargs: Any) -> None:
+        self.editor = WorldEditor(driver(session), notify, self.select_robot)
         super().__init__(gui, session, notify, *args, **kwargs)
 
     # ------------------------------------------------------------------ building
@@ -144,7 +146,7 @@ class FleetPanels(PanelsBase):
                                  "the nearest · **drag** an obstacle to move it · click a robot to select it.")
                 self.click_mode = gui.add_dropdown("click does", CLICK_MODES, initial_value=CLICK_MODES[0])
                 self.obstacle_radius = gui.add_slider("new obstacle radius [m]", min=0.2, max=3.0, step=0.1,
-                                                      initial_value=self.session.obstacle_radius)
+                                                      initial_value=driver(self.session).obstacle_radius)
                 self.restore = gui.add_button("Restore world", hint="drop the edits: the generated world again")
             self._slider(SPECS["view.trail_seconds"])
         with self.tabs.add_tab("Plots"):
@@ -216,11 +218,11 @@ class FleetPanels(PanelsBase):
 
         @self.obstacle_radius.on_update
         def _(event: Any) -> None:
-            self.session.obstacle_radius = float(min(max(self.obstacle_radius.value, 0.05), 10.0))
+            driver(self.session).obstacle_radius = float(min(max(self.obstacle_radius.value, 0.05), 10.0))
 
         @self.restore.on_click
         def _(event: Any) -> None:
-            self.session.restore_world()
+            driver(self.session).restore_world()
             self.notify("World restored", "the generated obstacles are back; the robots carry on", "blue")
 
     # ------------------------------------------------------------------ sync
@@ -269,7 +271,7 @@ class FleetPanels(PanelsBase):
     # ------------------------------------------------------------------ changes
     def apply(self, changes: dict[str, Any], what: str) -> bool:
         """As :meth:`PanelsBase.apply`, and says so when the change rebuilt the fleet."""
-        before, edits = self.session.scene_revision, self.session.edits
+        before, edits = self.session.scene_revision, driver(self.session).edits
         ok = super().apply(changes, what)
         if ok and self.session.scene_revision != before:
             dropped = f"; {edits} obstacle edit{'s' * (edits != 1)} dropped" if edits else ""
@@ -315,7 +317,7 @@ class FleetPanels(PanelsBase):
     def _view_changed(self) -> None:
         follow = VIEWS.get(self.view_mode.value, "world")
         self.zoom.visible = follow != "world"
-        self.session.set_view(follow, float(self.zoom.value))
+        driver(self.session).set_view(follow, float(self.zoom.value))
 
     def select_robot(self, robot: int) -> None:
         self.session.select(robot)
@@ -330,12 +332,13 @@ class FleetPanels(PanelsBase):
         self.editor.drag(index, x, y, phase)
 
     # ------------------------------------------------------------------ readouts
-    def on_snapshot(self, snap: FleetSnapshot) -> None:
-        i = snap.view.robot
+    def on_snapshot(self, snap: Snapshot) -> None:
+        e = snap.extras
+        i = e["view"].robot
         if self.robot.value != i:
             with self._sync():
                 self._set(self.robot, i)
-        self.budget.content = budget_markdown(snap.view, snap.params, int(snap.status[i]), snap.cmd[i])
+        self.budget.content = budget_markdown(e["view"], e["params"], int(snap.status[i]), e["cmd"][i])
         self.positions_gui.refresh(snap.ghosts, snap.live)
 
     def refresh_readout(self) -> None:
@@ -358,7 +361,7 @@ class FleetPanels(PanelsBase):
         r = self.session.readout()
         sc = self.session.scenario
         state = "▶ playing" if self.session.playing else ("■ finished" if self.session.finished else "paused")
-        edits = self.session.edits
+        edits = driver(self.session).edits
         self.status.content = (
             f"**{sc.name}** · {state} · t = {r['t']:.0f} s · step {int(r['k'])}/{sc.sim.steps} · "
             f"CoM x = {r['com']:.1f} m"

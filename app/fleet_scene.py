@@ -19,7 +19,7 @@ from shoal.engine.world import WorldSpec
 from shoal.presets.models import Scenario
 
 from . import shapes
-from .fleet_session import FleetSnapshot
+from .session.snapshot import Snapshot
 from .ghosts import GhostLayer
 from .scene import VIEW_HALF
 from .twin_view import TwinLayer, trail_segments
@@ -208,19 +208,20 @@ class FleetView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
         self.on_obstacle_drag(int(event.instance_index), float(xy[0]), float(xy[1]), str(event.phase))
 
     # ------------------------------------------------------------------ per frame
-    def draw(self, snap: FleetSnapshot) -> None:
+    def draw(self, snap: Snapshot) -> None:
         """Push one snapshot into the nodes (building the static scene first if needed)."""
         if self.built_revision < 0:
             return
-        if snap.zoom != self.zoom:  # another scale: every node again
+        e = snap.extras
+        if e["zoom"] != self.zoom:  # another scale: every node again
             self._drop_nodes()
-            self.zoom = snap.zoom
+            self.zoom = e["zoom"]
         if not self._static:
-            self._build_static(snap.world)
+            self._build_static(e["world"])
         self._follow(snap)
-        if snap.world_revision != self.world_revision:
-            self._draw_obstacles(snap.world)
-            self.world_revision = snap.world_revision
+        if e["world_revision"] != self.world_revision:
+            self._draw_obstacles(e["world"])
+            self.world_revision = e["world_revision"]
         self._draw_robots(snap)
         if snap.live:
             self._draw_probe(snap)
@@ -231,12 +232,13 @@ class FleetView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
         self.draw_ghosts(snap.ghosts if snap.live else None)  # SLO positions: the selected robot's beliefs
         self.drawn_revision = snap.revision
 
-    def _follow(self, snap: FleetSnapshot) -> None:
+    def _follow(self, snap: Snapshot) -> None:
         """Move /fleet so the followed point (swarm centre or selected robot) stays in view."""
-        if snap.follow == "world" or self.zoom <= 1.0:
+        follow = snap.extras["follow"]
+        if follow == "world" or self.zoom <= 1.0:
             target = self.centre
-        elif snap.follow == "robot":
-            target = snap.view.x
+        elif follow == "robot":
+            target = snap.extras["view"].x
         else:
             alive = snap.status == 0
             target = snap.x[alive].mean(axis=0) if alive.any() else snap.x.mean(axis=0)
@@ -244,16 +246,17 @@ class FleetView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
                 off = target - self.focus
                 dead = 0.15 * VIEW_HALF / self.scale  # metres; VIEW_HALF/scale reaches the nearer edge
                 target = self.focus + np.sign(off) * np.maximum(np.abs(off) - dead, 0.0)
-        self._followed = snap.follow
-        x0, y0, x1, y1 = snap.world.bounds
+        self._followed = follow
+        x0, y0, x1, y1 = snap.extras["world"].bounds
         target = np.clip(target, (x0, y0), (x1, y1))
         if not np.allclose(target, self.focus):
             self.focus = np.asarray(target, dtype=float)
             off = (self.centre - self.focus) * self.scale
             self.nodes["root"].position = (float(off[0]), float(off[1]), 0.0)
 
-    def _draw_robots(self, snap: FleetSnapshot) -> None:
-        r = snap.params.robot_radius
+    def _draw_robots(self, snap: Snapshot) -> None:
+        params = snap.extras["params"]
+        r = params.robot_radius
         colors = np.where((snap.status != 0)[:, None], COLLIDED, ROBOT).astype(np.uint8)
         pos = self.to_view(snap.x, Z["robots"])
         node = self.nodes.get("robots")
@@ -263,8 +266,9 @@ class FleetView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
                 precision="float32", point_shading="flat")
         else:
             node.points, node.colors = pos, colors
-        speed = np.hypot(snap.u[:, 0], snap.u[:, 1])
-        along = np.where(snap.params.body_frame | (speed < 1e-9), snap.heading, np.arctan2(snap.u[:, 1], snap.u[:, 0]))
+        u = snap.extras["u"]
+        speed = np.hypot(u[:, 0], u[:, 1])
+        along = np.where(params.body_frame | (speed < 1e-9), snap.heading, np.arctan2(u[:, 1], u[:, 0]))
         tip = snap.x + 1.3 * r * np.column_stack([np.cos(along), np.sin(along)])
         self._lines("headings", np.stack([snap.x, tip], axis=1), HEADING, 2.0, Z["headings"])
         self._lines("trails", trail_segments(snap.trails), TRAIL, 1.5, Z["trails"])
@@ -276,10 +280,10 @@ class FleetView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
     def _twin_size(self) -> float:
         return getattr(self, "_robot_radius", 0.2)
 
-    def _draw_probe(self, snap: FleetSnapshot) -> None:
+    def _draw_probe(self, snap: Snapshot) -> None:
         """The selected robot: sectors filled out to each closest body, the range circle, the
         hits, F_t and the reach its budget allows in one step."""
-        v, p = snap.view, snap.params
+        v, p = snap.extras["view"], snap.extras["params"]
         centre, radius, rng = v.x, p.robot_radius, p.sensing_range
         self._lines("selected", shapes.circle_segments(centre, 1.35 * radius, 40), SELECTED, 3.0, Z["probe"])
         start = v.frame_angle - math.pi + np.arange(6) * math.pi / 3  # sector k starts here
@@ -316,11 +320,11 @@ class FleetView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
             self._lines("force", np.zeros((0, 2, 2)), FORCE, 3.0, Z["probe"])
         self._draw_reach(snap)
 
-    def _draw_reach(self, snap: FleetSnapshot) -> None:
+    def _draw_reach(self, snap: Snapshot) -> None:
         """How far the budget can carry the selected robot in one step: omni, the attraction reach
         (c1+c2)√2/β·Δt (blue) and the total ĉ√2/β·Δt (orange); non-omni, the forward reach
         c5/β·Δt along the heading (blue). Not drawn for original RPSO, whose terms are unbounded."""
-        v, p = snap.view, snap.params
+        v, p = snap.extras["view"], snap.extras["params"]
         c, centre, r = np.asarray(v.c, dtype=float), v.x, p.robot_radius
         attract, total = np.zeros((0, 2, 2)), np.zeros((0, 2, 2))
         if p.law == "adapted-rpso" and p.beta > 0:

@@ -1,19 +1,16 @@
-"""Truth against belief in any arena (spec §15.2 item 1): the selected robot's ghosts.
-
-For an observer robot i on SLO positions, a ghost at x_i + x̂_ij stands for every robot j it
-localised at its last step, joined to the true x_j by an error segment coloured from green
-(no error) to red (``scale`` and beyond); a host swarm adds where i believes the global best
-is. :func:`ghosts_of` reads them from an engine's beliefs; :class:`GhostLayer` draws them in
-any view built on ``_points`` helpers, a ``scene`` and a ``nodes`` dict (the SLO, Chapter 3,
-fleet and acoustic views).
+"""Truth against belief in any arena: the selected robot's ghosts (:mod:`.session.beliefs`),
+each joined to the true robot by an error segment coloured from green (no error) to red
+(``scale`` and beyond). :class:`GhostLayer` draws them in any view built on ``_points``
+helpers, a ``scene`` and a ``nodes`` dict.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from .session.beliefs import Ghosts
 
 GHOST = (60, 110, 230)
 GHOST_BEST = (30, 80, 220)
@@ -27,49 +24,6 @@ def error_colors(err: np.ndarray, scale: float) -> np.ndarray:
     f = np.clip(np.asarray(err, dtype=float) / max(scale, 1e-12), 0.0, 1.0)[:, None]
     rgb = (ERR_LOW + (ERR_HIGH - ERR_LOW) * f).astype(np.uint8)
     return np.repeat(rgb[:, None, :], 2, axis=1)
-
-
-@dataclass(frozen=True)
-class Ghosts:
-    """What one observer robot believes, in world coordinates anchored at its true position."""
-
-    observer: int
-    points: np.ndarray  # (G, 2) x_i + x̂_ij
-    of: np.ndarray  # (G,) the robot j each ghost stands for
-    truth: np.ndarray  # (G, 2) x_j
-    error: np.ndarray  # (G,) |ghost − x_j|
-    scale: float  # error drawn fully red
-    best: np.ndarray | None = None  # (2,) where i believes the global best is
-    true_best: np.ndarray | None = None  # (2,) the global best it stands for
-
-    @property
-    def mean_error(self) -> float:
-        return float(self.error.mean()) if len(self.error) else float("nan")
-
-
-def ghosts_of(beliefs: Any, x: np.ndarray, i: int, scale: float, *, best: np.ndarray | None = None,
-              true_best: np.ndarray | None = None) -> Ghosts:
-    """Observer ``i``'s ghosts (run 0) from :class:`~shoal.engine.slo_localiser.Beliefs` and
-    the true positions ``x`` (N, 2): every neighbour it localised at its last step."""
-    of = np.flatnonzero(beliefs.valid[0, i])
-    points = x[i] + beliefs.est[0, i, of]
-    truth = x[of]
-    err = np.hypot(*(points - truth).T) if len(of) else np.zeros(0)
-    return Ghosts(observer=i, points=points, of=of, truth=truth, error=err, scale=float(scale), best=best,
-                  true_best=true_best)
-
-
-def host_ghosts(sim: Any, i: int, true_best: np.ndarray) -> Ghosts | None:
-    """The ghosts of observer ``i`` of a host swarm on SLO positions (:class:`~shoal.engine.
-    slo_host.SLOHost`: Chapter 3 swarm, fleet, acoustic swarm), or None on oracle positions.
-    Errors show fully red at 10 thesis units."""
-    source = getattr(sim, "slo_source", None)
-    if source is None:
-        return None
-    x = sim.state.x[0]
-    unit = float(sim.slo_params.get("unit", 1.0))
-    return ghosts_of(source.beliefs, x, i, 10.0 * unit, best=sim.believed_gbest()[0, i].copy(),
-                     true_best=np.asarray(true_best, dtype=float))
 
 
 class GhostLayer:

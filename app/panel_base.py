@@ -28,10 +28,11 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from .base_session import BaseSession, parse_upload
+from .kinds.registry import app_kind, app_presets
+from .session.session import Session
+from .session.upload import parse_upload
 from .compare_panel import CompareGui
 from .replay_panel import ReplayGui
-from .session import app_presets
 from .twin_view import twin_series
 
 Notify = Callable[[str, str, str], None]
@@ -129,7 +130,7 @@ class PanelsBase:
     SLIDERS: ClassVar[tuple[SliderSpec, ...]] = ()
     EXPORT_NOTE: ClassVar[str] = ""  # more words for the Export tab
 
-    def __init__(self, gui: Any, session: BaseSession, notify: Notify, send_file: SendFile,
+    def __init__(self, gui: Any, session: Session, notify: Notify, send_file: SendFile,
                  replace: Replace | None = None) -> None:
         self.gui, self.session, self.notify, self.send_file = gui, session, notify, send_file
         self.replace = replace
@@ -180,7 +181,7 @@ class PanelsBase:
             self.download = gui.add_button("Download preset", hint="the current scenario as TOML")
             self.upload = gui.add_upload_button("Upload preset", hint=".toml or .json, at most 256 KiB")
         with self.tabs.add_tab("Notes"):
-            self.notes = gui.add_markdown(notes_text(self.session.NOTES))
+            self.notes = gui.add_markdown(notes_text(app_kind(self.session).notes))
 
     def _slider(self, spec: SliderSpec) -> Any:
         value = get_path(self.session.scenario, spec.path)

@@ -18,7 +18,9 @@ from .panel_base import (
     TRAIL, PanelsBase, SliderSpec, field_bounds, fmt, get_path, notes_text, round_sig, slider_range,
 )
 from .positions_panel import PositionsGui
-from .session import Session, Snapshot
+from .kinds.swarm import driver
+from .session.session import Session
+from .session.snapshot import Snapshot
 
 __all__ = ["LAWS", "MODES", "Panels", "SLIDERS", "SPECS", "field_bounds", "get_path", "notes_text",
            "slider_range"]
@@ -217,14 +219,14 @@ class Panels(PanelsBase):
         s = self.session
         sc = s.scenario
         adapted = sc.controller.law != "standard"
-        omega, c_hat = s.coefficients()
+        omega, c_hat = driver(s).coefficients()
         key = (round(omega, 9), round(c_hat, 9), adapted)
         if key != self._stability_key:  # move the point; building a new figure costs ~50 ms
             self.stability_plot.figure = plots.update_stability_point(
                 self.stability_plot.figure, omega, c_hat, adapted=adapted)
             self._stability_key = key
         robot, dim = s.selected_robot, s.selected_dim
-        u, a = s.particle_history(robot, dim)
+        u, a = driver(s).particle_history(robot, dim)
         label = f"particle {robot}, {self._dims(sc)[min(dim, sc.sim.d - 1)]}"
         phase_key = (key, round(s.sim.dt, 12), label)
         fig = self.phase_plot.figure

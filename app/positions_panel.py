@@ -9,8 +9,8 @@ from typing import Any
 
 from shoal.presets.models import Scenario
 
-from .ghosts import Ghosts
-from .positions import NEW_SLO, POSITIONS, ghost_text, positions_of, switch_changes
+from .session.beliefs import Ghosts
+from .session.positions import NEW_SLO, POSITIONS, ghost_text, positions_of, switch_changes
 from .slo_panels import ERROR_SETS, _key
 
 

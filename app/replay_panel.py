@@ -17,7 +17,7 @@ from shoal.presets.io import PresetError
 
 from . import replay
 from .replay import ReplayError
-from .timeline import verify_replay
+from .session.timeline import verify_replay
 
 if TYPE_CHECKING:
     from .panel_base import PanelsBase
@@ -71,9 +71,9 @@ class ReplayGui:
                 scenario = presets_io.validate(rec.meta["preset"])
             except PresetError as err:
                 raise PresetError([f"preset: {m}" for m in err.messages]) from None
-            from .tab import kind_for  # the tab module imports the panels
+            from .kinds.registry import session_for  # transitional
 
-            fresh = kind_for(scenario).session(scenario)
+            fresh = session_for(scenario)
             fresh.check_replay(rec)
             try:
                 check = verify_replay(fresh, rec)
@@ -99,7 +99,7 @@ class ReplayGui:
         if p.removed:
             return
         s = self.session
-        first, last, shown = s.timeline()
+        first, last, shown = s.timeline_span()
         with s.lock:
             t = s.shown_frame().t
             info, live = s.replaying, s.cursor is None and s.replaying is None

@@ -21,7 +21,7 @@ from shoal.presets.models import Scenario
 
 from .ghosts import GhostLayer
 from .shapes import PointLayer
-from .session import Snapshot
+from .session.snapshot import Snapshot
 from .twin_view import TWIN, TWIN_TRAIL, trail_segments
 
 VIEW_HALF = 10.0  # the arena's half size in view units
@@ -202,8 +202,9 @@ class ArenaView(PointLayer, GhostLayer):
             return
         self.follow(snap.x)
         n["robots"].points = self.view_points(snap.x, 0.02)
-        n["pbests"].points = self.view_points(snap.y, 0.005)
-        n["gbest"].points = self.view_points(snap.yg[None, :], 0.012)
+        if snap.y is not None and snap.yg is not None:
+            n["pbests"].points = self.view_points(snap.y, 0.005)
+            n["gbest"].points = self.view_points(snap.yg[None, :], 0.012)
         n["pbests"].visible = n["gbest"].visible = snap.live  # a recorded frame has no bests
         start = self.view_points(snap.x, 0.015)
         tip = start.copy()

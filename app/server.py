@@ -22,11 +22,12 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from .base_session import MAX_UPLOAD_BYTES, BaseSession
+from .kinds.registry import check_supported, session_for
 from .replay import MAX_REPLAY_BYTES
 from .scene import CAMERA_FOV, CAMERA_HEIGHT, camera_height
-from .session import check_supported
-from .tab import TabApp, session_for
+from .session.session import Session
+from .session.upload import MAX_UPLOAD_BYTES
+from .tab import TabApp
 from .upload_guard import guard_uploads
 
 TICK_HZ = 60.0
@@ -97,7 +98,7 @@ class ShoalServer:
         self._thread.start()
 
     @property
-    def sessions(self) -> dict[int, BaseSession]:
+    def sessions(self) -> dict[int, Session]:
         with self._lock:
             return {cid: tab.session for cid, tab in self.tabs.items()}
 

@@ -20,7 +20,8 @@ from shoal.presets.models import SLOErrorValues, Scenario
 
 from . import slo_plots
 from .panel_base import TRAIL, PanelsBase, SliderSpec, fmt
-from .slo_session import FLAG_NAMES, KIND_NAMES, SLOSession
+from .kinds.mai import FLAG_NAMES, KIND_NAMES
+from .session.session import Session
 
 SELECTIONS = {"CSS (closest solution)": "css", "RTS (round trip)": "rts", "Akcan (GDL)": "akcan"}
 ERROR_SETS = {"None": "none", "Low": "low", "High": "high"}
@@ -64,7 +65,7 @@ class SLOPanels(PanelsBase):
     PLOT_HISTORY = 2000
     SLIDERS = SLIDERS
     EXPORT_NOTE = " The JSON export adds the selected robot's estimates of the others."
-    session: SLOSession
+    session: Session
 
     def _build_tabs(self) -> None:
         gui, sc = self.gui, self.session.scenario
@@ -259,7 +260,7 @@ class SLOPanels(PanelsBase):
     def handle_click(self, x: float, y: float, modifier: str | None) -> str:
         """Click a robot: it becomes the observer; shift-click: the inspected neighbour."""
         half = self.session.scenario.arena.half_size
-        j = self.session.robot_near(x, y, tol=0.04 * half)
+        j = self.session.robot_near(x, y, 0.04 * half)
         if j is None:
             return "nothing"
         if modifier == "shift":
@@ -286,7 +287,7 @@ class SLOPanels(PanelsBase):
         if self.robot.value != snap.selected:
             with self._sync():
                 self._set(self.robot, snap.selected)
-        p = snap.pair
+        p = snap.extras["pair"]
         if p is None:
             self.inspector.content = f"Robot {snap.selected} has no neighbour this step."
             return
@@ -300,7 +301,7 @@ class SLOPanels(PanelsBase):
         ]
         if self.session.scenario.slo.selection == "rts":
             lines.append(f"RTS loop error e_r = {fmt(p.round_trip)}")
-        lines.append(f"robot {snap.selected} localised {len(snap.ghost_of)} neighbour(s) this step")
+        lines.append(f"robot {snap.selected} localised {len(snap.ghosts.of) if snap.ghosts else 0} neighbour(s) this step")
         self.inspector.content = "  \n".join(lines)
 
     def refresh_status(self) -> None:

@@ -22,9 +22,9 @@ import numpy as np
 from shoal.presets.models import Scenario
 
 from . import shapes
-from .ghosts import GhostLayer, Ghosts
+from .ghosts import GhostLayer
 from .scene import ROBOT_SIZE, VIEW_HALF
-from .slo_session import SLOSnapshot
+from .session.snapshot import Snapshot
 from .twin_view import TwinLayer, trail_segments
 
 ROBOT = (220, 50, 50)
@@ -157,25 +157,23 @@ class SLOView(shapes.PointLayer, TwinLayer, GhostLayer):
             off = (self.centre - self.focus) * self.scale
             self.nodes["root"].position = (float(off[0]), float(off[1]), 0.0)
 
-    def draw(self, snap: SLOSnapshot) -> None:
+    def draw(self, snap: Snapshot) -> None:
         if self.built_revision < 0:
             return
         x = snap.x
         self._follow(x)
-        unit = snap.half_size / 50.0  # thesis units on screen
-        self._lines("edges", snap.edges, EDGE, 1.0, Z["edges"])
+        self._lines("edges", snap.extras["edges"], EDGE, 1.0, Z["edges"])
         self._lines("trails", trail_segments(snap.trails), TRAIL, 1.2, Z["trails"])
         self._points("robots", x, ROBOT, ROBOT_SIZE, "circle", Z["robots"])
         xi = x[snap.selected]
         self._lines("selected", shapes.circle_segments(xi, 1.7 * ROBOT_SIZE / self.scale, 32), SELECTED, 3.0,
                     Z["selected"])
-        self.draw_ghosts(Ghosts(observer=snap.selected, points=snap.ghosts, of=snap.ghost_of,  # the observer's beliefs
-                                truth=x[snap.ghost_of], error=snap.ghost_error, scale=10.0 * unit))
+        self.draw_ghosts(snap.ghosts)  # the observer's beliefs
         self._draw_pair(snap)
         self.drawn_revision = snap.revision
 
-    def _draw_pair(self, snap: SLOSnapshot) -> None:
-        p = snap.pair
+    def _draw_pair(self, snap: Snapshot) -> None:
+        p = snap.extras["pair"]
         if p is None:
             for key in ("tri_truth", "tri_mirror", "tri_dr"):
                 self._lines(key, np.zeros((0, 2, 2)), EDGE, 1.0, Z["inspector"])

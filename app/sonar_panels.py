@@ -18,7 +18,9 @@ from shoal.presets.models import Scenario
 from . import sonar_plots
 from .panel_base import TRAIL, PanelsBase, SliderSpec, fmt
 from .positions_panel import PositionsGui
-from .sonar_session import SonarSession, SonarSnapshot
+from .kinds.sonar import driver
+from .session.session import Session
+from .session.snapshot import Snapshot
 
 ALGORITHMS = {"A-PSO": "a-pso", "X-PSO": "x-pso", "B-PSO": "b-pso", "XB-PSO": "xb-pso", "GT-PSO": "gt-pso"}
 LABELS = {v: k for k, v in ALGORITHMS.items()}
@@ -52,7 +54,7 @@ class SonarPanels(PanelsBase):
     PLOT_HISTORY = 2000
     SLIDERS = SLIDERS
     EXPORT_NOTE = " The JSON export also lists the source where it is now (it may have been dragged)."
-    session: SonarSession
+    session: Session
 
     # ------------------------------------------------------------------ building
     def _build_above_tabs(self) -> None:
@@ -144,9 +146,9 @@ class SonarPanels(PanelsBase):
     def handle_click(self, x: float, y: float, modifier: str | None) -> str:
         """A click in the arena: near a robot selects it; shift-click puts the source there."""
         if modifier == "shift":
-            self.session.move_source(x, y)
+            driver(self.session).move_source(x, y)
             return "source"
-        robot = self.session.robot_near(x, y)
+        robot = driver(self.session).robot_near(x, y)
         if robot is not None:
             self.select_robot(robot)
             return "selected"
@@ -156,21 +158,22 @@ class SonarPanels(PanelsBase):
         """The source dragged to (x, y) m: the swarm tracks it from the next step."""
         if phase == "start":
             return
-        self.session.move_source(x, y)
+        driver(self.session).move_source(x, y)
 
     # ------------------------------------------------------------------ readouts
-    def on_snapshot(self, snap: SonarSnapshot) -> None:
+    def on_snapshot(self, snap: Snapshot) -> None:
         i = snap.selected
         if self.robot.value != i:
             with self._sync():
                 self._set(self.robot, i)
-        text = f"robot {i}: SNR {snap.snr[i]:.1f} dB, {np.hypot(*(snap.x[i] - snap.source)):.0f} m from the source"
-        corr = self.session.correlation(i)
+        e = snap.extras
+        text = f"robot {i}: SNR {e['snr'][i]:.1f} dB, {np.hypot(*(snap.x[i] - e['source'])):.0f} m from the source"
+        corr = driver(self.session).correlation(i)
         if corr is not None:
             _, _, tau, rho = corr
             text += f" · τ_lag = {tau * 1e3:.3f} ms · ρ = {rho:.3g}"
-        if snap.true_ray is not None:
-            text += " · true ray: " + ("r₊" if snap.true_ray[i] == 0 else "r₋")
+        if e["true_ray"] is not None:
+            text += " · true ray: " + ("r₊" if e["true_ray"][i] == 0 else "r₋")
         self.hearing.content = text
         self.positions_gui.refresh(snap.ghosts, snap.live)
 
@@ -200,7 +203,7 @@ class SonarPanels(PanelsBase):
                    if alg != here}, **self.positions_gui.compare_choices(sc)}
 
     def corr_plot_data(self) -> tuple[np.ndarray, ...]:
-        c = self.session.correlation()
+        c = driver(self.session).correlation()
         if c is None:
             return sonar_plots.corr_data(np.zeros(0), np.zeros(0), 0.0, 0.0)
         return sonar_plots.corr_data(*c)

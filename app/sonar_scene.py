@@ -21,7 +21,7 @@ from shoal.presets.models import Scenario
 from . import shapes
 from .ghosts import GhostLayer
 from .scene import VIEW_HALF
-from .sonar_session import SonarSnapshot
+from .session.snapshot import Snapshot
 from .twin_view import TwinLayer, trail_segments
 
 GRID_CELL = (228, 228, 224)
@@ -137,7 +137,7 @@ class SonarView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
         self.on_source_drag(float(xy[0]), float(xy[1]), str(event.phase))
 
     # ------------------------------------------------------------------ per frame
-    def draw(self, snap: SonarSnapshot) -> None:
+    def draw(self, snap: Snapshot) -> None:
         if self.built_revision < 0:
             return
         if not self._static:
@@ -151,34 +151,34 @@ class SonarView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
         self.draw_ghosts(snap.ghosts if snap.live else None)  # SLO positions: the selected robot's beliefs
         self.drawn_revision = snap.revision
 
-    def _follow(self, snap: SonarSnapshot) -> None:
+    def _follow(self, snap: Snapshot) -> None:
         """Keep the swarm's centre and the source on screen (a source may run away)."""
         com = snap.x.mean(axis=0)
         lim = 0.92 * self.half
-        if np.all(np.abs(com - self.focus) < lim) and np.all(np.abs(snap.source - self.focus) < lim):
+        if np.all(np.abs(com - self.focus) < lim) and np.all(np.abs(snap.extras["source"] - self.focus) < lim):
             return
-        self.focus = (com + snap.source) / 2
+        self.focus = (com + snap.extras["source"]) / 2
         off = -self.focus * self.scale
         self.nodes["root"].position = (float(off[0]), float(off[1]), 0.0)
 
-    def _draw_source(self, snap: SonarSnapshot) -> None:
-        src = snap.source
+    def _draw_source(self, snap: Snapshot) -> None:
+        src = snap.extras["source"]
         self.nodes["source"].batched_positions = self.to_view(src[None], Z["source"])
         self.nodes["source_label"].position = tuple(float(v) for v in self.to_view(src + 0.04 * self.half, 0.0))
-        self._lines("dc_ring", shapes.circle_segments(src, snap.d_c, 72), DC_RING, 1.0, Z["rings"])
-        if snap.r_trap > 0 and snap.live:
-            rings = np.concatenate([shapes.circle_segments(snap.yg, snap.r_trap, 72),
-                                    shapes.circle_segments(src, snap.r_trap, 72)])
+        self._lines("dc_ring", shapes.circle_segments(src, snap.extras["d_c"], 72), DC_RING, 1.0, Z["rings"])
+        if snap.extras["r_trap"] > 0 and snap.live:
+            rings = np.concatenate([shapes.circle_segments(snap.yg, snap.extras["r_trap"], 72),
+                                    shapes.circle_segments(src, snap.extras["r_trap"], 72)])
         else:
             rings = np.zeros((0, 2, 2))
         self._lines("escort", rings, ESCORT, 2.0, Z["rings"])
 
-    def _draw_robots(self, snap: SonarSnapshot) -> None:
+    def _draw_robots(self, snap: Snapshot) -> None:
         self._points("robots", snap.x, ROBOT, 0.009 * VIEW_HALF * 2, "circle", Z["robots"])
         tip = snap.x + 0.025 * self.half * np.column_stack([np.cos(snap.heading), np.sin(snap.heading)])
         self._lines("headings", np.stack([snap.x, tip], axis=1), HEADING, 2.0, Z["headings"])
         self._lines("trails", trail_segments(snap.trails), TRAIL, 1.2, Z["trails"])
-        self._points("pbests", snap.y, PBEST, 0.006 * VIEW_HALF * 2, "square", Z["pbests"])
+        self._points("pbests", snap.y if snap.y is not None else np.zeros((0, 2)), PBEST, 0.006 * VIEW_HALF * 2, "square", Z["pbests"])
         self._points("gbest", snap.yg[None] if snap.live else np.zeros((0, 2)), GBEST, 0.016 * VIEW_HALF * 2,
                      "diamond", Z["gbest"])
         i = snap.selected
@@ -188,20 +188,20 @@ class SonarView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
     def _twin_size(self) -> float:
         return 0.009 * VIEW_HALF * 2
 
-    def ray_segments(self, snap: SonarSnapshot) -> tuple[np.ndarray, np.ndarray]:
+    def ray_segments(self, snap: Snapshot) -> tuple[np.ndarray, np.ndarray]:
         """(true, mirror) segment lists (N, 2, 2), each starting at a robot."""
-        if snap.rays is None or snap.true_ray is None:
+        if snap.extras["rays"] is None or snap.extras["true_ray"] is None:
             return np.zeros((0, 2, 2)), np.zeros((0, 2, 2))
         n = len(snap.x)
         length = self.RAY_SHARE * 2 * self.half
         idx = np.arange(n)
-        true_dir = snap.rays[idx, snap.true_ray]
-        mirror_dir = snap.rays[idx, 1 - snap.true_ray]
+        true_dir = snap.extras["rays"][idx, snap.extras["true_ray"]]
+        mirror_dir = snap.extras["rays"][idx, 1 - snap.extras["true_ray"]]
         true = np.stack([snap.x, snap.x + length * true_dir], axis=1)
         mirror = np.stack([snap.x, snap.x + length * mirror_dir], axis=1)
         return true, mirror
 
-    def _draw_rays(self, snap: SonarSnapshot) -> None:
+    def _draw_rays(self, snap: Snapshot) -> None:
         true, mirror = self.ray_segments(snap)
         self._lines("rays_true", true, RAY_TRUE, 1.2, Z["rays"])
         self._lines("rays_mirror", mirror, RAY_MIRROR, 1.2, Z["rays"])
@@ -214,22 +214,22 @@ class SonarView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
             self._lines("rays_sel_true", sel, RAY_TRUE, 3.0, Z["rays"] + 0.001)
             self._lines("rays_sel_mirror", sel, RAY_MIRROR, 3.0, Z["rays"] + 0.001)
 
-    def _draw_hits(self, snap: SonarSnapshot) -> None:
+    def _draw_hits(self, snap: Snapshot) -> None:
         empty = np.zeros((0, 2))
         kept = dropped = picks = empty
         partner = np.zeros((0, 2, 2))
-        if snap.points is not None and snap.tri_members is None:  # B/XB-PSO: up to four per robot
-            fwd = snap.forward.astype(bool)
-            keep = snap.kept.astype(bool)
-            kept = snap.points[keep]
-            dropped = snap.points[fwd & ~keep]
-        if snap.points is not None and snap.pick is not None:
-            ok = snap.pick >= 0
+        if snap.extras["points"] is not None and snap.extras["tri_members"] is None:  # B/XB-PSO: up to four per robot
+            fwd = snap.extras["forward"].astype(bool)
+            keep = snap.extras["kept"].astype(bool)
+            kept = snap.extras["points"][keep]
+            dropped = snap.extras["points"][fwd & ~keep]
+        if snap.extras["points"] is not None and snap.extras["pick"] is not None:
+            ok = snap.extras["pick"] >= 0
             idx = np.flatnonzero(ok)
-            picks = snap.points[idx, snap.pick[idx]]
-        if snap.partner is not None:
+            picks = snap.extras["points"][idx, snap.extras["pick"][idx]]
+        if snap.extras["partner"] is not None:
             i = snap.selected
-            j = int(snap.partner[i])
+            j = int(snap.extras["partner"][i])
             if 0 <= j < len(snap.x) and j != i:
                 partner = np.stack([snap.x[i], snap.x[j]])[None]
         size = 0.006 * VIEW_HALF * 2
@@ -238,17 +238,17 @@ class SonarView(shapes.GroundFrame, shapes.PointLayer, TwinLayer, GhostLayer):
         self._points("picks", picks, PICK, 1.8 * size, "diamond", Z["hits"] + 0.001)
         self._lines("partner", partner, PARTNER, 1.5, Z["rays"] + 0.002)
 
-    def _draw_triangles(self, snap: SonarSnapshot) -> None:
+    def _draw_triangles(self, snap: Snapshot) -> None:
         segs = rays = np.zeros((0, 2, 2))
         cents = np.zeros((0, 2))
-        if snap.tri_members is not None and snap.tri_valid is not None:
-            ok = snap.tri_valid.astype(bool) & np.all(snap.tri_members >= 0, axis=1)
-            m = snap.tri_members[ok]
+        if snap.extras["tri_members"] is not None and snap.extras["tri_valid"] is not None:
+            ok = snap.extras["tri_valid"].astype(bool) & np.all(snap.extras["tri_members"] >= 0, axis=1)
+            m = snap.extras["tri_members"][ok]
             if len(m):
                 p = snap.x[m]  # (T, 3, 2)
                 segs = np.concatenate([np.stack([p[:, a], p[:, b]], axis=1) for a, b in ((0, 1), (1, 2), (2, 0))])
-                cents = snap.tri_centroid[ok]
-                rays = np.stack([cents, cents + 0.08 * self.half * snap.tri_direction[ok]], axis=1)
+                cents = snap.extras["tri_centroid"][ok]
+                rays = np.stack([cents, cents + 0.08 * self.half * snap.extras["tri_direction"][ok]], axis=1)
         self._lines("triangles", segs, TRIANGLE, 1.0, Z["triangles"])
         self._lines("tri_rays", rays, TRIANGLE, 2.0, Z["triangles"])
         self._points("tri_centroids", cents, TRIANGLE, 0.008 * VIEW_HALF * 2, "circle", Z["triangles"])

@@ -4,11 +4,10 @@
 at most ``SCENE_HZ`` times a second and the plots and readouts at most ``PLOT_HZ`` times,
 so that plot traffic never holds up the scene.
 
-A tab shows one kind of scene at a time: a Chapter 3 swarm (``Session``, ``Panels``,
-``ArenaView``), a Chapter 4–5 fleet (``FleetSession``, ``FleetPanels``, ``FleetView``), a
-Chapter 6–8 acoustic swarm (``SonarSession``…) or Mai's SLO swarm (``SLOSession``…); the
-first three run on true or SLO-estimated positions (``[slo] swarm = "host"``) in their own
-scene. Loading a scene of another kind (preset dropdown, upload) swaps all three in place.
+A tab shows one kind of scene at a time (:mod:`.kinds.registry`): a Chapter 3 swarm, a
+Chapter 4–5 fleet, a Chapter 6–8 acoustic swarm or Mai's SLO swarm; the first three run on
+true or SLO-estimated positions (``[slo] swarm = "host"``) in their own scene. Loading a
+scene of another kind (preset dropdown, upload) swaps session, panels and arena in place.
 """
 
 from __future__ import annotations
@@ -20,51 +19,33 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Any, Callable, ContextManager
 
-from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from .base_session import BaseSession
 from .fleet_panels import FleetPanels
 from .fleet_scene import FleetView
-from .fleet_session import FleetSession
+from .kinds.registry import app_kind, kind_for
 from .panel_base import PanelsBase
 from .panels import Panels
 from .scene import ArenaView
-from .session import Session
+from .session.session import Session
 from .slo_panels import SLOPanels
 from .slo_scene import SLOView
-from .slo_session import SLOSession
 from .sonar_panels import SonarPanels
 from .sonar_scene import SonarView
-from .sonar_session import SonarSession
 
 CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
 
 
 @dataclass(frozen=True)
-class Kind:
-    """The session, panel and view classes that together show one kind of scene."""
+class Parts:
+    """The panel and view classes that show one kind of scene."""
 
-    session: type[BaseSession]
     panels: type[PanelsBase]
     view: type
 
 
-KINDS = (Kind(FleetSession, FleetPanels, FleetView), Kind(Session, Panels, ArenaView))
-KINDS = (Kind(SLOSession, SLOPanels, SLOView),) + KINDS  # Mai's swarm (slo.swarm = "slo") before the free swarm
-KINDS = KINDS[:1] + (Kind(SonarSession, SonarPanels, SonarView),) + KINDS[1:]  # [acoustics] scenes
-
-
-def kind_for(scenario: Scenario) -> Kind:
-    for kind in KINDS:
-        if kind.session.accepts(scenario):
-            return kind
-    raise PresetError([f"{scenario.name}: no view for this kind of scene"])
-
-
-def session_for(scenario: Scenario) -> BaseSession:
-    """A new session of the kind ``scenario`` needs."""
-    return kind_for(scenario).session(scenario)
+PARTS = {"swarm": Parts(Panels, ArenaView), "fleet": Parts(FleetPanels, FleetView),
+         "sonar": Parts(SonarPanels, SonarView), "mai": Parts(SLOPanels, SLOView)}
 
 
 class TabApp:
@@ -75,7 +56,7 @@ class TabApp:
 
     def __init__(
         self,
-        session: BaseSession,
+        session: Session,
         gui: Any,
         scene: Any,
         *,
@@ -96,7 +77,7 @@ class TabApp:
         self._build_kind()
 
     def _build_kind(self) -> None:
-        kind = next(k for k in KINDS if isinstance(self.session, k.session))
+        kind = PARTS[app_kind(self.session).name]
         self.panels = kind.panels(self.gui, self.session, self.notify, self.send_file, replace=self.replace)
         self.arena = kind.view(self.scene)
         if hasattr(self.panels, "drag_obstacle"):
@@ -120,13 +101,13 @@ class TabApp:
         self.panels.remove()
         self.arena.clear()
 
-    def replace(self, scenario: Scenario) -> BaseSession:
+    def replace(self, scenario: Scenario) -> Session:
         """Load ``scenario``; a scene of the other kind swaps session, panels and arena.
         Returns the session now shown. Raises :class:`PresetError` (nothing changed) when it
         cannot be shown."""
         kind = kind_for(scenario)
         with self._ticking:
-            if isinstance(self.session, kind.session):
+            if app_kind(self.session) is kind:
                 self.session.load_scenario(scenario)
                 self.panels.sync_from_scenario()
                 return self.session
@@ -210,7 +191,7 @@ class TabApp:
                 self.panels.on_snapshot(snap)
             self._next_scene = now + 1.0 / self.SCENE_HZ
         if plots and now >= self._next_plot:
-            key = (s.revision, s.selected_robot, getattr(s, "selected_dim", 0), s.playing)
+            key = (s.revision, s.selected_robot, s.selected_dim, s.playing)
             if key != self._plot_key:
                 with self._atomic():  # one wake-up for all of them (wake-ups cost the ticking thread the GIL)
                     self.panels.refresh_status()

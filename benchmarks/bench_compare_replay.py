@@ -15,8 +15,8 @@ from __future__ import annotations
 import time
 
 from shoal.app import replay
-from shoal.app.tab import session_for
-from shoal.app.timeline import verify_replay
+from shoal.app.kinds.registry import session_for
+from shoal.app.session.timeline import verify_replay
 from shoal.presets import io as presets_io
 
 CASES = (("default", 400), ("course-dvc", 200), ("sonar-xb-pso", 200), ("slo-walk", 200))

@@ -11,12 +11,11 @@ import numpy as np
 import pytest
 
 from shoal.app import replay
-from shoal.app.compare import parse_overrides, twin_scenario
 from shoal.app.fleet_scene import PROBE_NODES
-from shoal.app.fleet_session import FleetSession
-from shoal.app.session import Session
-from shoal.app.tab import session_for
-from shoal.app.timeline import verify_replay
+from shoal.app.kinds import fleet, sonar
+from shoal.app.kinds.registry import session_for
+from shoal.app.session.timeline import verify_replay
+from shoal.app.session.twin import parse_overrides, twin_scenario
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 
@@ -141,7 +140,7 @@ def test_a_replay_re_simulates_to_the_same_positions(name):
     s = session(name)
     s.step(25)
     rec = replay.from_bytes(s.export_replay(), "run.npz")
-    assert rec.frames == 26 and rec.name == name and rec.metric_names == s.METRICS
+    assert rec.frames == 26 and rec.name == name and rec.metric_names == s.history.names
     verified, text = verify_replay(session_for(presets_io.validate(rec.meta["preset"])), rec)
     assert verified is True and "steps 0–20 match" in text
 
@@ -227,7 +226,7 @@ def test_load_replay_swaps_the_scene_kind_and_shows_the_badge(tab):
     data = src.export_replay()
     assert tab.panels.replay_gui.load("course.npz", data)
     s = tab.session
-    assert isinstance(s, FleetSession) and s.replaying is not None and s.scenario.name == "course-dvc"
+    assert s.kind is fleet.KIND and s.replaying is not None and s.scenario.name == "course-dvc"
     assert tab.messages[-1][2] == "green" and "verified" in tab.messages[-1][1]
     tab.tick(1.0)
     badge = tab.panels.replay_gui.badge
@@ -257,7 +256,7 @@ def test_a_bad_replay_is_refused_and_nothing_changes(tab):
         title, body, color = tab.messages[-1]
         assert color == "red" and name in title and words in body
     assert tab.session is s and s.replaying is None and s.sim.state.k == 4
-    assert isinstance(s, Session)
+    assert s.kind.name == "swarm"
 
 
 @pytest.mark.parametrize("name", KINDS[1:])
@@ -290,11 +289,11 @@ def test_hand_edits_reach_b_too():
     s.enable_compare({"controller.alpha": 0.9})
     s.step(3)
     x = s.sim.world.bounds[2] - 5.0
-    s.add_obstacle(x, 0.0, 1.0)
+    fleet.driver(s).add_obstacle(x, 0.0, 1.0)
     np.testing.assert_array_equal(s.twin.sim.world.circles, s.sim.world.circles)
-    s.restore_world()
+    fleet.driver(s).restore_world()
     np.testing.assert_array_equal(s.twin.sim.world.circles, s.sim.world.circles)
-    sonar = session("sonar-xb-pso")
-    sonar.enable_compare({"acoustics.algorithm": "x-pso"})
-    sonar.move_source(12.0, -30.0)
-    np.testing.assert_array_equal(sonar.twin.sim.state.source[0], [12.0, -30.0])
+    acoustic = session("sonar-xb-pso")
+    acoustic.enable_compare({"acoustics.algorithm": "x-pso"})
+    sonar.driver(acoustic).move_source(12.0, -30.0)
+    np.testing.assert_array_equal(acoustic.twin.sim.state.source[0], [12.0, -30.0])

@@ -19,11 +19,15 @@ from app_helpers import HAND_TAB
 
 from shoal.app.fleet_panels import CONTROLLERS
 from shoal.app.fleet_scene import FleetView
-from shoal.app.fleet_session import EditRefused, FleetSession
+from shoal.app.kinds import fleet as fleet_kind
+from shoal.app.kinds import swarm
+from shoal.app.kinds.fleet import EditRefused
+from shoal.app.kinds.registry import app_presets
 from shoal.app.panels import Panels
 from shoal.app.scene import ArenaView
-from shoal.app.session import Session, TRAJECTORY_COLUMNS, app_presets
+from shoal.app.session.session import Session
 from shoal.engine.fleet import Fleet
+from shoal.engine.recorder import TRAJECTORY_COLUMNS
 from shoal.engine.sensing import sense
 from shoal.presets import io as presets_io
 
@@ -53,16 +57,16 @@ def click_at(tab, x: float, y: float, modifier: str | None = None) -> None:
     tab.scene_click(Click(tuple(origin), tuple(d / np.linalg.norm(d)), modifier))
 
 
-def free_spot(session: FleetSession, robot: int, distance: float) -> np.ndarray:
+def free_spot(session: Session, robot: int, distance: float) -> np.ndarray:
     """A point ``distance`` m from the robot's surface (centre to centre, one default obstacle's
     radius more) that is clear of every obstacle and robot."""
-    fleet = session.sim
+    fleet, obstacle_radius = session.sim, fleet_kind.driver(session).obstacle_radius
     x = fleet.state.x[0, robot]
-    r = fleet.params.robot_radius + distance + session.obstacle_radius
+    r = fleet.params.robot_radius + distance + obstacle_radius
     for a in np.linspace(0, 2 * math.pi, 72, endpoint=False):
         p = x + r * np.array([math.cos(a), math.sin(a)])
-        clear_obstacles = fleet.world.obstacle_distance(*p).min(initial=np.inf) > session.obstacle_radius + 0.3
-        others = np.hypot(*(fleet.state.x[0] - p).T) - fleet.params.robot_radius - session.obstacle_radius
+        clear_obstacles = fleet.world.obstacle_distance(*p).min(initial=np.inf) > obstacle_radius + 0.3
+        others = np.hypot(*(fleet.state.x[0] - p).T) - fleet.params.robot_radius - obstacle_radius
         if clear_obstacles and others.min() > 0.3:
             return p
     raise AssertionError("no free spot near the robot")
@@ -71,7 +75,7 @@ def free_spot(session: FleetSession, robot: int, distance: float) -> np.ndarray:
 # ---------------------------------------------------------------------------- loading and drawing
 def test_course_preset_builds_a_fleet_and_draws_its_obstacles(tab):
     s = tab.session
-    assert isinstance(s, FleetSession) and isinstance(s.sim, Fleet)
+    assert s.kind is fleet_kind.KIND and isinstance(s.sim, Fleet)
     assert isinstance(tab.panels, type(tab.panels)) and isinstance(tab.arena, FleetView)
     assert "course-dvc" in app_presets() and "default" in app_presets()
     tab.tick(1.0)
@@ -189,7 +193,7 @@ def test_click_adds_an_obstacle_that_the_next_step_senses(tab):
     assert len(circles) == n + 1
     np.testing.assert_allclose(circles[-1, :2], spot, atol=1e-6)
     assert circles[-1, 2] == pytest.approx(0.7)
-    assert s.edits == 1
+    assert fleet_kind.driver(s).edits == 1
     s.step(1)
     reading = s.sim.state.reading
     seen = reading.hit[0, 2] & np.all(np.isclose(reading.centre[0, 2], spot), axis=-1)
@@ -232,7 +236,7 @@ def test_edits_on_a_robot_are_refused_and_clicks_on_robots_select(tab):
     x = s.sim.state.x[0, 4]
     n = len(s.sim.world.circles)
     with pytest.raises(EditRefused, match="robot"):
-        s.add_obstacle(x[0] + 0.9, x[1])
+        fleet_kind.driver(s).add_obstacle(x[0] + 0.9, x[1])
     click_at(tab, x[0] + 0.2, x[1])
     assert s.selected_robot == 4 and p.robot.value == 4
     assert len(s.sim.world.circles) == n
@@ -241,7 +245,7 @@ def test_edits_on_a_robot_are_refused_and_clicks_on_robots_select(tab):
     assert s.sim.state.k == 0 and len(s.sim.world.circles) == n  # reset keeps the world
     click_at(tab, *free_spot(s, 0, 2.0))
     p.restore.value = True
-    assert len(s.sim.world.circles) == n and s.edits == 0
+    assert len(s.sim.world.circles) == n and fleet_kind.driver(s).edits == 0
 
 
 # ---------------------------------------------------------------------------- the selected robot
@@ -279,7 +283,7 @@ def test_the_budget_shown_is_the_budget_the_next_step_uses(tab):
     s.step(15)
     p.robot.value = 1
     tab.tick(3.0)
-    shown = s.view()
+    shown = fleet_kind.driver(s).view()
     assert f"{shown.c[0] + shown.c[1]:.3f}" in p.budget.content and f"{shown.c[2]:.3f}" in p.budget.content
     s.step(1)
     np.testing.assert_allclose(s.sim.state.reading.gap[0, 1], shown.gap)
@@ -353,7 +357,7 @@ def test_export_marks_collided_robots(tab):
 # ---------------------------------------------------------------------------- switching kinds
 def test_switching_between_chapter_3_and_fleet_scenes_in_one_tab(tab, server):
     tab.panels.preset.value = "rastrigin"
-    assert isinstance(tab.session, Session) and isinstance(tab.panels, Panels)
+    assert tab.session.kind is swarm.KIND and isinstance(tab.panels, Panels)
     assert isinstance(tab.arena, ArenaView)
     assert server.sessions[HAND_TAB] is tab.session
     tab.tick(1.0)
@@ -363,7 +367,7 @@ def test_switching_between_chapter_3_and_fleet_scenes_in_one_tab(tab, server):
     assert tab.session.sim.policy.omega == pytest.approx(0.61)  # Chapter 3 panels work again
     text = presets_io.to_toml(presets_io.load("forest-dvc")).encode()
     assert tab.panels.upload_preset("forest.toml", text)
-    assert isinstance(tab.session, FleetSession) and tab.session.sim.world.name == "forest"
+    assert tab.session.kind is fleet_kind.KIND and tab.session.sim.world.name == "forest"
     tab.tick(2.0)
     assert "obstacles" in tab.arena.nodes and "landscape" not in tab.arena.nodes
     tab.panels.preset.value = "default"
@@ -372,13 +376,13 @@ def test_switching_between_chapter_3_and_fleet_scenes_in_one_tab(tab, server):
     s.step(3)
     tab.tick(4.0)
     drawn = np.asarray(tab.arena.nodes["robots"].points)
-    assert drawn.shape[0] == s.sim.robots and isinstance(s, Session)
+    assert drawn.shape[0] == s.sim.robots and s.kind is swarm.KIND
 
 
 def test_a_server_can_start_on_a_fleet_preset_and_sessions_accept_only_their_kind():
     with pytest.raises(Exception, match="world"):
-        Session(presets_io.load("course-dvc"))
+        Session(presets_io.load("course-dvc"), swarm.KIND)
     with pytest.raises(Exception, match="world"):
-        FleetSession(presets_io.load("default"))
+        Session(presets_io.load("default"), fleet_kind.KIND)
     assert set(CONTROLLERS.values()) >= {("rpso", "raw"), ("adapted-rpso", "raw"), ("adapted-rpso", "dvc"),
                                          ("robot-centred", "raw"), ("nonomni", "dvc")}

@@ -14,13 +14,11 @@ import pytest
 
 from shoal.app import replay
 from shoal.app.fleet_scene import FleetView
-from shoal.app.fleet_session import FleetSession
+from shoal.app.kinds import swarm
+from shoal.app.kinds.registry import session_for
 from shoal.app.panels import Panels
 from shoal.app.scene import ArenaView
-from shoal.app.session import Session
-from shoal.app.sonar_session import SonarSession
-from shoal.app.tab import session_for
-from shoal.app.timeline import verify_replay
+from shoal.app.session.timeline import verify_replay
 from shoal.engine.fleet import Fleet
 from shoal.engine.sim import Simulation
 from shoal.engine.slo_fleet import SLOFleet
@@ -28,7 +26,6 @@ from shoal.engine.slo_sonar import SLOAcousticSwarm
 from shoal.engine.slo_source import SLOSimulation
 from shoal.engine.sonar import AcousticSwarm
 from shoal.presets.io import validate
-
 
 APP_PRESET = "course-dvc"  # the shared ``server`` fixture (conftest.py) shows this scene
 
@@ -46,7 +43,7 @@ def _shown(tab, key: str) -> bool:
 
 def test_fleet_switch_keeps_the_fleet_view_and_changes_the_engine(tab):
     s, p = tab.session, tab.panels
-    assert isinstance(s, FleetSession) and type(s.sim) is Fleet and s.scenario.slo is None
+    assert s.kind.name == "fleet" and type(s.sim) is Fleet and s.scenario.slo is None
     assert p.positions_gui.positions.value == "oracle (true)" and not p.positions_gui.errors.visible
     x0 = s.sim.state.x.copy()
     p.positions_gui.positions.value = "SLO (estimated)"
@@ -89,7 +86,7 @@ def test_fleet_compare_runs_b_on_slo_positions(tab):
 def test_sonar_switch_keeps_the_sonar_view(tab):
     tab.panels.preset.value = "sonar-xb-pso-slo"
     s, p = tab.session, tab.panels  # another kind of scene: new panels
-    assert isinstance(s, SonarSession) and type(s.sim) is SLOAcousticSwarm
+    assert s.kind.name == "sonar" and type(s.sim) is SLOAcousticSwarm
     assert p.positions_gui.positions.value == "SLO (estimated)"
     s.step(3)
     tab.tick(1.0)
@@ -115,7 +112,7 @@ def _omega(sim) -> float:
 def test_chapter3_controller_changes_reach_the_running_slo_simulation(tab):
     tab.panels.preset.value = "slo-adapted"
     s, p = tab.session, tab.panels
-    assert isinstance(s, Session) and isinstance(p, Panels) and isinstance(tab.arena, ArenaView)
+    assert s.kind.name == "swarm" and isinstance(p, Panels) and isinstance(tab.arena, ArenaView)
     assert type(s.sim) is SLOSimulation and p.positions_gui.positions.value == "SLO (estimated)"
     s.step(5)
     sim, source = s.sim, s.sim.slo_source
@@ -123,7 +120,7 @@ def test_chapter3_controller_changes_reach_the_running_slo_simulation(tab):
     assert _omega(sim) == pytest.approx(0.5)  # U = 6, A+ = 30, Δt = 0.1: β = 0.5
     p.sliders["controller.U"].value = 4.0  # physical mode: β = A+Δt/U = 0.75, ω = 0.25
     assert s.sim is sim and sim.slo_source is source and sim.state.k == 5
-    assert _omega(sim) == pytest.approx(0.25) and s.coefficients()[0] == pytest.approx(0.25)
+    assert _omega(sim) == pytest.approx(0.25) and swarm.driver(s).coefficients()[0] == pytest.approx(0.25)
     np.testing.assert_array_equal(source.beliefs.est, est)  # the beliefs are kept
     p.mode.value = "raw"
     p.sliders["controller.omega"].value = 0.3

@@ -18,13 +18,16 @@ import pytest
 from app_helpers import HAND_TAB
 
 from shoal.app import plots
-from shoal.app.panels import field_bounds, slider_range, SPECS
+from shoal.app.kinds import swarm
+from shoal.app.kinds.registry import session_for
+from shoal.app.panels import SPECS, field_bounds, slider_range
 from shoal.app.scene import VIEW_HALF, landscape_rgb
 from shoal.app.server import PortInUseError, serve, start_server
-from shoal.app.session import MAX_UPLOAD_BYTES, Session, TRAJECTORY_COLUMNS
+from shoal.app.session.upload import MAX_UPLOAD_BYTES
 from shoal.engine import stability
 from shoal.engine.coeffs import Constant, Physical
 from shoal.engine.objectives import Objective
+from shoal.engine.recorder import TRAJECTORY_COLUMNS
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 
@@ -49,11 +52,11 @@ def test_omega_slider_reaches_the_running_policy_without_restart(tab):
     tab.panels.sliders["controller.omega"].value = 0.83
     assert isinstance(s.sim.policy, Constant)
     assert s.sim.policy.omega == pytest.approx(0.83)
-    assert s.coefficients()[0] == pytest.approx(0.83)
+    assert swarm.driver(s).coefficients()[0] == pytest.approx(0.83)
     assert s.scenario.controller.omega == pytest.approx(0.83)  # scenario kept in sync (export, download)
     assert s.sim.state.k == 7 and np.array_equal(s.sim.state.x, x_before)  # not restarted
     s.step(1)  # and the next step really uses it
-    assert s.metrics[-1][3] == pytest.approx(0.83)
+    assert s.history.metrics[-1][3] == pytest.approx(0.83)
 
 
 def test_c1_c2_dt_and_robots_sliders_apply_at_once(tab):
@@ -80,7 +83,7 @@ def test_physical_mode_derives_omega_c_beta_from_U_A_dt(tab):
     p.sliders["controller.A_plus"].value = 20.0
     assert isinstance(s.sim.policy, Physical)
     beta = 20.0 * 0.1 / 5.0
-    omega, c_hat = s.coefficients()
+    omega, c_hat = swarm.driver(s).coefficients()
     assert omega == pytest.approx(1 - beta)  # [3.35]
     assert c_hat == pytest.approx(20.0 * 0.1 / np.sqrt(2))  # [3.32]
     tab.tick(10.0)
@@ -95,11 +98,11 @@ def test_law_dropdown_swaps_the_law(tab):
 
 def test_mode_switch_keeps_the_controllers_behaviour(tab):
     s = tab.session
-    before = s.coefficients()
+    before = swarm.driver(s).coefficients()
     tab.panels.mode.value = "raw"
-    assert s.coefficients() == pytest.approx(before, rel=1e-5)
+    assert swarm.driver(s).coefficients() == pytest.approx(before, rel=1e-5)
     tab.panels.mode.value = "physical"
-    assert s.coefficients() == pytest.approx(before, rel=1e-5)
+    assert swarm.driver(s).coefficients() == pytest.approx(before, rel=1e-5)
     assert tab.panels.physical_folder.visible and not tab.panels.raw_folder.visible
 
 
@@ -239,7 +242,7 @@ def test_seed_input_restarts_with_that_seed(tab):
     s.step(4)
     tab.panels.seed.value = 77
     assert s.sim.seed == 77 and s.scenario.sim.seed == 77 and s.sim.state.k == 0
-    other = Session(presets_io.load("default", ["sim.seed=77"]))
+    other = session_for(presets_io.load("default", ["sim.seed=77"]))
     assert np.array_equal(other.sim.state.x, s.sim.state.x)
 
 
@@ -274,8 +277,8 @@ def test_export_json_has_preset_seed_version_and_trajectories(tab):
 
 
 def test_history_is_a_bounded_ring_buffer():
-    s = Session(presets_io.load("default"))
-    s.MAX_STEPS = 50
+    s = session_for(presets_io.load("default"))
+    s.history.max_steps = 50
     s.step(120)
     assert len(s.frames) == 50
     rows = s.trajectory_rows()
@@ -283,7 +286,7 @@ def test_history_is_a_bounded_ring_buffer():
 
 
 def test_trails_cover_the_last_trail_seconds_and_end_at_the_robots():
-    s = Session(presets_io.load("default", ["view.trail_seconds=2.0"]))
+    s = session_for(presets_io.load("default", ["view.trail_seconds=2.0"]))
     s.step(100)  # 10 s at Δt = 0.1
     snap = s.snapshot(max_trails=5, max_trail_points=8)
     assert snap.trails.shape[0] == 5 and 2 <= snap.trails.shape[1] <= 8
@@ -294,7 +297,7 @@ def test_trails_cover_the_last_trail_seconds_and_end_at_the_robots():
 
 
 def test_time_axis_stays_monotonic_when_dt_changes():
-    s = Session(presets_io.load("default"))
+    s = session_for(presets_io.load("default"))
     s.step(10)
     s.apply({"controller.dt": 0.05})
     s.step(10)
@@ -372,7 +375,7 @@ def test_a_diverging_swarm_keeps_the_home_view_and_is_reported(tab):
     s = tab.session
     s.step(250)
     tab.tick(70.0)
-    assert s.outside_arena() > 0
+    assert swarm.driver(s).outside_arena() > 0
     assert np.all(tab.arena.offset == 0)  # too spread to follow: the arena stays in view
     assert "outside the arena" in tab.panels.status.content
 

@@ -14,16 +14,16 @@ import json
 import numpy as np
 import pytest
 
+from shoal.app.kinds import mai
 from shoal.app.panels import Panels
-from shoal.app.session import Session, TRAJECTORY_COLUMNS
+from shoal.app.session.session import Session
 from shoal.app.slo_panels import SLOPanels
 from shoal.app.slo_scene import SLOView
-from shoal.app.slo_session import SLOSession
+from shoal.engine.recorder import TRAJECTORY_COLUMNS
 from shoal.engine.slo import SLOSwarm
 from shoal.engine.slo_source import SLOSimulation
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
-
 
 APP_PRESET = "slo-walk"  # the shared ``server`` fixture (conftest.py) shows this scene
 
@@ -41,7 +41,7 @@ def _drawn(tab, key: str) -> np.ndarray:
 
 def test_slo_walk_builds_an_slo_swarm_and_draws_the_selected_robots_estimates(tab):
     s = tab.session
-    assert isinstance(s, SLOSession) and isinstance(s.sim, SLOSwarm)
+    assert s.kind.name == "mai" and isinstance(s.sim, SLOSwarm)
     assert isinstance(tab.panels, SLOPanels) and isinstance(tab.arena, SLOView)
     s.step(6)
     tab.panels.robot.value = 3
@@ -60,7 +60,7 @@ def test_slo_walk_builds_an_slo_swarm_and_draws_the_selected_robots_estimates(ta
     adj = st.adjacency[0] | st.adjacency[0].T
     assert len(edges) == np.triu(adj, 1).sum()
     # the triangle inspector: candidates of the pair (3, first neighbour), anchored at robot 3
-    pair = s.snapshot().pair
+    pair = s.snapshot().extras["pair"]
     assert pair is not None and pair.i == 3 and adj[3, pair.j]
     c = st.candidates
     np.testing.assert_allclose(pair.candidates[2], x[3] + c.points[0, 3, pair.j, 2])  # x3, dead reckoning
@@ -107,12 +107,12 @@ def test_slo_adapted_opens_in_the_chapter3_scene_and_the_slo_session_keeps_mais_
     """The Chapter 3 swarm on SLO positions has its own scene (its Positions folder, see
     test_app_positions.py); the SLO session runs Mai's swarm only and says why."""
     tab.panels.preset.value = "slo-adapted"
-    assert isinstance(tab.session, Session) and isinstance(tab.panels, Panels)
+    assert tab.session.kind.name == "swarm" and isinstance(tab.panels, Panels)
     assert type(tab.session.sim) is SLOSimulation
     with pytest.raises(PresetError, match="slo.swarm"):
-        SLOSession(presets_io.load("slo-adapted"))
+        Session(presets_io.load("slo-adapted"), mai.KIND)
     tab.panels.preset.value = "slo-walk"
-    assert isinstance(tab.session, SLOSession) and isinstance(tab.session.sim, SLOSwarm)
+    assert tab.session.kind.name == "mai" and isinstance(tab.session.sim, SLOSwarm)
     assert not hasattr(tab.panels, "positions")  # no oracle switch for Mai's swarm: it always localises
 
 
@@ -139,10 +139,10 @@ def test_plots_notes_and_export(tab):
 
 def test_switching_kinds_and_uploading_an_slo_preset(tab):
     tab.panels.preset.value = "default"
-    assert isinstance(tab.session, Session)
+    assert tab.session.kind.name == "swarm"
     text = presets_io.to_toml(presets_io.load("slo-pso-sphere")).encode()
     assert tab.panels.upload_preset("slo.toml", text)
-    assert isinstance(tab.session, SLOSession) and tab.session.sim.config.motion == "pso"
+    assert tab.session.kind.name == "mai" and tab.session.sim.config.motion == "pso"
     tab.tick(1.0)
     assert "ghosts" in tab.arena.nodes
     tab.panels.preset.value = "slo-walk"

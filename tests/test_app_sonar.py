@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from shoal.app import sonar_plots
-from shoal.app.fleet_session import FleetSession
+from shoal.app.kinds import sonar
+from shoal.app.kinds.sonar import true_ray_index
 from shoal.app.sonar_panels import SonarPanels
 from shoal.app.sonar_scene import SonarView
-from shoal.app.sonar_session import SonarSession, true_ray_index
 from shoal.engine.sonar import AcousticSwarm
 
 
@@ -39,7 +39,7 @@ def _drawn(tab, now: float):
 
 def test_sonar_preset_builds_an_acoustic_swarm_and_draws_rays_from_the_robots(tab):
     s = tab.session
-    assert isinstance(s, SonarSession) and isinstance(s.sim, AcousticSwarm)
+    assert s.kind.name == "sonar" and isinstance(s.sim, AcousticSwarm)
     assert isinstance(tab.panels, SonarPanels) and isinstance(tab.arena, SonarView)
     s.step(3)
     view = _drawn(tab, 1.0)
@@ -114,9 +114,9 @@ def test_dragging_the_source_moves_it_in_the_engine(tab):
 def test_a_moving_source_continues_from_where_it_was_dropped(tab):
     tab.panels.preset.value = "escort-moving"
     s = tab.session
-    assert isinstance(s, SonarSession) and s.scenario.acoustics.v_n > 0
+    assert s.kind.name == "sonar" and s.scenario.acoustics.v_n > 0
     s.step(2)
-    s.move_source(10.0, 20.0)
+    sonar.driver(s).move_source(10.0, 20.0)
     s.step(1)
     v = s.scenario.acoustics.v_n * s.scenario.acoustics.U * s.scenario.acoustics.dt
     np.testing.assert_allclose(s.sim.state.source[0], [10.0 + v, 20.0], atol=1e-9)
@@ -143,9 +143,9 @@ def test_the_correlation_plot_shows_the_selected_robots_corr(tab):
 def test_switching_kinds_and_export(tab):
     p = tab.panels
     p.preset.value = "course-dvc"
-    assert isinstance(tab.session, FleetSession)
+    assert tab.session.kind.name == "fleet"
     tab.panels.preset.value = "sonar-gt-pso"
-    assert isinstance(tab.session, SonarSession) and tab.session.sim.params.algorithm == "gt-pso"
+    assert tab.session.kind.name == "sonar" and tab.session.sim.params.algorithm == "gt-pso"
     assert "Chapters 6–8" in tab.panels.notes.content
     tab.session.step(3)
     csv_text = tab.session.export_csv().decode()
@@ -160,7 +160,7 @@ def test_upload_of_an_acoustic_preset(tab):
     text = (b'name = "mine"\n[sim]\nrobots = 6\nsteps = 100\nseed = 3\n'
             b'[acoustics]\nalgorithm = "x-pso"\nsnr0_db = 4.0\n')
     assert tab.panels.upload_preset("mine.toml", text)
-    assert isinstance(tab.session, SonarSession) and tab.session.sim.robots == 6
+    assert tab.session.kind.name == "sonar" and tab.session.sim.robots == 6
     assert tab.session.sim.params.algorithm == "x-pso"
 
 

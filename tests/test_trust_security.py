@@ -18,7 +18,7 @@ import time
 import pytest
 from app_helpers import hand_tab
 
-from shoal.app.base_session import MAX_UPLOAD_BYTES
+from shoal.app.session.upload import MAX_UPLOAD_BYTES
 from shoal.app.cli import build_parser
 from shoal.app.server import is_loopback, start_server
 from shoal.presets import io as presets_io
@@ -194,7 +194,7 @@ def test_shoal_run_puts_its_output_inside_out_whatever_the_preset_name(tmp_path)
 
 
 def test_the_size_limit_is_checked_before_parsing():
-    from shoal.app.base_session import parse_upload
+    from shoal.app.session.upload import parse_upload
 
     with pytest.raises(presets_io.PresetError, match="KiB limit"):
         parse_upload("x.json", b"{" * (MAX_UPLOAD_BYTES + 1))  # would be a nesting bomb if it were parsed

@@ -31,7 +31,6 @@ from browser_helpers import (  # noqa: E402
 from shoal.app import replay  # noqa: E402
 from shoal.app.scene import ROBOT_SIZE  # noqa: E402
 from shoal.app.server import start_server  # noqa: E402
-from shoal.app.session import Session  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -158,7 +157,7 @@ def test_a_replay_exported_here_plays_back_in_another_server(server, browser, pa
                 {"name": "run-replay.npz", "mimeType": "application/octet-stream", "buffer": data})
             wait_until(lambda: getattr(other.tabs[cid2].session, "replaying", None) is not None, what="the replay")
             tab2 = other.tabs[cid2]
-            assert isinstance(tab2.session, Session) and tab2.session.scenario.name == "default"
+            assert tab2.session.kind.name == "swarm" and tab2.session.scenario.name == "default"
             page2.wait_for_selector("text=Replay of default, seed 1", timeout=30000)
             page2.wait_for_selector(".mantine-Notification-root:has-text('verified')", timeout=30000)
             # scrub to step 12: the arena shows the recorded robots of that step

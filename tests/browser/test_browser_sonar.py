@@ -24,7 +24,6 @@ sync_api = pytest.importorskip("playwright.sync_api")
 
 from browser_helpers import choose, dismiss_toasts, root_for, to_pixel, wait_until  # noqa: E402
 
-from shoal.app.sonar_session import SonarSession  # noqa: E402
 
 
 def _plot_matches(tab, robot: int) -> bool:
@@ -40,7 +39,7 @@ def test_switching_to_sonar_draws_rays_and_the_correlation_follows_the_robot(ser
     server.tabs[cid].session.pause()
     dismiss_toasts(page)
     choose(page, "preset", "sonar-xb-pso")
-    wait_until(lambda: isinstance(server.tabs[cid].session, SonarSession), what="an acoustic session")
+    wait_until(lambda: server.tabs[cid].session.kind.name == "sonar", what="an acoustic session")
     page.wait_for_selector("label:has-text('algorithm')", timeout=20000)
     tab = server.tabs[cid]
     page.get_by_role("button", name="Step", exact=True).click()

@@ -1,13 +1,12 @@
-"""Oracle or SLO-estimated positions for a Chapter 3 swarm, a fleet or an acoustic scene
-(spec §15.2 item 4): the scenario side of the "Positions" folder (:mod:`.positions_panel`),
-no GUI here.
+"""Oracle or SLO-estimated positions for a Chapter 3 swarm, a fleet or an acoustic scene: the
+scenario side of the *Positions* folder, no GUI here.
 
 The switch goes through the model like any control: SLO positions are ``[slo] swarm =
 "host"``, ``positions = "slo"`` (a scene without ``[slo]`` gets one: Low errors, CSS, every
 robot localising every other); oracle is ``positions = "oracle"``, the very run of the scene
 without SLO. Switching rebuilds the swarm with the same seed; the error set and the other
 localisation settings retune the running swarm (beliefs kept). The view draws the selected
-robot's ghosts (:mod:`.ghosts`); the folder reads out how wrong they are.
+robot's ghosts (:mod:`.beliefs`); the folder reads out how wrong they are.
 """
 
 from __future__ import annotations
@@ -17,7 +16,7 @@ from typing import Any
 from shoal.presets.build import slo_live_changes
 from shoal.presets.models import Scenario
 
-from .ghosts import Ghosts
+from .beliefs import Ghosts
 
 POSITIONS = {"SLO (estimated)": "slo", "oracle (true)": "oracle"}  # the switch's labels
 NEW_SLO = {"slo.errors": "low", "slo.selection": "css", "slo.neighbourhood": "full"}  # a scene without [slo]

@@ -1,0 +1,73 @@
+"""What a scene kind plugs into the app: :class:`AppKind` (the registry entry) and
+:class:`BaseDriver` (the defaults of a kind's :class:`~shoal.app.session.driver.Driver`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from shoal.presets.models import Scenario
+
+from ..session.driver import Driver
+from ..session.history import Frame, frame_of
+from ..session.session import Session
+
+
+@dataclass(frozen=True)
+class AppKind:
+    """One kind of scene: which scenarios it shows and the parts it brings."""
+
+    name: str
+    title: str  # in words, for messages
+    priority: int  # kinds are asked from the highest priority down (see ``registry.kind_for``)
+    accepts: Callable[[Scenario], bool]
+    refuse: Callable[[Scenario], None]  # raises PresetError saying why a scenario is not this kind's
+    make_driver: Callable[[Session], Driver]
+    notes: str  # teaching notes ``static/notes/<notes>.md``
+
+    def check(self, scenario: Scenario) -> Scenario:
+        """``scenario`` if this kind shows it, else :class:`PresetError` saying why not."""
+        self.refuse(scenario)
+        return scenario
+
+    def driver(self, session: Session) -> Driver:
+        return self.make_driver(session)
+
+    def session(self, scenario: Scenario) -> Session:
+        """A new session of this kind (raises :class:`PresetError` if it cannot show ``scenario``)."""
+        return Session(scenario, self)
+
+
+class BaseDriver:
+    """Defaults of a :class:`Driver`; a kind's driver fills in the rest."""
+
+    metrics: tuple[str, ...] = ()
+    scene_sections: tuple[str, ...] = ()
+
+    def __init__(self, session: Session) -> None:
+        self.session = session
+
+    @property
+    def sim(self) -> Any:
+        return self.session.sim
+
+    def loaded(self) -> None:
+        pass
+
+    def cleared(self) -> None:
+        pass
+
+    def before_step(self) -> None:
+        pass
+
+    def dt(self) -> float:
+        return float(self.sim.dt)
+
+    def frame(self, t: float) -> Frame:
+        return frame_of(self.sim.state, t)
+
+    def recorded(self, frame: Frame) -> dict[str, Any]:
+        return {}
+
+    def export_extra(self) -> dict[str, Any]:
+        return {}
