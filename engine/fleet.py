@@ -24,6 +24,10 @@ from .world import RunSpace, WorldSpec
 
 FleetLaw = Literal["rpso", "adapted-rpso", "robot-centred", "nonomni"]
 ACTIVE, COLLIDED = 0, 1
+# A stall (ours, a metric only): an operational robot slower than STALL_SPEED m/s for at
+# least STALL_STEPS ticks in a row, e.g. squeezed between bodies it may not approach.
+STALL_SPEED = 0.01
+STALL_STEPS = 10
 
 
 @dataclass
@@ -51,6 +55,7 @@ class FleetParams:
     update: Literal["sequential", "simultaneous"] = "sequential"
     guard: bool = False  # DVC inertia guard (ours): see dvc.approach_guard
     spawn_gap: float = 0.3  # free space between robots at the start [m]
+    contact_tolerance: float = 1e-3  # a collision is an overlap deeper than this [m] (ours)
 
     @property
     def body_frame(self) -> bool:
@@ -69,6 +74,7 @@ class FleetState:
     f_yg: np.ndarray  # (R,)
     f: np.ndarray  # (R, N) cost at x
     status: np.ndarray  # (R, N) int8: 0 active, 1 collided
+    slow: np.ndarray  # (R, N) ticks in a row an active robot has moved slower than STALL_SPEED
     k: int = 0
     reading: SectorReading | None = None
     force: np.ndarray | None = None  # (R, N, 2) F_t [4.3]
@@ -82,6 +88,7 @@ class FleetInfo:
     t: float
     com_fitness: np.ndarray  # (R,) mean x_1 of all robots [4.17]
     collided: np.ndarray  # (R,)
+    stalled: np.ndarray  # (R,) operational robots stalled (slower than STALL_SPEED for STALL_STEPS ticks)
     operational: np.ndarray  # (R,)
     layers_passed: np.ndarray  # (R,) layers with x below the CoM
     best_fitness: np.ndarray  # (R,) distance of the global best to the source
@@ -145,7 +152,7 @@ class Fleet:
         x = np.stack([spawn_positions(g, self.world.start_box, self._robots, p.robot_radius, p.spawn_gap) for g in self.rngs])
         body = "dynamic" if p.motion == "physics" else "kinematic"
         self.spaces = [RunSpace(self.world, x[r], p.robot_radius, body_type=body) for r in range(self.runs)]
-        self.motion = Physics(p.drive, p.v_max, p.a_max) if p.motion == "physics" else Kinematic(p.drive, p.v_max)
+        self.motion = self._motion()
         heading = np.zeros(x.shape[:2])
         f = self.cost(x)
         R, N = f.shape
@@ -153,7 +160,14 @@ class Fleet:
         self.state = FleetState(
             x=x, heading=heading, u=np.zeros_like(x), cmd=np.zeros_like(x), y=x.copy(), f_y=f.copy(),
             yg=x[np.arange(R), best], f_yg=f[np.arange(R), best], f=f, status=np.zeros((R, N), np.int8),
+            slow=np.zeros((R, N), np.int64),
         )
+
+    def _motion(self) -> Kinematic | Physics:
+        p = self.params
+        if p.motion == "physics":
+            return Physics(p.drive, p.v_max, p.a_max, tolerance=p.contact_tolerance)
+        return Kinematic(p.drive, p.v_max, tolerance=p.contact_tolerance)
 
     def cost(self, x: np.ndarray) -> np.ndarray:
         """Distance to the source, the cost of Algorithms 1 and 2."""
@@ -166,7 +180,7 @@ class Fleet:
         body = "dynamic" if p.motion == "physics" else "kinematic"
         self.spaces = [RunSpace(world, s.x[r], p.robot_radius, body_type=body) for r in range(self.runs)]
         if p.motion == "physics":
-            self.motion = Physics(p.drive, p.v_max, p.a_max)
+            self.motion = self._motion()
             for r, sp in enumerate(self.spaces):
                 for i, b in enumerate(sp.robot_bodies):
                     b.angle = float(s.heading[r, i])
@@ -241,12 +255,12 @@ class Fleet:
         return approach_guard(cmd, self.state.x, reading.point, gap, alpha=p.alpha, dt=p.dt)
 
     def _touching(self, moved: np.ndarray) -> np.ndarray:
-        """Robots in contact after a move: the movers and whatever they touch (only a mover
-        can have made a new contact)."""
+        """Robots overlapping a body by more than the contact tolerance after a move: the
+        movers and whatever they overlap (only a mover can have made a new contact)."""
         out = np.zeros_like(moved)
         for r, sp in enumerate(self.spaces):
             for i in np.flatnonzero(moved[r]):
-                bodies = sp.contacts_of(i, -1e-6)
+                bodies = sp.contacts_of(i, -self.params.contact_tolerance)
                 if bodies:
                     out[r, i] = True
                     out[r, [j for j in bodies if j is not None]] = True
@@ -316,6 +330,8 @@ class Fleet:
             gap_all = np.where(m[..., None], reading.gap, gap_all)
         s.cmd[s.status != ACTIVE] = 0.0
         s.u[s.status != ACTIVE] = 0.0
+        slow = (s.status == ACTIVE) & (np.linalg.norm(s.u, axis=-1) < STALL_SPEED)
+        s.slow = np.where(slow, s.slow + 1, 0)
         if reading is not None:
             reading.gap = gap_all
         s.reading, s.force, s.omega, s.c = reading, force_all, omega_all, c_all
@@ -326,9 +342,10 @@ class Fleet:
         s = self.state
         com = s.x[..., 0].mean(axis=1)  # [4.17]
         collided = (s.status != ACTIVE).sum(axis=1)
+        stalled = (s.slow >= STALL_STEPS).sum(axis=1)  # only active robots count up
         layers = np.asarray(self.world.layer_x)
         passed = (layers[None, :] < com[:, None]).sum(axis=1) if layers.size else np.zeros(self.runs, int)
         return FleetInfo(
-            t=self.t, com_fitness=com, collided=collided, operational=self.robots - collided,
+            t=self.t, com_fitness=com, collided=collided, stalled=stalled, operational=self.robots - collided,
             layers_passed=passed, best_fitness=s.f_yg.copy(), max_speed=np.linalg.norm(s.u, axis=-1).max(axis=1),
         )

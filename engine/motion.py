@@ -37,19 +37,21 @@ class Moved:
     x: np.ndarray  # (R, N, 2)
     heading: np.ndarray  # (R, N)
     velocity: np.ndarray  # (R, N, 2) realised world-frame velocity
-    hit: np.ndarray  # (R, N) bool, touched something during this tick
+    hit: np.ndarray  # (R, N) bool, collided this tick (overlap beyond the contact tolerance)
 
 
-def first_contact(sp: RunSpace, start: tuple[float, float], end: tuple[float, float], i: int) -> float | None:
-    """Fraction of the way from ``start`` to ``end`` at which robot ``i``'s disc first
-    touches another body of ``sp`` (None: a free path).
+def first_contact(sp: RunSpace, start: tuple[float, float], end: tuple[float, float], i: int,
+                  inset: float = 0.0) -> float | None:
+    """Fraction of the way from ``start`` to ``end`` at which robot ``i``'s disc, shrunk by
+    ``inset`` metres, first touches another body of ``sp`` (None: a free path). With an
+    inset it answers whether the full disc would overlap a body by more than ``inset``.
 
     ``Space.segment_query_first`` with a radius is not used: its broad phase tests the bare
     centre line against the bounding boxes, so it misses a body that the disc grazes while
     the line passes beside its box. Candidates come from a bounding-box query of the whole
     swept disc instead, and each is tested exactly with ``Shape.segment_query``.
     """
-    rad = sp.robot_radius
+    rad = sp.robot_radius - inset
     bb = pymunk.BB(min(start[0], end[0]) - rad, min(start[1], end[1]) - rad,
                    max(start[0], end[0]) + rad, max(start[1], end[1]) + rad)
     best = None
@@ -64,13 +66,15 @@ class Kinematic:
     """Exact position update ([3.10]/[4.6], or the arc [5.5]–[5.10] for differential drive).
 
     Contacts: each robot's path is swept as a disc against the world and the other
-    robots (:func:`first_contact`) and stops at the first contact. Robots are moved one
-    after another in the space, so a later sweep sees an earlier robot's new position;
-    the space must hold every robot at ``x`` when ``move`` is called.
+    robots (:func:`first_contact`) and stops at the first contact. The contact is a
+    collision (``hit``) only when the path would have carried the disc more than
+    ``tolerance`` metres into the body; a shallower touch just stops the robot. Robots are
+    moved one after another in the space, so a later sweep sees an earlier robot's new
+    position; the space must hold every robot at ``x`` when ``move`` is called.
     """
 
-    def __init__(self, drive: Drive = "holonomic", v_max: float = 3.0) -> None:
-        self.drive, self.v_max = drive, v_max
+    def __init__(self, drive: Drive = "holonomic", v_max: float = 3.0, tolerance: float = 0.0) -> None:
+        self.drive, self.v_max, self.tolerance = drive, v_max, tolerance
 
     def move(
         self, spaces: Sequence[RunSpace], x: np.ndarray, heading: np.ndarray, command: np.ndarray,
@@ -92,7 +96,7 @@ class Kinematic:
                     alpha = first_contact(sp, start, end, i)
                     if alpha is not None:  # stop where the swept disc first touches
                         new_x[r, i] = x[r, i] + max(alpha - 1e-6, 0.0) * (target[r, i] - x[r, i])
-                        hit[r, i] = True
+                        hit[r, i] = self.tolerance <= 0 or first_contact(sp, start, end, i, self.tolerance) is not None
                     sp.move_robot(i, new_x[r, i])
         velocity = (new_x - x) / dt
         return Moved(new_x, wrap_angle(new_heading), velocity, hit)
@@ -104,12 +108,15 @@ class Physics:
     Each control tick is split into ``substeps``; per substep the body velocity moves
     toward the drive's realisable velocity by at most a_max·h, differential-drive bodies
     also turn toward the commanded rate and lose their sideways velocity (no skid).
-    Contacts come from pymunk's collision callback; a collided body becomes kinematic with
-    zero velocity, i.e. it stays where it stopped.
+    Contacts come from pymunk's collision callback: a contact whose overlap exceeds
+    ``tolerance`` metres in some substep is a collision, and a collided body becomes
+    kinematic with zero velocity, i.e. it stays where it stopped.
     """
 
-    def __init__(self, drive: Drive = "holonomic", v_max: float = 3.0, a_max: float = 10.0, substeps: int = 10) -> None:
+    def __init__(self, drive: Drive = "holonomic", v_max: float = 3.0, a_max: float = 10.0, substeps: int = 10,
+                 tolerance: float = 0.0) -> None:
         self.drive, self.v_max, self.a_max, self.substeps = drive, v_max, a_max, substeps
+        self.tolerance = tolerance
         self._hooked: set[int] = set()
 
     def _hook(self, sp: RunSpace) -> None:
@@ -118,14 +125,17 @@ class Physics:
         hits: set[int] = set()
         sp.contacts = hits  # type: ignore[attr-defined]
 
-        def begin(arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
+        def pre_solve(arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
+            depth = -min((p.distance for p in arbiter.contact_point_set.points), default=0.0)
+            if depth <= self.tolerance:  # a touch within the tolerance is not a collision
+                return
             for shape in arbiter.shapes:
                 i = sp.robot_of(shape)
                 if i is not None:
                     hits.add(i)
 
-        sp.space.on_collision(ROBOT, OBSTACLE, begin=begin)
-        sp.space.on_collision(ROBOT, ROBOT, begin=begin)
+        sp.space.on_collision(ROBOT, OBSTACLE, pre_solve=pre_solve)
+        sp.space.on_collision(ROBOT, ROBOT, pre_solve=pre_solve)
         self._hooked.add(id(sp))
 
     def move(

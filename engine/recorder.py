@@ -41,8 +41,8 @@ def metric_table(state: Any, info: Any, t: float) -> dict[str, np.ndarray]:
     """Per-run metrics at the state's step, one array (R,) per column.
 
     Common: best fitness and speeds. A Chapter 3 swarm adds the largest component and the
-    coefficients in force; a fleet (``FleetInfo``) adds CoM fitness [4.17], collided and
-    operational counts and layers passed; an acoustic swarm (``SonarInfo``) adds the CoM,
+    coefficients in force; a fleet (``FleetInfo``) adds CoM fitness [4.17], collided
+    (overlap beyond the contact tolerance), stalled and operational counts and layers passed; an acoustic swarm (``SonarInfo``) adds the CoM,
     the source, |CoM − x_src|, convergence (flag and first step, −1 if none), the fraction
     of robots inside the escort ring, the mean robot–source distance and contacts. An SLO
     swarm (``SLOInfo``) adds every column of :meth:`SLOInfo.columns` (localisation errors,
@@ -64,8 +64,8 @@ def metric_table(state: Any, info: Any, t: float) -> dict[str, np.ndarray]:
                     steps_to_converge=info.steps_to_converge, frac_inside_ring=info.frac_inside_ring,
                     mean_dist_to_source=info.mean_dist_to_source, contacts=info.contacts)
     elif hasattr(info, "com_fitness"):
-        cols.update(com_fitness=info.com_fitness, collided=info.collided, operational=info.operational,
-                    layers_passed=info.layers_passed)
+        cols.update(com_fitness=info.com_fitness, collided=info.collided, stalled=info.stalled,
+                    operational=info.operational, layers_passed=info.layers_passed)
     else:
         cols.update(
             max_component=np.abs(state.u).max(axis=(1, 2)),
@@ -85,7 +85,7 @@ def write_trajectory(fh: IO[str], rows: np.ndarray) -> None:
     np.savetxt(fh, rows, fmt=fmt, delimiter=",")
 
 
-_INT_COLUMNS = {"run", "step", "collided", "operational", "layers_passed", "converged", "steps_to_converge", "contacts"}
+_INT_COLUMNS = {"run", "step", "collided", "stalled", "operational", "layers_passed", "converged", "steps_to_converge", "contacts"}
 
 
 def write_metrics(fh: IO[str], table: dict[str, np.ndarray], header: bool = False) -> None:

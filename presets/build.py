@@ -88,6 +88,7 @@ def fleet_params_for(s: Scenario) -> FleetParams:
         gamma=c.gamma, c1_share=c.c1_share, sensing_range=s.sensing.range, robot_radius=r.radius, v_max=r.v_max,
         a_max=r.a_max, motion=r.motion, drive=r.drive, r_min=c.r_min, s_min=c.s_min,
         rotational_energy=c.rotational_energy, update=c.update, guard=c.guard, spawn_gap=r.spawn_gap,
+        contact_tolerance=r.contact_tolerance,
     )
 
 

@@ -128,6 +128,7 @@ class Robot(_Model):
     motion: Literal["kinematic", "physics"] = "kinematic"
     drive: Literal["holonomic", "mecanum", "differential"] = "holonomic"
     spawn_gap: Annotated[float, Field(ge=0.0, le=10.0, description="free space between robots at the start [m]")] = 0.3
+    contact_tolerance: Annotated[float, Field(ge=0.0, le=0.1, description="a collision is an overlap deeper than this [m]; a shallower touch only stops the robot")] = 1e-3
 
 
 class Sensing(_Model):

@@ -1,5 +1,5 @@
-"""The Chapter 4–5 fleet: seeded determinism, disabled robots, and the DVC guard's one-step
-clearance as a property."""
+"""The Chapter 4–5 fleet: seeded determinism, disabled robots, the DVC guard's one-step
+clearance as a property, and contact accounting (collisions beyond a tolerance, stalls)."""
 
 from __future__ import annotations
 
@@ -7,8 +7,9 @@ import numpy as np
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.fleet import ACTIVE, COLLIDED, Fleet, FleetParams
-from shoal.engine.motion import Kinematic
+from shoal.engine.fleet import ACTIVE, COLLIDED, STALL_STEPS, Fleet, FleetParams
+from shoal.engine.motion import Kinematic, Physics
+from shoal.engine.recorder import metric_table
 from shoal.engine.sensing import sense
 from shoal.engine.world import RunSpace, WorldSpec, box_walls
 from shoal.presets.build import build_fleet
@@ -160,3 +161,49 @@ def test_without_the_guard_dvc_can_reach_the_nearest_body():
         gap = np.hypot(*(f.state.x[:, 0] - (1.6, 0.0)).T) - 1.5
         closed[guard] = int((gap < (1 - ALPHA) * 0.1 - 1e-9).sum())
     assert closed[False] > 0 and closed[True] == 0
+
+
+# ---------------------------------------------------------------------- contact accounting
+def _one_robot_towards_a_circle(step: float, gap: float, motion: str = "kinematic") -> bool:
+    """A robot ``gap`` m from a circle's surface moves ``step`` m straight at it; hit?"""
+    world = _world(np.array([[2.0, 0.0, 0.5]]))
+    x = np.array([[1.0 - gap, 0.0]])
+    if motion == "kinematic":
+        sp = RunSpace(world, x, robot_radius=0.5)
+        mover = Kinematic("holonomic", 3.0, tolerance=1e-3)
+    else:
+        sp = RunSpace(world, x, robot_radius=0.5, body_type="dynamic")
+        mover = Physics("holonomic", 3.0, a_max=1e3, tolerance=1e-3)
+    moved = mover.move([sp], x[None], np.zeros((1, 1)), np.array([[[step, 0.0]]]), np.ones((1, 1), bool), 1.0)
+    return bool(moved.hit[0, 0])
+
+
+def test_a_touch_within_the_contact_tolerance_is_not_a_collision():
+    # the guard's geometric approach leaves gaps of ~1e-16 m; a step of a fraction of a
+    # millimetre into the body stops the robot but does not disable it
+    assert not _one_robot_towards_a_circle(step=5e-4, gap=1e-16)
+    assert _one_robot_towards_a_circle(step=5e-3, gap=1e-16)  # 5 mm into the body: a collision
+    assert _one_robot_towards_a_circle(step=0.5, gap=0.2)
+
+
+def test_physics_counts_a_collision_only_beyond_the_contact_tolerance():
+    assert not _one_robot_towards_a_circle(step=2e-3, gap=1.5e-3, motion="physics")  # ≤ 0.5 mm deep
+    assert _one_robot_towards_a_circle(step=0.5, gap=0.2, motion="physics")
+
+
+def test_a_robot_standing_still_counts_as_stalled_after_stall_steps_ticks():
+    # run 0: one robot at its own best with nothing in sensing range; every attractor is
+    # zero, so it does not move. Run 1: its best is the source, 35 m away; it keeps moving
+    world = _world(np.zeros((0, 3)))
+    f = Fleet(world=world, robots=1, runs=2, seed=0, params=FleetParams(law="adapted-rpso", dvc=True))
+    s = f.state
+    s.x[:, 0] = np.asarray(world.source) - (35.0, 0.0)
+    s.y = s.x.copy()
+    s.y[1, 0] = world.source
+    s.f_y = f.cost(s.y)
+    for sp, x in zip(f.spaces, s.x):
+        sp.set_positions(x)
+    stalled = [f.step().stalled.tolist() for _ in range(STALL_STEPS)]
+    assert stalled[-2] == [0, 0] and stalled[-1] == [1, 0]
+    table = metric_table(f.state, f.info(), f.t)
+    assert table["stalled"].tolist() == [1, 0] and table["collided"].tolist() == [0, 0]

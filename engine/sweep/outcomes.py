@@ -20,7 +20,7 @@ from ..recorder import metric_table
 
 # first-passage times: a run that never got there has none (NaN/inf), and a median counts it as +inf
 FIRST_PASSAGE = frozenset({"steps_to_converge", "time_to_converge_s", "quality_met_at"})
-INTEGER = frozenset({"step", "collided", "operational", "layers_passed", "converged", "steps_to_converge", "contacts"})
+INTEGER = frozenset({"step", "collided", "stalled", "operational", "layers_passed", "converged", "steps_to_converge", "contacts"})
 
 
 @dataclass(frozen=True)
