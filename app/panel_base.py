@@ -33,13 +33,19 @@ from .session.session import Session
 from .session.upload import parse_upload
 from .compare_panel import CompareGui
 from .replay_panel import ReplayGui
-from .twin_view import twin_series
 
 Notify = Callable[[str, str, str], None]
 SendFile = Callable[[str, bytes], None]
 Replace = Callable[[Scenario], Any]  # loads a scene (maybe of another kind); returns the session shown
 
 PLAYBACK = ("Play", "Pause", "Step", "Reset")
+TWIN_STROKE = "rgb(20,170,180)"  # swarm B's curve in the plots
+TWIN_DASH = (5.0, 4.0)
+
+
+def twin_series(label: str) -> dict[str, Any]:
+    """uPlot series options of B's curve."""
+    return {"label": f"B: {label}", "stroke": TWIN_STROKE, "width": 2, "dash": TWIN_DASH}
 
 
 @dataclass(frozen=True)

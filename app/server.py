@@ -24,11 +24,11 @@ from shoal.presets.models import Scenario
 
 from .kinds.registry import check_supported, session_for
 from .replay import MAX_REPLAY_BYTES
-from .scene import CAMERA_FOV, CAMERA_HEIGHT, camera_height
 from .session.session import Session
 from .session.upload import MAX_UPLOAD_BYTES
 from .tab import TabApp
 from .upload_guard import guard_uploads
+from .view.camera import CAMERA_FOV, CAMERA_HEIGHT, camera_height
 
 TICK_HZ = 60.0
 PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round

@@ -16,36 +16,23 @@ import contextlib
 import threading
 import time
 from collections import deque
-from dataclasses import dataclass
 from typing import Any, Callable, ContextManager
 
 from shoal.presets.models import Scenario
 
 from .fleet_panels import FleetPanels
-from .fleet_scene import FleetView
 from .kinds.registry import app_kind, kind_for
 from .panel_base import PanelsBase
 from .panels import Panels
-from .scene import ArenaView
 from .session.session import Session
 from .slo_panels import SLOPanels
-from .slo_scene import SLOView
 from .sonar_panels import SonarPanels
-from .sonar_scene import SonarView
 
 CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
 
 
-@dataclass(frozen=True)
-class Parts:
-    """The panel and view classes that show one kind of scene."""
-
-    panels: type[PanelsBase]
-    view: type
-
-
-PARTS = {"swarm": Parts(Panels, ArenaView), "fleet": Parts(FleetPanels, FleetView),
-         "sonar": Parts(SonarPanels, SonarView), "mai": Parts(SLOPanels, SLOView)}
+PANELS: dict[str, type[PanelsBase]] = {"swarm": Panels, "fleet": FleetPanels, "sonar": SonarPanels,
+                                        "mai": SLOPanels}
 
 
 class TabApp:
@@ -77,13 +64,9 @@ class TabApp:
         self._build_kind()
 
     def _build_kind(self) -> None:
-        kind = PARTS[app_kind(self.session).name]
-        self.panels = kind.panels(self.gui, self.session, self.notify, self.send_file, replace=self.replace)
-        self.arena = kind.view(self.scene)
-        if hasattr(self.panels, "drag_obstacle"):
-            self.arena.on_obstacle_drag = self.panels.drag_obstacle  # type: ignore[attr-defined]
-        if hasattr(self.panels, "drag_source"):
-            self.arena.on_source_drag = self.panels.drag_source  # type: ignore[attr-defined]
+        kind = app_kind(self.session)
+        self.panels = PANELS[kind.name](self.gui, self.session, self.notify, self.send_file, replace=self.replace)
+        self.arena = kind.view(self.scene, self.panels)
         if hasattr(self.panels, "handle_click"):
             for modifier in CLICK_MODIFIERS:
                 self._clicks.append(self.scene.on_click(modifier=modifier)(self.scene_click))
@@ -128,11 +111,10 @@ class TabApp:
 
     def scene_click(self, event: Any) -> None:
         """A click in the arena (viser ``SceneClickEvent``): the panels decide what it does."""
-        to_world = getattr(self.arena, "ray_to_world", None)
         handle = getattr(self.panels, "handle_click", None)
-        if to_world is None or handle is None:
+        if handle is None:
             return
-        xy = to_world(event.ray_origin, event.ray_direction)
+        xy = self.arena.ray_to_world(event.ray_origin, event.ray_direction)
         if xy is not None:
             handle(float(xy[0]), float(xy[1]), event.modifier)
 
@@ -181,13 +163,11 @@ class TabApp:
         self._was_playing = s.playing
         if s.scene_revision != self.arena.built_revision:
             with self._atomic():
-                self.arena.rebuild(s.scenario, s.scene_revision)
+                self.arena.rebuild(s.scene_revision)
         if now >= self._next_scene and s.revision != self.arena.drawn_revision:
-            snap = s.shown_snapshot()  # live, or the recorded frame the timeline points at
-            twin = s.twin_view()
+            snap = s.shown_snapshot()  # live, or the recorded frame the timeline points at (and swarm B)
             with self._atomic():  # one wake-up of viser's event loop for the scene and its readouts
                 self.arena.draw(snap)
-                self.arena.draw_twin(twin)
                 self.panels.on_snapshot(snap)
             self._next_scene = now + 1.0 / self.SCENE_HZ
         if plots and now >= self._next_plot:

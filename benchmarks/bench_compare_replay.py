@@ -43,9 +43,9 @@ def main() -> None:
     for name, steps in CASES:
         alone, _ = step_cost(name, steps, compare=False)
         both, s = step_cost(name, steps, compare=True)
-        live = per_call(lambda: (s.shown_snapshot(), s.twin_view()), 20)
+        live = per_call(s.shown_snapshot, 20)
         s.scrub(steps // 2)
-        scrubbed = per_call(lambda: (s.shown_snapshot(), s.twin_view()), 20)
+        scrubbed = per_call(s.shown_snapshot, 20)
         export = per_call(s.export_replay, 3)
         data = s.export_replay()
         load = per_call(lambda: replay.from_bytes(data), 3)

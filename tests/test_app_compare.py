@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from shoal.app import replay
-from shoal.app.fleet_scene import PROBE_NODES
 from shoal.app.kinds import fleet, sonar
+from shoal.app.kinds.fleet import PROBE_NODES
 from shoal.app.kinds.registry import session_for
 from shoal.app.session.timeline import verify_replay
 from shoal.app.session.twin import parse_overrides, twin_scenario
@@ -185,7 +185,7 @@ def test_compare_tab_switches_b_on_and_the_arena_and_plot_show_it(tab):
     tab.tick(1.0)
     node = tab.arena.nodes["twin"]
     assert node.visible
-    np.testing.assert_allclose(np.asarray(node.points)[:, :2], tab.arena.view_points(s.twin.sim.state.x[0])[:, :2],
+    np.testing.assert_allclose(np.asarray(node.points)[:, :2], tab.arena.to_view(s.twin.sim.state.x[0])[:, :2],
                                atol=1e-5)
     assert p.speed_plot.series[-1]["label"] == "B: max |u|"
     assert len(p.speed_plot.data) == len(p.speed_plot.series)
@@ -214,7 +214,7 @@ def test_the_timeline_slider_scrubs_and_the_arena_shows_that_step(tab):
     assert s.cursor == 12 and not s.playing
     tab.tick(2.0)
     robots = np.asarray(tab.arena.nodes["robots"].points)[:, :2]
-    np.testing.assert_allclose(robots, tab.arena.view_points(s.frames[12].x)[:, :2], atol=1e-5)
+    np.testing.assert_allclose(robots, tab.arena.to_view(s.frames[12].x)[:, :2], atol=1e-5)
     assert not tab.arena.nodes["gbest"].visible  # bests are not recorded
     assert tab.panels.speed_plot.data[0][-1] == pytest.approx(s.frames[12].t)
     assert "step 12" in tab.panels.replay_gui.where.content

@@ -18,13 +18,11 @@ import pytest
 from app_helpers import HAND_TAB
 
 from shoal.app.fleet_panels import CONTROLLERS
-from shoal.app.fleet_scene import FleetView
 from shoal.app.kinds import fleet as fleet_kind
 from shoal.app.kinds import swarm
 from shoal.app.kinds.fleet import EditRefused
 from shoal.app.kinds.registry import app_presets
 from shoal.app.panels import Panels
-from shoal.app.scene import ArenaView
 from shoal.app.session.session import Session
 from shoal.engine.fleet import Fleet
 from shoal.engine.recorder import TRAJECTORY_COLUMNS
@@ -76,7 +74,7 @@ def free_spot(session: Session, robot: int, distance: float) -> np.ndarray:
 def test_course_preset_builds_a_fleet_and_draws_its_obstacles(tab):
     s = tab.session
     assert s.kind is fleet_kind.KIND and isinstance(s.sim, Fleet)
-    assert isinstance(tab.panels, type(tab.panels)) and isinstance(tab.arena, FleetView)
+    assert isinstance(tab.panels, type(tab.panels)) and tab.arena.name == "fleet"
     assert "course-dvc" in app_presets() and "default" in app_presets()
     tab.tick(1.0)
     world = s.sim.world
@@ -215,7 +213,7 @@ def test_shift_click_removes_the_nearest_obstacle_and_drag_moves_one(tab):
     # drag obstacle 0 somewhere free: the view reports scene coordinates of the pointer
     dest = np.array([30.0, 0.5]) if s.sim.world.obstacle_distance(30.0, 0.5).min() > 1.0 else np.array([33.0, 9.0])
     event = type("Drag", (), dict(instance_index=0, phase="update", end_position=(*tab.arena.to_scene(dest), 0.0)))
-    tab.arena._dragged(event)
+    tab.arena.layer("obstacles").dragged(event)
     np.testing.assert_allclose(s.sim.world.circles[0, :2], dest, atol=1e-6)
     assert len(s.sim.world.circles) == len(after)
 
@@ -298,7 +296,7 @@ def test_follow_views_keep_the_robot_in_the_middle_and_clicks_still_land(tab):
     p.view_mode.value = "follow the robot"
     tab.tick(4.0)
     view = tab.arena
-    assert view.zoom == pytest.approx(2.5)
+    assert view.camera.zoom == pytest.approx(2.5)
     x = s.sim.state.x[0, 2]
     np.testing.assert_allclose(view.to_scene(x), 0.0, atol=1e-6)  # on the camera's axis
     root = np.asarray(view.nodes["root"].position)[:2]
@@ -358,7 +356,7 @@ def test_export_marks_collided_robots(tab):
 def test_switching_between_chapter_3_and_fleet_scenes_in_one_tab(tab, server):
     tab.panels.preset.value = "rastrigin"
     assert tab.session.kind is swarm.KIND and isinstance(tab.panels, Panels)
-    assert isinstance(tab.arena, ArenaView)
+    assert tab.arena.name == "swarm"
     assert server.sessions[HAND_TAB] is tab.session
     tab.tick(1.0)
     assert "landscape" in tab.arena.nodes and not any(n.startswith("obstacle") for n in tab.arena.nodes)

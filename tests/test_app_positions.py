@@ -13,11 +13,9 @@ import numpy as np
 import pytest
 
 from shoal.app import replay
-from shoal.app.fleet_scene import FleetView
 from shoal.app.kinds import swarm
 from shoal.app.kinds.registry import session_for
 from shoal.app.panels import Panels
-from shoal.app.scene import ArenaView
 from shoal.app.session.timeline import verify_replay
 from shoal.engine.fleet import Fleet
 from shoal.engine.sim import Simulation
@@ -47,7 +45,7 @@ def test_fleet_switch_keeps_the_fleet_view_and_changes_the_engine(tab):
     assert p.positions_gui.positions.value == "oracle (true)" and not p.positions_gui.errors.visible
     x0 = s.sim.state.x.copy()
     p.positions_gui.positions.value = "SLO (estimated)"
-    assert tab.session is s and isinstance(tab.arena, FleetView)  # the same kind of scene
+    assert tab.session is s and tab.arena.name == "fleet"  # the same kind of scene
     assert type(s.sim) is SLOFleet and s.scenario.slo.errors == "low" and s.scenario.slo.neighbourhood == "full"
     np.testing.assert_array_equal(s.sim.state.x, x0)  # same seed, same start
     assert p.positions_gui.errors.visible
@@ -112,7 +110,7 @@ def _omega(sim) -> float:
 def test_chapter3_controller_changes_reach_the_running_slo_simulation(tab):
     tab.panels.preset.value = "slo-adapted"
     s, p = tab.session, tab.panels
-    assert s.kind.name == "swarm" and isinstance(p, Panels) and isinstance(tab.arena, ArenaView)
+    assert s.kind.name == "swarm" and isinstance(p, Panels) and tab.arena.name == "swarm"
     assert type(s.sim) is SLOSimulation and p.positions_gui.positions.value == "SLO (estimated)"
     s.step(5)
     sim, source = s.sim, s.sim.slo_source

@@ -21,9 +21,10 @@ from shoal.app import plots
 from shoal.app.kinds import swarm
 from shoal.app.kinds.registry import session_for
 from shoal.app.panels import SPECS, field_bounds, slider_range
-from shoal.app.scene import VIEW_HALF, landscape_rgb
 from shoal.app.server import PortInUseError, serve, start_server
 from shoal.app.session.upload import MAX_UPLOAD_BYTES
+from shoal.app.view.camera import VIEW_HALF
+from shoal.app.view.layers import landscape_rgb
 from shoal.engine import stability
 from shoal.engine.coeffs import Constant, Physical
 from shoal.engine.objectives import Objective
@@ -365,7 +366,7 @@ def test_one_dimensional_preset_draws_on_the_x_axis_and_follows(tab):
     drawn = np.asarray(tab.arena.nodes["robots"].points)
     assert drawn.shape == (s.sim.robots, 3) and np.all(drawn[:, 1] == 0)
     if np.any(s.sim.state.x[0, :, 0] > s.scenario.arena.half_size):
-        assert tab.arena.offset[0] > 0  # view moved with the swarm
+        assert tab.arena.focus[0] > 0  # view moved with the swarm
     tab.panels.refresh_plots()  # plots for d = 1 do not fail either
 
 
@@ -376,7 +377,7 @@ def test_a_diverging_swarm_keeps_the_home_view_and_is_reported(tab):
     s.step(250)
     tab.tick(70.0)
     assert swarm.driver(s).outside_arena() > 0
-    assert np.all(tab.arena.offset == 0)  # too spread to follow: the arena stays in view
+    assert np.all(tab.arena.focus == 0)  # too spread to follow: the arena stays in view
     assert "outside the arena" in tab.panels.status.content
 
 

@@ -18,7 +18,6 @@ from shoal.app.kinds import mai
 from shoal.app.panels import Panels
 from shoal.app.session.session import Session
 from shoal.app.slo_panels import SLOPanels
-from shoal.app.slo_scene import SLOView
 from shoal.engine.recorder import TRAJECTORY_COLUMNS
 from shoal.engine.slo import SLOSwarm
 from shoal.engine.slo_source import SLOSimulation
@@ -42,7 +41,7 @@ def _drawn(tab, key: str) -> np.ndarray:
 def test_slo_walk_builds_an_slo_swarm_and_draws_the_selected_robots_estimates(tab):
     s = tab.session
     assert s.kind.name == "mai" and isinstance(s.sim, SLOSwarm)
-    assert isinstance(tab.panels, SLOPanels) and isinstance(tab.arena, SLOView)
+    assert isinstance(tab.panels, SLOPanels) and tab.arena.name == "mai"
     s.step(6)
     tab.panels.robot.value = 3
     tab.tick(1.0)

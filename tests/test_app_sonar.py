@@ -16,7 +16,6 @@ from shoal.app import sonar_plots
 from shoal.app.kinds import sonar
 from shoal.app.kinds.sonar import true_ray_index
 from shoal.app.sonar_panels import SonarPanels
-from shoal.app.sonar_scene import SonarView
 from shoal.engine.sonar import AcousticSwarm
 
 
@@ -40,7 +39,7 @@ def _drawn(tab, now: float):
 def test_sonar_preset_builds_an_acoustic_swarm_and_draws_rays_from_the_robots(tab):
     s = tab.session
     assert s.kind.name == "sonar" and isinstance(s.sim, AcousticSwarm)
-    assert isinstance(tab.panels, SonarPanels) and isinstance(tab.arena, SonarView)
+    assert isinstance(tab.panels, SonarPanels) and tab.arena.name == "sonar"
     s.step(3)
     view = _drawn(tab, 1.0)
     x = s.sim.state.x[0]
@@ -98,9 +97,9 @@ def test_dragging_the_source_moves_it_in_the_engine(tab):
     _drawn(tab, 1.0)
     target = np.array([-150.0, 120.0])
     sx, sy = view.to_scene(target)
-    view._dragged(Drag((float(sx), float(sy), 0.0), "start"))
-    view._dragged(Drag((float(sx), float(sy), 0.0), "update"))
-    view._dragged(Drag((float(sx), float(sy), 0.0), "end"))
+    view.layer("source").dragged(Drag((float(sx), float(sy), 0.0), "start"))
+    view.layer("source").dragged(Drag((float(sx), float(sy), 0.0), "update"))
+    view.layer("source").dragged(Drag((float(sx), float(sy), 0.0), "end"))
     np.testing.assert_allclose(s.sim.state.source[0], target, atol=1e-6)
     d = np.linalg.norm(s.sim.state.x[0] - target, axis=-1)
     np.testing.assert_allclose(s.sim.state.snr_db[0], 60.0 - 20 * np.log10(np.maximum(d, 1.0)), atol=1e-9)

@@ -11,6 +11,8 @@ from shoal.presets.models import Scenario
 from ..session.driver import Driver
 from ..session.history import Frame, frame_of
 from ..session.session import Session
+from ..view.layers import Layer
+from ..view.view import Camera, Fit, View
 
 
 @dataclass(frozen=True)
@@ -24,6 +26,8 @@ class AppKind:
     refuse: Callable[[Scenario], None]  # raises PresetError saying why a scenario is not this kind's
     make_driver: Callable[[Session], Driver]
     notes: str  # teaching notes ``static/notes/<notes>.md``
+    layers: Callable[[Any], tuple[Layer, ...]]  # the arena's layers (given the panels, for drags)
+    camera: Callable[[], Camera]
 
     def check(self, scenario: Scenario) -> Scenario:
         """``scenario`` if this kind shows it, else :class:`PresetError` saying why not."""
@@ -36,6 +40,10 @@ class AppKind:
     def session(self, scenario: Scenario) -> Session:
         """A new session of this kind (raises :class:`PresetError` if it cannot show ``scenario``)."""
         return Session(scenario, self)
+
+    def view(self, scene: Any, panels: Any, fit: Fit | None = None) -> View:
+        """The arena of a tab showing this kind on viser ``scene``."""
+        return View(scene, self.name, self.camera(), self.layers(panels), fit)
 
 
 class BaseDriver:

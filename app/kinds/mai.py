@@ -29,6 +29,11 @@ from shoal.presets.models import Scenario
 from ..session.beliefs import ghosts_of
 from ..session.history import Frame
 from ..session.session import Session
+from ..session.snapshot import Snapshot
+from ..view import shapes
+from ..view.canvas import Canvas
+from ..view.layers import Ghosts, Ground, Layer, LegendEntry, Robots, Selected, Static, Trails, Twin
+from ..view.view import KeepSwarmInView
 from .base import AppKind, BaseDriver
 
 KIND_NAMES = {0: "none", 1: "x1", 2: "x2", 3: "x3 (dead reckoning)", 4: "initial guess", 5: "oracle"}
@@ -153,6 +158,93 @@ class MaiDriver(BaseDriver):
                             "kind": b.kind[0, i].tolist()}}
 
 
+# ---------------------------------------------------------------------------- view
+ROBOT = (220, 50, 50)
+ROBOT_SIZE = 0.24  # scene units
+TRAIL = (150, 175, 255)
+EDGE = (175, 175, 175)
+ARENA = (40, 40, 40)
+SELECTED = (255, 190, 0)
+MIRROR = (150, 60, 200)
+DEAD_RECKONING = (240, 140, 20)
+PREVIOUS = (130, 130, 130)
+CHOSEN = (30, 80, 220)
+TRUTH = (20, 150, 60)
+
+Z = dict(grid=-0.02, edges=-0.01, trails=-0.005, errors=0.004, inspector=0.006, ghosts=0.008, robots=0.01,
+         selected=0.012, points=0.014)
+PAIR_LINES = ("tri_truth", "tri_mirror", "tri_dr")
+PAIR_POINTS = ("mirror", "dr", "prev", "chosen", "truth")
+PAIR_LABELS = ("label_x1", "label_x2", "label_x3")
+
+
+def view_centre(snap: Snapshot) -> np.ndarray:
+    """World point at the middle of the view: where the swarm starts."""
+    if snap.scenario.slo is not None and snap.scenario.slo.motion == "random_walk":
+        return np.array([50.0, 50.0])  # the walk starts in [0, 100]²
+    return np.zeros(2)
+
+
+class Edges(Static):
+    """Who localises whom: the neighbourhood's edges (computed from truth)."""
+
+    name = "edges"
+    keys = ("edges",)
+    legend = (LegendEntry("—", EDGE, "neighbours"),)
+
+    def draw(self, canvas: Canvas, snap: Snapshot) -> None:
+        canvas.lines("edges", snap.extras["edges"], EDGE, 1.0, Z["edges"])
+
+
+class Pair(Static):
+    """The triangle inspector of one pair (i, j): the true B (green), the mirror pair x1/x2
+    (purple), dead reckoning x3 (orange), the previous estimate (grey) and the one kept (blue)."""
+
+    name = "pair"
+    keys = PAIR_LINES + PAIR_POINTS + PAIR_LABELS
+    legend = (LegendEntry("—", TRUTH, "true neighbour"), LegendEntry("■", MIRROR, "mirror pair x1, x2"),
+              LegendEntry("■", DEAD_RECKONING, "dead reckoning x3"), LegendEntry("●", PREVIOUS, "previous estimate"),
+              LegendEntry("●", CHOSEN, "estimate kept"))
+
+    def draw(self, canvas: Canvas, snap: Snapshot) -> None:
+        p: PairView | None = snap.extras["pair"]
+        if p is None:
+            canvas.hide(*self.keys)
+            return
+        a, (x1, x2, x3) = p.a, p.candidates
+        canvas.lines("tri_truth", np.array([[a, p.b]]), TRUTH, 2.0, Z["inspector"])
+        mirror = [[a, c] for c in (x1, x2) if np.all(np.isfinite(c))]
+        if np.all(np.isfinite(x1)) and np.all(np.isfinite(x2)):
+            mirror += list(shapes.dashed(x1, x2, 0.6 / canvas.scale, 0.4 / canvas.scale))
+        canvas.lines("tri_mirror", np.array(mirror).reshape(-1, 2, 2), MIRROR, 1.5, Z["inspector"])
+        dr = (shapes.dashed(a, x3, 0.5 / canvas.scale, 0.3 / canvas.scale) if np.all(np.isfinite(x3))
+              else np.zeros((0, 2, 2)))
+        canvas.lines("tri_dr", dr, DEAD_RECKONING, 1.5, Z["inspector"])
+        canvas.points("mirror", np.array([x1, x2]), MIRROR, 0.6 * ROBOT_SIZE, "square", Z["points"])
+        canvas.points("dr", x3[None], DEAD_RECKONING, 0.6 * ROBOT_SIZE, "square", Z["points"])
+        canvas.points("prev", p.prev[None], PREVIOUS, 0.5 * ROBOT_SIZE, "circle", Z["points"])
+        canvas.points("chosen", p.chosen[None], CHOSEN, 1.1 * ROBOT_SIZE, "circle", Z["ghosts"] - 0.001)
+        canvas.points("truth", p.b[None], TRUTH, 1.3 * ROBOT_SIZE, "circle", Z["robots"] - 0.001)
+        for key, xy in zip(PAIR_LABELS, (x1, x2, x3)):
+            canvas.label(key, key[-2:], xy + 0.5 / canvas.scale, 0.02)
+
+
+def layers(panels: Any) -> tuple[Layer, ...]:
+    """Truth against belief: the true robots (red) and their neighbourhood (grey), trails, the
+    observer (yellow ring) and its ghosts, the triangle inspector; swarm B."""
+    return (
+        Ground(cell=lambda half: half / 10, cell_colour=(228, 228, 224), section_colour=(200, 200, 196), z=Z["grid"],
+               border=ARENA, border_px=2.5, border_z=0.0),
+        Edges(),
+        Trails(TRAIL, 1.2, Z["trails"]),
+        Robots(ROBOT, ROBOT_SIZE, Z["robots"]),
+        Selected(SELECTED, lambda canvas, snap: 1.7 * ROBOT_SIZE / canvas.scale, Z["selected"]),
+        Ghosts(ROBOT_SIZE, (Z["errors"], Z["ghosts"])),
+        Pair(),
+        Twin(ROBOT_SIZE, (0.009, -0.006)),
+    )
+
+
 def _same_run(old: Scenario, new: Scenario) -> bool:
     """Do ``old`` and ``new`` differ only in the view?"""
     return {**old.model_dump(), "view": None} == {**new.model_dump(), "view": None}
@@ -172,7 +264,8 @@ def refuse(scenario: Scenario) -> None:
 
 
 KIND = AppKind(name="mai", title="Mai's SLO swarm", priority=40, accepts=accepts, refuse=refuse,
-               make_driver=MaiDriver, notes="slo")
+               make_driver=MaiDriver, notes="slo", layers=layers,
+               camera=lambda: KeepSwarmInView(view_centre, home_first=False))
 
 
 def driver(session: Session) -> MaiDriver:

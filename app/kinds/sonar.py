@@ -15,7 +15,7 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -32,6 +32,25 @@ from ..session.beliefs import host_ghosts
 from ..session.history import Frame
 from ..session.positions import slo_retune
 from ..session.session import Session
+from ..session.snapshot import Snapshot
+from ..view import shapes
+from ..view.camera import VIEW_HALF
+from ..view.canvas import Canvas
+from ..view.layers import (
+    Ghosts,
+    GlobalBest,
+    Ground,
+    Headings,
+    Layer,
+    LegendEntry,
+    PersonalBests,
+    Robots,
+    Selected,
+    Static,
+    Trails,
+    Twin,
+)
+from ..view.view import Home, arena_home
 from .base import AppKind, BaseDriver
 
 # acoustics fields whose change rebuilds the swarm (everything else applies at the next step)
@@ -185,6 +204,209 @@ class SonarDriver(BaseDriver):
                            for k, v in dataclasses.asdict(self.sim.params).items()}}
 
 
+# ---------------------------------------------------------------------------- view
+BORDER = (60, 60, 60)
+ROBOT = (220, 50, 50)
+HEADING = (90, 15, 15)
+TRAIL = (110, 150, 255)
+RAY_TRUE = (30, 150, 60)  # the ray of the pair nearer the true source direction
+RAY_MIRROR = (235, 120, 20)  # its mirror image about the robot's axis
+HIT_KEPT = (130, 50, 200)  # intersections ahead of both rays (and passing [7.12] under XB-PSO)
+HIT_DROPPED = (170, 170, 170)  # ahead of both rays but removed by [7.12]
+PICK = (200, 0, 140)  # the selected intersection p_s of each robot
+PARTNER = (200, 0, 140)
+PBEST = (110, 110, 110)
+GBEST = (240, 170, 0)
+SOURCE = (20, 150, 60)
+DC_RING = (20, 150, 60)
+ESCORT = (240, 170, 0)
+TRIANGLE = (40, 90, 200)
+SELECTED = (255, 190, 0)
+SIDE = 2 * VIEW_HALF  # the arena's side in scene units
+ROBOT_SIZE = 0.009 * SIDE
+RAY_SHARE = 0.3  # ray length as a share of the arena side
+
+Z = dict(grid=-0.025, rings=-0.015, triangles=-0.012, rays=-0.01, trails=-0.005, hits=0.0, pbests=0.004,
+         source=0.006, gbest=0.008, robots=0.01, headings=0.012, selected=0.014)
+
+SourceDrag = Callable[[float, float, str], None]  # (x, y, phase) in world metres
+
+
+def _half(snap: Snapshot) -> float:
+    return float(snap.scenario.arena.half_size)
+
+
+class Source(Static):
+    """The source (a one-instance disc mesh: drag it to move it), the circle of radius d_c
+    round it and, when escorting, the ring r round the source and round the global best."""
+
+    name = "source"
+    keys = ("source", "source_label", "dc_ring", "escort")
+    legend = (LegendEntry("●", SOURCE, "source"), LegendEntry("○", DC_RING, "d_c round the source"),
+              LegendEntry("○", ESCORT, "escort ring r"))
+
+    def __init__(self, on_drag: SourceDrag | None) -> None:
+        self.on_drag = on_drag
+        self._canvas: Canvas | None = None
+
+    def build(self, canvas: Canvas, snap: Snapshot) -> None:
+        self._canvas = canvas
+        v, f = shapes.disc_mesh(32)
+        node = canvas.add("source", canvas.scene.add_batched_meshes_simple(
+            canvas.name("source"), v, f, batched_wxyzs=np.array([[1.0, 0, 0, 0]]),
+            batched_positions=np.zeros((1, 3), np.float32), batched_scales=np.array([0.022 * SIDE], np.float32),
+            batched_colors=SOURCE, lod="off", material="toon3", side="double", cast_shadow=False,
+            receive_shadow=False))
+        node.on_drag("left")(self.dragged)
+        canvas.label("source_label", "source (drag me)", np.zeros(2))
+
+    def draw(self, canvas: Canvas, snap: Snapshot) -> None:
+        e = snap.extras
+        src = e["source"]
+        canvas.nodes["source"].batched_positions = canvas.to_view(src[None], Z["source"])
+        canvas.label("source_label", "source (drag me)", src + 0.04 * _half(snap))
+        canvas.lines("dc_ring", shapes.circle_segments(src, e["d_c"], 72), DC_RING, 1.0, Z["rings"])
+        if e["r_trap"] > 0 and snap.live and snap.yg is not None:
+            rings = np.concatenate([shapes.circle_segments(snap.yg, e["r_trap"], 72),
+                                    shapes.circle_segments(src, e["r_trap"], 72)])
+        else:
+            rings = np.zeros((0, 2, 2))
+        canvas.lines("escort", rings, ESCORT, 2.0, Z["rings"])
+
+    def dragged(self, event: Any) -> None:
+        """viser's drag event on the source: where the pointer is, in world metres."""
+        if self.on_drag is None or self._canvas is None:
+            return
+        xy = self._canvas.to_world(np.asarray(event.end_position, dtype=float)[:2])
+        self.on_drag(float(xy[0]), float(xy[1]), str(event.phase))
+
+
+def ray_segments(snap: Snapshot) -> tuple[np.ndarray, np.ndarray]:
+    """(true, mirror) segment lists (N, 2, 2) of the last listen, each starting at a robot."""
+    rays, true_ray = snap.extras["rays"], snap.extras["true_ray"]
+    if rays is None or true_ray is None:
+        return np.zeros((0, 2, 2)), np.zeros((0, 2, 2))
+    n = len(snap.x)
+    length = RAY_SHARE * 2 * _half(snap)
+    idx = np.arange(n)
+    true = np.stack([snap.x, snap.x + length * rays[idx, true_ray]], axis=1)
+    mirror = np.stack([snap.x, snap.x + length * rays[idx, 1 - true_ray]], axis=1)
+    return true, mirror
+
+
+class Rays(Static):
+    """Each robot's pair of bearing rays (green: the one nearer the true source; orange: its
+    mirror), the selected robot's thicker."""
+
+    name = "rays"
+    keys = ("rays_true", "rays_mirror", "rays_sel_true", "rays_sel_mirror")
+    legend = (LegendEntry("—", RAY_TRUE, "bearing ray nearer the source"), LegendEntry("—", RAY_MIRROR, "its mirror"))
+
+    def draw(self, canvas: Canvas, snap: Snapshot) -> None:
+        true, mirror = ray_segments(snap)
+        canvas.lines("rays_true", true, RAY_TRUE, 1.2, Z["rays"])
+        canvas.lines("rays_mirror", mirror, RAY_MIRROR, 1.2, Z["rays"])
+        i = snap.selected
+        canvas.lines("rays_sel_true", true[i:i + 1], RAY_TRUE, 3.0, Z["rays"] + 0.001)
+        canvas.lines("rays_sel_mirror", mirror[i:i + 1], RAY_MIRROR, 3.0, Z["rays"] + 0.001)
+
+
+class Hits(Static):
+    """Ray intersections ahead of both rays (purple; grey: dropped by the ρ test [7.12]), each
+    robot's chosen one (pink diamonds) and the selected robot's partner."""
+
+    name = "hits"
+    keys = ("hits_kept", "hits_dropped", "picks", "partner")
+    legend = (LegendEntry("●", HIT_KEPT, "ray intersection"), LegendEntry("●", HIT_DROPPED, "dropped by the ρ test"),
+              LegendEntry("◆", PICK, "chosen intersection"))
+
+    def draw(self, canvas: Canvas, snap: Snapshot) -> None:
+        e = snap.extras
+        empty = np.zeros((0, 2))
+        kept = dropped = picks = empty
+        partner = np.zeros((0, 2, 2))
+        points = e["points"]
+        if points is not None and e["tri_members"] is None:  # B/XB-PSO: up to four per robot
+            fwd, keep = e["forward"].astype(bool), e["kept"].astype(bool)
+            kept, dropped = points[keep], points[fwd & ~keep]
+        if points is not None and e["pick"] is not None:
+            idx = np.flatnonzero(e["pick"] >= 0)
+            picks = points[idx, e["pick"][idx]]
+        if e["partner"] is not None:
+            i = snap.selected
+            j = int(e["partner"][i])
+            if 0 <= j < len(snap.x) and j != i:
+                partner = np.stack([snap.x[i], snap.x[j]])[None]
+        size = 0.006 * SIDE
+        canvas.points("hits_kept", kept, HIT_KEPT, size, "circle", Z["hits"])
+        canvas.points("hits_dropped", dropped, HIT_DROPPED, size, "circle", Z["hits"])
+        canvas.points("picks", picks, PICK, 1.8 * size, "diamond", Z["hits"] + 0.001)
+        canvas.lines("partner", partner, PARTNER, 1.5, Z["rays"] + 0.002)
+
+
+class Triangles(Static):
+    """GT-PSO triplets: each valid triangle, its centroid and the direction it points."""
+
+    name = "triangles"
+    keys = ("triangles", "tri_rays", "tri_centroids")
+    legend = (LegendEntry("—", TRIANGLE, "GT-PSO triangle"),)
+
+    def draw(self, canvas: Canvas, snap: Snapshot) -> None:
+        e = snap.extras
+        segs = rays = np.zeros((0, 2, 2))
+        cents = np.zeros((0, 2))
+        if e["tri_members"] is not None and e["tri_valid"] is not None:
+            ok = e["tri_valid"].astype(bool) & np.all(e["tri_members"] >= 0, axis=1)
+            m = e["tri_members"][ok]
+            if len(m):
+                p = snap.x[m]  # (T, 3, 2)
+                segs = np.concatenate([np.stack([p[:, a], p[:, b]], axis=1) for a, b in ((0, 1), (1, 2), (2, 0))])
+                cents = e["tri_centroid"][ok]
+                rays = np.stack([cents, cents + 0.08 * _half(snap) * e["tri_direction"][ok]], axis=1)
+        canvas.lines("triangles", segs, TRIANGLE, 1.0, Z["triangles"])
+        canvas.lines("tri_rays", rays, TRIANGLE, 2.0, Z["triangles"])
+        canvas.points("tri_centroids", cents, TRIANGLE, 0.008 * SIDE, "circle", Z["triangles"])
+
+
+class SourceCamera:
+    """The arena square; shifted to keep the swarm's centre and the source on screen (a source
+    may run away)."""
+
+    def home(self, snap: Snapshot) -> Home:
+        return arena_home(snap)
+
+    def reset(self) -> None:
+        pass
+
+    def follow(self, canvas: Canvas, snap: Snapshot) -> None:
+        com, src = snap.x.mean(axis=0), snap.extras["source"]
+        lim = 0.92 * _half(snap)
+        if np.all(np.abs(com - canvas.focus) < lim) and np.all(np.abs(src - canvas.focus) < lim):
+            return
+        canvas.set_focus((com + src) / 2)
+
+
+def layers(panels: Any) -> tuple[Layer, ...]:
+    """The acoustic arena: the source (drag it), the robots with their rays, intersections and
+    triangles, headings, trails and bests; swarm B, the beliefs."""
+    return (
+        Ground(cell=lambda half: 10 ** np.floor(np.log10(half / 4)), cell_colour=(228, 228, 224),
+               section_colour=(205, 205, 200), z=Z["grid"], border=BORDER, border_px=1.5, border_z=Z["grid"]),
+        Source(panels.drag_source),
+        Robots(ROBOT, ROBOT_SIZE, Z["robots"]),
+        Headings(HEADING, lambda canvas, snap: 0.025 * _half(snap), Z["headings"]),
+        Trails(TRAIL, 1.2, Z["trails"]),
+        PersonalBests(PBEST, 0.006 * SIDE, Z["pbests"]),
+        GlobalBest(GBEST, 0.016 * SIDE, Z["gbest"]),
+        Selected(SELECTED, lambda canvas, snap: 0.02 * _half(snap), Z["selected"]),
+        Rays(),
+        Hits(),
+        Triangles(),
+        Ghosts(ROBOT_SIZE),
+        Twin(ROBOT_SIZE, (0.009, -0.006)),
+    )
+
+
 def accepts(scenario: Scenario) -> bool:
     return scenario.acoustics is not None
 
@@ -195,7 +417,7 @@ def refuse(scenario: Scenario) -> None:
 
 
 KIND = AppKind(name="sonar", title="Chapter 6–8 acoustic swarm", priority=30, accepts=accepts, refuse=refuse,
-               make_driver=SonarDriver, notes="ch6-8")
+               make_driver=SonarDriver, notes="ch6-8", layers=layers, camera=SourceCamera)
 
 
 def driver(session: Session) -> SonarDriver:

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from shoal.engine.objectives import Objective
 from shoal.engine.sim import Simulation
 from shoal.presets.build import build_simulation, law_for, objective_for, policy_for, slo_unit
 from shoal.presets.io import PresetError
@@ -22,7 +23,34 @@ from ..session.beliefs import host_ghosts
 from ..session.history import Frame, frame_of
 from ..session.positions import positions_of, slo_retune
 from ..session.session import Session
+from ..session.snapshot import Snapshot
+from ..view.canvas import Canvas
+from ..view.layers import (
+    Ghosts,
+    GlobalBest,
+    Ground,
+    Headings,
+    Landscape,
+    Layer,
+    LegendEntry,
+    PersonalBests,
+    Robots,
+    Static,
+    Trails,
+    Twin,
+)
+from ..view.view import KeepSwarmInView
 from .base import AppKind, BaseDriver
+
+ROBOT = (220, 50, 50)
+ROBOT_SIZE = 0.24  # scene units: the disc drawn has this radius
+HEADING = (120, 20, 20)
+TRAIL = (80, 120, 255)
+PBEST = (110, 110, 110)
+GBEST = (240, 170, 0)
+SOURCE = (20, 150, 60)
+ARENA = (40, 40, 40)
+BENCHMARKS = ("sphere", "rastrigin", "ackley", "rosenbrock", "griewank")
 
 
 def _changed(old: Scenario, new: Scenario, name: str) -> bool:
@@ -112,6 +140,47 @@ class SwarmDriver(BaseDriver):
         return arr[:, 0], arr[:, 1]
 
 
+# ---------------------------------------------------------------------------- view
+class Optimum(Static):
+    """Where the objective is best (a benchmark's optimum, or the source), with its name."""
+
+    name = "optimum"
+    keys = ("source", "source_label")
+    legend = (LegendEntry("●", SOURCE, "optimum / source"),)
+
+    def build(self, canvas: Canvas, snap: Snapshot) -> None:
+        o = snap.scenario.objective
+        if o.kind == "linear":
+            return
+        where = np.asarray(o.source, dtype=float) if snap.scenario.sim.d >= 2 else np.array([o.source[0], 0.0])
+        canvas.points("source", where[None], SOURCE, 0.3, "circle", 0.01)
+        canvas.label("source_label", "source" if o.kind == "source-distance" else "optimum", where + 0.5 / canvas.scale)
+
+
+def landscape(scenario: Scenario) -> Objective | None:
+    """The benchmark objectives of a 2-D (or 3-D) swarm are drawn as a heat map."""
+    o = scenario.objective
+    return objective_for(o) if o.kind in BENCHMARKS and scenario.sim.d >= 2 else None
+
+
+def layers(panels: Any) -> tuple[Layer, ...]:
+    """The Chapter 3 arena: the square with its grid, the landscape or the source, the robots
+    with their headings, trails and bests; swarm B and the selected robot's beliefs."""
+    return (
+        Ground(cell=lambda half: half / 10, cell_colour=(225, 225, 225), section_colour=(185, 185, 185), z=-0.02,
+               border=ARENA, border_px=2.5, border_z=0.0, fade=100.0),
+        Landscape(landscape, z=-0.04),
+        Optimum(),
+        Trails(TRAIL, 1.5, 0.0),
+        PersonalBests(PBEST, 0.1, 0.005),
+        Headings(HEADING, lambda canvas, snap: 0.35 / canvas.scale, 0.015),
+        Robots(ROBOT, ROBOT_SIZE, 0.02),
+        GlobalBest(GBEST, 0.4, 0.012),
+        Twin(ROBOT_SIZE, (0.018, -0.001), px=1.5),
+        Ghosts(ROBOT_SIZE),
+    )
+
+
 def supported(scenario: Scenario) -> None:
     """A free-space swarm needs mode raw or physical (DVC needs a [world])."""
     if scenario.world is None and scenario.controller.mode not in ("raw", "physical"):
@@ -134,7 +203,7 @@ def refuse(scenario: Scenario) -> None:
 
 
 KIND = AppKind(name="swarm", title="Chapter 3 swarm", priority=10, accepts=accepts, refuse=refuse,
-               make_driver=SwarmDriver, notes="ch3")
+               make_driver=SwarmDriver, notes="ch3", layers=layers, camera=KeepSwarmInView)
 
 
 def driver(session: Session) -> SwarmDriver:

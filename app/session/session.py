@@ -352,7 +352,7 @@ class Session:
             return Snapshot(scenario=self.scenario, k=s.k, t=self.clock(), x=s.x[0].copy(),
                             heading=s.heading[0].copy(), status=s.status[0].copy(),
                             trails=self.trails(max_trails, max_trail_points), revision=self.revision,
-                            selected=selected, **self.driver.snapshot(selected))
+                            selected=selected, twin=self.twin_view(), **self.driver.snapshot(selected))
 
     def shown_snapshot(self) -> Snapshot:
         """The live snapshot, or (scrubbing or replaying) the recorded frame at the cursor: its

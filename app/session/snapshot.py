@@ -33,5 +33,6 @@ class Snapshot:
     y: np.ndarray | None = None  # (N, d) personal bests
     yg: np.ndarray | None = None  # (d,) global best
     ghosts: Ghosts | None = None  # the selected robot's beliefs (SLO positions)
+    twin: tuple[np.ndarray, np.ndarray] | None = None  # swarm B's robots (N, d) and trails at this step
     live: bool = True
     extras: dict[str, Any] = field(default_factory=dict)  # kind-specific drawing data

@@ -29,7 +29,7 @@ from browser_helpers import (  # noqa: E402
 )
 
 from shoal.app import replay  # noqa: E402
-from shoal.app.scene import ROBOT_SIZE  # noqa: E402
+from shoal.app.kinds.swarm import ROBOT_SIZE  # noqa: E402
 from shoal.app.server import start_server  # noqa: E402
 
 
@@ -169,7 +169,7 @@ def test_a_replay_exported_here_plays_back_in_another_server(server, browser, pa
             x = rec.robots(int(np.flatnonzero(rec.k == k)[0]))[0]
             wait_until(lambda: tab2.arena.drawn_revision == tab2.session.revision, what="the frame drawn")
             np.testing.assert_allclose(np.asarray(tab2.arena.nodes["robots"].points)[:, :2],
-                                       tab2.arena.view_points(x)[:, :2], atol=1e-5)
+                                       tab2.arena.to_view(x)[:, :2], atol=1e-5)
             dismiss_toasts(page2)
             pixels = np.round(to_pixel(other, cid2, page2, x)).astype(int)
             hits = seen(page2, pixels, red)

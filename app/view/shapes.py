@@ -1,5 +1,5 @@
 """Flat 2-D shapes as arrays for viser nodes: disc and wedge meshes (triangle fans facing +z),
-and circles, dashes and arrows as line segments ``(S, 2, 3)``. Pure numpy, no viser.
+and circles, dashes, arrows and trails as line segments ``(S, 2, 2)``. Pure numpy, no viser.
 """
 
 from __future__ import annotations
@@ -39,6 +39,14 @@ def yaw_wxyz(angle: np.ndarray) -> np.ndarray:
     return out
 
 
+def plane(points: np.ndarray) -> np.ndarray:
+    """(…, d) points → (…, 2) in the ground plane: d = 1 lies on the x axis, d = 3 drops z."""
+    p = np.asarray(points, dtype=float)
+    if p.shape[-1] >= 2:
+        return p[..., :2]
+    return np.concatenate([p, np.zeros(p.shape[:-1] + (2 - p.shape[-1],))], axis=-1)
+
+
 def lift(points: np.ndarray, z: float) -> np.ndarray:
     """(…, 2) → (…, 3) float32 at height ``z``."""
     p = np.asarray(points, dtype=float)
@@ -53,6 +61,15 @@ def polyline(points: np.ndarray, closed: bool = False) -> np.ndarray:
     if closed:
         p = np.vstack([p, p[:1]])
     return np.stack([p[:-1], p[1:]], axis=1)
+
+
+def trail_segments(trails: np.ndarray) -> np.ndarray:
+    """(M, L, d) trails → (S, 2, 2) segments in the ground plane (empty for no trail)."""
+    tr = np.asarray(trails, dtype=float)
+    if tr.ndim != 3 or not tr.shape[0] or tr.shape[1] < 2:
+        return np.zeros((0, 2, 2))
+    xy = plane(tr)
+    return np.stack([xy[:, :-1], xy[:, 1:]], axis=2).reshape(-1, 2, 2)
 
 
 def circle_segments(centre: np.ndarray, radius: float, n: int = 64) -> np.ndarray:
@@ -100,48 +117,3 @@ def ray_ground(origin: Any, direction: Any) -> np.ndarray | None:
         return None
     t = -o[2] / d[2]
     return None if t < 0 else (o + t * d)[:2]
-
-
-class GroundFrame:
-    """World metres ↔ scene coordinates for a top-down view with ``focus`` (the world point at
-    the middle of the screen) and ``scale`` (scene units per metre)."""
-
-    focus: np.ndarray
-    scale: float
-
-    def to_world(self, scene_xy: np.ndarray) -> np.ndarray:
-        """Scene coordinates (what clicks and drags report) → world metres."""
-        return np.asarray(scene_xy, dtype=float)[..., :2] / self.scale + self.focus
-
-    def to_scene(self, xy: np.ndarray) -> np.ndarray:
-        """World metres → scene coordinates, the inverse of :meth:`to_world`."""
-        return (np.asarray(xy, dtype=float) - self.focus) * self.scale
-
-    def ray_to_world(self, origin: Any, direction: Any) -> np.ndarray | None:
-        """Where a click ray meets the ground (z = 0), in world metres; None if it misses."""
-        p = ray_ground(origin, direction)
-        return None if p is None else self.to_world(p)
-
-
-class PointLayer:
-    """``_points`` for views with ``to_view``, ``_name``, ``scene`` and ``nodes``: one point
-    cloud per key, created on first use and hidden when it has no finite point."""
-
-    nodes: dict[str, Any]
-
-    def _point_size(self, size: float) -> float:
-        """The marker size in scene units (a view that sizes markers in metres scales it)."""
-        return size
-
-    def _points(self: Any, key: str, xy: np.ndarray, color: Any, size: float, shape: str, z: float) -> None:
-        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
-        xy = xy[np.all(np.isfinite(xy), axis=1)]
-        pts = self.to_view(xy, z) if len(xy) else self.to_view(np.zeros((1, 2)), z)
-        node = self.nodes.get(key)
-        if node is None:
-            self.nodes[key] = self.scene.add_point_cloud(
-                self._name(key), pts, colors=color, point_size=self._point_size(size), point_shape=shape,
-                precision="float32", point_shading="flat")
-        else:
-            node.points = pts
-        self.nodes[key].visible = bool(len(xy))
