@@ -130,6 +130,16 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_export_replay(args: argparse.Namespace) -> int:
+    from shoal.app.share.command import ExportError, export_replay
+
+    try:
+        print(export_replay(args.preset, args.out, seed=args.seed, steps=args.steps, sets=args.set or ()))
+    except ExportError as e:
+        return _err(str(e))
+    return 0
+
+
 def _check_counts(args: argparse.Namespace) -> str | None:
     if args.runs is not None and args.runs < 1:
         return "--runs must be >= 1"
@@ -232,6 +242,14 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--workers", type=int, default=1)
     w.add_argument("--scheduler", help="Dask scheduler address (tcp://HOST:PORT)")
     w.set_defaults(func=_cmd_sweep)
+
+    e = sub.add_parser("export-replay", help="a seeded run as one HTML page that plays in any browser")
+    e.add_argument("preset", help="preset name or TOML/JSON file")
+    e.add_argument("--seed", type=int)
+    e.add_argument("--steps", type=int)
+    e.add_argument("--out", required=True, help="the page to write (.html)")
+    e.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field by dotted path")
+    e.set_defaults(func=_cmd_export_replay)
 
     ps = sub.add_parser("presets", help="list, show or validate presets")
     ps.add_argument("action", choices=["list", "show", "validate"])

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from shoal.engine.dvc import TABLE_4_1
+from shoal.engine.robot_laws import ROBOT_LAWS
 from shoal.presets.models import Scenario
 
 from . import fleet_plots
@@ -19,10 +20,10 @@ from .budget import budget_markdown
 from .fleet_edit import MODES as CLICK_MODES
 from .fleet_edit import WorldEditor
 from .kinds.fleet import driver
-from .session.session import Session
-from .session.snapshot import Snapshot
 from .panel_base import TRAIL, PanelsBase, SliderSpec, fmt, round_sig
 from .positions_panel import PositionsGui
+from .session.session import Session
+from .session.snapshot import Snapshot
 
 # label → (controller.law, controller.mode)
 CONTROLLERS: dict[str, tuple[str, str]] = {
@@ -32,7 +33,7 @@ CONTROLLERS: dict[str, tuple[str, str]] = {
     "Robot-centred (constant)": ("robot-centred", "raw"),
     "Non-omni + DVC": ("nonomni", "dvc"),
 }
-BODY_FRAME_LAWS = ("robot-centred", "nonomni")
+BODY_FRAME_LAWS = tuple(name for name, law in ROBOT_LAWS.items() if law.body_frame)
 OMNI_DRIVES = ("holonomic", "mecanum")
 WORLDS = ("obstacle-course", "forest", "empty")
 

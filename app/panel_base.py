@@ -28,11 +28,11 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
+from .compare_panel import CompareGui
 from .kinds.registry import app_kind, app_presets
+from .replay_panel import ReplayGui
 from .session.session import Session
 from .session.upload import parse_upload
-from .compare_panel import CompareGui
-from .replay_panel import ReplayGui
 
 Notify = Callable[[str, str, str], None]
 SendFile = Callable[[str, bytes], None]

@@ -185,7 +185,8 @@ def phase_figure(
         ):
             pts = geo[key]
             fig.add_trace(go.Scatter(x=pts[:, 0], y=pts[:, 1], mode="markers", name=name,
-                                     marker=dict(symbol=symbol, size=12, color=color, line=dict(width=1, color="black"))))
+                                     marker=dict(symbol=symbol, size=12, color=color,
+                                                 line=dict(width=1, color="black"))))
     if u is not None and a is not None and len(u):
         u, a = np.asarray(u, float), np.asarray(a, float)
         fig.add_trace(go.Scatter(x=u, y=a, mode="markers", name="recent",

@@ -48,7 +48,7 @@ def main() -> None:
         scrubbed = per_call(s.shown_snapshot, 20)
         export = per_call(s.export_replay, 3)
         data = s.export_replay()
-        load = per_call(lambda: replay.from_bytes(data), 3)
+        load = per_call(lambda data=data: replay.from_bytes(data), 3)
         rec = replay.from_bytes(data)
         t0 = time.perf_counter()
         ok, _ = verify_replay(session_for(presets_io.validate(rec.meta["preset"])), rec)

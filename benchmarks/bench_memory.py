@@ -4,7 +4,8 @@ Run: python benchmarks/bench_memory.py [--quick] [--minutes 60] [--runs 10000] [
      [--skip-batch] [--png benchmarks/memory.png]
 
 (a) For each scene kind (Ch. 3 swarm, Ch. 4–5 fleet, Ch. 7 acoustic swarm, SLO walk), in a
-    fresh Python process each, the app's tab (session, panels, plots and arena on a real viser server, no browser) is ticked
+    fresh Python process each, the app's tab (session, panels, plots and arena on a real viser
+    server, no browser) is ticked
     headless as the server's 60 Hz ticking thread would, on a simulated clock, with playback
     at 30 steps/s and a run that never ends: ``--minutes`` of session time are
     1800 × minutes scene frames. The resident set size (RSS) of the process, the history
@@ -265,13 +266,15 @@ def main() -> None:
             s = sweep_memory(runs, workers)
             batches[label] = s
             marks = per_thousand(s)
-            rows.append([label, str(s[-1]["runs"]), fmt(s[0]["rss"]), fmt(marks[1]["rss"] if len(marks) > 1 else s[0]["rss"]),
+            first = marks[1]["rss"] if len(marks) > 1 else s[0]["rss"]
+            rows.append([label, str(s[-1]["runs"]), fmt(s[0]["rss"]), fmt(first),
                          fmt(s[-1]["rss"]), fmt(s[-1]["peak"]), " ".join(str(round(x["rss"])) for x in marks[1:]),
                          fmt(s[-1]["wall"])])
             print(f"  {label}: {[(x['runs'], round(x['rss'])) for x in marks]}", file=sys.stderr)
         for workers in (1, 2):
             for keep in (False, True):
-                label = f"{'run_jobs (keep all)' if keep else 'iter_jobs (stream)'}, {workers} worker{'s' * (workers > 1)}"
+                kind = "run_jobs (keep all)" if keep else "iter_jobs (stream)"
+                label = f"{kind}, {workers} worker{'s' * (workers > 1)}"
                 s = batch_memory(runs, workers, keep)
                 batches[label] = s
                 per_k = [round(x["rss"]) for x in s[1:]]

@@ -104,7 +104,8 @@ def surrogate(
     snr_eff = I**2 / (a[..., 0] ** 2 + a[..., 1] ** 2 + 1.0)
     f_rms = np.sqrt(np.mean(band.freqs**2))
     sd = 1.0 / (2.0 * np.pi * f_rms * np.sqrt(2.0 * K * np.maximum(snr_eff, 1e-300)))
-    tau = np.clip(np.take_along_axis(cand, win[..., None], -1)[..., 0] + np.minimum(sd, 1e3 * edge) * z_lag, -edge, edge)
+    lag = np.take_along_axis(cand, win[..., None], -1)[..., 0]
+    tau = np.clip(lag + np.minimum(sd, 1e3 * edge) * z_lag, -edge, edge)
     alpha = angle_of_arrival(tau, D, band.c)
     head = np.asarray(heading, dtype=float)
     b = Bearing(tau=tau, rho=rho, alpha=alpha, rays=rays(alpha, head), lags=np.zeros(0), corr=np.zeros((R, N, 0)))

@@ -8,21 +8,19 @@ metrics. Arrays are (runs, robots, …); run ``i`` draws from child ``i`` of
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Literal
+from dataclasses import dataclass, field, replace
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
+from .contract import check_live
 from .dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
 from .motion import Drive, Kinematic, Physics
-from .robot_laws import (
-    Inertia, adapted_rpso_velocity, energy_limit, min_turning_radius, nonomni_velocity,
-    robot_centred_velocity, rpso_velocity, to_body, to_world,
-)
+from .robot_laws import ROBOT_LAWS, Inertia, Limits
 from .sensing import SectorReading, sense, virtual_force
+from .sim import run_generators
 from .world import RunSpace, WorldSpec
 
-FleetLaw = Literal["rpso", "adapted-rpso", "robot-centred", "nonomni"]
 ACTIVE, COLLIDED = 0, 1
 # A stall (ours, a metric only): an operational robot slower than STALL_SPEED m/s for at
 # least STALL_STEPS ticks in a row, e.g. squeezed between bodies it may not approach.
@@ -34,7 +32,7 @@ STALL_STEPS = 10
 class FleetParams:
     """Controller and robot parameters of a fleet (Tables 4.1 and 5.1 by default)."""
 
-    law: FleetLaw = "adapted-rpso"
+    law: str = "adapted-rpso"  # a key of robot_laws.ROBOT_LAWS
     dvc: bool = True
     dt: float = 1.0
     omega: float = 0.1  # constant mode; ω = 1 − β (spec §20 item 17)
@@ -57,9 +55,19 @@ class FleetParams:
     spawn_gap: float = 0.3  # free space between robots at the start [m]
     contact_tolerance: float = 1e-3  # a collision is an overlap deeper than this [m] (ours)
 
+    def __post_init__(self) -> None:
+        if ROBOT_LAWS.pick(self.law).dvc is None and self.dvc:
+            raise ValueError(f"dvc: law {self.law!r} has no DVC form")
+        if not self.dt > 0:
+            raise ValueError(f"dt: must be > 0, got {self.dt}")
+
     @property
     def body_frame(self) -> bool:
-        return self.law in ("robot-centred", "nonomni")
+        return ROBOT_LAWS[self.law].body_frame
+
+    @property
+    def limits(self) -> Limits:
+        return Limits(self.v_max, self.rotational_energy, self.robot_radius, self.r_min)
 
 
 @dataclass
@@ -71,7 +79,7 @@ class FleetState:
     y: np.ndarray  # (R, N, 2) personal bests
     f_y: np.ndarray  # (R, N)
     yg: np.ndarray  # (R, 2)
-    f_yg: np.ndarray  # (R,)
+    best_fitness: np.ndarray  # (R,) cost of y_g
     f: np.ndarray  # (R, N) cost at x
     status: np.ndarray  # (R, N) int8: 0 active, 1 collided
     slow: np.ndarray  # (R, N) ticks in a row an active robot has moved slower than STALL_SPEED
@@ -93,6 +101,12 @@ class FleetInfo:
     layers_passed: np.ndarray  # (R,) layers with x below the CoM
     best_fitness: np.ndarray  # (R,) distance of the global best to the source
     max_speed: np.ndarray  # (R,)
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """CoM fitness [4.17], collided (overlap beyond the contact tolerance), stalled and
+        operational robots, obstacle layers passed."""
+        return {"com_fitness": self.com_fitness, "collided": self.collided, "stalled": self.stalled,
+                "operational": self.operational, "layers_passed": self.layers_passed}
 
 
 def spawn_positions(
@@ -116,7 +130,16 @@ def spawn_positions(
 
 
 class Fleet:
-    """A seeded swarm of robots in a world, for ``runs`` Monte-Carlo runs at once."""
+    """A seeded swarm of robots in a world, for ``runs`` Monte-Carlo runs at once.
+
+    Implements :class:`~.contract.Engine`; :meth:`retune` takes the :class:`FleetParams` of the
+    controller and the sensing (in force from the next tick) and, on SLO positions, the
+    localisation keywords (``slo``). The world, the robots' bodies and drive and their number
+    need a new fleet."""
+
+    LIVE: ClassVar[frozenset[str]] = frozenset(
+        {"law", "dvc", "dt", "omega", "c", "alpha", "beta", "gamma", "c1_share", "sensing_range", "r_min", "s_min",
+         "rotational_energy", "update", "guard", "slo"})
 
     def __init__(self, *, world: WorldSpec, robots: int, params: FleetParams | None = None,
                  runs: int = 1, seed: int = 0, first_run: int = 0) -> None:
@@ -146,10 +169,10 @@ class Fleet:
     def reset(self, seed: int | None = None) -> None:
         if seed is not None:
             self.seed = int(seed)
-        children = range(self.first_run, self.first_run + self.runs)
-        self.rngs = [np.random.Generator(np.random.PCG64(np.random.SeedSequence(self.seed, spawn_key=(i,)))) for i in children]
+        self.rngs = run_generators(self.seed, self.first_run, self.runs)
         p = self.params
-        x = np.stack([spawn_positions(g, self.world.start_box, self._robots, p.robot_radius, p.spawn_gap) for g in self.rngs])
+        x = np.stack([spawn_positions(g, self.world.start_box, self._robots, p.robot_radius, p.spawn_gap)
+                      for g in self.rngs])
         body = "dynamic" if p.motion == "physics" else "kinematic"
         self.spaces = [RunSpace(self.world, x[r], p.robot_radius, body_type=body) for r in range(self.runs)]
         self.motion = self._motion()
@@ -159,7 +182,7 @@ class Fleet:
         best = np.argmin(f, axis=1)
         self.state = FleetState(
             x=x, heading=heading, u=np.zeros_like(x), cmd=np.zeros_like(x), y=x.copy(), f_y=f.copy(),
-            yg=x[np.arange(R), best], f_yg=f[np.arange(R), best], f=f, status=np.zeros((R, N), np.int8),
+            yg=x[np.arange(R), best], best_fitness=f[np.arange(R), best], f=f, status=np.zeros((R, N), np.int8),
             slow=np.zeros((R, N), np.int64),
         )
 
@@ -168,6 +191,23 @@ class Fleet:
         if p.motion == "physics":
             return Physics(p.drive, p.v_max, p.a_max, tolerance=p.contact_tolerance)
         return Kinematic(p.drive, p.v_max, tolerance=p.contact_tolerance)
+
+    def retune(self, **changes: Any) -> list[str]:
+        """Change :data:`LIVE` settings from the next tick on, keeping the fleet; returns the names
+        that changed. Refused (``ValueError``, nothing changed) for other keywords."""
+        check_live(self.LIVE, changes)
+        slo = changes.pop("slo", None)
+        params = replace(self.params, **changes)  # validates
+        changed = [k for k in changes if getattr(params, k) != getattr(self.params, k)]
+        if slo:
+            self._retune_positions(slo)
+            changed.append("slo")
+        self.params = params
+        return changed
+
+    def _retune_positions(self, slo: dict[str, Any]) -> None:
+        """New localisation settings: only a fleet on SLO positions has any."""
+        raise ValueError("slo: this fleet acts on true positions; switch it to SLO positions first")
 
     def cost(self, x: np.ndarray) -> np.ndarray:
         """Distance to the source, the cost of Algorithms 1 and 2."""
@@ -201,29 +241,25 @@ class Fleet:
         s.f_y = np.where(better, s.f, s.f_y)
         idx = np.argmin(s.f_y, axis=1)
         runs = np.arange(self.runs)
-        s.yg, s.f_yg = s.y[runs, idx], s.f_y[runs, idx]
+        s.yg, s.best_fitness = s.y[runs, idx], s.f_y[runs, idx]
 
     def _coefficients(self, gap: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         p, shape = self.params, gap.shape[:2]
-        if p.law == "nonomni":
-            if p.dvc:
-                wm = w_max(p.v_max, p.dt, p.rotational_energy, p.robot_radius)
-                return dvc_nonomni(gap, alpha=p.alpha, beta=p.beta, dt=p.dt, sensing_range=p.sensing_range,
-                                   w_max=wm, c1_share=p.c1_share, v_max=p.v_max)
-            c = np.asarray((tuple(p.c) + (0.0,) * 5)[:5], dtype=float)
-        elif p.law in ("rpso", "adapted-rpso") and p.dvc:
+        law = ROBOT_LAWS[p.law]
+        if p.dvc and law.dvc == "nonomni":
+            wm = w_max(p.v_max, p.dt, p.rotational_energy, p.robot_radius)
+            return dvc_nonomni(gap, alpha=p.alpha, beta=p.beta, dt=p.dt, sensing_range=p.sensing_range,
+                               w_max=wm, c1_share=p.c1_share, v_max=p.v_max)
+        if p.dvc and law.dvc == "omni":
             return dvc_omni(gap, alpha=p.alpha, beta=p.beta, dt=p.dt, c1_share=p.c1_share)
-        else:
-            n = 2 if p.law == "robot-centred" else 3
-            c = np.asarray((tuple(p.c) + (0.0,) * 3)[:n], dtype=float)
+        c = np.asarray((tuple(p.c) + (0.0,) * law.terms)[: law.terms], dtype=float)  # constant c_1..c_n
         return np.full(shape, p.omega), np.broadcast_to(c.reshape((-1, 1, 1)), (c.size,) + shape).copy()
 
     def _draws(self) -> np.ndarray:
         """This tick's U(0,1) draws for every robot, drawn once so the update order does not
         change the random stream."""
-        shape = self.state.x.shape
-        n = {"rpso": 3, "adapted-rpso": 3, "nonomni": 5, "robot-centred": 2}[self.params.law]
-        return self._draw((n,) + (shape[:2] if self.params.law == "nonomni" else shape))
+        shape, law = self.state.x.shape, ROBOT_LAWS[self.params.law]
+        return self._draw((law.terms,) + (shape[:2] if law.draws == "robot" else shape))
 
     def _attractors(self) -> tuple[np.ndarray, np.ndarray]:
         """Each robot's vectors to its personal best and to the global best, (R, N, 2) each:
@@ -234,19 +270,7 @@ class Fleet:
     def _velocity(self, omega: np.ndarray, c: np.ndarray, force: np.ndarray, r: np.ndarray) -> np.ndarray:
         p, s = self.params, self.state
         g_p, g_g = self._attractors()
-        if p.law == "rpso":  # [4.2], clipped to the top speed (spec §20 item 18)
-            return rpso_velocity(s.cmd, g_p, g_g, force, c, omega, r, v_max=p.v_max)
-        if p.law == "adapted-rpso":  # [4.5]
-            return adapted_rpso_velocity(s.cmd, g_p, g_g, force, c, omega, r)
-        y_t, yg_t = to_body(g_p, s.heading), to_body(g_g, s.heading)
-        if p.law == "nonomni":  # [5.13]
-            vw = nonomni_velocity(s.cmd, y_t, yg_t, c, omega, r)
-        else:  # robot-centred Generalised Adapted PSO [5.4], same c_n for v and w
-            cc = np.repeat(c[..., None], 2, axis=-1)
-            vw = robot_centred_velocity(s.cmd, np.stack([y_t, yg_t]), cc, omega[..., None], r)
-        v, w = energy_limit(vw[..., 0], vw[..., 1], p.v_max, p.rotational_energy, p.robot_radius)  # §14
-        w = min_turning_radius(v, w, p.r_min)  # §5.4
-        return np.stack([v, w], axis=-1)
+        return ROBOT_LAWS[p.law].command(s.cmd, g_p, g_g, force, s.heading, c, omega, r, p.limits)
 
     def _guard(self, cmd: np.ndarray, reading: SectorReading, gap: np.ndarray) -> np.ndarray:
         p = self.params
@@ -347,5 +371,6 @@ class Fleet:
         passed = (layers[None, :] < com[:, None]).sum(axis=1) if layers.size else np.zeros(self.runs, int)
         return FleetInfo(
             t=self.t, com_fitness=com, collided=collided, stalled=stalled, operational=self.robots - collided,
-            layers_passed=passed, best_fitness=s.f_yg.copy(), max_speed=np.linalg.norm(s.u, axis=-1).max(axis=1),
+            layers_passed=passed, best_fitness=s.best_fitness.copy(),
+            max_speed=np.linalg.norm(s.u, axis=-1).max(axis=1),
         )

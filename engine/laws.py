@@ -1,4 +1,4 @@
-"""Velocity laws of the PSO family (Rossides Ch. 2 and 3).
+"""Velocity laws of the PSO family (Rossides Ch. 2 and 3) and their registry :data:`LAWS`.
 
 Arrays follow one convention: positions and velocities are ``(runs, robots, d)``;
 the ``n`` accelerating terms are stacked on a leading axis, so direction inputs and
@@ -9,13 +9,14 @@ random draws are ``(n, runs, robots, d)`` and coefficients ``c`` are ``(n,)`` or
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Callable, Literal
 
 import numpy as np
 from scipy.special import expit
 
+from .registry import Registry
+
 Squash = Literal["sgn", "tanh", "logistic"]
-LawName = Literal["standard", "adapted-sgn", "adapted-tanh", "adapted-logistic"]
 
 
 def squash(z: np.ndarray, kind: Squash = "sgn", width: float = 1.0) -> np.ndarray:
@@ -74,24 +75,60 @@ def adapted_velocity(
     return _omega(omega) * u + terms.sum(axis=0)
 
 
+# (u, g, c, omega, r, smooth width) → u[k+1]
+Velocity = Callable[[np.ndarray, np.ndarray, np.ndarray, "np.ndarray | float", np.ndarray, float], np.ndarray]
+
+
+@dataclass(frozen=True)
+class VelocityLaw:
+    """One Chapter 3 velocity law and what the rest of Shoal needs to know about it."""
+
+    name: str
+    label: str
+    adapted: bool  # bounded per-component terms [3.11] with the position update x + Δt u [3.10]
+    velocity: Velocity
+
+
+def _standard(u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | float, r: np.ndarray,
+              width: float) -> np.ndarray:
+    return standard_velocity(u, g, c, omega, r)
+
+
+def _adapted(kind: Squash) -> Velocity:
+    def velocity(u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | float, r: np.ndarray,
+                 width: float) -> np.ndarray:
+        return adapted_velocity(u, g, c, omega, r, kind, width)
+
+    return velocity
+
+
+LAWS: Registry[VelocityLaw] = Registry(
+    "law",
+    VelocityLaw("standard", "Standard PSO", False, _standard),  # [2.1], [2.2]
+    VelocityLaw("adapted-sgn", "Adapted PSO (sgn)", True, _adapted("sgn")),  # [3.11]
+    VelocityLaw("adapted-tanh", "Adapted PSO (tanh)", True, _adapted("tanh")),  # §3.2.1 smooth option
+    VelocityLaw("adapted-logistic", "Adapted PSO (logistic)", True, _adapted("logistic")),
+)
+
+
 @dataclass(frozen=True)
 class Law:
-    """A velocity law plus its position update."""
+    """A velocity law of :data:`LAWS` (by name) plus its position update."""
 
-    name: LawName = "adapted-sgn"
+    name: str = "adapted-sgn"
     smooth_width: float = 1.0
+
+    def __post_init__(self) -> None:
+        LAWS.pick(self.name)
 
     @property
     def adapted(self) -> bool:
-        return self.name != "standard"
+        return LAWS[self.name].adapted
 
     def velocity(
         self, u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | float, r: np.ndarray
     ) -> np.ndarray:
-        if self.name == "standard":
-            return standard_velocity(u, g, c, omega, r)
-        kind: Squash = self.name.removeprefix("adapted-")  # type: ignore[assignment]
-        return adapted_velocity(u, g, c, omega, r, kind, self.smooth_width)
+        return LAWS[self.name].velocity(u, g, c, omega, r, self.smooth_width)
 
     def position(self, x: np.ndarray, u_new: np.ndarray, dt: float) -> np.ndarray:
         """[3.10] ``x + Δt u[k+1]`` for Adapted laws; [2.2] ``x + u[k+1]`` for standard PSO."""

@@ -1,4 +1,5 @@
-"""Source-localisation strategies of Chapters 7–8: A-, X-, B-, XB- and GT-PSO (spec §7).
+"""Source-localisation strategies of Chapters 7–8: A-, X-, B-, XB- and GT-PSO (spec §7), and
+their registry :data:`STRATEGIES`.
 
 Every strategy turns one step of sensed arrays into a candidate location and fitness per
 robot, updates the personal bests with forgetting (spec §7.0) and forms the global best
@@ -21,6 +22,7 @@ import numpy as np
 from .forgetting import best_of, centroid_of, forget_update, improves
 from .intersections import EPS, furthest, intersect, pair_intersections, rho_consistent
 from .partners import Rngs, random_partner
+from .registry import Registry
 from .triangulation import Triangles, triangles
 
 
@@ -65,6 +67,8 @@ class Strategy(Protocol):
     """One best-location strategy: ``update`` is called once per step."""
 
     name: ClassVar[str]
+    label: ClassVar[str]
+    min_robots: ClassVar[int]  # the fewest robots it can work with
     needs: ClassVar[tuple[str, ...]]
     hydrophones: ClassVar[int]
     global_best: ClassVar[GlobalBest]
@@ -103,11 +107,14 @@ class APSO:
 
     a: float = 1.0
     name: ClassVar[str] = "a-pso"
+    label: ClassVar[str] = "A-PSO"
+    min_robots: ClassVar[int] = 1
     needs: ClassVar[tuple[str, ...]] = ("intensity",)
     hydrophones: ClassVar[int] = 1
     global_best: ClassVar[GlobalBest] = "best"
 
-    def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed, rng: Rngs | None = None) -> Update:
+    def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed,
+               rng: Rngs | None = None) -> Update:
         return _own_position(f_hat, y, x, sensed.need("intensity"), self.a)
 
 
@@ -117,11 +124,14 @@ class XPSO:
 
     a: float = 1.0
     name: ClassVar[str] = "x-pso"
+    label: ClassVar[str] = "X-PSO"
+    min_robots: ClassVar[int] = 1
     needs: ClassVar[tuple[str, ...]] = ("rho",)
     hydrophones: ClassVar[int] = 2
     global_best: ClassVar[GlobalBest] = "best"
 
-    def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed, rng: Rngs | None = None) -> Update:
+    def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed,
+               rng: Rngs | None = None) -> Update:
         return _own_position(f_hat, y, x, sensed.need("rho"), self.a)
 
 
@@ -132,6 +142,8 @@ class BPSO:
     a: float = 1.0
     eps: float = EPS
     name: ClassVar[str] = "b-pso"
+    label: ClassVar[str] = "B-PSO"
+    min_robots: ClassVar[int] = 2  # a robot and a partner
     needs: ClassVar[tuple[str, ...]] = ("rays",)
     hydrophones: ClassVar[int] = 2
     global_best: ClassVar[GlobalBest] = "centroid"
@@ -160,6 +172,7 @@ class XBPSO(BPSO):
     """XB-PSO (Alg. 6): B-PSO keeping only points nearer the robot with larger ρ [7.12]."""
 
     name: ClassVar[str] = "xb-pso"
+    label: ClassVar[str] = "XB-PSO"
     needs: ClassVar[tuple[str, ...]] = ("rays", "rho")
 
     def _keep(self, d_i: np.ndarray, d_j: np.ndarray, sensed: Sensed, partner: np.ndarray) -> np.ndarray:
@@ -181,6 +194,8 @@ class GTPSO:
     eps: float = EPS
     maximise: bool = True
     name: ClassVar[str] = "gt-pso"
+    label: ClassVar[str] = "GT-PSO"
+    min_robots: ClassVar[int] = 4  # a triplet and a partner outside it
     needs: ClassVar[tuple[str, ...]] = ("intensity",)
     hydrophones: ClassVar[int] = 1
     global_best: ClassVar[GlobalBest] = "centroid"
@@ -194,7 +209,8 @@ class GTPSO:
         partner = random_partner(rng, (R, N), exclude=own)  # step 3: o ∉ {i, j, h}
         o = np.maximum(partner, 0)
         runs = np.arange(R)[:, None]
-        p, _, _, forward = intersect(tri.centroid, tri.direction, tri.centroid[runs, o], tri.direction[runs, o], self.eps)
+        p, _, _, forward = intersect(tri.centroid, tri.direction, tri.centroid[runs, o], tri.direction[runs, o],
+                                     self.eps)
         forward = forward & (partner >= 0) & tri.valid & tri.valid[runs, o]
         dist = np.linalg.norm(x - p, axis=-1)
         valid = forward & (dist > self.eps)  # fitness 1/0 is not offered
@@ -206,16 +222,12 @@ class GTPSO:
         return f_hat, y, y_g, info
 
 
-STRATEGIES: dict[str, type] = {s.name: s for s in (APSO, XPSO, BPSO, XBPSO, GTPSO)}
+STRATEGIES: Registry[type[Strategy]] = Registry("strategy", APSO, XPSO, BPSO, XBPSO, GTPSO)
 
 
 def make_strategy(name: str, **params: float | bool) -> Strategy:
     """The strategy called ``name`` (a key of ``STRATEGIES``) with its parameters."""
-    try:
-        cls = STRATEGIES[name]
-    except KeyError:
-        raise ValueError(f"strategy: unknown {name!r}, choose from {sorted(STRATEGIES)}") from None
-    return cls(**params)
+    return STRATEGIES.pick(name)(**params)
 
 
 def initial_memory(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

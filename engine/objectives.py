@@ -68,7 +68,7 @@ _BENCHMARKS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
 }
 
 
-@dataclass
+@dataclass(eq=False)
 class Objective:
     """A named objective; benchmark functions are evaluated at ``(x − source)/scale``
     so that their optimum sits on the source and their features fit the arena."""
@@ -76,6 +76,10 @@ class Objective:
     name: ObjectiveName = "source-distance"
     source: np.ndarray = field(default_factory=lambda: np.zeros(2))
     scale: float = 1.0
+
+    def __eq__(self, other: object) -> bool:
+        return (isinstance(other, Objective) and (self.name, self.scale) == (other.name, other.scale)
+                and np.array_equal(self.source, other.source))
 
     @property
     def maximise(self) -> bool:

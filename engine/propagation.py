@@ -65,7 +65,8 @@ def received_level_db(
     raise ValueError(f"model: must be 'spherical', 'cylindrical' or 'hybrid', got {model!r}")
 
 
-def snr_general_db(Ls_db: np.ndarray | float, noise_ms_pa2: np.ndarray | float, range_m: np.ndarray | float) -> np.ndarray:
+def snr_general_db(Ls_db: np.ndarray | float, noise_ms_pa2: np.ndarray | float,
+                   range_m: np.ndarray | float) -> np.ndarray:
     """SNR [6.7] with the reference fixed as in spec A1: NL = 10 log10(N / (1 µPa)²),
     N the mean-square noise in the band (Pa²); spherical spreading, range clamped to 1 m."""
     R = clamp_range(range_m) / 1000.0

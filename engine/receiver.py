@@ -124,4 +124,5 @@ def bearing(spectra: np.ndarray, band: Band, D: float, heading: np.ndarray, full
     tau = _refine(corr, lags)
     rho = np.sum((X * band.phasor(tau)).real, axis=-1)  # ρ = R(τ_lag) [7.5]
     alpha = angle_of_arrival(tau, D, band.c)
-    return Bearing(tau=tau, rho=rho, alpha=alpha, rays=rays(alpha, np.asarray(heading, dtype=float)), lags=lags, corr=corr)
+    return Bearing(tau=tau, rho=rho, alpha=alpha, rays=rays(alpha, np.asarray(heading, dtype=float)), lags=lags,
+                   corr=corr)

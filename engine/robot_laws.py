@@ -1,4 +1,5 @@
-"""Velocity laws and motion helpers of Rossides Ch. 4 (RPSO) and Ch. 5 (robot frame).
+"""Velocity laws and motion helpers of Rossides Ch. 4 (RPSO) and Ch. 5 (robot frame), and the
+registry of the fleet's laws :data:`ROBOT_LAWS`.
 
 Shapes follow ``laws.py``: positions and velocities ``(runs, robots, 2)``, headings and
 scalar speeds ``(runs, robots)``; the ``n`` accelerating terms are stacked on a leading
@@ -7,11 +8,13 @@ axis. Body frame: x along the heading, y to the left; w > 0 turns left (CCW), §
 
 from __future__ import annotations
 
-from typing import Literal
+from dataclasses import dataclass
+from typing import Callable, Literal
 
 import numpy as np
 
 from .laws import Squash, adapted_velocity, squash, standard_velocity
+from .registry import Registry
 
 Inertia = Literal["pi", "disc"]
 
@@ -237,3 +240,74 @@ def mecanum_limit(u: np.ndarray, heading: np.ndarray, v_max: float) -> np.ndarra
     wheels = mecanum_wheels(body[..., 0], body[..., 1], 0.0, r_w=1.0, L=1.0)
     fastest = np.abs(wheels).max(axis=-1, keepdims=True)
     return u * _shrink(fastest, v_max)
+
+
+# --------------------------------------------------------------------------- the fleet's laws
+
+
+@dataclass(frozen=True)
+class Limits:
+    """What bounds a robot's command: its top speed, the rotational-energy reading [5.12] and
+    its radius, and the minimum turning radius [5.6] (0 = off)."""
+
+    v_max: float
+    inertia: Inertia = "pi"
+    radius: float | None = None
+    r_min: float = 0.0
+
+
+# (cmd, y − x, y_g − x, F_t, heading, c, ω, r, limits) → the next command: a world-frame velocity
+# (R, N, 2), or [v, w] (R, N, 2) for a body-frame law
+Command = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                    Limits], np.ndarray]
+
+
+@dataclass(frozen=True)
+class RobotLaw:
+    """One velocity law of the Chapter 4–5 fleet and what the fleet needs to know about it."""
+
+    name: str
+    label: str
+    terms: int  # accelerating terms n: coefficients c_1..c_n and draws r_1..r_n
+    draws: Literal["component", "robot"]  # one U(0,1) draw per velocity component, or per robot
+    body_frame: bool  # the command is [v, w] in the robot frame (a differential drive)
+    dvc: Literal["omni", "nonomni"] | None  # the DVC form that tunes it ([4.14]–[4.16], [5.14]–[5.16]), if any
+    command: Command
+
+
+def _rpso(cmd: np.ndarray, g_p: np.ndarray, g_g: np.ndarray, force: np.ndarray, heading: np.ndarray, c: np.ndarray,
+          omega: np.ndarray, r: np.ndarray, lim: Limits) -> np.ndarray:
+    return rpso_velocity(cmd, g_p, g_g, force, c, omega, r, v_max=lim.v_max)  # clipped (spec §20 item 18)
+
+
+def _adapted_rpso(cmd: np.ndarray, g_p: np.ndarray, g_g: np.ndarray, force: np.ndarray, heading: np.ndarray,
+                  c: np.ndarray, omega: np.ndarray, r: np.ndarray, lim: Limits) -> np.ndarray:
+    return adapted_rpso_velocity(cmd, g_p, g_g, force, c, omega, r)
+
+
+def _limited(vw: np.ndarray, lim: Limits) -> np.ndarray:
+    """[v, w] within the energy limit (§14) and the minimum turning radius (§5.4)."""
+    v, w = energy_limit(vw[..., 0], vw[..., 1], lim.v_max, lim.inertia, lim.radius)
+    w = min_turning_radius(v, w, lim.r_min)
+    return np.stack([v, w], axis=-1)
+
+
+def _robot_centred(cmd: np.ndarray, g_p: np.ndarray, g_g: np.ndarray, force: np.ndarray, heading: np.ndarray,
+                   c: np.ndarray, omega: np.ndarray, r: np.ndarray, lim: Limits) -> np.ndarray:
+    y = np.stack([to_body(g_p, heading), to_body(g_g, heading)])
+    cc = np.repeat(c[..., None], 2, axis=-1)  # the same c_n for v and w
+    return _limited(robot_centred_velocity(cmd, y, cc, omega[..., None], r), lim)
+
+
+def _nonomni(cmd: np.ndarray, g_p: np.ndarray, g_g: np.ndarray, force: np.ndarray, heading: np.ndarray,
+             c: np.ndarray, omega: np.ndarray, r: np.ndarray, lim: Limits) -> np.ndarray:
+    return _limited(nonomni_velocity(cmd, to_body(g_p, heading), to_body(g_g, heading), c, omega, r), lim)
+
+
+ROBOT_LAWS: Registry[RobotLaw] = Registry(
+    "law",
+    RobotLaw("rpso", "Original RPSO", 3, "component", False, None, _rpso),  # [4.2]
+    RobotLaw("adapted-rpso", "Adapted RPSO", 3, "component", False, "omni", _adapted_rpso),  # [4.5]
+    RobotLaw("robot-centred", "Robot-centred", 2, "component", True, None, _robot_centred),  # [5.4]
+    RobotLaw("nonomni", "Non-omni", 5, "robot", True, "nonomni", _nonomni),  # [5.13]
+)

@@ -7,15 +7,12 @@ from pathlib import Path
 from typing import Any, Callable
 
 from .atomic import atomic_output_dir
-from .fleet import Fleet
+from .contract import Engine
 from .recorder import metric_table, trajectory_header, trajectory_rows, write_metrics, write_trajectory
-from .sim import Simulation
-from .slo import SLOSwarm
-from .sonar import AcousticSwarm
 
 
 def run_to_dir(
-    sim: Simulation | Fleet | AcousticSwarm | SLOSwarm,
+    sim: Engine,
     steps: int,
     out: Path | str,
     meta: dict[str, Any],
@@ -30,8 +27,7 @@ def run_to_dir(
         ) as metrics:
             traj.write(trajectory_header(sim.state.x.shape[-1]) + "\n")
             write_trajectory(traj, trajectory_rows(sim.state, sim.t))
-            first = sim.info() if isinstance(sim, (Fleet, AcousticSwarm, SLOSwarm)) else None
-            write_metrics(metrics, metric_table(sim.state, first, sim.t), header=True)
+            write_metrics(metrics, metric_table(sim.state, sim.info(), sim.t), header=True)
             for k in range(steps):
                 info = sim.step()
                 write_trajectory(traj, trajectory_rows(sim.state, sim.t))

@@ -8,12 +8,13 @@ alone (``first_run=i, runs=1``) or inside a batch.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, ClassVar, Literal, get_args
 
 import numpy as np
 
 from .bests import global_best, update_personal
 from .coeffs import CoefficientPolicy
+from .contract import check_live
 from .laws import Law
 from .laws import motion_heading as _heading
 from .objectives import Objective
@@ -34,7 +35,7 @@ class SwarmState:
     y: np.ndarray  # (R, N, d) personal best
     f_y: np.ndarray  # (R, N)
     yg: np.ndarray  # (R, d) global best
-    f_yg: np.ndarray  # (R,)
+    best_fitness: np.ndarray  # (R,) f(y_g)
     f: np.ndarray  # (R, N) fitness at x
     heading: np.ndarray  # (R, N) direction of motion, kept when the robot stops
     status: np.ndarray  # (R, N) int, 0 = active
@@ -49,11 +50,24 @@ class StepInfo:
     """Per-run scalars of one tick, for metrics and plots."""
 
     t: float
-    omega: np.ndarray | float
-    c: np.ndarray
+    omega: np.ndarray | float  # in force during the last tick (NaN before the first)
+    c: np.ndarray  # (n,) or (n, R, N)
     best_fitness: np.ndarray  # (R,)
     max_speed: np.ndarray  # (R,) highest |u| in the swarm
     max_component: np.ndarray  # (R,) highest |u_j|
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The largest velocity component and the coefficients in force (ω, ĉ = Σ c_n; means over
+        robots for per-robot coefficients)."""
+        R = self.max_speed.shape[0]
+        return {"max_component": self.max_component, "omega": _per_run(self.omega, R),
+                "c_hat": _per_run(np.sum(self.c, axis=0), R)}
+
+
+def _per_run(value: np.ndarray | float, R: int) -> np.ndarray:
+    """A scalar or per-robot ``(R, N)`` coefficient as one value per run (mean over robots)."""
+    v = np.asarray(value, dtype=float)
+    return np.full(R, float(v)) if v.ndim == 0 else v.reshape(R, -1).mean(axis=1)
 
 
 def run_generators(seed: int, first_run: int, runs: int) -> list[np.random.Generator]:
@@ -64,7 +78,15 @@ def run_generators(seed: int, first_run: int, runs: int) -> list[np.random.Gener
 
 
 class Simulation:
-    """A seeded swarm: positions, velocities and bests of ``runs`` independent runs."""
+    """A seeded swarm: positions, velocities and bests of ``runs`` independent runs.
+
+    Implements :class:`~.contract.Engine`; :meth:`retune` takes the controller (``policy``,
+    ``law``, ``dt``), the swarm size (``robots``), the bests' bookkeeping (``attractors``,
+    ``pbest_order``), the ``objective`` and, on SLO positions, the localisation keywords
+    (``slo``)."""
+
+    LIVE: ClassVar[frozenset[str]] = frozenset(
+        {"policy", "law", "dt", "slo", "robots", "attractors", "pbest_order", "objective"})
 
     def __init__(
         self,
@@ -120,6 +142,7 @@ class Simulation:
         self.rngs = run_generators(self.seed, self.first_run, self.runs)
         x, u = self._spawn(self._robots)
         self.state = self._fresh_state(x, u)
+        self._coefficients: tuple[np.ndarray | float, np.ndarray] = (np.nan, np.full(1, np.nan))
 
     def _spawn(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         shape = (n, self.d)
@@ -131,7 +154,7 @@ class Simulation:
         f = self.objective(x)
         yg, f_yg = global_best(x, f, self.objective)
         return SwarmState(
-            x=x, u=u, a=np.zeros_like(u), y=x.copy(), f_y=f.copy(), yg=yg, f_yg=f_yg, f=f,
+            x=x, u=u, a=np.zeros_like(u), y=x.copy(), f_y=f.copy(), yg=yg, best_fitness=f_yg, f=f,
             heading=_heading(u, np.zeros(x.shape[:2])), status=np.full(x.shape[:2], ACTIVE, dtype=np.int8),
         )
 
@@ -151,7 +174,7 @@ class Simulation:
             new = self._fresh_state(x, u)
             for name in ("x", "u", "a", "y", "f_y", "f", "heading", "status"):
                 setattr(s, name, np.concatenate([getattr(s, name), getattr(new, name)], axis=1))
-        s.yg, s.f_yg = global_best(s.y, s.f_y, self.objective)
+        s.yg, s.best_fitness = global_best(s.y, s.f_y, self.objective)
 
     def set_objective(self, objective: Objective) -> None:
         """Swap the objective and re-score the bests at the current positions."""
@@ -159,14 +182,49 @@ class Simulation:
         s = self.state
         s.f = objective(s.x)
         s.y, s.f_y = s.x.copy(), s.f.copy()
-        s.yg, s.f_yg = global_best(s.y, s.f_y, objective)
+        s.yg, s.best_fitness = global_best(s.y, s.f_y, objective)
+
+    def retune(self, **changes: Any) -> list[str]:
+        """Change :data:`LIVE` settings from the next tick on, keeping the swarm; returns the names
+        that changed. A new ``objective`` re-scores the bests at the current positions, new
+        ``robots`` spawn in the start region. Refused (``ValueError``, nothing changed) for
+        other keywords or bad values."""
+        check_live(self.LIVE, changes)
+        if "dt" in changes and not changes["dt"] > 0:
+            raise ValueError(f"dt: must be > 0, got {changes['dt']}")
+        if "robots" in changes and changes["robots"] < 1:
+            raise ValueError(f"robots: need at least one robot, got {changes['robots']}")
+        for name, kind in (("attractors", Attractors), ("pbest_order", PbestOrder)):
+            if name in changes and changes[name] not in get_args(kind):
+                raise ValueError(f"{name}: unknown {changes[name]!r}, choose from {get_args(kind)}")
+        slo = changes.pop("slo", None)
+        now = {"policy": self.policy, "law": self.law, "dt": self.dt, "robots": self.robots,
+               "attractors": self.attractors, "pbest_order": self.pbest_order, "objective": self.objective}
+        changed = [k for k, v in changes.items() if now[k] != v]
+        if slo:
+            self._retune_positions(slo)
+            changed.append("slo")
+        for name in ("policy", "law", "attractors", "pbest_order"):
+            if name in changed:
+                setattr(self, name, changes[name])
+        if "dt" in changed:
+            self.dt = float(changes["dt"])
+        if "robots" in changed:
+            self.set_robots(int(changes["robots"]))
+        if "objective" in changed:
+            self.set_objective(changes["objective"])
+        return changed
+
+    def _retune_positions(self, slo: dict[str, Any]) -> None:
+        """New localisation settings: only a swarm on SLO positions has any."""
+        raise ValueError("slo: this swarm acts on true positions; switch it to SLO positions first")
 
     # ------------------------------------------------------------------ tick
     def _update_bests(self) -> None:
         s = self.state
         s.f = self.objective(s.x)
         s.y, s.f_y = update_personal(s.x, s.f, s.y, s.f_y, self.objective)
-        s.yg, s.f_yg = global_best(s.y, s.f_y, self.objective)
+        s.yg, s.best_fitness = global_best(s.y, s.f_y, self.objective)
 
     def _directions(self) -> np.ndarray:
         """Direction inputs g_n of the accelerating terms, (2, R, N, d)."""
@@ -187,6 +245,7 @@ class Simulation:
         if self.pbest_order == "before_velocity":  # Algorithm 1 phase A first
             self._update_bests()
         omega, c = self.policy.coefficients(self.t, self.dt, self.d)
+        self._coefficients = (omega, np.asarray(c))
         g = self._directions()
         u_new = self.law.velocity(s.u, g, c, omega, self._draw(g.shape[0]))
         if self.pbest_order == "after_velocity":  # the velocity saw last tick's bests
@@ -196,8 +255,12 @@ class Simulation:
         s.u = u_new
         s.heading = _heading(u_new, s.heading)
         s.k += 1
-        speed = np.linalg.norm(u_new, axis=-1)
-        return StepInfo(
-            t=self.t, omega=omega, c=np.asarray(c),
-            best_fitness=s.f_yg.copy(), max_speed=speed.max(axis=1), max_component=np.abs(u_new).max(axis=(1, 2)),
-        )
+        return self.info()
+
+    def info(self) -> StepInfo:
+        """The metrics of the current step, with the coefficients of the last tick."""
+        s = self.state
+        omega, c = self._coefficients
+        return StepInfo(t=self.t, omega=omega, c=c, best_fitness=s.best_fitness.copy(),
+                        max_speed=np.linalg.norm(s.u, axis=-1).max(axis=1),
+                        max_component=np.abs(s.u).max(axis=(1, 2)))

@@ -12,10 +12,11 @@ Arrays are (runs R, particles N, 2); run i draws from the children of
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field, replace
-from typing import Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
+from .contract import check_live
 from .neighbourhoods import Neighbourhood, NeighbourhoodKind
 from .slo_formation import AttractionRepulsion
 from .slo_localisation import Candidates
@@ -129,11 +130,6 @@ class SLOConfig:
         return QUALITY_THRESHOLDS.get(self.objective, -np.inf) if isinstance(self.objective, str) else -np.inf
 
 
-# Settings an SLO swarm can change mid-run (:meth:`SLOSwarm.retune`).
-LIVE = frozenset({"selection", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1", "entry_policy",
-                  "neighbourhood", "neighbourhood_param", "errors", "objective", "walk_speed", "quality_threshold"})
-
-
 def _differs(a: object, b: object) -> bool:
     if isinstance(a, (str, ErrorModel)) and isinstance(b, (str, ErrorModel)):
         return error_model(a) != error_model(b) if not (isinstance(a, str) and isinstance(b, str)) else a != b
@@ -152,13 +148,8 @@ class SLOState:
     heading: np.ndarray  # (R, N) direction of the last command
     status: np.ndarray  # (R, N) int8, 0 = active (recorder convention)
     beliefs: Beliefs
-    f_best: np.ndarray  # (R,) best true fitness of the run so far
+    best_fitness: np.ndarray  # (R,) best true fitness of the run so far
     k: int = 0
-
-    @property
-    def f_yg(self) -> np.ndarray:
-        """Best fitness so far, under the name the recorder reads."""
-        return self.f_best
 
     @property
     def est(self) -> np.ndarray:
@@ -194,7 +185,7 @@ class SLOInfo:
     """Per-run metrics of one generation (spec §11), each (R,)."""
 
     k: int
-    best_fitness: np.ndarray  # min_i f(x_i(t))
+    best_fitness: np.ndarray  # min_i f(x_i(t)), the best of this generation
     best_so_far: np.ndarray
     quality_met_at: np.ndarray  # first generation with best ≤ T, inf if not yet
     e_abs: dict[str, np.ndarray] = field(default_factory=dict)  # mean, std, sem, median, count
@@ -204,8 +195,13 @@ class SLOInfo:
     dead_reckoning: np.ndarray | None = None  # share of x3 estimates
     round_trip: np.ndarray | None = None  # mean e_r over first triangles
 
-    def columns(self) -> dict[str, np.ndarray]:
-        """Flat per-run columns, e.g. ``e_abs_mean``, ``distance_median`` (for metrics.csv)."""
+    @property
+    def t(self) -> float:
+        return float(self.k)
+
+    def series(self) -> dict[str, np.ndarray]:
+        """Flat per-run values under Mai's names, e.g. ``best_fitness`` (of this generation),
+        ``e_abs_mean``, ``distance_median`` (:meth:`SLOSwarm.run`)."""
         out: dict[str, np.ndarray] = {}
         for name, value in asdict(self).items():
             if isinstance(value, dict):
@@ -214,11 +210,24 @@ class SLOInfo:
                 out[name] = np.asarray(value, dtype=float)
         return out
 
+    def columns(self) -> dict[str, np.ndarray]:
+        """The metric columns: :meth:`series` with this generation's best as ``generation_best``
+        (in the metric table ``best_fitness`` is the best so far, as for every kind)."""
+        out = self.series()
+        return {"generation_best": out.pop("best_fitness"), **out}
+
 
 class SLOSwarm:
     """Seeded SLO swarms of ``runs`` runs (``first_run`` … ``first_run + runs − 1``).
 
-    Keyword parameters are the fields of :class:`SLOConfig`."""
+    Keyword parameters are the fields of :class:`SLOConfig`. Implements
+    :class:`~.contract.Engine` (one tick is one generation); :meth:`retune` takes the
+    localisation choices, the errors, the neighbourhood, the objective, the walk speed and the
+    quality threshold."""
+
+    LIVE: ClassVar[frozenset[str]] = frozenset(
+        {"selection", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1", "entry_policy", "neighbourhood",
+         "neighbourhood_param", "errors", "objective", "walk_speed", "quality_threshold"})
 
     def __init__(self, *, runs: int = 1, seed: int = 0, first_run: int = 0, **params) -> None:
         if runs < 1:
@@ -232,16 +241,14 @@ class SLOSwarm:
         self.formation = self.config.formation()
         self.reset(seed)
 
-    def retune(self, **changes) -> list[str]:
+    def retune(self, **changes: Any) -> list[str]:
         """Change :data:`LIVE` settings mid-run and return the names that changed.
 
         Positions, commands and beliefs are kept, so a learner sees the same swarm react.
         A new objective restarts the bests (personal bests, best so far, threshold
         generation) at the current positions; new errors keep each robot's calibration
         offsets, rescaled. Refused (``ValueError``, nothing changed) for other fields."""
-        fixed = sorted(set(changes) - LIVE)
-        if fixed:
-            raise ValueError(f"{', '.join(fixed)}: cannot change mid-run (reset the swarm instead)")
+        check_live(self.LIVE, changes)
         cfg = replace(self.config, **changes)  # validates
         changed = [k for k in changes if _differs(getattr(self.config, k), getattr(cfg, k))]
         if not changed:
@@ -258,7 +265,7 @@ class SLOSwarm:
             s = self.state
             self.fitness = fitness
             s.f, s.P, s.fP = self.fitness(s.x), np.zeros_like(s.P), np.full_like(s.fP, np.inf)
-            s.f_best = np.full(self.runs, np.inf)
+            s.best_fitness = np.full(self.runs, np.inf)
         if {"objective", "quality_threshold"} & set(changed):
             self._met = np.full(self.runs, np.inf)
             self._last = self._record()
@@ -267,6 +274,15 @@ class SLOSwarm:
     @property
     def t(self) -> float:
         return float(self.state.k)
+
+    @property
+    def dt(self) -> float:
+        """One generation."""
+        return 1.0
+
+    @property
+    def robots(self) -> int:
+        return self.config.particles
 
     def reset(self, seed: int | None = None) -> None:
         """Generation 0 with ``seed`` (or the current one): new positions, commands, beliefs."""
@@ -286,7 +302,7 @@ class SLOSwarm:
         self.state = SLOState(
             x=x, u=u, P=np.zeros_like(x), fP=np.full(shape, np.inf), f=self.fitness(x),
             heading=np.arctan2(u[..., 1], u[..., 0]), status=np.zeros(shape, dtype=np.int8), beliefs=beliefs,
-            f_best=np.full(self.runs, np.inf),
+            best_fitness=np.full(self.runs, np.inf),
         )
         self._met = np.full(self.runs, np.inf)
         self._last = self._record()
@@ -296,9 +312,9 @@ class SLOSwarm:
         return self._last
 
     def run(self, generations: int) -> dict[str, np.ndarray]:
-        """Advance ``generations`` steps; per-generation columns of :meth:`SLOInfo.columns`
+        """Advance ``generations`` steps; per-generation values of :meth:`SLOInfo.series`
         stacked to (generations + 1, R), the current generation first."""
-        rows = [self._last.columns()] + [self.step().columns() for _ in range(generations)]
+        rows = [self._last.series()] + [self.step().series() for _ in range(generations)]
         return {k: np.stack([r[k] for r in rows]) for k in rows[0]}
 
     # ------------------------------------------------------------------ behaviour
@@ -368,11 +384,11 @@ class SLOSwarm:
     def _record(self) -> SLOInfo:
         s = self.state
         best = s.f.min(axis=1)
-        s.f_best = np.minimum(s.f_best, best)
+        s.best_fitness = np.minimum(s.best_fitness, best)
         self._met = np.where(np.isinf(self._met) & (best <= self.config.threshold()), float(s.k), self._met)
         err = pair_errors(s.x, s.est, s.valid)
         return SLOInfo(
-            k=s.k, best_fitness=best, best_so_far=s.f_best.copy(), quality_met_at=self._met.copy(),
+            k=s.k, best_fitness=best, best_so_far=s.best_fitness.copy(), quality_met_at=self._met.copy(),
             e_abs=stats(err["abs"]), e_rel=stats(err["rel"]), e_ang=stats(err["ang"]),
             distance=stats(pair_distances(s.x)), dead_reckoning=dead_reckoning_share(s.kind, s.valid),
             round_trip=stats(round_trip_errors(s.est, s.adjacency))["mean"],

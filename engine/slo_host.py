@@ -119,9 +119,9 @@ class SLOHost:
                                             **self.slo_params)
         self.bests = BelievedBests(self.slo_source, s.y - s.x, s.k)
 
-    def retune_slo(self, **slo: Any) -> None:
-        """Change the SLO keywords (errors, selection, …) mid-run, beliefs kept; see
-        :meth:`SLOPositionSource.retune`."""
+    def _retune_positions(self, slo: dict[str, Any]) -> None:
+        """Change the SLO keywords (errors, selection, …) mid-run, beliefs kept (the host's
+        ``retune(slo=...)``); see :meth:`SLOPositionSource.retune`."""
         merged = {**self.slo_params, **slo}
         self.slo_source.retune(**{k: merged[k] for k in slo if k != "unit"}, unit=merged.get("unit", 1.0),
                                **({"neighbourhood_param": merged.get("neighbourhood_param")}

@@ -14,17 +14,18 @@ import numpy as np
 
 from .neighbourhoods import distances
 from .slo_localisation import Candidates, Flag, candidates
-from .slo_selection import Kind, RTSTriangle, akcan, css, rts
+from .slo_selection import SELECTIONS, Kind, RTSTriangle, css
 from .slo_sensors import ErrorModel, measure_odometry, measure_ranges, permanent_errors, permanent_normals
 from .slo_streams import Streams
 
-Selection = Literal["css", "rts", "akcan", "perfect"]
+PERFECT = "perfect"  # the oracle baseline: every estimate is the truth
+Selection = str  # a key of slo_selection.SELECTIONS, or PERFECT
 EntryPolicy = Literal["stale", "geometric_random"]
 
 
 @dataclass(frozen=True)
 class LocaliserParams:
-    """Localisation choices (spec §7, §9). ``selection`` "perfect" is the oracle baseline."""
+    """Localisation choices (spec §7, §9). ``selection`` :data:`PERFECT` is the oracle baseline."""
 
     selection: Selection = "css"  # gap A27
     prediction_weight: float = 0.5  # w of [3.7]
@@ -39,8 +40,8 @@ class LocaliserParams:
     rts_tolerance: float = 1.0  # e_r below which a geometric loop excludes x3
 
     def __post_init__(self) -> None:
-        if self.selection not in ("css", "rts", "akcan", "perfect"):
-            raise ValueError(f"selection: unknown {self.selection!r}")
+        if self.selection != PERFECT:
+            SELECTIONS.pick(self.selection)
         if not 0.0 <= self.prediction_weight <= 1.0:
             raise ValueError(f"prediction_weight: must be in [0, 1], got {self.prediction_weight}")
         if self.entry_policy not in ("stale", "geometric_random"):
@@ -131,16 +132,12 @@ class Localiser:
         if p.entry_policy == "geometric_random":
             entry = adjacency & ~b.adjacency
             coin = np.stack([g.random(adjacency.shape[1:]) < 0.5 for g in self.streams["entry"]])
-        triangle = round_trip = None
-        if p.selection == "perfect":
+        if p.selection == PERFECT:
             new, kind = relative_truth(x), np.full(adjacency.shape, Kind.PERFECT, dtype=np.int8)
-        else:
-            new, kind = css(cand, p.prediction_weight, entry, coin)
-            if p.selection == "akcan":
-                new, kind = akcan(cand, adjacency, ranges, (new, kind))
-            elif p.selection == "rts":
-                res = rts(cand, adjacency, (new, kind), p.rts_triangle, p.rts_prefer_geometric, p.rts_tolerance)
-                new, kind, triangle, round_trip = res.est, res.kind, res.triangle, res.round_trip
+            triangle = round_trip = None
+        else:  # CSS, and the others fall back on it
+            base = css(cand, p.prediction_weight, entry, coin)
+            new, kind, triangle, round_trip = SELECTIONS[p.selection].select(cand, adjacency, ranges, base, p)
         est = np.where(adjacency[..., None], new, b.est)
         return Beliefs(
             est=est, valid=adjacency.copy(), adjacency=adjacency.copy(), ranges=ranges,

@@ -1,5 +1,6 @@
 """Choosing each neighbour's estimate among its candidates (Mai §3.5.3): Closest Solution
-Selection (CSS) [3.7], Round Trip Selection (RTS) [3.8] and Akcan's criterion [3.9].
+Selection (CSS) [3.7], Round Trip Selection (RTS) [3.8] and Akcan's criterion [3.9], and their
+registry :data:`SELECTIONS`.
 
 Arrays: candidates ``(R, N, N, 3, 2)`` for the ordered pairs (a → b), masks ``(R, N, N, 3)``,
 adjacency ``(R, N, N)``; outputs are the estimate ``(R, N, N, 2)`` and the :class:`Kind` of
@@ -10,10 +11,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Literal
+from typing import Callable, Literal, Protocol
 
 import numpy as np
 
+from .registry import Registry
 from .slo_localisation import Candidates
 
 RTSTriangle = Literal["first", "best"]
@@ -188,3 +190,52 @@ def rts(
         smask[:, a] = np.where(open_[..., None], single, smask[:, a])
         resolved[:, a] |= open_
     return RTSResult(est=est, kind=kind, triangle=used, round_trip=e_used)
+
+
+# --------------------------------------------------------------------------- the registry
+
+
+class RTSOptions(Protocol):
+    """The localisation choices a selection may read (:class:`~.slo_localiser.LocaliserParams`)."""
+
+    rts_triangle: RTSTriangle
+    rts_prefer_geometric: bool
+    rts_tolerance: float
+
+
+Chosen = tuple[np.ndarray, np.ndarray, "np.ndarray | None", "np.ndarray | None"]  # est, kind, triangle, e_r
+
+
+@dataclass(frozen=True)
+class SelectionRule:
+    """One candidate selection: (candidates, adjacency, measured ranges d*(t), the CSS choice it
+    falls back on, options) → estimate, kind, and for RTS the closing vertex and its e_r."""
+
+    name: str
+    label: str
+    select: Callable[[Candidates, np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray], RTSOptions], Chosen]
+
+
+def _css(c: Candidates, adjacency: np.ndarray, ranges: np.ndarray, base: tuple[np.ndarray, np.ndarray],
+         options: RTSOptions) -> Chosen:
+    return base[0], base[1], None, None
+
+
+def _rts(c: Candidates, adjacency: np.ndarray, ranges: np.ndarray, base: tuple[np.ndarray, np.ndarray],
+         options: RTSOptions) -> Chosen:
+    res = rts(c, adjacency, base, options.rts_triangle, options.rts_prefer_geometric, options.rts_tolerance)
+    return res.est, res.kind, res.triangle, res.round_trip
+
+
+def _akcan(c: Candidates, adjacency: np.ndarray, ranges: np.ndarray, base: tuple[np.ndarray, np.ndarray],
+           options: RTSOptions) -> Chosen:
+    est, kind = akcan(c, adjacency, ranges, base)
+    return est, kind, None, None
+
+
+SELECTIONS: Registry[SelectionRule] = Registry(
+    "selection",
+    SelectionRule("css", "CSS (closest solution)", _css),  # [3.7]
+    SelectionRule("rts", "RTS (round trip)", _rts),  # [3.8]
+    SelectionRule("akcan", "Akcan (GDL)", _akcan),  # [3.9]
+)

@@ -37,13 +37,14 @@ a run is the same alone or in a batch. With ``stop_on_converge`` a converged run
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Literal
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
 from .acoustic_surrogate import surrogate
 from .band import Band
+from .contract import check_live
 from .dvc import dvc_nonomni, forward_guard, w_max
 from .escort import moving_source, with_escort
 from .laws import adapted_velocity, motion_heading
@@ -113,7 +114,7 @@ class SonarParams:
                 raise ValueError(f"{name}: must be > 0, got {getattr(self, name)!r}")
         if not self.d0 >= 0:
             raise ValueError(f"d0: must be >= 0, got {self.d0!r}")
-        self.band  # validates f_c, Q, tbp, c, fs
+        _ = self.band  # validates f_c, Q, tbp, c, fs
 
     @property
     def band(self) -> Band:
@@ -157,11 +158,11 @@ class SonarState:
     bearing: Bearing | None = None  # last receiver output (rays, corr, lags), two-hydrophone strategies
     loc: LocInfo | None = None  # last strategy decision (intersections, selected, triangles)
     reading: SectorReading | None = None  # last six-sector reading (nonomni)
-    stepped: np.ndarray = field(default_factory=lambda: np.zeros(0, int))  # runs R' that intensity/bearing/loc/reading cover
+    stepped: np.ndarray = field(default_factory=lambda: np.zeros(0, int))  # runs R' intensity…reading cover
 
     @property
-    def f_yg(self) -> np.ndarray:
-        """(R,) largest remembered fitness of each run (the recorder's ``best_fitness``)."""
+    def best_fitness(self) -> np.ndarray:
+        """(R,) largest remembered fitness of each run."""
         return self.f_hat.max(axis=1)
 
 
@@ -193,9 +194,28 @@ class SonarInfo:
     source: np.ndarray  # (R, 2)
     running: np.ndarray  # (R,) bool
 
+    def columns(self) -> dict[str, np.ndarray]:
+        """CoM and source, their distance, convergence (flag and first tick, −1 if none), the share
+        inside the escort ring, the mean robot–source distance and contacts."""
+        return {"com_x": self.com[:, 0], "com_y": self.com[:, 1], "source_x": self.source[:, 0],
+                "source_y": self.source[:, 1], "com_dist": self.com_dist, "converged": self.converged,
+                "steps_to_converge": self.steps_to_converge, "frac_inside_ring": self.frac_inside_ring,
+                "mean_dist_to_source": self.mean_dist_to_source, "contacts": self.contacts}
+
+
+# SonarParams fields that shape the start (the source, the deployment) or the kind of swarm.
+_FIXED = frozenset({"algorithm", "controller", "mode", "snr0_db", "d0", "start", "source_bearing", "full_lag",
+                    "stop_on_converge"})
+
 
 class AcousticSwarm:
-    """``runs`` seeded swarms of ``robots`` robots localising one acoustic source each."""
+    """``runs`` seeded swarms of ``robots`` robots localising one acoustic source each.
+
+    Implements :class:`~.contract.Engine`; :meth:`retune` takes the :class:`SonarParams` that
+    shape the next listen or the next move (band, levels, forgetting, U, β, Δt, the escort ring,
+    the source's motion, …) and, on SLO positions, the localisation keywords (``slo``)."""
+
+    LIVE: ClassVar[frozenset[str]] = frozenset({f.name for f in fields(SonarParams)} - _FIXED | {"slo"})
 
     def __init__(self, params: SonarParams | None = None, *, robots: int = 10, runs: int = 1, seed: int = 0,
                  first_run: int = 0) -> None:
@@ -203,20 +223,51 @@ class AcousticSwarm:
             raise ValueError("robots and runs must be >= 1")
         self.params = params or SonarParams()
         p = self.params
-        self.strategy: Strategy = make_strategy(p.algorithm, a=p.a)
+        self._tune()
         if self.strategy.hydrophones == 2 and p.mode == "waveform" and not p.D > 0:
             raise ValueError("d_over_lambda: must be > 0 for two hydrophones")
-        if p.algorithm == "gt-pso" and robots < 4:
-            raise ValueError("gt-pso needs at least 4 robots (a triplet and a partner outside it)")
-        if p.algorithm in ("b-pso", "xb-pso") and robots < 2:
-            raise ValueError(f"{p.algorithm} needs at least 2 robots")
-        self.band = p.band
+        if robots < self.strategy.min_robots:
+            raise ValueError(f"{p.algorithm} needs at least {self.strategy.min_robots} robots")
         self.runs, self.first_run, self._robots = runs, first_run, robots
+        self.reset(seed)
+
+    def _tune(self) -> None:
+        """The band, the strategy and the controller's coefficients of ``params``."""
+        p = self.params
+        self.band = p.band
+        self.strategy: Strategy = make_strategy(p.algorithm, a=p.a)
         tune = from_beta(p.dt, p.U, p.beta, d=2)  # ω = 1 − β, ĉ = βU/√2 [4.15]
         self.omega = tune.omega
         self.c = np.array(split(tune.c_hat, p.c1_share))  # c1, c2
         self.w_max = w_max(p.U, p.dt)  # §14: min(√(4 e_max/π), π/(2Δt))
-        self.reset(seed)
+
+    def retune(self, **changes: Any) -> list[str]:
+        """Change :data:`LIVE` settings from the next tick on, keeping the swarm and its memory;
+        returns the names that changed. A new source speed, heading, U or Δt lets the source
+        carry on from where it is. Refused (``ValueError``, nothing changed) for other keywords."""
+        check_live(self.LIVE, changes)
+        slo = changes.pop("slo", None)
+        old, params = self.params, replace(self.params, **changes)  # validates
+        changed = [k for k in changes if getattr(params, k) != getattr(old, k)]
+        if slo:
+            self._retune_positions(slo)
+            changed.append("slo")
+        if {"v_n", "source_heading", "U", "dt"} & set(changed):
+            self._restart_source_motion(params)
+        self.params = params
+        self._tune()
+        self._refresh(np.arange(self.runs))
+        return changed
+
+    def _retune_positions(self, slo: dict[str, Any]) -> None:
+        """New localisation settings: only a swarm on SLO positions has any."""
+        raise ValueError("slo: this swarm acts on true positions; switch it to SLO positions first")
+
+    def _restart_source_motion(self, params: SonarParams) -> None:
+        """A moving source under new ``params`` carries on from where it is now [8.8]."""
+        h = params.source_heading
+        step = np.array([np.cos(h), np.sin(h)]) * params.v_n * params.U * params.dt
+        self.source0 = self.state.source - self.state.steps[:, None] * step
 
     # ------------------------------------------------------------------ setup
     @property
@@ -265,7 +316,8 @@ class AcousticSwarm:
         self._converge(np.arange(R))
 
     # ------------------------------------------------------------------ pieces
-    def _listen(self, x: np.ndarray, heading: np.ndarray, src: np.ndarray, rngs: list) -> tuple[Sensed, np.ndarray, Bearing | None]:
+    def _listen(self, x: np.ndarray, heading: np.ndarray, src: np.ndarray,
+                rngs: list) -> tuple[Sensed, np.ndarray, Bearing | None]:
         """Step 1 for runs with positions ``x`` (R', N, 2): the Sensed arrays, the per-hydrophone
         intensity and (two hydrophones) the receiver output."""
         p, strat = self.params, self.strategy

@@ -458,7 +458,8 @@ class RunSpace:
         """(N,) bool: robot i is within ``tol`` m of (or overlapping) any other body."""
         q = self.space.point_query_nearest
         return np.array(
-            [q(tuple(b.position), self.robot_radius + tol, f) is not None for b, f in zip(self.robot_bodies, self.filters)],
+            [q(tuple(b.position), self.robot_radius + tol, f) is not None
+             for b, f in zip(self.robot_bodies, self.filters)],
             dtype=bool,
         )
 

@@ -171,7 +171,7 @@ def slo_localiser_for(slo: SLO) -> dict:
     )
 
 
-# [slo] fields an engine can change mid-run (SLOSwarm.retune, SLOSimulation.retune_slo).
+# [slo] fields an engine can change mid-run (SLOSwarm.retune, a host swarm's retune(slo=...)).
 SLO_LIVE = ("selection", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1", "entry_policy", "neighbourhood",
             "neighbourhood_param", "errors", "error_values", "objective", "walk_speed", "quality_threshold")
 

@@ -15,7 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from app_helpers import HAND_TAB
 
 from shoal.app.fleet_panels import CONTROLLERS
 from shoal.app.kinds import fleet as fleet_kind
@@ -28,6 +27,8 @@ from shoal.engine.fleet import Fleet
 from shoal.engine.recorder import TRAJECTORY_COLUMNS
 from shoal.engine.sensing import sense
 from shoal.presets import io as presets_io
+
+from app_helpers import HAND_TAB
 
 
 @dataclass

@@ -15,7 +15,6 @@ import threading
 
 import numpy as np
 import pytest
-from app_helpers import HAND_TAB
 
 from shoal.app import plots
 from shoal.app.kinds import swarm
@@ -31,6 +30,8 @@ from shoal.engine.objectives import Objective
 from shoal.engine.recorder import TRAJECTORY_COLUMNS
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
+
+from app_helpers import HAND_TAB
 
 
 def _raw(tab):

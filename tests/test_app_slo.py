@@ -52,7 +52,8 @@ def test_slo_walk_builds_an_slo_swarm_and_draws_the_selected_robots_estimates(ta
     expected = x[3] + est[3, j]  # ghost = observer's true position + its estimated vector
     np.testing.assert_allclose(_drawn(tab, "ghosts"), expected, atol=1e-4)
     np.testing.assert_allclose(_drawn(tab, "robots"), x, atol=1e-4)
-    errs = np.asarray(tab.arena.nodes["ghost_errors"].points, dtype=float)[:, :, :2] / tab.arena.scale + tab.arena.centre
+    drawn = np.asarray(tab.arena.nodes["ghost_errors"].points, dtype=float)[:, :, :2]
+    errs = drawn / tab.arena.scale + tab.arena.centre
     np.testing.assert_allclose(errs[:, 0], expected, atol=1e-4)  # error segment: ghost → true neighbour
     np.testing.assert_allclose(errs[:, 1], x[j], atol=1e-4)
     edges = np.asarray(tab.arena.nodes["edges"].points)

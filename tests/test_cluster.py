@@ -84,8 +84,8 @@ def test_a_worker_that_dies_mid_sweep_costs_a_retry_not_the_sweep(cluster, local
 
 def test_cli_sweep_and_reproduce_take_a_scheduler_address(cluster, tmp_path):
     out = tmp_path / "cli"
-    res = subprocess.run([sys.executable, "-m", "shoal", "sweep", "default", "--grid", "controller.U=6,8", "--runs", "2",
-                          "--steps", "10", "--out", str(out), "--scheduler", cluster.address],
+    res = subprocess.run([sys.executable, "-m", "shoal", "sweep", "default", "--grid", "controller.U=6,8",
+                          "--runs", "2", "--steps", "10", "--out", str(out), "--scheduler", cluster.address],
                          capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stderr
     assert (out / "results.csv").is_file()

@@ -7,15 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shoal.engine.band import Band
-from shoal.engine.receiver import (
-    MINUS,
-    PLUS,
-    angle_of_arrival,
-    bearing,
-    correlate,
-    cross_spectrum,
-    lag_samples,
-)
+from shoal.engine.receiver import MINUS, PLUS, angle_of_arrival, bearing, correlate, cross_spectrum, lag_samples
 from shoal.engine.signals import hydrophone_positions, intensity, synthesise, to_time
 
 
@@ -239,7 +231,8 @@ def test_batched_bearing_equals_runs_alone():
     pos = hydrophone_positions(x, o, D)
     batch = bearing(synthesise(_rngs(runs, 4), pos, src, b, 1000.0), b, D, o)
     for i in range(runs):
-        alone = bearing(synthesise([np.random.default_rng([4, i])], pos[i : i + 1], src[i : i + 1], b, 1000.0), b, D, o[i : i + 1])
+        spectra = synthesise([np.random.default_rng([4, i])], pos[i : i + 1], src[i : i + 1], b, 1000.0)
+        alone = bearing(spectra, b, D, o[i : i + 1])
         for name in ("tau", "rho", "alpha", "rays", "corr"):
             assert np.allclose(getattr(batch, name)[i], getattr(alone, name)[0], rtol=1e-12, atol=1e-12), name
 

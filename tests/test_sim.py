@@ -39,7 +39,7 @@ def test_swarm_reaches_the_source_and_bests_are_monotone():
     history = []
     for _ in range(400):
         sim.step()
-        history.append(sim.state.f_yg[0])
+        history.append(sim.state.best_fitness[0])
     assert np.all(np.diff(history) <= 0)  # the global best never gets worse
     assert history[-1] < 0.5  # the swarm found the source (distance in m)
     assert np.all(sim.state.f_y <= sim.objective(sim.state.y) + 1e-12)
@@ -93,7 +93,7 @@ def test_live_changes_apply_without_restart():
     sim.step()
     sim.set_robots(5)
     assert sim.state.y.shape == (1, 5, 2)
-    assert sim.state.f_yg[0] == pytest.approx(sim.state.f_y[0].min())
+    assert sim.state.best_fitness[0] == pytest.approx(sim.state.f_y[0].min())
 
 
 def test_law_switch_keeps_state():

@@ -33,7 +33,8 @@ def test_slo_fields_reach_the_engine():
                                  "slo.neighbourhood=ring", "slo.neighbourhood_param=3", "slo.prediction_weight=0.25",
                                  "slo.entry_policy=geometric_random"]))
     cfg = sw.config
-    assert (cfg.selection, cfg.neighbourhood, cfg.neighbourhood_param, cfg.prediction_weight) == ("rts", "ring", 3, 0.25)
+    chosen = (cfg.selection, cfg.neighbourhood, cfg.neighbourhood_param, cfg.prediction_weight)
+    assert chosen == ("rts", "ring", 3, 0.25)
     assert cfg.entry_policy == "geometric_random" and build(load("slo-walk")).config.entry_policy == "stale"
     assert cfg.motion == "random_walk" and sw.errors.range.sigma_m == 0.4
     assert sw.errors.range.sigma_a == 0.30  # the rest of the High set stays

@@ -147,5 +147,5 @@ def test_failed_range_edges_resolve_to_x3():
     d1 = np.linalg.norm(c.points[..., 0, :], axis=-1)
     d1[0, 0, 1] = 0.0
     cc = candidates(d1, d1, np.ones(d1.shape + (2,)), c.x3 - 1.0)
-    for est, kind in (css(cc, 0.5), akcan(cc, adj, ranges, css(cc, 0.5)), (rts(cc, adj, css(cc, 0.5)).est, None)):
+    for est, _kind in (css(cc, 0.5), akcan(cc, adj, ranges, css(cc, 0.5)), (rts(cc, adj, css(cc, 0.5)).est, None)):
         assert np.array_equal(est[0, 0, 1], cc.x3[0, 0, 1])

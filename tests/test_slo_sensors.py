@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 
 from shoal.engine.slo_sensors import (
-    ERROR_PRESETS, ErrorModel, OdometryErrors, RangeErrors, draw_permanent, error_model, measure_odometry,
+    ERROR_PRESETS,
+    ErrorModel,
+    OdometryErrors,
+    RangeErrors,
+    draw_permanent,
+    error_model,
+    measure_odometry,
     measure_ranges,
 )
 

@@ -88,10 +88,14 @@ def test_state_exposes_beliefs_for_the_app():
     assert np.all(s.kind[~s.valid] == Kind.NONE)
     assert np.array_equal(s.valid, s.adjacency) and np.all(s.adjacency.sum(axis=2) == 5)
     assert s.beliefs.triangle.shape == (2, 7, 7) and s.flag.dtype == np.int8
-    cols = sw.info().columns()
+    series = sw.info().series()
     for name in ("best_fitness", "e_abs_mean", "e_abs_sem", "e_rel_median", "e_ang_std", "distance_median",
                  "dead_reckoning", "round_trip", "quality_met_at"):
-        assert cols[name].shape == (2,)
+        assert series[name].shape == (2,)
+    cols = sw.info().columns()  # the metric table's names: best_fitness there is the best so far
+    assert list(cols)[0] == "generation_best" and "best_fitness" not in cols
+    assert np.array_equal(cols["generation_best"], series["best_fitness"])
+    assert cols.keys() - {"generation_best"} < series.keys()
 
 
 def test_perfect_localisation_has_no_error():

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from shoal.app.cli import build_parser
-from shoal.app.server import DEFAULT_MAX_SESSIONS, FULL_TITLE, start_server
 from shoal.app.kinds.registry import session_for
+from shoal.app.server import DEFAULT_MAX_SESSIONS, FULL_TITLE, start_server
 from shoal.app.tab import TabApp
 from shoal.presets.io import load
 

@@ -51,7 +51,6 @@ from .base import AppKind, BaseDriver
 
 OBSTACLE_RADIUS = 0.7  # m: a new obstacle's default radius
 FOLLOW = ("world", "swarm", "robot")  # what the view keeps in the middle
-REBUILD_SECTIONS = ("world", "robot")  # changes here (and sim.robots, the positions switch) rebuild the fleet
 
 
 class EditRefused(ValueError):
@@ -96,19 +95,16 @@ class FleetDriver(BaseDriver):
 
     # ------------------------------------------------------------------ changes
     def rebuilds(self, old: Scenario, new: Scenario) -> bool:
-        return (new.sim.robots != old.sim.robots or any(_changed(old, new, s) for s in REBUILD_SECTIONS)
-                or slo_retune(old, new) is None)
+        """A new fleet for another size, world or positions, or a robot model the fleet cannot
+        change running (a :class:`FleetParams` field outside ``Fleet.LIVE``)."""
+        a, b = fleet_params_for(old), fleet_params_for(new)
+        fixed = {f.name for f in dataclasses.fields(FleetParams)} - Fleet.LIVE
+        return (new.sim.robots != old.sim.robots or _changed(old, new, "world") or slo_retune(old, new) is None
+                or any(getattr(a, f) != getattr(b, f) for f in fixed))
 
-    def retune(self, old: Scenario, new: Scenario) -> None:
-        fleet = self.sim
-        params = fleet_params_for(new)
-        for f in dataclasses.fields(FleetParams):
-            value = getattr(params, f.name)
-            if getattr(fleet.params, f.name) != value:
-                setattr(fleet.params, f.name, value)  # in force from the next step
-        retune = slo_retune(old, new)
-        if retune:  # errors, selection, neighbourhood…: the running fleet keeps its beliefs
-            fleet.retune_slo(**retune)  # type: ignore[attr-defined]
+    def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
+        params, slo = fleet_params_for(new), slo_retune(old, new)  # slo: the running fleet keeps its beliefs
+        return {**{k: getattr(params, k) for k in Fleet.LIVE - {"slo"}}, **({"slo": slo} if slo else {})}
 
     # ------------------------------------------------------------------ world edits
     def _world_changed(self) -> None:
@@ -477,7 +473,7 @@ def layers(panels: Any) -> tuple[Layer, ...]:
     their headings, trails and bests, the selected robot's sensing; swarm B, the beliefs."""
     return (
         WorldLayer(),
-        Obstacles(panels.drag_obstacle),
+        Obstacles(panels.drag_obstacle if panels is not None else None),
         Robots(ROBOT, _radius, Z["robots"], collided=COLLIDED),
         Headings(HEADING, lambda canvas, snap: 1.3 * snap.extras["params"].robot_radius, Z["headings"],
                  angle=_heading_angle),

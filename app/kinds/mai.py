@@ -79,9 +79,6 @@ class MaiDriver(BaseDriver):
         except ValueError as err:
             raise PresetError([f"slo: {err}"]) from None
 
-    def dt(self) -> float:
-        return 1.0  # one step = one generation
-
     def cleared(self) -> None:
         self._prev_est = None
 
@@ -92,9 +89,9 @@ class MaiDriver(BaseDriver):
     def rebuilds(self, old: Scenario, new: Scenario) -> bool:
         return not _same_run(old, new) and slo_live_changes(old, new) is None
 
-    def retune(self, old: Scenario, new: Scenario) -> None:
-        if not _same_run(old, new):  # errors, selection, w, δ, neighbourhood…: keep running
-            self.sim.retune(**slo_live_changes(old, new))  # type: ignore[arg-type]
+    def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
+        """Errors, selection, w, δ, neighbourhood, objective…: the swarm keeps running."""
+        return {} if _same_run(old, new) else slo_live_changes(old, new) or {}
 
     # ------------------------------------------------------------------ history
     def metric_row(self, info: Any) -> tuple[float, ...]:

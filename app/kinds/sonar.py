@@ -19,11 +19,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from shoal.engine.dvc import w_max
-from shoal.engine.localisation import make_strategy
 from shoal.engine.propagation import snr_db
 from shoal.engine.sonar import AcousticSwarm, SonarParams
-from shoal.engine.tuning import from_beta, split
 from shoal.presets.build import build_sonar, sonar_params_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
@@ -53,12 +50,16 @@ from ..view.layers import (
 from ..view.view import Home, arena_home
 from .base import AppKind, BaseDriver
 
-# acoustics fields whose change rebuilds the swarm (everything else applies at the next step)
-REBUILD_FIELDS = ("algorithm", "controller", "mode", "snr0_db", "d_0", "start", "source_bearing_deg",
-                  "full_lag", "stop_on_converge")
 ROBOT_TOL = 0.02  # share of the arena width within which a click picks a robot
 LIVE_OVERLAYS = ("rays", "true_ray", "points", "forward", "kept", "pick", "partner", "tri_members", "tri_centroid",
                  "tri_direction", "tri_valid")  # what one listen shows; not recorded
+
+
+def _params(scenario: Scenario) -> SonarParams:
+    try:
+        return sonar_params_for(scenario.acoustics)
+    except ValueError as err:
+        raise PresetError([f"acoustics.{err}"]) from None
 
 
 def true_ray_index(x: np.ndarray, rays: np.ndarray, source: np.ndarray) -> np.ndarray:
@@ -83,38 +84,16 @@ class SonarDriver(BaseDriver):
 
     # ------------------------------------------------------------------ changes
     def rebuilds(self, old: Scenario, new: Scenario) -> bool:
-        a, b = old.acoustics, new.acoustics
+        """A new swarm for another size, seed or positions, or a :class:`SonarParams` field outside
+        ``AcousticSwarm.LIVE`` (the algorithm, the controller, SNR_0, the deployment, …)."""
+        a, b = _params(old), _params(new)
+        fixed = {f.name for f in dataclasses.fields(SonarParams)} - AcousticSwarm.LIVE
         return (new.sim.robots != old.sim.robots or new.sim.seed != old.sim.seed or slo_retune(old, new) is None
-                or any(getattr(a, f) != getattr(b, f) for f in REBUILD_FIELDS))
+                or any(getattr(a, f) != getattr(b, f) for f in fixed))
 
-    def retune(self, old: Scenario, new: Scenario) -> None:
-        try:
-            params = sonar_params_for(new.acoustics)
-        except ValueError as err:
-            raise PresetError([f"acoustics.{err}"]) from None
-        sw = self.sim
-        before = sw.params
-        if (params.v_n, params.source_heading, params.U, params.dt) != (before.v_n, before.source_heading, before.U,
-                                                                       before.dt):
-            self._restart_source_motion(params)
-        sw.params = params
-        sw.band = params.band
-        sw.strategy = make_strategy(params.algorithm, a=params.a)
-        tune = from_beta(params.dt, params.U, params.beta, d=2)
-        sw.omega = tune.omega
-        sw.c = np.array(split(tune.c_hat, params.c1_share))
-        sw.w_max = w_max(params.U, params.dt)
-        retune = slo_retune(old, new)
-        if retune:  # errors, selection, neighbourhood…: the running swarm keeps its beliefs
-            sw.retune_slo(**retune)  # type: ignore[attr-defined]
-        self._refresh_snr()
-
-    def _restart_source_motion(self, params: SonarParams) -> None:
-        """A new speed or heading: the source carries on from where it is now."""
-        sw = self.sim
-        h = params.source_heading
-        step = np.array([np.cos(h), np.sin(h)]) * params.v_n * params.U * params.dt
-        sw.source0 = sw.state.source - sw.state.steps[:, None] * step
+    def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
+        params, slo = _params(new), slo_retune(old, new)  # slo: the running swarm keeps its beliefs
+        return {**{k: getattr(params, k) for k in AcousticSwarm.LIVE - {"slo"}}, **({"slo": slo} if slo else {})}
 
     def _refresh_snr(self) -> None:
         s, p = self.sim.state, self.sim.params
@@ -392,7 +371,7 @@ def layers(panels: Any) -> tuple[Layer, ...]:
     return (
         Ground(cell=lambda half: 10 ** np.floor(np.log10(half / 4)), cell_colour=(228, 228, 224),
                section_colour=(205, 205, 200), z=Z["grid"], border=BORDER, border_px=1.5, border_z=Z["grid"]),
-        Source(panels.drag_source),
+        Source(panels.drag_source if panels is not None else None),
         Robots(ROBOT, ROBOT_SIZE, Z["robots"]),
         Headings(HEADING, lambda canvas, snap: 0.025 * _half(snap), Z["headings"]),
         Trails(TRAIL, 1.2, Z["trails"]),

@@ -71,22 +71,12 @@ class SwarmDriver(BaseDriver):
         return (new.sim.d != old.sim.d or _changed(old, new, "init") or slo_retune(old, new) is None
                 or (positions_of(new) == "slo" and slo_unit(new) != slo_unit(old)))
 
-    def retune(self, old: Scenario, new: Scenario) -> None:
-        sim = self.sim
-        if _changed(old, new, "controller"):  # an SLOSimulation too: the same attributes
-            sim.policy = policy_for(new.controller)
-            sim.law = law_for(new.controller)
-            sim.dt = float(new.controller.dt)
-        retune = slo_retune(old, new)
-        if retune:  # errors, selection, neighbourhood…: the running SLO source keeps its beliefs
-            sim.retune_slo(**retune)  # type: ignore[attr-defined]
-        if new.sim.robots != old.sim.robots:
-            sim.set_robots(new.sim.robots)
-        if _changed(old, new, "bests"):
-            sim.attractors = new.bests.attractors
-            sim.pbest_order = new.bests.pbest_order
-        if _changed(old, new, "objective"):
-            sim.set_objective(objective_for(new.objective))
+    def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
+        slo = slo_retune(old, new)  # errors, selection, neighbourhood…: the running SLO source keeps its beliefs
+        c = new.controller
+        return dict(policy=policy_for(c), law=law_for(c), dt=float(c.dt), robots=new.sim.robots,
+                    attractors=new.bests.attractors, pbest_order=new.bests.pbest_order,
+                    objective=objective_for(new.objective), **({"slo": slo} if slo else {}))
 
     def frame(self, t: float) -> Frame:
         return frame_of(self.sim.state, t, accelerations=True)
@@ -120,7 +110,7 @@ class SwarmDriver(BaseDriver):
         return {
             "omega": omega, "c_hat": c_hat, "beta": (1.0 - omega) if bounded else math.nan,
             "U": U_j * math.sqrt(d), "U_j": U_j, "A_plus": A_plus, "A_minus": 2 * A_plus,
-            "t": self.session.clock(), "k": float(self.sim.state.k), "best": float(self.sim.state.f_yg[0]),
+            "t": self.session.clock(), "k": float(self.sim.state.k), "best": float(self.sim.state.best_fitness[0]),
             "outside": float(self.outside_arena()),
         }
 

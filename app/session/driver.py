@@ -2,8 +2,8 @@
 
 The session owns what every kind shares (scenario, engine, lock, playback, history, timeline,
 swarm B); a driver, one per session, knows its kind's engine: how to build it, which changes
-need a new engine and how the others reach the running one, and what the app records, shows
-and exports of it.
+need a new engine and which keywords of the engine's ``retune`` (its ``LIVE`` set) carry the
+others to the running one, and what the app records, shows and exports of it.
 """
 
 from __future__ import annotations
@@ -31,9 +31,10 @@ class Driver(Protocol):
         """Does going from ``old`` to ``new`` need a new engine?"""
         ...
 
-    def retune(self, old: Scenario, new: Scenario) -> None:
-        """Take ``new`` into the running engine (from its next step); :class:`PresetError`
-        before anything changed if it cannot."""
+    def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
+        """The keywords of the engine's ``retune`` that take the running engine from ``old`` to
+        ``new`` (every field of its ``LIVE`` set; the engine keeps what did not change);
+        :class:`PresetError` if ``new`` cannot be expressed."""
         ...
 
     def dt(self) -> float:

@@ -214,7 +214,10 @@ class Session:
             self._load(new)  # builds first: a refused scene leaves everything as it was
         else:
             t, k, dt = self.clock(), self.k, self.driver.dt()
-            self.driver.retune(old, new)
+            try:
+                self.sim.retune(**self.driver.live(old, new))  # from the next step; refused: nothing changed
+            except ValueError as err:
+                raise PresetError([str(err)]) from None
             self.scenario = new
             if self.driver.dt() != dt:  # the time axis continues from where it was
                 self._t0, self._k0 = t, k

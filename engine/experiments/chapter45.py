@@ -97,7 +97,8 @@ def fleet_job(case: Case, mode: str, runs: int, duration: float, positions: bool
     steps = int(round(duration / dt))
     if steps < 1 or abs(steps * dt - duration) > 1e-9 * max(1.0, duration):
         raise ValueError(f"duration {duration} s is not a whole number of ticks of {dt} s")
-    return FleetJob((case.name, mode), case.preset, (*case.overrides, *extra), scenario.sim.seed, runs, steps, positions)
+    return FleetJob((case.name, mode), case.preset, (*case.overrides, *extra), scenario.sim.seed, runs, steps,
+                    positions)
 
 
 @dataclass

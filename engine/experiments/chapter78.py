@@ -22,6 +22,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from shoal.engine.localisation import STRATEGIES
 from shoal.presets.build import build_sonar
 from shoal.presets.io import load
 from shoal.presets.models import Scenario
@@ -30,7 +31,7 @@ from .output import num, percentile_band, write_csv
 from .runner import run_jobs
 
 ALGORITHMS = ("a-pso", "x-pso", "b-pso", "xb-pso")  # Chapter 7 order
-LABELS = {"a-pso": "A-PSO", "x-pso": "X-PSO", "b-pso": "B-PSO", "xb-pso": "XB-PSO", "gt-pso": "GT-PSO"}
+LABELS = {name: strategy.label for name, strategy in STRATEGIES.items()}
 COLOURS = {"a-pso": "tab:red", "x-pso": "tab:orange", "b-pso": "tab:blue", "xb-pso": "tab:green",
            "gt-pso": "tab:purple"}
 NOT_CONVERGED = -1
@@ -313,7 +314,8 @@ def convergence_sweep(
 ) -> tuple[dict[Any, Any], float]:
     """Run (algorithm, SNR_0) jobs, write runs.csv and series.csv; return results and wall time."""
     t0 = time.perf_counter()
-    res = run_jobs(jobs, workers=workers, progress=progress, desc=desc, simulate=simulate_sonar, merge=merge, chunk=runs)
+    res = run_jobs(jobs, workers=workers, progress=progress, desc=desc, simulate=simulate_sonar, merge=merge,
+                   chunk=runs)
     wall = time.perf_counter() - t0
     rows, series = [], []
     for j in jobs:

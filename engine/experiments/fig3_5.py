@@ -153,8 +153,8 @@ def run(
     over_u = {p: float(np.max(R[p].max_speed[1:] - R[p].U_command[:, None])) for p in PANELS}
     checks += [
         c3.check(
-            "every speed within the worst-case envelope B[k+1] = ω B[k] + ĉ√d, B[0] = max |u| at t = 0 (all cases, sizes, runs, "
-            "iterations); B = U(t) except after a drop of U, where it decays to the new U as ω^n",
+            "every speed within the worst-case envelope B[k+1] = ω B[k] + ĉ√d, B[0] = max |u| at t = 0 (all cases, "
+            "sizes, runs, iterations); B = U(t) except after a drop of U, where it decays to the new U as ω^n",
             "|u_j| ≤ U_j [3.26], asymptotic after U drops", f"max(|u| − B) = {env_excess:.3g} m/s",
             env_excess <= 1e-9),
         c3.check(

@@ -54,8 +54,8 @@ def _segment_gap(p: np.ndarray, walls: np.ndarray) -> np.ndarray:
 def classify_collisions(b: ch.FleetBatch, world: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per run: robots disabled by touching another robot, by touching a wall or an
     obstacle, and robot-robot ones that follow a stall (the two were already closer than
-    ``STALL_GAP`` during the two ticks before; a robot that is run into is not "stalled"). At the step a robot is disabled, whichever kind of body
-    is closer to its surface is the one it touched."""
+    ``STALL_GAP`` during the two ticks before; a robot that is run into is not "stalled"). At the
+    step a robot is disabled, whichever kind of body is closer to its surface is the one it touched."""
     assert b.x is not None and b.status is not None
     r = b.robot_radius
     robot_hits = np.zeros(b.runs, dtype=np.int64)
@@ -133,7 +133,8 @@ def run(
             f"ticks before); {int(s['other'].sum())} by touching a wall", rr.sum() == 0))
         checks.append(check(
             f"{c.name}: the robots keep moving: median speed of the operational robots over the last "
-            f"{SPEED_WINDOW:g} s >= {MIN_SPEED:g} m/s in every run", "the robots roam constantly", f"lowest run median {r3(np.nanmin(s['speed']))} m/s "
+            f"{SPEED_WINDOW:g} s >= {MIN_SPEED:g} m/s in every run", "the robots roam constantly",
+            f"lowest run median {r3(np.nanmin(s['speed']))} m/s "
             f"(median over runs {r3(np.nanmedian(s['speed']))} m/s)", bool(np.all(s["speed"] >= MIN_SPEED))))
         checks.append(check(
             f"{c.name}: none settles: every operational robot covers >= {MIN_PATH:g} m in the last {TRAIL:g} s, "

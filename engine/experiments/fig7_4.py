@@ -28,7 +28,7 @@ from shoal.presets.io import load
 
 from . import chapter78 as ch
 from .fig7_2 import PRESET, seed_for
-from .output import check, checks_table, new_figure, num, r3, save, write_csv
+from .output import check, checks_table, new_figure, num, save, write_csv
 from .runner import run_jobs
 
 DEFAULT_RUNS = 20
@@ -170,7 +170,8 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
                    steps),
     ]
     for alg in ("b-pso", "xb-pso"):
-        checks.append(check(f"{ch.LABELS[alg]} slower as Q rises (D = λ_c/2: median time at Q = {qhi:g} above Q = {qlo:g})",
+        checks.append(check(f"{ch.LABELS[alg]} slower as Q rises (D = λ_c/2: median time at Q = {qhi:g} above "
+                            f"Q = {qlo:g})",
                             "performance decreases as Q increases",
                             f"{ch.time_text(med(res, alg, qhi), steps)} vs {ch.time_text(med(res, alg, qlo), steps)}",
                             med(res, alg, qhi) > med(res, alg, qlo)))
@@ -181,8 +182,8 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
                                   for x, (a, b) in zip(q, pairs)),
                         all(a <= 1.05 * b for a, b in pairs)))
     for alg in ("b-pso", "xb-pso"):
-        checks.append(unaffected(res, alg, [(qlo, y, U0) for y in d], f"D at low Q (Q = {qlo:g}, D/λ_c {d[0]:g}–{d[-1]:g})",
-                                 steps))
+        checks.append(unaffected(res, alg, [(qlo, y, U0) for y in d],
+                                 f"D at low Q (Q = {qlo:g}, D/λ_c {d[0]:g}–{d[-1]:g})", steps))
         if 1.0 in d:
             t_half, t_one, t_far = med(res, alg, qhi, D0), med(res, alg, qhi, 1.0), med(res, alg, qhi, d[-1])
             checks.append(check(f"{ch.LABELS[alg]} at Q = {qhi:g}: worse as D → λ (median time at D = λ above D = λ/2)",
@@ -198,7 +199,8 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
         "seed_rule": "every point uses child i of SeedSequence(seed) for run i, seed = the Fig. 7-2 seed of 10 dB",
         "cost": cost,
     }
-    (out_dir / "README.md").write_text(_readme("Fig. 7-4", "fig7-4.png", "(Q, D/λ_c)", runs, steps, mode, summary), encoding="utf-8")
+    (out_dir / "README.md").write_text(_readme("Fig. 7-4", "fig7-4.png", "(Q, D/λ_c)", runs, steps, mode, summary),
+                                       encoding="utf-8")
     return summary
 
 

@@ -55,12 +55,14 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
     both = [x for x in u if np.isfinite(med(res, "a-pso", Q0, D0, x)) and np.isfinite(med(res, "x-pso", Q0, D0, x))]
     checks.append(check(f"X-PSO faster than A-PSO wherever both converge (Q = {Q0:g}, median times)",
                         "3400 < 4500 at U = 2 m/s (Fig. 7-2)",
-                        "; ".join(f"U {x:g}: X {med(res, 'x-pso', Q0, D0, x):.0f} vs A {med(res, 'a-pso', Q0, D0, x):.0f}"
+                        "; ".join(f"U {x:g}: X {med(res, 'x-pso', Q0, D0, x):.0f} "
+                                  f"vs A {med(res, 'a-pso', Q0, D0, x):.0f}"
                                   for x in both) or "neither converges at any U",
                         bool(both) and all(med(res, "x-pso", Q0, D0, x) < med(res, "a-pso", Q0, D0, x) for x in both)))
     b_hi = [med(res, "b-pso", qhi, D0, x) for x in u]
     xb_hi = [med(res, "xb-pso", qhi, D0, x) for x in u]
-    checks.append(check(f"B-PSO never converges at large U with Q = {qhi:g} (median not reached at U ≥ {u[len(u) // 2]:g})",
+    checks.append(check(f"B-PSO never converges at large U with Q = {qhi:g} "
+                        f"(median not reached at U ≥ {u[len(u) // 2]:g})",
                         "B-PSO unable to converge however much U increases",
                         "; ".join(f"U {x:g}: {ch.time_text(t, steps)}" for x, t in zip(u, b_hi)),
                         not any(np.isfinite(t) for x, t in zip(u, b_hi) if x >= u[len(u) // 2])))

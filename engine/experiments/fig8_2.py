@@ -57,7 +57,8 @@ def run(
     if high:
         checks.append(check(f"GT-PSO converges at SNR0 = {', '.join(f'{s:g}' for s in high)} dB within {steps} steps "
                             "(median)", "converges at 10 and 6 dB",
-                            "; ".join(f"{s:g} dB: {txt('gt-pso', s)}" for s in high), all(conv("gt-pso", s) for s in high)))
+                            "; ".join(f"{s:g} dB: {txt('gt-pso', s)}" for s in high),
+                            all(conv("gt-pso", s) for s in high)))
     if low:
         checks.append(check(f"GT-PSO does not converge at the lower SNR0 ({', '.join(f'{s:g}' for s in low)} dB) "
                             f"within {steps} steps (median)", "no convergence below 6 dB in 2000 steps",

@@ -80,14 +80,15 @@ WHY: dict[str, str] = {
                   "failures leave a median relative error near 0.18, above the 0.1 we fixed before the runs for "
                   "'acceptably small'. A failed odometry reading is zero, so the triangle of that step is wrong and "
                   "CSS carries the error into its prediction.",
-    "slo-mitigation": "The δ grid of the thesis is not given; we sweep 0, 0.03 and 0.1. In a random topology mitigation "
-                      "ruins the estimate at 0.1 (more than 20 times the error) but costs less than a factor of two at "
-                      "0.03. With the High error set δ_cos and δ_v move the error by similar amounts, so 'δ_cos matters "
-                      "less' holds for Low only.",
-    "slo-neighbourhood": "The thesis credits an entry rule for new neighbours that it does not describe (gap A25). Neither "
-                         "reading we offer (stale, geometric_random) gives p = 0.3 and 0.5 the early lead; we think the "
-                         "random start of every estimate dominates the first generations, longest for the rarest "
-                         "links. RTS beats CSS at p = 0.3 and 0.9 but ties at 0.5, and its error still depends on p.",
+    "slo-mitigation": "The δ grid of the thesis is not given; we sweep 0, 0.03 and 0.1. In a random topology "
+                      "mitigation ruins the estimate at 0.1 (more than 20 times the error) but costs less than a "
+                      "factor of two at 0.03. With the High error set δ_cos and δ_v move the error by similar "
+                      "amounts, so 'δ_cos matters less' holds for Low only.",
+    "slo-neighbourhood": "The thesis credits an entry rule for new neighbours that it does not describe (gap A25). "
+                         "Neither reading we offer (stale, geometric_random) gives p = 0.3 and 0.5 the early lead; we "
+                         "think the random start of every estimate dominates the first generations, longest for the "
+                         "rarest links. RTS beats CSS at p = 0.3 and 0.9 but ties at 0.5, and its error still depends "
+                         "on p.",
     "slo-weight": "Fig. 4.9 is not discussed in the thesis; we read its neighbourhood as knn 5.",
     "slo-pso": "The thesis does not give the swarm size, start area, quality thresholds or the number of runs "
                "behind Table 4.4 (medians such as 117.5 cannot come from 31 whole numbers); we use the spec's "
@@ -212,8 +213,8 @@ def render(outcomes: Sequence[Outcome], *, image_prefix: str = "") -> str:
         f"(Shoal {__version__}). For each target: the thesis' figure or table it stands for, Shoal's own "
         "figures, each check with the thesis' claim beside Shoal's measured value, and where and why the two "
         "differ. A check that does not hold is reported as not passed, never hidden. Each target folder also "
-        "holds `runs.csv` and `summary.json`; a fresh run also writes the series behind the figures. Times are wall-clock seconds with the "
-        "workers named in each section.", "",
+        "holds `runs.csv` and `summary.json`; a fresh run also writes the series behind the figures. Times are "
+        "wall-clock seconds with the workers named in each section.", "",
         "| target | thesis | runs | checks passed | time (s) |", "|---|---|---:|---:|---:|",
     ]
     for o in outcomes:

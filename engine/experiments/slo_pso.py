@@ -106,7 +106,8 @@ def run(out_dir: Path, runs: int, workers: int = 1, progress: bool = True, *,
             f"Every case runs {FULL} generations"),
         "seed_rule": "run i of every case uses the streams of run i of the preset seed (same start positions)",
         "commands": sc.cases_section(list(cases.values()), gens),
-        "table4_4": {"/".join(k): {"gen": sc.g3(v[0]), "fit": sc.g3(v[1]), "end": sc.g3(v[2])} for k, v in stats.items()},
+        "table4_4": {"/".join(k): {"gen": sc.g3(v[0]), "fit": sc.g3(v[1]), "end": sc.g3(v[2])}
+                 for k, v in stats.items()},
     }
     (out_dir / "README.md").write_text(_readme(summary), encoding="utf-8")
     return summary
@@ -178,7 +179,7 @@ def _table_checks(stats: dict, functions: tuple[str, ...]) -> list[dict[str, Any
             "stuck at medians 7.0 (Akcan) and 3.2 (RTS)", ", ".join(f"{s} {v:.3g}" for s, v in a.items()),
             all(v > 1 for v in a.values())))
     close, total = 0, 0
-    for k, (g, fit, end) in stats.items():
+    for k, (_gen, fit, _end) in stats.items():
         th = THESIS[k[:2]][LEVELS.index(k[2])][1]
         if th > 0 and fit > 0:
             total += 1

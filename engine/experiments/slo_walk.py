@@ -34,7 +34,8 @@ def single(param: str | None, value: float = 0.0, selection: str = "css", neighb
     """All errors 0 except ``param`` = ``value`` (§4.5.1)."""
     name = f"{selection}/{neighbourhood}/" + ("no-error" if param is None else f"{param}={value:g}")
     sets = ["slo.errors=none", f"slo.selection={selection}", f"slo.neighbourhood={neighbourhood}",
-            "slo.neighbourhood_param=" + {"knn": "5", "ring": "2", "random": "0.5", "radius": "25", "full": "0"}[neighbourhood]]
+            "slo.neighbourhood_param="
+            + {"knn": "5", "ring": "2", "random": "0.5", "radius": "25", "full": "0"}[neighbourhood]]
     if param is not None:
         sets.append(f"slo.error_values.{param}={value}")
     return sc.walk(name, *sets)
@@ -272,13 +273,14 @@ def run_mitigation(out_dir: Path, runs: int, workers: int = 1, progress: bool = 
         save(fig, out_dir / f"{fig_name}.png")
 
     checks = []
-    spread_cos = {lv: max(val[f"fig4-4 {lv}"][(dc, 0.03)] for dc in DELTAS) - min(val[f"fig4-4 {lv}"][(dc, 0.03)] for dc in DELTAS)
-                  for lv in ("low", "high")}
-    spread_v = {lv: max(val[f"fig4-4 {lv}"][(0.03, dv)] for dv in DELTAS) - min(val[f"fig4-4 {lv}"][(0.03, dv)] for dv in DELTAS)
-                for lv in ("low", "high")}
+    spread_cos = {lv: max(val[f"fig4-4 {lv}"][(dc, 0.03)] for dc in DELTAS)
+                  - min(val[f"fig4-4 {lv}"][(dc, 0.03)] for dc in DELTAS) for lv in ("low", "high")}
+    spread_v = {lv: max(val[f"fig4-4 {lv}"][(0.03, dv)] for dv in DELTAS)
+                - min(val[f"fig4-4 {lv}"][(0.03, dv)] for dv in DELTAS) for lv in ("low", "high")}
     checks.append(check(
         "CSS, knn: δ_cos matters less than δ_v (spread of the error over the three δ_cos at δ_v = 0.03 smaller "
-        "than over the three δ_v at δ_cos = 0.03, Low and High)", "δ_cos has almost no effect; δ_v matters more (Fig. 4.4)",
+        "than over the three δ_v at δ_cos = 0.03, Low and High)",
+        "δ_cos has almost no effect; δ_v matters more (Fig. 4.4)",
         ", ".join(f"{lv}: δ_cos spread {sc.g3(spread_cos[lv])}, δ_v spread {sc.g3(spread_v[lv])}" for lv in spread_cos),
         all(spread_cos[lv] < spread_v[lv] for lv in spread_cos)))
     none = val["fig4-4 none"]
@@ -295,12 +297,14 @@ def run_mitigation(out_dir: Path, runs: int, workers: int = 1, progress: bool = 
     ring = val["fig4-5 css"]
     best = min((k for k in ring if k != (0.0, 0.0)), key=ring.get)
     checks.append(check(
-        "ring, Low, CSS: some mitigation setting beats no mitigation", "mitigation is more useful in a static ring (Fig. 4.5)",
+        "ring, Low, CSS: some mitigation setting beats no mitigation",
+        "mitigation is more useful in a static ring (Fig. 4.5)",
         f"no mitigation {sc.g3(ring[(0.0, 0.0)])}; best δ_cos={best[0]:g}, δ_v={best[1]:g}: {sc.g3(ring[best])}",
         ring[best] < ring[(0.0, 0.0)]))
     summary = _summary(checks, cases, generations, runs, grid=DELTAS,
                        panels={p: dict(zip(("selection", "neighbourhood", "errors"), v)) for p, v in panels.items()},
-                       outcomes={p: {f"dcos={k[0]:g},dv={k[1]:g}": sc.g3(v) for k, v in g.items()} for p, g in val.items()})
+                       outcomes={p: {f"dcos={k[0]:g},dv={k[1]:g}": sc.g3(v) for k, v in g.items()}
+                                 for p, g in val.items()})
     (out_dir / "README.md").write_text(_readme(
         "Figs. 4.4-4.6 reproduction: SLO error mitigation (random walk)",
         f"Mean absolute error at generation {generations} over a δ_cos x δ_v grid {DELTAS} (the thesis grid is not "

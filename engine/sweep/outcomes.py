@@ -20,7 +20,8 @@ from ..recorder import metric_table
 
 # first-passage times: a run that never got there has none (NaN/inf), and a median counts it as +inf
 FIRST_PASSAGE = frozenset({"steps_to_converge", "time_to_converge_s", "quality_met_at"})
-INTEGER = frozenset({"step", "collided", "stalled", "operational", "layers_passed", "converged", "steps_to_converge", "contacts"})
+INTEGER = frozenset({"step", "collided", "stalled", "operational", "layers_passed", "converged", "steps_to_converge",
+                     "contacts"})
 
 
 @dataclass(frozen=True)
@@ -59,7 +60,7 @@ def simulate_cell(job: CellJob, first_run: int, runs: int) -> CellBatch:
         return np.linalg.norm(sim.state.u, axis=-1).max(axis=1)
 
     peak = speed()
-    info = sim.info() if hasattr(sim, "info") else None
+    info = sim.info()
     running = getattr(sim, "running", None)
     for _ in range(job.steps):
         if running is not None and not np.any(sim.running):
@@ -73,7 +74,7 @@ def simulate_cell(job: CellJob, first_run: int, runs: int) -> CellBatch:
         first = np.asarray(cols["steps_to_converge"], dtype=float)
         first[first < 0] = np.nan
         cols["steps_to_converge"] = first
-        cols["time_to_converge_s"] = first * sim.params.dt
+        cols["time_to_converge_s"] = first * sim.dt
     return CellBatch(first_run, {k: np.asarray(v, dtype=float).copy() for k, v in cols.items()})
 
 

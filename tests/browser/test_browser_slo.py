@@ -19,14 +19,14 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import choose, dismiss_toasts, number_box, wait_until  # noqa: E402
-
 from shoal.app.kinds import swarm  # noqa: E402
 from shoal.engine.fleet import Fleet  # noqa: E402
 from shoal.engine.sim import Simulation  # noqa: E402
 from shoal.engine.slo import SLOSwarm  # noqa: E402
 from shoal.engine.slo_fleet import SLOFleet  # noqa: E402
 from shoal.engine.slo_source import SLOSimulation  # noqa: E402
+
+from browser_helpers import choose, dismiss_toasts, number_box, wait_until  # noqa: E402
 
 
 def test_the_dropdown_switches_to_slo_walk_and_the_ghosts_are_drawn(server, page, cid):

@@ -25,7 +25,6 @@ sync_api = pytest.importorskip("playwright.sync_api")
 from browser_helpers import choose, dismiss_toasts, root_for, to_pixel, wait_until  # noqa: E402
 
 
-
 def _plot_matches(tab, robot: int) -> bool:
     b = tab.session.sim.state.bearing
     if b is None or tab.session.selected_robot != robot:
