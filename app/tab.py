@@ -18,21 +18,23 @@ import time
 from collections import deque
 from typing import Any, Callable, ContextManager
 
+from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from .fleet_panels import FleetPanels
-from .kinds.registry import app_kind, kind_for
-from .panel_base import PanelsBase
-from .panels import Panels
+from . import share
+from .kinds.registry import app_kind, app_presets, kind_for, session_for
+from .panel.panel import Panel, Services
 from .session.session import Session
-from .slo_panels import SLOPanels
-from .sonar_panels import SonarPanels
 
 CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
 
 
-PANELS: dict[str, type[PanelsBase]] = {"swarm": Panels, "fleet": FleetPanels, "sonar": SonarPanels,
-                                        "mai": SLOPanels}
+def share_page(session: Session) -> bytes:
+    """The Share button's page; a busy server refuses it like a bad value."""
+    try:
+        return share.session_html(session)
+    except share.Busy as err:
+        raise PresetError(err.messages) from None
 
 
 class TabApp:
@@ -65,9 +67,11 @@ class TabApp:
 
     def _build_kind(self) -> None:
         kind = app_kind(self.session)
-        self.panels = PANELS[kind.name](self.gui, self.session, self.notify, self.send_file, replace=self.replace)
-        self.arena = kind.view(self.scene, self.panels)
-        if hasattr(self.panels, "handle_click"):
+        services = Services(notify=self.notify, send_file=self.send_file, presets=tuple(app_presets()),
+                            make_session=session_for, replace=self.replace, share=share_page)
+        self.panels = Panel(self.gui, self.session, kind, services)
+        self.arena = kind.view(self.scene, self.panels.part)
+        if self.panels.part.click is not None:
             for modifier in CLICK_MODIFIERS:
                 self._clicks.append(self.scene.on_click(modifier=modifier)(self.scene_click))
         self._acc = 0.0
@@ -92,7 +96,7 @@ class TabApp:
         with self._ticking:
             if app_kind(self.session) is kind:
                 self.session.load_scenario(scenario)
-                self.panels.sync_from_scenario()
+                self.panels.sync()
                 return self.session
             new = kind.session(scenario)  # may refuse: then the old scene stays
             if self.session.playing:
@@ -109,14 +113,14 @@ class TabApp:
                 self.scene.remove_click_callback(cb)
         self._clicks.clear()
 
-    def scene_click(self, event: Any) -> None:
-        """A click in the arena (viser ``SceneClickEvent``): the panels decide what it does."""
-        handle = getattr(self.panels, "handle_click", None)
-        if handle is None:
-            return
+    def scene_click(self, event: Any) -> str:
+        """A click in the arena (viser ``SceneClickEvent``): the kind decides what it does; returns
+        what it did ("none" where the kind offers nothing or the ray misses the ground)."""
+        click = self.panels.part.click
         xy = self.arena.ray_to_world(event.ray_origin, event.ray_direction)
-        if xy is not None:
-            handle(float(xy[0]), float(xy[1]), event.modifier)
+        if click is None or xy is None:
+            return "none"
+        return click(self.panels, float(xy[0]), float(xy[1]), event.modifier)
 
     def notify(self, title: str, body: str, color: str = "blue") -> None:
         self.messages.append((title, body, color))

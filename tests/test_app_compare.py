@@ -187,12 +187,12 @@ def test_compare_tab_switches_b_on_and_the_arena_and_plot_show_it(tab):
     assert node.visible
     np.testing.assert_allclose(np.asarray(node.points)[:, :2], tab.arena.to_view(s.twin.sim.state.x[0])[:, :2],
                                atol=1e-5)
-    assert p.speed_plot.series[-1]["label"] == "B: max |u|"
-    assert len(p.speed_plot.data) == len(p.speed_plot.series)
+    assert p.handles["speed"].series[-1]["label"] == "B: max |u|"
+    assert len(p.handles["speed"].data) == len(p.handles["speed"].series)
     p.compare_gui.enabled.value = False
     tab.tick(2.0)
     assert s.twin is None and not tab.arena.nodes["twin"].visible
-    assert all(not x.get("label", "").startswith("B:") for x in p.speed_plot.series)
+    assert all(not x.get("label", "").startswith("B:") for x in p.handles["speed"].series)
 
 
 def test_a_bad_override_typed_in_the_compare_tab_is_a_red_toast(tab):
@@ -216,7 +216,7 @@ def test_the_timeline_slider_scrubs_and_the_arena_shows_that_step(tab):
     robots = np.asarray(tab.arena.nodes["robots"].points)[:, :2]
     np.testing.assert_allclose(robots, tab.arena.to_view(s.frames[12].x)[:, :2], atol=1e-5)
     assert not tab.arena.nodes["gbest"].visible  # bests are not recorded
-    assert tab.panels.speed_plot.data[0][-1] == pytest.approx(s.frames[12].t)
+    assert tab.panels.handles["speed"].data[0][-1] == pytest.approx(s.frames[12].t)
     assert "step 12" in tab.panels.replay_gui.where.content
 
 
@@ -273,7 +273,8 @@ def test_every_kind_draws_b_and_a_scrubbed_frame(tab, name):
     assert twin.visible
     np.testing.assert_allclose(np.asarray(twin.points)[:, :2], tab.arena.to_view(s.twin.sim.state.x[0, :, :2])[:, :2],
                                atol=1e-5)
-    plot_labels = [x["label"] for p in vars(tab.panels).values() if hasattr(p, "series") for x in p.series]
+    plot_labels = [x["label"] for key in ("speed", "com", "dist", "error") if key in tab.panels.handles
+                   for x in tab.panels.handles[key].series]
     assert any(label.startswith("B: ") for label in plot_labels)
     s.scrub(5)
     tab.tick(2.0)

@@ -16,12 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from shoal.app.fleet_panels import CONTROLLERS
 from shoal.app.kinds import fleet as fleet_kind
 from shoal.app.kinds import swarm
-from shoal.app.kinds.fleet import EditRefused
+from shoal.app.kinds.fleet import CONTROLLERS, EditRefused
 from shoal.app.kinds.registry import app_presets
-from shoal.app.panels import Panels
 from shoal.app.session.session import Session
 from shoal.engine.fleet import Fleet
 from shoal.engine.recorder import TRAJECTORY_COLUMNS
@@ -111,11 +109,11 @@ def test_sliders_reach_the_fleet_params_without_restart(tab):
     s, p = tab.session, tab.panels
     s.step(4)
     fleet, x = s.sim, s.sim.state.x.copy()
-    p.sliders["controller.alpha"].value = 0.6
-    p.sliders["controller.beta"].value = 0.7
-    p.sliders["sensing.range"].value = 4.5
-    p.guard.value = True
-    p.update_order.value = "simultaneous"
+    p.handles["controller.alpha"].value = 0.6
+    p.handles["controller.beta"].value = 0.7
+    p.handles["sensing.range"].value = 4.5
+    p.handles["controller.guard"].value = True
+    p.handles["controller.update"].value = "simultaneous"
     assert (fleet.params.alpha, fleet.params.beta, fleet.params.sensing_range) == (0.6, 0.7, 4.5)
     assert fleet.params.guard and fleet.params.update == "simultaneous"
     assert s.sim is fleet and fleet.state.k == 4 and np.array_equal(fleet.state.x, x)  # not restarted
@@ -126,25 +124,25 @@ def test_sliders_reach_the_fleet_params_without_restart(tab):
 
 def test_constant_controller_budget_and_ratio_sliders(tab):
     p, s = tab.panels, tab.session
-    p.controller.value = "Adapted RPSO (constant)"
+    p.handles["controller"].value = "Adapted RPSO (constant)"
     assert (s.sim.params.law, s.sim.params.dvc) == ("adapted-rpso", False)
-    p.c_hat.value = 1.8
-    p.ratio.value = 2.0
+    p.handles["c_hat"].value = 1.8
+    p.handles["ratio"].value = 2.0
     c1, c2, c3 = s.sim.params.c
     assert c1 + c2 + c3 == pytest.approx(1.8, rel=1e-4) and c3 / (c1 + c2) == pytest.approx(2.0, rel=1e-4)
     assert c1 == pytest.approx(c2)
-    assert p.ratio.visible and not p.sliders["controller.alpha"].visible
-    p.controller.value = "Original RPSO"
+    assert p.handles["ratio"].visible and not p.handles["controller.alpha"].visible
+    p.handles["controller"].value = "Original RPSO"
     assert s.sim.params.law == "rpso" and s.sim.params.c == pytest.approx((c1, c2, c3))
 
 
 def test_non_omni_controller_switches_drive_and_rebuilds(tab):
     p = tab.panels
-    p.controller.value = "Non-omni + DVC"
+    p.handles["controller"].value = "Non-omni + DVC"
     s = tab.session
     assert s.sim.params.law == "nonomni" and s.sim.params.drive == "differential" and s.sim.state.k == 0
     assert _last(tab)[0] == "Fleet rebuilt"
-    assert tuple(p.drive.options) == ("differential",)
+    assert tuple(p.handles["robot.drive"].options) == ("differential",)
     s.step(3)
     assert s.sim.state.c.shape[0] == 5  # the five non-omni budgets
 
@@ -153,15 +151,15 @@ def test_bad_values_are_refused_and_the_fleet_is_untouched(tab):
     s, p = tab.session, tab.panels
     s.step(3)
     fleet, scenario = s.sim, s.scenario
-    p.sliders["controller.alpha"].value = 1.0  # the model wants α < 1
+    p.handles["controller.alpha"].value = 1.0  # the model wants α < 1
     title, body, color = _last(tab)
     assert color == "red" and "controller.alpha" in body
-    assert p.sliders["controller.alpha"].value == pytest.approx(0.9)  # handle restored
+    assert p.handles["controller.alpha"].value == pytest.approx(0.9)  # handle restored
     assert fleet.params.alpha == 0.9 and s.scenario is scenario and s.sim is fleet
-    p.sliders["world.length"].value = 20.0  # allowed by the model, too short for the course generator
+    p.handles["world.length"].value = 20.0  # allowed by the model, too short for the course generator
     title, body, color = _last(tab)
     assert color == "red" and "world.length" in body
-    assert p.sliders["world.length"].value == pytest.approx(60.0)
+    assert p.handles["world.length"].value == pytest.approx(60.0)
     assert s.sim is fleet and s.sim.state.k == 3
 
 
@@ -169,21 +167,21 @@ def test_world_and_robot_count_changes_rebuild_the_fleet(tab):
     s, p = tab.session, tab.panels
     s.step(5)
     old = s.sim
-    p.sliders["sim.robots"].value = 9
+    p.handles["sim.robots"].value = 9
     assert s.sim is not old and s.sim.robots == 9 and s.sim.state.k == 0
     assert _last(tab)[:1] == ("Fleet rebuilt",)
     circles = s.sim.world.circles.copy()
-    p.world_seed.value = 5
+    p.handles["world.seed"].value = 5
     assert not np.array_equal(s.sim.world.circles, circles)
-    p.world_kind.value = "forest"
-    assert s.sim.world.name == "forest" and p.sliders["world.density"].visible
-    assert not p.sliders["world.layers"].visible
+    p.handles["world.kind"].value = "forest"
+    assert s.sim.world.name == "forest" and p.handles["world.density"].visible
+    assert not p.handles["world.layers"].visible
 
 
 # ---------------------------------------------------------------------------- editing the world
 def test_click_adds_an_obstacle_that_the_next_step_senses(tab):
     s, p = tab.session, tab.panels
-    p.update_order.value = "simultaneous"  # robot 2 senses before anyone moves
+    p.handles["controller.update"].value = "simultaneous"  # robot 2 senses before anyone moves
     tab.tick(1.0)
     spot = free_spot(s, 2, 1.0)
     n = len(s.sim.world.circles)
@@ -221,10 +219,10 @@ def test_shift_click_removes_the_nearest_obstacle_and_drag_moves_one(tab):
 
 def test_move_mode_picks_then_places(tab):
     s, p = tab.session, tab.panels
-    p.click_mode.value = "move obstacle"
+    p.handles["click"].value = "move obstacle"
     c = s.sim.world.circles[5].copy()
     click_at(tab, c[0], c[1] + c[2] + 0.2)
-    assert p.editor.picked == 5
+    assert p.part.state.picked == 5
     dest = (c[0] + 1.5, c[1])
     click_at(tab, *dest)
     np.testing.assert_allclose(s.sim.world.circles[5, :2], dest, atol=1e-6)
@@ -237,13 +235,13 @@ def test_edits_on_a_robot_are_refused_and_clicks_on_robots_select(tab):
     with pytest.raises(EditRefused, match="robot"):
         fleet_kind.driver(s).add_obstacle(x[0] + 0.9, x[1])
     click_at(tab, x[0] + 0.2, x[1])
-    assert s.selected_robot == 4 and p.robot.value == 4
+    assert s.selected_robot == 4 and p.handles["robot"].value == 4
     assert len(s.sim.world.circles) == n
     s.step(2)
     s.reset()
     assert s.sim.state.k == 0 and len(s.sim.world.circles) == n  # reset keeps the world
     click_at(tab, *free_spot(s, 0, 2.0))
-    p.restore.value = True
+    p.handles["restore"].value = True
     assert len(s.sim.world.circles) == n and fleet_kind.driver(s).edits == 0
 
 
@@ -253,7 +251,7 @@ def test_selected_robot_sectors_are_its_reading(tab, preset):
     tab.panels.preset.value = preset
     s, p = tab.session, tab.panels
     s.step(12)
-    p.robot.value = 3
+    p.handles["robot"].value = 3
     tab.tick(5.0)
     fleet = s.sim
     params = fleet.params
@@ -273,17 +271,18 @@ def test_selected_robot_sectors_are_its_reading(tab, preset):
     np.testing.assert_allclose(np.angle(np.exp(1j * (start - expected))), 0.0, atol=1e-5)
     hits = np.asarray(view.nodes["hits"].points)[:, :2]
     np.testing.assert_allclose(hits, view.to_view(reading.point[0, i][reading.hit[0, i]])[:, :2], atol=1e-5)
-    assert f"robot {i}" in p.budget.content
+    assert f"robot {i}" in p.handles["budget"].content
 
 
 def test_the_budget_shown_is_the_budget_the_next_step_uses(tab):
     s, p = tab.session, tab.panels
-    p.update_order.value = "simultaneous"
+    p.handles["controller.update"].value = "simultaneous"
     s.step(15)
-    p.robot.value = 1
+    p.handles["robot"].value = 1
     tab.tick(3.0)
     shown = fleet_kind.driver(s).view()
-    assert f"{shown.c[0] + shown.c[1]:.3f}" in p.budget.content and f"{shown.c[2]:.3f}" in p.budget.content
+    budget = p.handles["budget"].content
+    assert f"{shown.c[0] + shown.c[1]:.3f}" in budget and f"{shown.c[2]:.3f}" in budget
     s.step(1)
     np.testing.assert_allclose(s.sim.state.reading.gap[0, 1], shown.gap)
     np.testing.assert_allclose(s.sim.state.c[:, 0, 1], shown.c)
@@ -293,8 +292,8 @@ def test_the_budget_shown_is_the_budget_the_next_step_uses(tab):
 def test_follow_views_keep_the_robot_in_the_middle_and_clicks_still_land(tab):
     s, p = tab.session, tab.panels
     s.step(20)
-    p.robot.value = 2
-    p.view_mode.value = "follow the robot"
+    p.handles["robot"].value = 2
+    p.handles["view"].value = "follow the robot"
     tab.tick(4.0)
     view = tab.arena
     assert view.camera.zoom == pytest.approx(2.5)
@@ -313,7 +312,7 @@ def test_plots_show_com_fitness_with_layer_lines_and_operational_robots(tab):
     s, p = tab.session, tab.panels
     s.step(10)
     p.refresh_plots()
-    data = p.com_plot.data
+    data = p.handles["com"].data
     m = s.metric_arrays()
     np.testing.assert_allclose(data[0], m["t"])
     np.testing.assert_allclose(data[1], m["com"])
@@ -322,8 +321,8 @@ def test_plots_show_com_fitness_with_layer_lines_and_operational_robots(tab):
     assert len(data) == 2 + len(layers)
     for j, lx in enumerate(layers):
         assert np.all(np.asarray(data[2 + j]) == lx)
-    assert p.com_plot.scales["x"]["time"] is False
-    ops = p.robots_plot.data
+    assert p.handles["com"].scales["x"]["time"] is False
+    ops = p.handles["robots"].data
     np.testing.assert_allclose(ops[1], m["operational"])
     assert ops[1][-1] == s.sim.robots - s.sim.state.status[0].sum()
 
@@ -356,13 +355,13 @@ def test_export_marks_collided_robots(tab):
 # ---------------------------------------------------------------------------- switching kinds
 def test_switching_between_chapter_3_and_fleet_scenes_in_one_tab(tab, server):
     tab.panels.preset.value = "rastrigin"
-    assert tab.session.kind is swarm.KIND and isinstance(tab.panels, Panels)
+    assert tab.session.kind is swarm.KIND and tab.panels.name == "swarm"
     assert tab.arena.name == "swarm"
     assert server.sessions[HAND_TAB] is tab.session
     tab.tick(1.0)
     assert "landscape" in tab.arena.nodes and not any(n.startswith("obstacle") for n in tab.arena.nodes)
-    tab.panels.mode.value = "raw"
-    tab.panels.sliders["controller.omega"].value = 0.61
+    tab.panels.handles["controller.mode"].value = "raw"
+    tab.panels.handles["controller.omega"].value = 0.61
     assert tab.session.sim.policy.omega == pytest.approx(0.61)  # Chapter 3 panels work again
     text = presets_io.to_toml(presets_io.load("forest-dvc")).encode()
     assert tab.panels.upload_preset("forest.toml", text)

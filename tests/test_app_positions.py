@@ -15,7 +15,6 @@ import pytest
 from shoal.app import replay
 from shoal.app.kinds import swarm
 from shoal.app.kinds.registry import session_for
-from shoal.app.panels import Panels
 from shoal.app.session.timeline import verify_replay
 from shoal.engine.fleet import Fleet
 from shoal.engine.sim import Simulation
@@ -42,13 +41,13 @@ def _shown(tab, key: str) -> bool:
 def test_fleet_switch_keeps_the_fleet_view_and_changes_the_engine(tab):
     s, p = tab.session, tab.panels
     assert s.kind.name == "fleet" and type(s.sim) is Fleet and s.scenario.slo is None
-    assert p.positions_gui.positions.value == "oracle (true)" and not p.positions_gui.errors.visible
+    assert p.handles["positions"].value == "oracle (true)" and not p.handles["positions.errors"].visible
     x0 = s.sim.state.x.copy()
-    p.positions_gui.positions.value = "SLO (estimated)"
+    p.handles["positions"].value = "SLO (estimated)"
     assert tab.session is s and tab.arena.name == "fleet"  # the same kind of scene
     assert type(s.sim) is SLOFleet and s.scenario.slo.errors == "low" and s.scenario.slo.neighbourhood == "full"
     np.testing.assert_array_equal(s.sim.state.x, x0)  # same seed, same start
-    assert p.positions_gui.errors.visible
+    assert p.handles["positions.errors"].visible
     s.select(2)
     s.step(4)
     tab.tick(1.0)
@@ -57,18 +56,18 @@ def test_fleet_switch_keeps_the_fleet_view_and_changes_the_engine(tab):
     of = np.flatnonzero(b.valid[0, 2])
     np.testing.assert_allclose(_drawn(tab, "ghosts"), x[2] + b.est[0, 2, of], atol=1e-4)
     assert _shown(tab, "ghosts") and _shown(tab, "ghost_best")
-    assert "robot 2 localises" in p.positions_gui.readout.content
+    assert "robot 2 localises" in p.handles["positions.readout"].content
 
     sim = s.sim
-    p.positions_gui.errors.value = "High"  # retunes the running fleet: beliefs and positions kept
+    p.handles["positions.errors"].value = "High"  # retunes the running fleet: beliefs and positions kept
     assert s.sim is sim and s.sim.state.k == 4 and s.scenario.slo.errors == "high"
     assert s.sim.slo_source.errors.range.sigma_m == pytest.approx(0.2)
 
-    p.positions_gui.positions.value = "oracle (true)"
+    p.handles["positions"].value = "oracle (true)"
     assert type(s.sim) is Fleet and s.sim.state.k == 0 and s.scenario.slo.positions == "oracle"
     tab.tick(2.0)
     assert not _shown(tab, "ghosts")
-    assert "oracle" in p.positions_gui.readout.content
+    assert "oracle" in p.handles["positions.readout"].content
 
 
 def test_fleet_compare_runs_b_on_slo_positions(tab):
@@ -85,13 +84,13 @@ def test_sonar_switch_keeps_the_sonar_view(tab):
     tab.panels.preset.value = "sonar-xb-pso-slo"
     s, p = tab.session, tab.panels  # another kind of scene: new panels
     assert s.kind.name == "sonar" and type(s.sim) is SLOAcousticSwarm
-    assert p.positions_gui.positions.value == "SLO (estimated)"
+    assert p.handles["positions"].value == "SLO (estimated)"
     s.step(3)
     tab.tick(1.0)
     assert _shown(tab, "ghosts") and len(tab.arena.nodes["ghosts"].points) == s.sim.robots - 1
     snap = s.snapshot()
     np.testing.assert_allclose(snap.ghosts.truth, np.delete(s.sim.state.x[0], snap.selected, axis=0))
-    p.positions_gui.positions.value = "oracle (true)"
+    p.handles["positions"].value = "oracle (true)"
     assert tab.session is s and type(s.sim) is AcousticSwarm and s.sim.state.k == 0
     tab.tick(2.0)
     assert not _shown(tab, "ghosts")
@@ -110,26 +109,26 @@ def _omega(sim) -> float:
 def test_chapter3_controller_changes_reach_the_running_slo_simulation(tab):
     tab.panels.preset.value = "slo-adapted"
     s, p = tab.session, tab.panels
-    assert s.kind.name == "swarm" and isinstance(p, Panels) and tab.arena.name == "swarm"
-    assert type(s.sim) is SLOSimulation and p.positions_gui.positions.value == "SLO (estimated)"
+    assert s.kind.name == "swarm" and p.name == "swarm" and tab.arena.name == "swarm"
+    assert type(s.sim) is SLOSimulation and p.handles["positions"].value == "SLO (estimated)"
     s.step(5)
     sim, source = s.sim, s.sim.slo_source
     est = source.beliefs.est.copy()
     assert _omega(sim) == pytest.approx(0.5)  # U = 6, A+ = 30, Δt = 0.1: β = 0.5
-    p.sliders["controller.U"].value = 4.0  # physical mode: β = A+Δt/U = 0.75, ω = 0.25
+    p.handles["controller.U"].value = 4.0  # physical mode: β = A+Δt/U = 0.75, ω = 0.25
     assert s.sim is sim and sim.slo_source is source and sim.state.k == 5
     assert _omega(sim) == pytest.approx(0.25) and swarm.driver(s).coefficients()[0] == pytest.approx(0.25)
     np.testing.assert_array_equal(source.beliefs.est, est)  # the beliefs are kept
-    p.mode.value = "raw"
-    p.sliders["controller.omega"].value = 0.3
-    p.sliders["controller.dt"].value = 0.05
-    p.law.value = "adapted-tanh"
+    p.handles["controller.mode"].value = "raw"
+    p.handles["controller.omega"].value = 0.3
+    p.handles["controller.dt"].value = 0.05
+    p.handles["controller.law"].value = "adapted-tanh"
     assert s.sim is sim and sim.state.k == 5
     assert _omega(sim) == pytest.approx(0.3) and sim.dt == 0.05 and sim.law.name == "adapted-tanh"
     s.step(3)
     assert sim.state.k == 8 and sim.bests.sensed_k == 8  # it runs and localises on the new controller
-    p.sliders["sim.robots"].value = 24  # new robots join the running swarm and its SLO source
-    assert s.sim is sim and sim.robots == 24 and p.particle.max == 23
+    p.handles["sim.robots"].value = 24  # new robots join the running swarm and its SLO source
+    assert s.sim is sim and sim.robots == 24 and p.handles["particle"].max == 23
     b = sim.slo_source.beliefs
     assert b.est.shape == (1, 24, 24, 2) and sim.bests.pbest.shape == (1, 24, 2)
     s.step(2)
@@ -140,7 +139,7 @@ def test_chapter3_positions_switch_changes_the_engine_with_the_same_seed(tab):
     tab.panels.preset.value = "slo-adapted"
     s, p = tab.session, tab.panels
     x0, seed = s.sim.state.x.copy(), s.sim.seed
-    p.particle.value = 3  # the phase plane's particle is the observer of the ghosts
+    p.handles["particle"].value = 3  # the phase plane's particle is the observer of the ghosts
     s.step(4)
     tab.tick(1.0)
     b, x = s.sim.slo_source.beliefs, s.sim.state.x[0]
@@ -149,22 +148,22 @@ def test_chapter3_positions_switch_changes_the_engine_with_the_same_seed(tab):
     np.testing.assert_allclose(_ch3_drawn(tab, "ghosts"), x[3] + b.est[0, 3, of], atol=1e-4)
     np.testing.assert_allclose(_ch3_drawn(tab, "ghost_best"), s.sim.believed_gbest()[0, 3][None], atol=1e-4)
     assert _shown(tab, "ghosts") and _shown(tab, "ghost_errors")
-    assert "robot 3 localises 19 robots" in p.positions_gui.readout.content
+    assert "robot 3 localises 19 robots" in p.handles["positions.readout"].content
 
     sim = s.sim
-    p.positions_gui.errors.value = "High"  # retunes the running swarm
+    p.handles["positions.errors"].value = "High"  # retunes the running swarm
     assert s.sim is sim and sim.state.k == 4 and sim.slo_source.errors.range.sigma_m == pytest.approx(0.2)
 
-    p.positions_gui.positions.value = "oracle (true)"
-    assert tab.session is s and isinstance(tab.panels, Panels)  # the same Chapter 3 scene
+    p.handles["positions"].value = "oracle (true)"
+    assert tab.session is s and tab.panels.name == "swarm"  # the same Chapter 3 scene
     assert type(s.sim) is Simulation and s.sim.seed == seed and s.sim.state.k == 0
     np.testing.assert_array_equal(s.sim.state.x, x0)  # same seed, same start
-    assert not p.positions_gui.errors.visible
+    assert not p.handles["positions.errors"].visible
     s.step(2)
     tab.tick(2.0)
-    assert not _shown(tab, "ghosts") and "oracle" in p.positions_gui.readout.content
+    assert not _shown(tab, "ghosts") and "oracle" in p.handles["positions.readout"].content
 
-    p.positions_gui.positions.value = "SLO (estimated)"
+    p.handles["positions"].value = "SLO (estimated)"
     assert type(s.sim) is SLOSimulation and s.scenario.slo.errors == "high"
     np.testing.assert_array_equal(s.sim.state.x, x0)
 

@@ -12,10 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from shoal.app import sonar_plots
 from shoal.app.kinds import sonar
-from shoal.app.kinds.sonar import true_ray_index
-from shoal.app.sonar_panels import SonarPanels
+from shoal.app.kinds.sonar import corr_data, true_ray_index
 from shoal.engine.sonar import AcousticSwarm
 
 
@@ -39,7 +37,7 @@ def _drawn(tab, now: float):
 def test_sonar_preset_builds_an_acoustic_swarm_and_draws_rays_from_the_robots(tab):
     s = tab.session
     assert s.kind.name == "sonar" and isinstance(s.sim, AcousticSwarm)
-    assert isinstance(tab.panels, SonarPanels) and tab.arena.name == "sonar"
+    assert tab.panels.name == "sonar" and tab.arena.name == "sonar"
     s.step(3)
     view = _drawn(tab, 1.0)
     x = s.sim.state.x[0]
@@ -64,16 +62,16 @@ def test_algorithm_and_Q_reach_the_scenario_and_the_swarm(tab):
     s, p = tab.session, tab.panels
     s.step(2)
     swarm = s.sim
-    p.sliders["acoustics.Q"].value = 4.0  # live: no rebuild
+    p.handles["acoustics.Q"].value = 4.0  # live: no rebuild
     assert s.scenario.acoustics.Q == 4.0 and swarm.params.Q == 4.0 and swarm.band.Q == 4.0
     assert s.sim is swarm and swarm.state.k == 2
-    p.sliders["acoustics.a"].value = 0.5
+    p.handles["acoustics.a"].value = 0.5
     assert swarm.strategy.a == 0.5
-    p.algorithm.value = "B-PSO"  # rebuilds
+    p.handles["acoustics.algorithm"].value = "B-PSO"  # rebuilds
     assert s.scenario.acoustics.algorithm == "b-pso" and s.sim.params.algorithm == "b-pso"
     assert s.sim.state.k == 0 and s.sim.params.Q == 4.0
     assert tab.messages[-1][0] == "Swarm rebuilt"
-    p.algorithm.value = "GT-PSO"
+    p.handles["acoustics.algorithm"].value = "GT-PSO"
     s.step(2)
     tab.tick(1.0)
     assert s.sim.params.algorithm == "gt-pso" and s.sim.state.loc.triangles is not None
@@ -82,13 +80,13 @@ def test_algorithm_and_Q_reach_the_scenario_and_the_swarm(tab):
 
 def test_a_bad_value_is_refused_and_the_slider_restored(tab):
     s, p = tab.session, tab.panels
-    p.sliders["acoustics.r"].value = 30.0  # escorting needs the non-omni controller
+    p.handles["acoustics.r"].value = 30.0  # escorting needs the non-omni controller
     title, body, colour = tab.messages[-1]
     assert colour == "red" and "acoustics" in body and "nonomni" in body
-    assert s.scenario.acoustics.r == 0.0 and p.sliders["acoustics.r"].value == 0.0
-    p.sliders["acoustics.Q"].value = 5000.0  # beyond the model's range
+    assert s.scenario.acoustics.r == 0.0 and p.handles["acoustics.r"].value == 0.0
+    p.handles["acoustics.Q"].value = 5000.0  # beyond the model's range
     assert tab.messages[-1][2] == "red" and s.scenario.acoustics.Q == 1.5
-    assert p.sliders["acoustics.Q"].value == 1.5
+    assert p.handles["acoustics.Q"].value == 1.5
 
 
 def test_dragging_the_source_moves_it_in_the_engine(tab):
@@ -125,17 +123,17 @@ def test_the_correlation_plot_shows_the_selected_robots_corr(tab):
     s, p = tab.session, tab.panels
     s.step(2)
     for robot in (0, 4):
-        p.robot.value = robot
+        p.handles["robot"].value = robot
         assert s.selected_robot == robot
         tab.tick(float(robot) + 1.0)
         b = s.sim.state.bearing
-        x, y, mark = (np.asarray(a) for a in p.corr_plot.data)
+        x, y, mark = (np.asarray(a) for a in p.handles["corr"].data)
         lags_ms = b.lags * 1e3
         on_grid = np.isin(x, lags_ms)
         np.testing.assert_allclose(y[on_grid], b.corr[0, robot], rtol=1e-12)
         assert mark.max() == pytest.approx(b.rho[0, robot])
         assert x[np.argmax(mark)] == pytest.approx(b.tau[0, robot] * 1e3)
-    snr = np.asarray(p.snr_plot.data[1])
+    snr = np.asarray(p.handles["snr"].data[1])
     assert snr.max() == pytest.approx(s.sim.state.snr_db[0].max())
 
 
@@ -166,7 +164,7 @@ def test_upload_of_an_acoustic_preset(tab):
 def test_corr_data_marks_tau_with_a_vertical_line():
     lags = np.linspace(-1e-3, 1e-3, 21)
     corr = np.cos(lags * 3000)
-    x, y, mark = sonar_plots.corr_data(lags, corr, 2.5e-4, 0.9)
+    x, y, mark = corr_data(lags, corr, 2.5e-4, 0.9)
     assert np.all(np.diff(x) >= 0)
     assert mark.max() == 0.9 and x[np.argmax(mark)] == pytest.approx(0.25)
     np.testing.assert_allclose(y, np.interp(x / 1e3, lags, corr))

@@ -15,17 +15,14 @@ from shoal.presets import io as presets_io
 KINDS = ("default", "course-dvc", "sonar-xb-pso", "slo-walk")
 
 
-class Panels:
-    """What a kind's layers ask of the panels: where a drag in the arena goes."""
+class Part:
+    """What a kind's layers ask of its panel part: where a drag in the arena goes."""
 
     def __init__(self) -> None:
         self.drags: list[tuple] = []
 
-    def drag_obstacle(self, *args) -> None:
-        self.drags.append(("obstacle", *args))
-
-    def drag_source(self, *args) -> None:
-        self.drags.append(("source", *args))
+    def drag(self, *args) -> None:
+        self.drags.append(args)
 
 
 @pytest.fixture
@@ -38,7 +35,7 @@ def _view(scene, preset: str, fits: list | None = None):
     sc = presets_io.load(preset)
     kind = kind_for(sc)
     session = kind.session(sc)
-    view = kind.view(scene, Panels(), fit=(lambda w, h: fits.append((w, h))) if fits is not None else None)
+    view = kind.view(scene, Part(), fit=(lambda w, h: fits.append((w, h))) if fits is not None else None)
     view.rebuild(session.scene_revision)
     return session, view
 

@@ -8,6 +8,8 @@ from typing import Any, Callable
 
 from shoal.presets.models import Scenario
 
+from ..panel.spec import KindPanel, PanelAPI
+from ..session.beliefs import Ghosts, host_ghosts
 from ..session.driver import Driver
 from ..session.history import Frame, frame_of
 from ..session.session import Session
@@ -26,8 +28,9 @@ class AppKind:
     refuse: Callable[[Scenario], None]  # raises PresetError saying why a scenario is not this kind's
     make_driver: Callable[[Session], Driver]
     notes: str  # teaching notes ``static/notes/<notes>.md``
-    layers: Callable[[Any], tuple[Layer, ...]]  # the arena's layers (given the panels, for drags)
+    layers: Callable[[KindPanel | None], tuple[Layer, ...]]  # the arena's layers (a drag goes to the panel part)
     camera: Callable[[], Camera]
+    make_panel: Callable[[PanelAPI], KindPanel]
 
     def check(self, scenario: Scenario) -> Scenario:
         """``scenario`` if this kind shows it, else :class:`PresetError` saying why not."""
@@ -41,9 +44,14 @@ class AppKind:
         """A new session of this kind (raises :class:`PresetError` if it cannot show ``scenario``)."""
         return Session(scenario, self)
 
-    def view(self, scene: Any, panels: Any, fit: Fit | None = None) -> View:
-        """The arena of a tab showing this kind on viser ``scene``."""
-        return View(scene, self.name, self.camera(), self.layers(panels), fit)
+    def panel(self, api: PanelAPI) -> KindPanel:
+        """This kind's part of a tab's panel (built by the shared :class:`~shoal.app.panel.panel.Panel`)."""
+        return self.make_panel(api)
+
+    def view(self, scene: Any, part: KindPanel | None, fit: Fit | None = None) -> View:
+        """The arena of a tab showing this kind on viser ``scene`` (``part``: where drags go; None on
+        a page that only plays a run back)."""
+        return View(scene, self.name, self.camera(), self.layers(part), fit)
 
 
 class BaseDriver:
@@ -79,3 +87,7 @@ class BaseDriver:
 
     def export_extra(self) -> dict[str, Any]:
         return {}
+
+    def ghosts(self, selected: int, true_best: Any) -> Ghosts | None:
+        """The selected robot's beliefs when the swarm acts on SLO-estimated positions."""
+        return host_ghosts(self.sim, self.session.scenario, selected, true_best)

@@ -18,14 +18,33 @@ from typing import Any, Callable
 
 import numpy as np
 
+from shoal.engine.dvc import TABLE_4_1
 from shoal.engine.fleet import Fleet, FleetParams
 from shoal.engine.fleet_probe import RobotView, robot_view
+from shoal.engine.robot_laws import ROBOT_LAWS
 from shoal.engine.world import WorldSpec
 from shoal.presets.build import build_fleet, fleet_params_for, world_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from ..session.beliefs import host_ghosts
+from ..panel.panel import TRAIL_SLIDER
+from ..panel.plots import Line, PlotSpec, Series
+from ..panel.positions import positions_choices, positions_folder
+from ..panel.selection import robot_number
+from ..panel.spec import (
+    Button,
+    Checkbox,
+    Dropdown,
+    Folder,
+    KindPanel,
+    Number,
+    PanelAPI,
+    Slider,
+    Tab,
+    Text,
+    fmt,
+    round_sig,
+)
 from ..session.history import Frame
 from ..session.positions import slo_retune
 from ..session.session import Session
@@ -48,13 +67,12 @@ from ..view.layers import (
 )
 from ..view.view import Home
 from .base import AppKind, BaseDriver
+from .fleet_budget import budget_markdown
+from .fleet_world import MODES as CLICK_MODES
+from .fleet_world import EditRefused, WorldEditor
 
 OBSTACLE_RADIUS = 0.7  # m: a new obstacle's default radius
 FOLLOW = ("world", "swarm", "robot")  # what the view keeps in the middle
-
-
-class EditRefused(ValueError):
-    """A world edit that would put an obstacle on a robot or outside the world."""
 
 
 def _world_error(msg: str) -> str:
@@ -80,6 +98,7 @@ class FleetDriver(BaseDriver):
         super().__init__(session)
         self.world_revision = 0  # bumps whenever the obstacles change (redraw them)
         self.edits = 0  # world edits since the fleet was built
+        self.dropped = 0  # the edits the last rebuild dropped
         self.obstacle_radius = OBSTACLE_RADIUS
         self.follow, self.zoom = "world", 1.0
 
@@ -91,7 +110,7 @@ class FleetDriver(BaseDriver):
 
     def loaded(self) -> None:
         self.world_revision += 1
-        self.edits = 0
+        self.dropped, self.edits = self.edits, 0
 
     # ------------------------------------------------------------------ changes
     def rebuilds(self, old: Scenario, new: Scenario) -> bool:
@@ -203,7 +222,7 @@ class FleetDriver(BaseDriver):
         extras = dict(u=s.u[0].copy(), cmd=s.cmd[0].copy(), world_revision=self.world_revision, world=self.sim.world,
                       params=dataclasses.replace(self.sim.params), view=self.view(), follow=self.follow,
                       zoom=self.zoom if self.follow != "world" else 1.0)
-        return {"y": s.y[0].copy(), "yg": s.yg[0].copy(), "ghosts": host_ghosts(self.sim, selected, s.yg[0]),
+        return {"y": s.y[0].copy(), "yg": s.yg[0].copy(), "ghosts": self.ghosts(selected, s.yg[0]),
                 "extras": extras}
 
     def recorded(self, frame: Frame) -> dict[str, Any]:
@@ -468,12 +487,12 @@ class FollowCamera:
         canvas.set_focus(np.clip(target, (x0, y0), (x1, y1)))
 
 
-def layers(panels: Any) -> tuple[Layer, ...]:
+def layers(part: KindPanel | None) -> tuple[Layer, ...]:
     """The fleet's arena: the course and its obstacles (drag one to move it), the robots with
     their headings, trails and bests, the selected robot's sensing; swarm B, the beliefs."""
     return (
         WorldLayer(),
-        Obstacles(panels.drag_obstacle if panels is not None else None),
+        Obstacles(part.drag if part is not None else None),
         Robots(ROBOT, _radius, Z["robots"], collided=COLLIDED),
         Headings(HEADING, lambda canvas, snap: 1.3 * snap.extras["params"].robot_radius, Z["headings"],
                  angle=_heading_angle),
@@ -486,6 +505,277 @@ def layers(panels: Any) -> tuple[Layer, ...]:
     )
 
 
+# ---------------------------------------------------------------------------- panel
+# label → (controller.law, controller.mode)
+CONTROLLERS: dict[str, tuple[str, str]] = {
+    "Original RPSO": ("rpso", "raw"),
+    "Adapted RPSO (constant)": ("adapted-rpso", "raw"),
+    "Adapted RPSO + DVC": ("adapted-rpso", "dvc"),
+    "Robot-centred (constant)": ("robot-centred", "raw"),
+    "Non-omni + DVC": ("nonomni", "dvc"),
+}
+BODY_FRAME_LAWS = tuple(name for name, law in ROBOT_LAWS.items() if law.body_frame)
+OMNI_DRIVES = ("holonomic", "mecanum")
+WORLDS = ("obstacle-course", "forest", "empty")
+RATIO_MARKS = ((0.5, "½"), (1.0, "1"), (2.0, "2"))  # the Table 4.1 cases
+VIEWS = {"whole world": "world", "follow the swarm": "swarm", "follow the robot": "robot"}
+FOLLOW_ZOOM = 2.5  # zoom a follow view starts with
+REBUILD_NOTE = ("*Changes on this tab rebuild the fleet: the robots start again from the start box and obstacle "
+                "edits are dropped.*")
+EDIT_HELP = ("Click the arena: **add** an obstacle · **shift-** or **ctrl-click** removes the nearest · **drag** an "
+             "obstacle to move it · click a robot to select it.")
+EXPORT_NOTE = (" Obstacles added, removed or moved by hand are not part of the preset (it names its world by "
+               "generator and seed); the JSON export lists the obstacles as they are.")
+
+
+def controller_changes(label: str, sc: Scenario) -> dict[str, Any]:
+    """The preset fields that switch ``sc`` to the controller ``label`` (one of ``CONTROLLERS``)."""
+    law, mode = CONTROLLERS[label]
+    c = sc.controller
+    changes: dict[str, Any] = {"controller.law": law, "controller.mode": mode}
+    drive = sc.robot.drive
+    if law in BODY_FRAME_LAWS and drive != "differential":
+        changes["robot.drive"] = "differential"
+    elif law not in BODY_FRAME_LAWS and drive == "differential":
+        changes["robot.drive"] = "holonomic"
+    if mode == "raw" and (c.c3 == 0.0 or c.mode == "dvc"):
+        case = TABLE_4_1["c3-equal"]  # a sensible constant case to start from
+        changes.update({f"controller.{k}": v for k, v in case.items()})
+    return changes
+
+
+def controller_label(law: str, mode: str) -> str:
+    for label, key in CONTROLLERS.items():
+        if key == (law, mode):
+            return label
+    return f"{law} ({mode})"
+
+
+def _controller(s: Session) -> str:
+    return controller_label(s.scenario.controller.law, s.scenario.controller.mode)
+
+
+def _controllers(s: Session) -> tuple[str, ...]:
+    label = _controller(s)
+    return tuple(CONTROLLERS) + (() if label in CONTROLLERS else (label,))
+
+
+def _set_controller(s: Session, label: str) -> dict[str, Any] | None:
+    c = s.scenario.controller
+    if label not in CONTROLLERS or CONTROLLERS[label] == (c.law, c.mode):
+        return None
+    return controller_changes(label, s.scenario)
+
+
+def _dvc(s: Session) -> bool:
+    return s.scenario.controller.mode == "dvc"
+
+
+def _omni(sc: Scenario) -> bool:
+    """An omnidirectional RPSO law (original or Adapted): attraction and avoidance c1, c2, c3."""
+    return not ROBOT_LAWS[sc.controller.law].body_frame
+
+
+def _avoidance(sc: Scenario) -> float:
+    """c3, when the law has an avoidance term."""
+    c = sc.controller
+    return c.c3 if ROBOT_LAWS[c.law].terms > 2 else 0.0
+
+
+def _c_hat(s: Session) -> float:
+    c = s.scenario.controller
+    return round_sig(min(max(c.c1 + c.c2 + _avoidance(s.scenario), 0.05), 5.0), 4)
+
+
+def _ratio(s: Session) -> float:
+    c = s.scenario.controller
+    c12 = c.c1 + c.c2
+    return round_sig(min(_avoidance(s.scenario) / c12 if c12 > 0 else 4.0, 4.0), 4)
+
+
+def _budget(panel: PanelAPI, total: float | None = None, ratio: float | None = None) -> None:
+    """ĉ and c3/(c1+c2) → c1, c2, c3 (split by c1 : c2)."""
+    total = float(panel.handles["c_hat"].value if total is None else total)
+    ratio = float(panel.handles["ratio"].value if ratio is None else ratio)
+    c = panel.session.scenario.controller
+    if ROBOT_LAWS[c.law].terms <= 2:
+        c12, c3 = total, c.c3
+    else:
+        c12, c3 = total / (1.0 + ratio), total * ratio / (1.0 + ratio)
+    changes = {"controller.c1": round_sig(c.c1_share * c12), "controller.c2": round_sig((1 - c.c1_share) * c12),
+               "controller.c3": round_sig(c3)}
+    panel.apply(changes, f"ĉ = {total:g}, c3/(c1+c2) = {ratio:g}")
+
+
+def _drives(s: Session) -> tuple[str, ...]:
+    sc = s.scenario
+    drives = ("differential",) if sc.controller.law in BODY_FRAME_LAWS else OMNI_DRIVES
+    return drives if sc.robot.drive in drives else drives + (sc.robot.drive,)
+
+
+def _view(panel: PanelAPI, value: Any) -> None:
+    """The arena's view: the whole world, or a closer one that follows the swarm or the robot."""
+    follow = VIEWS.get(panel.handles["view"].value, "world")
+    panel.handles["zoom"].visible = follow != "world"
+    driver(panel.session).set_view(follow, float(panel.handles["zoom"].value))
+
+
+def _restore(panel: PanelAPI) -> None:
+    driver(panel.session).restore_world()
+    panel.notify("World restored", "the generated obstacles are back; the robots carry on", "blue")
+
+
+def _obstacle_radius(panel: PanelAPI, value: Any) -> None:
+    driver(panel.session).obstacle_radius = float(min(max(value, 0.05), 10.0))
+
+
+def _keep(panel: PanelAPI, value: Any) -> None:
+    """A choice kept in its handle (read when the arena is clicked)."""
+
+
+def _budget_table(s: Session, snap: Snapshot) -> str:
+    e = snap.extras
+    i = e["view"].robot
+    return budget_markdown(e["view"], e["params"], int(snap.status[i]), e["cmd"][i])
+
+
+def _readout(s: Session) -> str:
+    c = s.scenario.controller
+    if c.mode == "dvc":
+        n = ROBOT_LAWS[c.law].terms
+        text = (f"ω = 1 − β = {1 - c.beta:.3g}; every robot gets its own c1..c{n} each step from its "
+                "sector gaps (see the selected robot above).")
+    else:
+        c_hat = c.c1 + c.c2 + _avoidance(s.scenario)
+        U = c_hat * 2 ** 0.5 / (1 - c.omega)
+        bound = "" if c.law == "rpso" else f"; U = ĉ√2/(1 − ω) = {fmt(U, 'm/s')}"
+        text = f"c1 = {c.c1:.4g}, c2 = {c.c2:.4g}, c3 = {c.c3:.4g}, ω = {c.omega:.3g}{bound}"
+        if c.law == "rpso":
+            text += "; original RPSO: unbounded terms, clipped at the top speed"
+    with s.lock:
+        sensing = s.sim.params.sensing_range
+    return text + f" · sensing range {sensing:g} m"
+
+
+def _status(s: Session, r: dict[str, float], state: str) -> str:
+    sc, edits = s.scenario, driver(s).edits
+    return (f"**{sc.name}** · {state} · t = {r['t']:.0f} s · step {int(r['k'])}/{sc.sim.steps} · "
+            f"CoM x = {r['com']:.1f} m"
+            + (f" · layers passed {int(r['layers_passed'])}/{int(r['layers'])}" if r["layers"] else "")
+            + f" · {int(r['operational'])}/{int(r['operational'] + r['collided'])} operational"
+            + (f" · {edits} obstacle edit{'s' * (edits != 1)}" if edits else ""))
+
+
+def _compare(s: Session) -> dict[str, dict[str, Any]]:
+    """B with another controller (law, coefficient policy and the drive it needs), or on the
+    other positions (oracle vs SLO)."""
+    sc = s.scenario
+    here = (sc.controller.law, sc.controller.mode)
+    return {**{f"controller: {label}": controller_changes(label, sc) for label, key in CONTROLLERS.items()
+               if key != here}, **positions_choices(sc)}
+
+
+def _rebuilt(s: Session, what: str, changes: dict[str, Any]) -> tuple[str, str]:
+    n = driver(s).dropped
+    dropped = f"; {n} obstacle edit{'s' * (n != 1)} dropped" if n else ""
+    return "Fleet rebuilt", f"{what}: the robots start again from the start box{dropped}"
+
+
+def _world_layers(s: Session) -> tuple[Line, ...]:
+    return tuple(Line(f"layer {i + 1}", float(x), stroke="rgba(120, 120, 120, 0.9)", dash=(3.0, 4.0))
+                 for i, x in enumerate(s.sim.world.layer_x))
+
+
+COM = PlotSpec("com", "swarm fitness: CoM x [m] vs time [s] · dotted: layers",
+               (Series("CoM x [m]", "com", "rgb(220,50,50)", 2),), lines=_world_layers, twin="com",
+               y_range=lambda s: (float(s.sim.world.bounds[0]), float(s.sim.world.bounds[2])), aspect=1.6,
+               legend={"show": False})
+ROBOTS = PlotSpec("robots", "robots vs time [s]", (
+    Series("operational", "operational", "rgb(30,140,70)", 2),
+    Series("collided", "collided", "rgb(150,150,150)", 2, dash=(6.0, 4.0)),
+), y_range=lambda s: (0.0, float(max(s.robots, 1)) + 0.5), axes=({}, {"size": 40}))
+
+
+def panel(api: PanelAPI) -> KindPanel:
+    """The selected robot's budget, the controller, the world and its obstacles, the robots,
+    live plots. Controller and sensing fields change the running fleet at its next step; the
+    world, the robot model and the robot count rebuild it (the panel says so)."""
+    editor = WorldEditor(driver(api.session), api.notify, api.select_robot)
+    world = lambda kind: (lambda s: s.scenario.world.kind == kind)  # noqa: E731
+    omni = lambda s: _omni(s.scenario)  # noqa: E731
+    return KindPanel(
+        folders=(
+            Folder("Arena view and selected robot", items=(
+                Dropdown("view", "view", tuple(VIEWS), act=_view,
+                         hint="the whole world, or a closer view that follows"),
+                Slider("zoom", "zoom", 1.0, 6.0, 0.5, "how close the following view is", act=_view,
+                       initial=FOLLOW_ZOOM, visible=lambda s: driver(s).follow != "world"),
+                robot_number(hint="whose sectors, force and budget are drawn; or click a robot"),
+                Text("budget", on_snapshot=_budget_table),
+            )),
+            positions_folder(),
+        ),
+        tabs=(
+            Tab("Controller", (
+                Dropdown("controller", "controller", _controllers, read=_controller, write=_set_controller,
+                         hint="velocity law and coefficient policy (Chapters 4 and 5)"),
+                Slider("controller.dt", "Δt [s]", 0.1, 2.0, 0.05, "controller period"),
+                Slider("controller.alpha", "α safety", 0.05, 0.99, 0.01,
+                       "DVC: a step may cover at most α of a gap [4.14]", visible=_dvc),
+                Slider("controller.beta", "β", 0.05, 1.0, 0.01, "ĉ = βU/√d [4.15]; ω = 1 − β under DVC", visible=_dvc),
+                Slider("controller.omega", "ω", 0.0, 0.99, 0.01, "inertia weight (constant coefficients)",
+                       visible=lambda s: not _dvc(s)),
+                Slider("c_hat", "ĉ = c1 + c2 + c3", 0.05, 5.0, 0.01, "total budget of the constant coefficients [m/s]",
+                       read=_c_hat, act=lambda p, v: _budget(p, total=v), visible=lambda s: not _dvc(s),
+                       label_of=lambda sc: "ĉ = c1 + c2 + c3" if _omni(sc) else "ĉ = c1 + c2"),
+                Slider("ratio", "c3 / (c1 + c2)", 0.0, 4.0, 0.05, "avoidance against attraction; Table 4.1: ½, 1, 2",
+                       marks=RATIO_MARKS, read=_ratio, act=lambda p, v: _budget(p, ratio=v),
+                       visible=lambda s: not _dvc(s) and omni(s)),
+                Slider("controller.gamma", "γ", 0.1, 10.0, 0.1,
+                       "avoidance sensitivity [4.4]: F = γ/s; only the sign of F_t counts in Adapted RPSO",
+                       visible=omni),
+                Slider("controller.c1_share", "c1 : c2 split", 0.0, 1.0, 0.05, "c1/(c1+c2); the thesis uses 0.5"),
+                Slider("sensing.range", "sensing range R [m]", 0.5, 10.0, 0.1, "LiDAR range of the six sectors"),
+                Checkbox("controller.guard", "DVC inertia guard", visible=_dvc,
+                         hint="ours: cap each step at α of every sensed gap, inertia included"),
+                Dropdown("controller.update", "update order", ("sequential", "simultaneous"),
+                         hint="robots sense and move one after another (Algorithms 1–2) or all at once"),
+                Text("readout", compute=_readout),
+                Text(text="*Controller changes take effect at the next step, without a restart.*"),
+            )),
+            Tab("World", (
+                Text(text=REBUILD_NOTE),
+                Dropdown("world.kind", "world", WORLDS),
+                Slider("world.layers", "layers", 1, 15, 1, "obstacle layers, denser towards the source", integer=True,
+                       visible=world("obstacle-course")),
+                Slider("world.length", "length [m]", 20.0, 150.0, 1.0, "course length along x",
+                       visible=world("obstacle-course")),
+                Slider("world.width", "width [m]", 13.0, 80.0, 1.0, "course width, or the side of a square arena"),
+                Slider("world.density", "tree density", 0.01, 0.2, 0.01, "share of the forest floor covered by trees",
+                       visible=world("forest")),
+                Slider("sim.robots", "robots", 1, 40, 1, "number of robots (rebuilds the fleet)", integer=True),
+                Number("world.seed", "world seed", read=lambda s: int(s.scenario.world.seed),
+                       hint="which random course or forest"),
+                Dropdown("robot.motion", "motion", ("kinematic", "physics"),
+                         hint="ideal particles (MATLAB) or pymunk bodies with inertia (Gazebo)"),
+                Dropdown("robot.drive", "drive", _drives,
+                         hint="holonomic, mecanum (direction-dependent top speed) or differential"),
+                Folder("Edit obstacles", items=(
+                    Text(text=EDIT_HELP),
+                    Dropdown("click", "click does", CLICK_MODES, act=_keep),
+                    Slider("obstacle_radius", "new obstacle radius [m]", 0.2, 3.0, 0.1,
+                           read=lambda s: driver(s).obstacle_radius, act=_obstacle_radius),
+                    Button("restore", "Restore world", _restore, hint="drop the edits: the generated world again"),
+                )),
+                TRAIL_SLIDER,
+            )),
+            Tab("Plots", (COM, ROBOTS)),
+        ),
+        status=_status, compare=_compare, rebuilt=_rebuilt, export_note=EXPORT_NOTE, state=editor,
+        click=lambda p, x, y, modifier: editor.click(x, y, modifier, p.handles["click"].value),
+        drag=editor.drag)
+
+
 def accepts(scenario: Scenario) -> bool:
     return scenario.world is not None
 
@@ -496,7 +786,7 @@ def refuse(scenario: Scenario) -> None:
 
 
 KIND = AppKind(name="fleet", title="Chapter 4–5 fleet", priority=20, accepts=accepts, refuse=refuse,
-               make_driver=FleetDriver, notes="ch4-5", layers=layers, camera=FollowCamera)
+               make_driver=FleetDriver, notes="ch4-5", layers=layers, camera=FollowCamera, make_panel=panel)
 
 
 def driver(session: Session) -> FleetDriver:

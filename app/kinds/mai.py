@@ -16,16 +16,24 @@ neighbourhood edges and the candidate triangle of one selected pair.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from shoal.engine.slo import SLOSwarm
+from shoal.engine.slo_selection import SELECTIONS
+from shoal.engine.slo_sensors import error_model
 from shoal.presets.build import build_slo, slo_live_changes
 from shoal.presets.io import PresetError
-from shoal.presets.models import Scenario
+from shoal.presets.models import Scenario, SLOErrorValues
 
+from ..panel.panel import TRAIL_SLIDER
+from ..panel.plots import PlotSpec, Series
+from ..panel.positions import ERROR_SETS, label_of
+from ..panel.selection import robot_number
+from ..panel.spec import Dropdown, Folder, KindPanel, Number, PanelAPI, Slider, Tab, Text, fmt
 from ..session.beliefs import ghosts_of
 from ..session.history import Frame
 from ..session.session import Session
@@ -226,7 +234,7 @@ class Pair(Static):
             canvas.label(key, key[-2:], xy + 0.5 / canvas.scale, 0.02)
 
 
-def layers(panels: Any) -> tuple[Layer, ...]:
+def layers(part: KindPanel | None) -> tuple[Layer, ...]:
     """Truth against belief: the true robots (red) and their neighbourhood (grey), trails, the
     observer (yellow ring) and its ghosts, the triangle inspector; swarm B."""
     return (
@@ -240,6 +248,225 @@ def layers(panels: Any) -> tuple[Layer, ...]:
         Pair(),
         Twin(ROBOT_SIZE, (0.009, -0.006)),
     )
+
+
+# ---------------------------------------------------------------------------- panel
+SELECTION_LABELS = SELECTIONS.labels()  # label → slo.selection
+NEIGHBOURHOODS = ("knn", "radius", "full", "random", "ring")
+OBJECTIVES = ("sphere", "ackley", "griewank", "rastrigin", "rosenbrock", "plane", "line")
+MOTIONS = ("pso", "random_walk")
+PARAM_DEFAULT = {"knn": 5, "radius": 25, "ring": 2, "random": 0.5, "full": math.nan}
+ERROR_FIELDS = tuple(SLOErrorValues.model_fields)
+TINY = 1e-300
+EXPORT_NOTE = " The JSON export adds the selected robot's estimates of the others."
+
+
+def _error_range(name: str) -> tuple[float, float]:
+    """On-screen (max, step) of one single error slider."""
+    if name.endswith("p_fail"):
+        return 0.5, 0.01
+    if name.endswith("sigma_a"):
+        return 3.0, 0.01
+    return 0.5, 0.005
+
+
+def _error_value(s: Session, name: str) -> float:
+    """The single error ``name`` in force: set by hand, or the error set's."""
+    slo = s.scenario.slo
+    set_value = getattr(slo.error_values, name)
+    if set_value is not None:
+        return float(set_value)
+    part, _, field = name.partition("_")
+    return float(getattr(getattr(error_model(slo.errors), part), field))
+
+
+def _error_slider(name: str) -> Slider:
+    hi, step = _error_range(name)
+
+    def write(s: Session, value: Any) -> dict[str, Any] | None:
+        return None if math.isclose(value, _error_value(s, name), abs_tol=1e-12) else {
+            f"slo.error_values.{name}": value}
+
+    return Slider(f"slo.error_values.{name}", name, 0.0, hi, step,
+                  SLOErrorValues.model_fields[name].description or name,
+                  read=lambda s: _error_value(s, name), write=write, widen=True)
+
+
+def _mapped(path: str, mapping: dict[str, str]) -> tuple[Any, Any]:
+    """(read, write) of a dropdown of labels for the values of the ``[slo]`` field ``path``."""
+    name = path.split(".")[1]
+
+    def read(s: Session) -> str:
+        return label_of(mapping, getattr(s.scenario.slo, name))
+
+    def write(s: Session, label: str) -> dict[str, Any] | None:
+        value = mapping.get(label, label)
+        return None if value == getattr(s.scenario.slo, name) else {path: value}
+
+    return read, write
+
+
+def _set_errors(s: Session, label: str) -> dict[str, Any] | None:
+    value, slo = ERROR_SETS.get(label, label), s.scenario.slo
+    if value == slo.errors and not slo.error_values.values():
+        return None
+    return {"slo.errors": value, "slo.error_values": {}}
+
+
+def _set_neighbourhood(s: Session, value: str) -> dict[str, Any] | None:
+    if value == s.scenario.slo.neighbourhood:
+        return None
+    return {"slo.neighbourhood": value, "slo.neighbourhood_param": None}
+
+
+def _neighbourhood_param(s: Session) -> float | None:
+    slo = s.scenario.slo
+    p = slo.neighbourhood_param if slo.neighbourhood_param is not None else PARAM_DEFAULT[slo.neighbourhood]
+    return None if math.isnan(p) else float(p)
+
+
+def _set_neighbourhood_param(s: Session, value: Any) -> dict[str, Any] | None:
+    return None if value == s.scenario.slo.neighbourhood_param else {"slo.neighbourhood_param": value}
+
+
+def _neighbour(s: Session) -> int:
+    return -1 if s.selected_neighbour is None else s.selected_neighbour
+
+
+def _pick_neighbour(panel: PanelAPI, value: Any) -> None:
+    j = int(value)
+    panel.session.select_neighbour(None if j < 0 else j)
+
+
+def _engine(s: Session) -> str:
+    sc = s.scenario
+    what = "SPSO 2011 in each robot's frame" if sc.slo.motion == "pso" else "a random walk"
+    return f"engine: **{s.engine_name}**, Mai's SLO swarm ({what}) · selection {sc.slo.selection.upper()}"
+
+
+def _inspector(s: Session, snap: Snapshot) -> str:
+    p: PairView | None = snap.extras["pair"]
+    if p is None:
+        return f"Robot {snap.selected} has no neighbour this step."
+    cand = " · ".join(f"{n}" for n, m in zip(("x1", "x2", "x3"), p.mask) if m)
+    err = float(np.hypot(*(p.chosen - p.b)))
+    lines = [
+        f"**pair ({p.i} → {p.j})**{'' if p.neighbour else ' (not a neighbour this step: stale)'}",
+        f"candidates: {cand or '—'} · {FLAG_NAMES.get(p.flag, p.flag)}",
+        f"chosen: **{KIND_NAMES.get(p.kind, p.kind)}** · error |x̂ − r| = {fmt(err)}",
+        f"cos α = {fmt(p.cos_alpha)} · |v|/d = {fmt(p.thinness)}",
+    ]
+    if s.scenario.slo.selection == "rts":
+        lines.append(f"RTS loop error e_r = {fmt(p.round_trip)}")
+    localised = len(snap.ghosts.of) if snap.ghosts is not None else 0
+    lines.append(f"robot {snap.selected} localised {localised} neighbour(s) this step")
+    return "  \n".join(lines)
+
+
+def _status(s: Session, r: dict[str, float], state: str) -> str:
+    sc = s.scenario
+    return (f"**{sc.name}** · {state} · gen {int(r['k'])}/{sc.sim.steps} · "
+            f"mean e_abs {fmt(r['e_abs_mean'])} · best f {fmt(r['best'])}")
+
+
+def _compare(s: Session) -> dict[str, dict[str, Any]]:
+    """B with another candidate selection."""
+    here = s.scenario.slo.selection
+    return {f"selection: {label}": {"slo.selection": value} for label, value in SELECTION_LABELS.items()
+            if value != here}
+
+
+def _rebuilt(s: Session, what: str, changes: dict[str, Any]) -> tuple[str, str] | None:
+    if all(k.startswith("view.") for k in changes):
+        return None
+    return "Run restarted", f"{what}: same seed, step 0 ({s.engine_name})"
+
+
+def _click(panel: PanelAPI, x: float, y: float, modifier: str | None) -> str:
+    """Click a robot: it becomes the observer; shift-click: the inspected neighbour."""
+    s = panel.session
+    j = s.robot_near(x, y, 0.04 * s.scenario.arena.half_size)
+    if j is None:
+        return "nothing"
+    if modifier == "shift":
+        s.select_neighbour(j)
+        panel.set_quietly(panel.handles["neighbour"], j)
+        return "neighbour"
+    panel.select_robot(j)
+    return "observer"
+
+
+def log_fitness(best: np.ndarray) -> np.ndarray:
+    """log10 |f| with 0 and non-finite values floored at 1e-300 (uPlot's own log axis rejects
+    values ≤ 0, and Sphere runs reach 1e-140)."""
+    b = np.abs(np.asarray(best, dtype=float))
+    return np.log10(np.where(np.isfinite(b) & (b > TINY), b, TINY))
+
+
+ERROR_PLOT = PlotSpec("error", "localisation error", (
+    Series("mean e_abs", "e_abs_mean", "rgb(220,50,50)", 2),
+    Series("median e_abs", "e_abs_median", "rgb(240,150,30)", 2, dash=(6.0, 4.0)),
+    Series("median e_rel", "e_rel_median", "rgb(60,110,230)", 1, scale="rel"),
+), x_label="generation", more_scales={"rel": {"range": (0.0, None)}}, nan_to=0.0, twin="e_abs_mean", history=2000,
+    aspect=1.8, axes=({}, {"size": 45}, {"scale": "rel", "side": 1, "size": 40}))
+DISTANCE_PLOT = PlotSpec("distance", "median distance between robots", (
+    Series("median distance between robots", "distance_median", "rgb(30,140,70)", 2),), x_label="generation",
+    y_range=None, history=2000, aspect=2.2, axes=({}, {"size": 45}))
+FITNESS_PLOT = PlotSpec("fitness", "best fitness, log10 |f|", (
+    Series("log10 |best f|", lambda m, sc: log_fitness(m["best"]), "rgb(120,60,200)", 2),), x_label="generation",
+    y_range=None, history=2000, aspect=2.2, axes=({}, {"size": 45}))
+
+
+def panel(api: PanelAPI) -> KindPanel:
+    """Candidate selection, prediction weight and mitigation thresholds, the error set and its
+    single errors, the neighbourhood, objective, motion and swarm size; the observer robot and
+    the pair whose triangle is inspected; live plots. A change that needs a new swarm rebuilds
+    it with the same seed (the panel says so)."""
+    selection = _mapped("slo.selection", SELECTION_LABELS)
+    return KindPanel(
+        tabs=(
+            Tab("SLO", (
+                Dropdown("slo.selection", "selection", tuple(SELECTION_LABELS), read=selection[0], write=selection[1],
+                         hint="which candidate becomes the estimate [3.7]-[3.9]"),
+                Slider("slo.prediction_weight", "w (prediction weight)", 0.0, 1.0, 0.01,
+                       "CSS: how far the kept estimate leans to dead reckoning x3 [3.7]"),
+                Slider("slo.delta_cos", "δ_cos", 0.0, 0.2, 0.005,
+                       "mitigation: dead reckoning when |cos α| is within δ_cos of 1"),
+                Slider("slo.delta_v", "δ_v", 0.0, 0.5, 0.005,
+                       "mitigation: dead reckoning when |v|/d < δ_v (thin triangle)"),
+                Dropdown("slo.errors", "error set", tuple(ERROR_SETS),
+                         read=lambda s: label_of(ERROR_SETS, s.scenario.slo.errors), write=_set_errors,
+                         hint="Tab. 4.3; choosing a set clears the single errors below"),
+                Folder("single errors", expand=False, items=tuple(_error_slider(name) for name in ERROR_FIELDS)),
+                Dropdown("slo.neighbourhood", "neighbourhood", NEIGHBOURHOODS, write=_set_neighbourhood,
+                         hint="who localises whom (computed from truth)"),
+                Number("slo.neighbourhood_param", "neighbourhood parameter", read=_neighbourhood_param,
+                       write=_set_neighbourhood_param, step=0.1, hint="k (knn), r (radius), n (ring), p (random)",
+                       visible=lambda s: s.scenario.slo.neighbourhood != "full"),
+                Text("engine", compute=_engine),
+                Text(text="*An SLO change restarts the run with the same seed, so settings compare run for run.*"),
+            )),
+            Tab("Swarm", (
+                Dropdown("slo.motion", "motion", MOTIONS,
+                         hint="SLO swarm: SPSO 2011 in each robot's frame, or a random walk"),
+                Dropdown("slo.objective", "objective", OBJECTIVES, hint="SLO swarm: 2-D benchmark, minimised",
+                         visible=lambda s: s.scenario.slo.motion == "pso"),
+                Slider("slo.walk_speed", "walk speed", 0.5, 20.0, 0.5, "random walk: longest step (thesis units)",
+                       visible=lambda s: s.scenario.slo.motion == "random_walk"),
+                Slider("sim.robots", "robots", 2, 60, 1, "swarm size P; RTS and Akcan slow down above ~30",
+                       integer=True),
+                TRAIL_SLIDER,
+            )),
+            Tab("Inspect", (
+                robot_number("observer robot", "whose beliefs are drawn as ghosts; or click a robot"),
+                Number("neighbour", "inspected neighbour", read=_neighbour, act=_pick_neighbour, low=-1,
+                       high=lambda s: s.robots - 1,
+                       hint="the pair of the triangle inspector; −1 = the first neighbour"),
+                Text("inspector", on_snapshot=_inspector),
+            )),
+            Tab("Plots", (ERROR_PLOT, DISTANCE_PLOT, FITNESS_PLOT)),
+        ),
+        status=_status, compare=_compare, rebuilt=_rebuilt, click=_click, export_note=EXPORT_NOTE)
 
 
 def _same_run(old: Scenario, new: Scenario) -> bool:
@@ -262,7 +489,7 @@ def refuse(scenario: Scenario) -> None:
 
 KIND = AppKind(name="mai", title="Mai's SLO swarm", priority=40, accepts=accepts, refuse=refuse,
                make_driver=MaiDriver, notes="slo", layers=layers,
-               camera=lambda: KeepSwarmInView(view_centre, home_first=False))
+               camera=lambda: KeepSwarmInView(view_centre, home_first=False), make_panel=panel)
 
 
 def driver(session: Session) -> MaiDriver:

@@ -19,13 +19,18 @@ from typing import Any, Callable
 
 import numpy as np
 
+from shoal.engine.localisation import STRATEGIES
 from shoal.engine.propagation import snr_db
 from shoal.engine.sonar import AcousticSwarm, SonarParams
 from shoal.presets.build import build_sonar, sonar_params_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from ..session.beliefs import host_ghosts
+from ..panel.panel import TRAIL_SLIDER
+from ..panel.plots import Chart, Line, PlotSpec, Series
+from ..panel.positions import positions_choices, positions_folder
+from ..panel.selection import robot_number
+from ..panel.spec import Dropdown, Folder, KindPanel, PanelAPI, Slider, Tab, Text, fmt
 from ..session.history import Frame
 from ..session.positions import slo_retune
 from ..session.session import Session
@@ -159,7 +164,7 @@ class SonarDriver(BaseDriver):
                       half_size=float(self.session.scenario.arena.half_size), r_trap=float(p.r_trap), d_c=float(p.dc),
                       rays=rays, true_ray=true_ray, points=pts, forward=fwd, kept=kept, pick=pick, partner=partner,
                       tri_members=tri[0], tri_centroid=tri[1], tri_direction=tri[2], tri_valid=tri[3])
-        return {"y": s.y[0].copy(), "yg": s.y_g[0].copy(), "ghosts": host_ghosts(self.sim, selected, s.y_g[0]),
+        return {"y": s.y[0].copy(), "yg": s.y_g[0].copy(), "ghosts": self.ghosts(selected, s.y_g[0]),
                 "extras": extras}
 
     def recorded(self, frame: Frame) -> dict[str, Any]:
@@ -365,13 +370,13 @@ class SourceCamera:
         canvas.set_focus((com + src) / 2)
 
 
-def layers(panels: Any) -> tuple[Layer, ...]:
+def layers(part: KindPanel | None) -> tuple[Layer, ...]:
     """The acoustic arena: the source (drag it), the robots with their rays, intersections and
     triangles, headings, trails and bests; swarm B, the beliefs."""
     return (
         Ground(cell=lambda half: 10 ** np.floor(np.log10(half / 4)), cell_colour=(228, 228, 224),
                section_colour=(205, 205, 200), z=Z["grid"], border=BORDER, border_px=1.5, border_z=Z["grid"]),
-        Source(panels.drag_source if panels is not None else None),
+        Source(part.drag if part is not None else None),
         Robots(ROBOT, ROBOT_SIZE, Z["robots"]),
         Headings(HEADING, lambda canvas, snap: 0.025 * _half(snap), Z["headings"]),
         Trails(TRAIL, 1.2, Z["trails"]),
@@ -386,6 +391,223 @@ def layers(panels: Any) -> tuple[Layer, ...]:
     )
 
 
+# ---------------------------------------------------------------------------- panel
+ALGORITHMS = STRATEGIES.labels()  # label → acoustics.algorithm
+LABELS = {v: k for k, v in ALGORITHMS.items()}
+CORR = "rgb(40,90,200)"
+MARK = "rgb(220,50,50)"
+REBUILD_NOTE = "*SNR₀, the algorithm and the swarm size rebuild the swarm; the rest applies at the next step.*"
+GLYPHS = ("Drag the green source in the arena to move it; click a robot to select it. Green ray: the one of the "
+          "pair nearer the true source; orange: its mirror. Purple dots: ray intersections ahead of both rays "
+          "(grey: dropped by the ρ test [7.12]); pink diamonds: each robot's chosen intersection. Gold diamond: "
+          "the global best; green circle: d_c round the source; gold rings: the escort ring.")
+EXPORT_NOTE = " The JSON export also lists the source where it is now (it may have been dragged)."
+
+
+def corr_series() -> tuple[dict[str, Any], ...]:
+    return (
+        {"label": "τ [ms]"},
+        {"label": "R(τ)", "stroke": CORR, "width": 2},
+        {"label": "τ_lag", "stroke": MARK, "width": 2},
+    )
+
+
+def corr_data(lags: np.ndarray, corr: np.ndarray, tau: float, rho: float) -> tuple[np.ndarray, ...]:
+    """(τ [ms], R(τ), marker): the lag grid with τ_lag inserted three times so that the marker
+    series rises straight up from the floor of the plot to ρ at τ_lag and lies on the floor
+    elsewhere. R(τ) is interpolated at the inserted points (so the curve is unchanged)."""
+    lags = np.asarray(lags, dtype=float)
+    corr = np.asarray(corr, dtype=float)
+    if len(lags) < 2:
+        return (np.array([0.0, 1e-6]), np.zeros(2), np.zeros(2))
+    floor = float(min(corr.min(), 0.0))
+    eps = 1e-9 * max(float(lags[-1] - lags[0]), 1e-12)
+    extra = np.array([tau - eps, tau, tau + eps])
+    x = np.concatenate([lags, extra])
+    order = np.argsort(x, kind="stable")
+    x = x[order]
+    y = np.interp(x, lags, corr)
+    mark = np.full(len(x), floor)
+    is_peak = np.zeros(len(x), bool)
+    is_peak[np.flatnonzero(order == len(lags) + 1)] = True
+    mark[is_peak] = rho
+    return (x * 1e3, y, mark)
+
+
+def corr_scales(data: tuple[np.ndarray, ...]) -> dict[str, Any]:
+    x, y, mark = data
+    lo = float(min(y.min(), mark.min()))
+    hi = float(max(y.max(), mark.max()))
+    if hi <= lo:
+        hi = lo + 1.0
+    return {"x": {"time": False, "range": (float(x[0]), float(x[-1]))},
+            "y": {"range": (lo, hi + 0.05 * (hi - lo))}}
+
+
+def snr_series() -> tuple[dict[str, Any], ...]:
+    return (
+        {"label": "robot"},
+        {"label": "SNR [dB]", "stroke": "rgb(30,140,70)", "width": 2, "fill": "rgba(30,140,70,0.25)"},
+        {"label": "0 dB", "stroke": "rgba(120,120,120,0.9)", "width": 1, "dash": (4.0, 4.0)},
+    )
+
+
+def snr_data(snr: np.ndarray) -> tuple[np.ndarray, ...]:
+    """A bar-like stepped outline: robot i spans [i − 0.4, i + 0.4] at height SNR_i."""
+    snr = np.asarray(snr, dtype=float)
+    n = len(snr)
+    if n == 0:
+        return (np.array([0.0, 1.0]), np.zeros(2), np.zeros(2))
+    i = np.arange(n, dtype=float)
+    x = np.stack([i - 0.45, i - 0.4, i + 0.4, i + 0.45], axis=1).ravel()
+    base = float(min(snr.min(), 0.0))
+    y = np.stack([np.full(n, base), snr, snr, np.full(n, base)], axis=1).ravel()
+    return (x, y, np.zeros(len(x)))
+
+
+def snr_scales(snr: np.ndarray) -> dict[str, Any]:
+    snr = np.asarray(snr, dtype=float)
+    n = len(snr)
+    lo = float(min(snr.min(initial=0.0), 0.0))
+    hi = float(max(snr.max(initial=0.0), 0.0))
+    return {"x": {"time": False, "range": (-0.6, n - 0.4)}, "y": {"range": (lo - 1.0, hi + 2.0)}}
+
+
+def _corr(s: Session) -> tuple[np.ndarray, ...]:
+    c = driver(s).correlation()
+    return corr_data(*c) if c is not None else corr_data(np.zeros(0), np.zeros(0), 0.0, 0.0)
+
+
+def _snr(s: Session) -> np.ndarray:
+    with s.lock:
+        return s.sim.state.snr_db[0].copy()
+
+
+CORR_PLOT = Chart("corr", "selected robot: R(τ) vs τ [ms] · red: τ_lag", corr_series(), _corr,
+                  lambda s, data: corr_scales(data), aspect=1.8)
+DIST = PlotSpec("dist", "|CoM − source| [m] vs time [s]",
+                (Series("|CoM − source| [m]", "com_dist", "rgb(220,50,50)", 2),),
+                lines=lambda s: (Line("d_c", float(s.scenario.acoustics.d_c)),), twin="com_dist", history=2000,
+                aspect=1.8)
+SNR_PLOT = Chart("snr", "SNR [dB] at each robot", snr_series(), lambda s: snr_data(_snr(s)),
+                 lambda s, data: snr_scales(_snr(s)), axes=({}, {"size": 40}), legend={"show": False})
+
+
+def _algorithm(s: Session) -> str:
+    return LABELS[s.scenario.acoustics.algorithm]
+
+
+def _set_algorithm(s: Session, label: str) -> dict[str, Any] | None:
+    algo = ALGORITHMS.get(label)
+    return {"acoustics.algorithm": algo} if algo is not None and algo != s.scenario.acoustics.algorithm else None
+
+
+def _hearing(s: Session, snap: Snapshot) -> str:
+    e, i = snap.extras, snap.selected
+    text = f"robot {i}: SNR {e['snr'][i]:.1f} dB, {np.hypot(*(snap.x[i] - e['source'])):.0f} m from the source"
+    corr = driver(s).correlation(i)
+    if corr is not None:
+        _, _, tau, rho = corr
+        text += f" · τ_lag = {tau * 1e3:.3f} ms · ρ = {rho:.3g}"
+    if e["true_ray"] is not None:
+        text += " · true ray: " + ("r₊" if e["true_ray"][i] == 0 else "r₋")
+    return text
+
+
+def _readout(s: Session) -> str:
+    r, ac = s.readout(), s.scenario.acoustics
+    return (f"R_ref = {fmt(r['r_ref'], 'm')} (SNR 0 dB) · source starts at d_s = {fmt(r['d_s'], 'm')} · "
+            f"λ_c = {fmt(r['lambda'], 'm')} · D = {fmt(r['D'], 'm')} · window ±D/c = "
+            f"{r['D'] / ac.c * 1e3:.3g} ms · controller {ac.controller}")
+
+
+def _status(s: Session, r: dict[str, float], state: str) -> str:
+    sc = s.scenario
+    conv = f" · reached d_c at step {int(r['converged_at'])}" if r["converged_at"] >= 0 else ""
+    ring = f" · {100 * r['inside']:.0f}% inside r" if sc.acoustics.r > 0 else ""
+    return (f"**{sc.name}** · {LABELS[sc.acoustics.algorithm]} · {state} · t = {r['t']:.0f} s · "
+            f"step {int(r['k'])}/{sc.sim.steps} · |CoM − source| = {r['com_dist']:.0f} m{conv}{ring}")
+
+
+def _compare(s: Session) -> dict[str, dict[str, Any]]:
+    """B with another localisation algorithm, or on the other positions (oracle vs SLO)."""
+    sc = s.scenario
+    here = sc.acoustics.algorithm
+    return {**{f"algorithm: {label}": {"acoustics.algorithm": alg} for label, alg in ALGORITHMS.items()
+               if alg != here}, **positions_choices(sc)}
+
+
+def _click(panel: PanelAPI, x: float, y: float, modifier: str | None) -> str:
+    """A click in the arena: near a robot selects it; shift-click puts the source there."""
+    if modifier == "shift":
+        driver(panel.session).move_source(x, y)
+        return "source"
+    robot = driver(panel.session).robot_near(x, y)
+    if robot is not None:
+        panel.select_robot(robot)
+        return "selected"
+    return "none"
+
+
+def _two_hydrophones(s: Session) -> bool:
+    return STRATEGIES[s.scenario.acoustics.algorithm].hydrophones == 2
+
+
+def panel(api: PanelAPI) -> KindPanel:
+    """The selected robot's hearing, the signal (SNR_0, Q, D/λ_c, TBP), the algorithm and
+    forgetting, the swarm and the source, live plots. Signal, forgetting, speed, escort and
+    source-motion changes reach the running swarm at its next step; the algorithm, the swarm
+    size and SNR_0 rebuild it (the panel says so)."""
+    def drag(x: float, y: float, phase: str) -> None:  # the source dragged to (x, y) m
+        if phase != "start":
+            driver(api.session).move_source(x, y)
+
+    return KindPanel(
+        folders=(
+            Folder("Selected robot", items=(
+                robot_number(hint="whose rays are drawn thick and whose R(τ) is plotted; or click a robot"),
+                Text("hearing", on_snapshot=_hearing),
+            )),
+            positions_folder(),
+        ),
+        tabs=(
+            Tab("Acoustics", (
+                Dropdown("acoustics.algorithm", "algorithm", tuple(ALGORITHMS), read=_algorithm, write=_set_algorithm,
+                         hint="A: amplitude · X: correlation peak · B: ray intersections · XB: both · "
+                              "GT: triangulation"),
+                Slider("acoustics.snr0_db", "SNR₀ [dB]", -10.0, 30.0, 0.5,
+                       "SNR at the start; places the source at d_s = R_ref·10^(−SNR₀/20) (rebuilds)",
+                       marks=((-5.0, "−5"), (0.0, "0"), (4.0, "4"), (10.0, "10"))),
+                Slider("acoustics.Q", "Q = f_c/B", 0.5, 20.0, 0.1, "quality factor: high Q = narrow band, side peaks",
+                       marks=((1.0, "1"), (1.5, "1.5"), (10.0, "10"))),
+                Slider("acoustics.d_over_lambda", "D/λ_c", 0.1, 4.0, 0.05,
+                       "hydrophone separation in wavelengths; above ½ the phase wraps",
+                       marks=((0.5, "½"), (1.0, "1"), (2.0, "2")), visible=_two_hydrophones),
+                Slider("acoustics.tbp", "TBP = B·T", 10.0, 1000.0, 10.0,
+                       "time-bandwidth product of one listening window"),
+                Slider("acoustics.a", "forgetting a", 0.0, 5.0, 0.05,
+                       "memory × e^(−a) each step [7.2]; 0 = never forget"),
+                Text("readout", compute=_readout),
+                Text(text=REBUILD_NOTE),
+            )),
+            Tab("Swarm", (
+                Slider("sim.robots", "swarm size", 2, 60, 1, "number of robots (rebuilds the swarm)", integer=True),
+                Slider("acoustics.U", "U [m/s]", 0.2, 10.0, 0.1, "top speed"),
+                Slider("acoustics.r", "escort radius r [m]", 0.0, 200.0, 1.0,
+                       "keep this distance from the global best (needs the non-omni controller, Ch. 8.2)",
+                       visible=lambda s: s.scenario.acoustics.controller == "nonomni"),
+                Slider("acoustics.v_n", "source speed v_n", 0.0, 1.0, 0.01, "source speed as a share of U [8.8]"),
+                Slider("acoustics.source_heading_deg", "source heading [°]", -180.0, 180.0, 5.0,
+                       "direction the source moves (0 = +x)"),
+                TRAIL_SLIDER,
+                Text(text=GLYPHS),
+            )),
+            Tab("Plots", (CORR_PLOT, DIST, SNR_PLOT)),
+        ),
+        status=_status, compare=_compare, export_note=EXPORT_NOTE, click=_click, drag=drag,
+        rebuilt=lambda s, what, changes: ("Swarm rebuilt", f"{what}: the robots start again"))
+
+
 def accepts(scenario: Scenario) -> bool:
     return scenario.acoustics is not None
 
@@ -396,7 +618,7 @@ def refuse(scenario: Scenario) -> None:
 
 
 KIND = AppKind(name="sonar", title="Chapter 6–8 acoustic swarm", priority=30, accepts=accepts, refuse=refuse,
-               make_driver=SonarDriver, notes="ch6-8", layers=layers, camera=SourceCamera)
+               make_driver=SonarDriver, notes="ch6-8", layers=layers, camera=SourceCamera, make_panel=panel)
 
 
 def driver(session: Session) -> SonarDriver:

@@ -12,6 +12,10 @@ from typing import Any
 
 import numpy as np
 
+from shoal.presets.models import Scenario
+
+from .positions import positions_of
+
 
 @dataclass(frozen=True)
 class Ghosts:
@@ -43,12 +47,12 @@ def ghosts_of(beliefs: Any, x: np.ndarray, i: int, scale: float, *, best: np.nda
                   true_best=true_best)
 
 
-def host_ghosts(sim: Any, i: int, true_best: np.ndarray) -> Ghosts | None:
-    """The ghosts of observer ``i`` of a host swarm on SLO positions (Chapter 3 swarm, fleet,
-    acoustic swarm), or None on true positions. Errors show fully red at 10 thesis units."""
-    source = getattr(sim, "slo_source", None)
-    if source is None:
+def host_ghosts(sim: Any, scenario: Scenario, i: int, true_best: np.ndarray) -> Ghosts | None:
+    """The ghosts of observer ``i`` of a host swarm (Chapter 3 swarm, fleet, acoustic swarm) running
+    ``scenario``: None on true positions. Errors show fully red at 10 thesis units."""
+    if positions_of(scenario) != "slo":
         return None
+    source = sim.slo_source
     x = sim.state.x[0]
     unit = float(sim.slo_params.get("unit", 1.0))
     return ghosts_of(source.beliefs, x, i, 10.0 * unit, best=sim.believed_gbest()[0, i].copy(),

@@ -16,8 +16,6 @@ from typing import Any
 from shoal.presets.build import slo_live_changes
 from shoal.presets.models import Scenario
 
-from .beliefs import Ghosts
-
 POSITIONS = {"SLO (estimated)": "slo", "oracle (true)": "oracle"}  # the switch's labels
 NEW_SLO = {"slo.errors": "low", "slo.selection": "css", "slo.neighbourhood": "full"}  # a scene without [slo]
 ENGINE_ONLY = ("objective", "walk_speed", "quality_threshold")  # SLO_LIVE fields of Mai's swarm only
@@ -53,17 +51,3 @@ def slo_retune(old: Scenario, new: Scenario) -> dict[str, Any] | None:
         return None
     changes = slo_live_changes(old, old.model_copy(update={"slo": b}))
     return None if changes is None else {k: v for k, v in changes.items() if k not in ENGINE_ONLY}
-
-
-def ghost_text(ghosts: Ghosts | None) -> str:
-    """One line on the selected robot's beliefs."""
-    if ghosts is None:
-        return "True positions: every robot knows where everyone is (the oracle)."
-    if not len(ghosts.of):
-        return f"robot {ghosts.observer} localised nobody at its last step"
-    text = (f"robot {ghosts.observer} localises {len(ghosts.of)} robots · mean error "
-            f"{ghosts.mean_error:.2f} m · worst {ghosts.error.max():.2f} m")
-    if ghosts.best is not None and ghosts.true_best is not None:
-        off = float(((ghosts.best - ghosts.true_best) ** 2).sum() ** 0.5)
-        text += f" · believes the global best {off:.2f} m off"
-    return text

@@ -121,6 +121,12 @@ class Session:
                 self.selected_neighbour = int(min(max(neighbour, 0), self.robots - 1))
             self.revision += 1
 
+    def select_neighbour(self, neighbour: int | None) -> None:
+        """The second robot singled out (None: the kind picks one)."""
+        with self.lock:
+            self.selected_neighbour = None if neighbour is None else int(min(max(neighbour, 0), self.robots - 1))
+            self.revision += 1
+
     def robot_near(self, x: float, y: float, tol: float, body: float = 0.0) -> int | None:
         """The robot within ``tol`` of (x, y) (of its body of radius ``body``), nearest first."""
         with self.lock:

@@ -140,4 +140,4 @@ def test_the_sector_view_follows_the_robot_chosen_in_the_gui(server, page, cid):
     wait_until(lambda: np.allclose(_sector_centre(tab), session.sim.state.x[0, j], atol=1e-4),
                what=f"the sectors on robot {j}")
     wait_until(lambda: field.input_value() == str(j), what="the robot box to show the clicked robot")
-    assert f"robot {j}" in tab.panels.budget.content
+    assert f"robot {j}" in tab.panels.handles["budget"].content

@@ -1,10 +1,10 @@
-"""Figure builders for the live plots: pure functions of numbers, no viser.
+"""The Chapter 3 figures as plotly figures: pure functions of numbers, no viser.
 
 * the (ω, ĉ) plane of Fig. 3-1: standard-PSO order-1 and order-2 regions [3.7], [3.9],
   the Adapted PSO strip [3.13] and its robot subset [3.14], and the live point;
 * the (u, a) phase plane of Fig. 3-3: lines a1, a2, a3 [3.24]-[3.25], the reachable
   parallelogram and the marked points, plus one particle's recent states;
-* the speed-versus-time series (uPlot data) with the bounds U [3.29] and U_j [3.26].
+* the speed bounds U [3.29] and U_j [3.26] of the speed plot.
 """
 
 from __future__ import annotations
@@ -229,48 +229,9 @@ def update_phase_points(fig: go.Figure, u: np.ndarray, a: np.ndarray) -> bool:
 
 
 # --------------------------------------------------------------------- speed vs time
-SPEED_SERIES = ("t [s]", "max |u|", "max |u_j|", "U", "U_j")
-
-
 def speed_bounds(omega: np.ndarray, c_hat: np.ndarray, d: int) -> tuple[np.ndarray, np.ndarray]:
     """Per-step U_j = ĉ/(1 − ω) [3.26] and U = U_j √d [3.29]; NaN where ω ∉ [0, 1)."""
     omega, c_hat = np.asarray(omega, float), np.asarray(c_hat, float)
     ok = (omega >= 0) & (omega < 1)
     U_j = np.where(ok, c_hat / np.where(ok, 1.0 - omega, 1.0), np.nan)
     return U_j * math.sqrt(d), U_j
-
-
-def speed_data(
-    t: np.ndarray, max_speed: np.ndarray, max_component: np.ndarray, omega: np.ndarray, c_hat: np.ndarray,
-    *, adapted: bool, d: int,
-) -> tuple[np.ndarray, ...]:
-    """uPlot data (t, max|u|, max|u_j|, U, U_j). Bounds are only drawn for Adapted laws; elsewhere
-    (and where undefined) they repeat max|u| so that the hidden series never stretch the y axis."""
-    t, s, sj = (np.asarray(v, float) for v in (t, max_speed, max_component))
-    if adapted:
-        U, U_j = speed_bounds(omega, c_hat, d)
-        U, U_j = np.where(np.isfinite(U), U, s), np.where(np.isfinite(U_j), U_j, sj)
-    else:
-        U, U_j = s.copy(), sj.copy()
-    if len(t) < 2:  # uPlot needs two x values to draw an axis
-        pad = lambda v: np.concatenate([v, v]) if len(v) else np.zeros(2)  # noqa: E731
-        t = np.array([t[0], t[0] + 1e-6]) if len(t) else np.array([0.0, 1e-6])
-        s, sj, U, U_j = pad(s), pad(sj), pad(U), pad(U_j)
-    return t, s, sj, U, U_j
-
-
-def speed_scales(t: np.ndarray) -> dict[str, Any]:
-    """uPlot scales: numeric (not calendar) x axis over the data's time span."""
-    t0, t1 = (float(t[0]), float(t[-1])) if len(t) else (0.0, 1.0)
-    return {"x": {"time": False, "range": (t0, max(t1, t0 + 1e-6))}, "y": {"range": (0.0, None)}}
-
-
-def speed_series_config(adapted: bool) -> tuple[dict[str, Any], ...]:
-    """uPlot series options matching :func:`speed_data`."""
-    return (
-        {"label": "t [s]"},
-        {"label": "max |u|", "stroke": "rgb(220,50,50)", "width": 2},
-        {"label": "max |u_j|", "stroke": "rgb(240,160,40)", "width": 1},
-        {"label": "U", "stroke": "rgb(40,90,200)", "width": 2, "dash": (6.0, 4.0), "show": adapted},
-        {"label": "U_j", "stroke": "rgb(90,170,230)", "width": 1, "dash": (3.0, 3.0), "show": adapted},
-    )

@@ -8,9 +8,7 @@ goes, or only select robots). Dragging an obstacle moves it while the robots run
 
 from __future__ import annotations
 
-from typing import Callable
-
-from .kinds.fleet import EditRefused, FleetDriver
+from typing import Callable, Protocol
 
 MODES = ("add obstacle", "remove obstacle", "move obstacle", "select robot")
 REMOVE_MODIFIERS = ("shift", "cmd/ctrl")
@@ -20,15 +18,35 @@ ROBOT_TOL = 0.3  # m from a robot's body
 Notify = Callable[[str, str, str], None]
 
 
+class EditRefused(ValueError):
+    """A world edit that would put an obstacle on a robot or outside the world."""
+
+
+class World(Protocol):
+    """The edits a fleet's session offers (:class:`~.fleet.FleetDriver`)."""
+
+    def add_obstacle(self, x: float, y: float, r: float | None = None) -> int: ...
+
+    def remove_obstacle_near(self, x: float, y: float, tol: float = 1.0) -> int | None: ...
+
+    def nearest_obstacle(self, x: float, y: float, tol: float = 1.0) -> int | None: ...
+
+    def move_obstacle(self, index: int, x: float, y: float) -> None: ...
+
+    def robot_near(self, x: float, y: float, tol: float = 0.3) -> int | None: ...
+
+
 class WorldEditor:
-    def __init__(self, session: FleetDriver, notify: Notify, select: Callable[[int], None]) -> None:
-        self.session, self.notify, self.select = session, notify, select
+    """Clicks and drags in a fleet's arena, for one panel (``world``: the fleet's edits)."""
+
+    def __init__(self, world: World, notify: Notify, select: Callable[[int], None]) -> None:
+        self.world, self.notify, self.select = world, notify, select
         self.picked: int | None = None  # "move" mode: the obstacle waiting for its new place
         self._drag_refused: str | None = None
 
     def click(self, x: float, y: float, modifier: str | None, mode: str) -> str:
         """Handle a click at world (x, y); returns what it did (for tests and the status line)."""
-        s = self.session
+        s = self.world
         if modifier in REMOVE_MODIFIERS or mode == "remove obstacle":
             i = s.remove_obstacle_near(x, y, PICK_TOL)
             if i is None:
@@ -55,7 +73,7 @@ class WorldEditor:
         return "added"
 
     def _move_click(self, x: float, y: float) -> str:
-        s = self.session
+        s = self.world
         if self.picked is None:
             self.picked = s.nearest_obstacle(x, y, PICK_TOL)
             if self.picked is None:
@@ -80,7 +98,7 @@ class WorldEditor:
             self._drag_refused = None
             return
         try:
-            self.session.move_obstacle(index, x, y)
+            self.world.move_obstacle(index, x, y)
             self._drag_refused = None
         except EditRefused as err:
             self._drag_refused = str(err)

@@ -1,8 +1,8 @@
 """The selected robot's budget as a small markdown table with bars: what DVC (or the constant
 coefficients) lets each term of its velocity update contribute at this step.
 
-Omni laws (§11): attraction c1 + c2 and avoidance c3, with the reach U·Δt each allows
-(U = c√2/β). Non-omni (§15): the turn budgets c1, c2 (towards the bests), c3 (turn right,
+Omni laws: attraction c1 + c2 and avoidance c3, with the reach U·Δt each allows
+(U = c√2/β). Non-omni: the turn budgets c1, c2 (towards the bests), c3 (turn right,
 body on the left), c4 (turn left, body on the right) and the forward push c5.
 """
 
