@@ -38,7 +38,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 def _cmd_run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from shoal.engine.runs import run_to_dir
+    from shoal.engine.core.runs import run_to_dir
     from shoal.presets.build import build
     from shoal.presets.io import PresetError, file_stem, load
 
@@ -67,7 +67,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from shoal.engine.experiments import TARGETS, OutputDirError, reproduce
+    from shoal.engine.studies.experiments import TARGETS, OutputDirError, reproduce
 
     if args.report:
         return _report(args.report)
@@ -97,7 +97,7 @@ def _cmd_reproduce_on(args: argparse.Namespace) -> int:
     """``reproduce`` with ``--scheduler``: every target's chunks of runs go to the Dask cluster."""
     if not args.scheduler or args.list or args.report:
         return _cmd_reproduce(args)
-    from shoal.engine.experiments.schedulers import SchedulerError, connect, using
+    from shoal.engine.studies.experiments.schedulers import SchedulerError, connect, using
 
     try:
         with connect(args.scheduler) as cluster, using(cluster):
@@ -107,8 +107,8 @@ def _cmd_reproduce_on(args: argparse.Namespace) -> int:
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from shoal.engine.experiments.schedulers import SchedulerError, connect
-    from shoal.engine.sweep import SweepError, run_sweep
+    from shoal.engine.studies.experiments.schedulers import SchedulerError, connect
+    from shoal.engine.studies.sweep import SweepError, run_sweep
 
     if args.workers < 1:
         return _err("--workers must be >= 1")
@@ -149,7 +149,7 @@ def _check_counts(args: argparse.Namespace) -> str | None:
 
 
 def _reproduce_all(args: argparse.Namespace) -> int:
-    from shoal.engine.experiments.report import run_all
+    from shoal.engine.studies.experiments.report import run_all
 
     if args.target:
         return _err("--all takes no TARGET")
@@ -165,7 +165,7 @@ def _reproduce_all(args: argparse.Namespace) -> int:
 
 
 def _report(folder: str) -> int:
-    from shoal.engine.experiments.report import write_report
+    from shoal.engine.studies.experiments.report import write_report
 
     try:
         print(f"wrote {write_report(Path(folder))}")

@@ -13,10 +13,10 @@ import time
 
 import numpy as np
 
-from shoal.engine.acoustic_surrogate import surrogate
-from shoal.engine.band import Band
-from shoal.engine.receiver import bearing
-from shoal.engine.signals import hydrophone_positions, synthesise
+from shoal.engine.acoustics.band import Band
+from shoal.engine.acoustics.receiver import bearing
+from shoal.engine.acoustics.signals import hydrophone_positions, synthesise
+from shoal.engine.acoustics.surrogate import surrogate
 
 
 def measure(runs: int, robots: int, band: Band, full_lag: bool = False, reps: int = 30) -> tuple[float, float, float]:

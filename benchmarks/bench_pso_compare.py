@@ -5,7 +5,7 @@ Run: python benchmarks/bench_pso_compare.py [--quick]   (part b needs: pip insta
 
 (a) ``loop_step`` below is a reference written only for this comparison: one robot and one
     component at a time with Python floats and ``math``, the equations of
-    ``engine/laws.py``/``engine/sim.py`` (bests [3.2]/[3.3], Adapted PSO [3.11], position
+    ``engine/pso/laws.py``/``engine/kinds/swarm.py`` (bests [3.2]/[3.3], Adapted PSO [3.11], position
     [3.10], acceleration [3.22], heading). Both sides start from the same state with copies of
     the same generators, so they draw the same numbers; the script asserts that positions,
     velocities, accelerations and bests agree bit for bit (headings to 2 ulp) before it
@@ -55,7 +55,7 @@ class LoopSwarm:
 
     @classmethod
     def from_state(cls, s) -> "LoopSwarm":
-        """Copy a :class:`shoal.engine.sim.SwarmState` into lists."""
+        """Copy a :class:`shoal.engine.kinds.swarm.SwarmState` into lists."""
         return cls(x=s.x.tolist(), u=s.u.tolist(), a=s.a.tolist(), y=s.y.tolist(), f_y=s.f_y.tolist(),
                    yg=s.yg.tolist(), best_fitness=s.best_fitness.tolist(), heading=s.heading.tolist())
 
@@ -163,10 +163,10 @@ HALF = 5.12  # start positions uniform in [−5.12, 5.12]^D
 
 def shoal_standard(fn: str, dim: int, particles: int, iters: int, runs: int, seed: int):
     """Standard PSO with a global best in Shoal: (best fitness per run, seconds)."""
-    from shoal.engine.coeffs import Constant
-    from shoal.engine.laws import Law
-    from shoal.engine.objectives import Objective
-    from shoal.engine.sim import Simulation
+    from shoal.engine.core.objectives import Objective
+    from shoal.engine.kinds.swarm import Simulation
+    from shoal.engine.pso.coeffs import Constant
+    from shoal.engine.pso.laws import Law
 
     sim = Simulation(robots=particles, d=dim, dt=1.0, law=Law("standard"), policy=Constant(W, (C1, C2)),
                      objective=Objective(fn, source=np.zeros(dim)), runs=runs, seed=seed,
@@ -184,7 +184,7 @@ def pyswarms_standard(fn: str, dim: int, x0: np.ndarray, iters: int, seed: int) 
 
     from pyswarms.single import GlobalBestPSO
 
-    from shoal.engine.objectives import Objective
+    from shoal.engine.core.objectives import Objective
 
     logging.getLogger("pyswarms").setLevel(logging.WARNING)
     objective = Objective(fn, source=np.zeros(dim))
@@ -201,7 +201,7 @@ def check_functions(dim: int) -> None:
     """Shoal's Sphere and Rastrigin equal pyswarms' on in-bounds points."""
     from pyswarms.utils.functions import single_obj
 
-    from shoal.engine.objectives import Objective
+    from shoal.engine.core.objectives import Objective
 
     pts = np.random.default_rng(1).uniform(-HALF, HALF, (50, dim))
     for fn in ("sphere", "rastrigin"):

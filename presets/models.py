@@ -11,11 +11,11 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from shoal.engine.laws import LAWS
-from shoal.engine.localisation import STRATEGIES
-from shoal.engine.objectives import ObjectiveName
-from shoal.engine.robot_laws import ROBOT_LAWS
-from shoal.engine.slo_selection import SELECTIONS
+from shoal.engine.acoustics.strategies import STRATEGIES
+from shoal.engine.core.objectives import ObjectiveName
+from shoal.engine.pso.laws import LAWS
+from shoal.engine.robots.laws import ROBOT_LAWS
+from shoal.engine.slo.selection import SELECTIONS
 
 DVC_LAWS = tuple(name for name, law in ROBOT_LAWS.items() if law.dvc is not None)
 

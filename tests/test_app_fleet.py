@@ -21,9 +21,9 @@ from shoal.app.kinds import swarm
 from shoal.app.kinds.fleet import CONTROLLERS, EditRefused
 from shoal.app.kinds.registry import app_presets
 from shoal.app.session.session import Session
-from shoal.engine.fleet import Fleet
-from shoal.engine.recorder import TRAJECTORY_COLUMNS
-from shoal.engine.sensing import sense
+from shoal.engine.core.recorder import TRAJECTORY_COLUMNS
+from shoal.engine.kinds.fleet import Fleet
+from shoal.engine.robots.sensing import sense
 from shoal.presets import io as presets_io
 
 from app_helpers import HAND_TAB

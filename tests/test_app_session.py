@@ -25,10 +25,10 @@ from shoal.app.server import PortInUseError, serve, start_server
 from shoal.app.session.upload import MAX_UPLOAD_BYTES
 from shoal.app.view.camera import VIEW_HALF
 from shoal.app.view.layers import landscape_rgb
-from shoal.engine import stability
-from shoal.engine.coeffs import Constant, Physical
-from shoal.engine.objectives import Objective
-from shoal.engine.recorder import TRAJECTORY_COLUMNS
+from shoal.engine.core.objectives import Objective
+from shoal.engine.core.recorder import TRAJECTORY_COLUMNS
+from shoal.engine.pso import stability
+from shoal.engine.pso.coeffs import Constant, Physical
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 

@@ -16,9 +16,8 @@ import pytest
 
 from shoal.app.kinds import mai
 from shoal.app.session.session import Session
-from shoal.engine.recorder import TRAJECTORY_COLUMNS
-from shoal.engine.slo import SLOSwarm
-from shoal.engine.slo_source import SLOSimulation
+from shoal.engine.core.recorder import TRAJECTORY_COLUMNS
+from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 
@@ -106,7 +105,7 @@ def test_slo_adapted_opens_in_the_chapter3_scene_and_the_slo_session_keeps_mais_
     test_app_positions.py); the SLO session runs Mai's swarm only and says why."""
     tab.panels.preset.value = "slo-adapted"
     assert tab.session.kind.name == "swarm" and tab.panels.name == "swarm"
-    assert type(tab.session.sim) is SLOSimulation
+    assert not tab.session.sim.positions.exact
     with pytest.raises(PresetError, match="slo.swarm"):
         Session(presets_io.load("slo-adapted"), mai.KIND)
     tab.panels.preset.value = "slo-walk"

@@ -14,7 +14,7 @@ import pytest
 
 from shoal.app.kinds import sonar
 from shoal.app.kinds.sonar import corr_data, true_ray_index
-from shoal.engine.sonar import AcousticSwarm
+from shoal.engine.kinds.sonar import AcousticSwarm
 
 
 @dataclass

@@ -1,4 +1,4 @@
-"""The engine contract (``shoal.engine.contract``): every scene kind is driven the same way —
+"""The engine contract (``shoal.engine.core.contract``): every scene kind is driven the same way —
 ``reset``/``step``/``info``, ``Info.columns()`` for the metric table and ``retune`` with the
 class's ``LIVE`` keywords, refusing anything else without changing the engine."""
 
@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shoal.engine.coeffs import Constant
-from shoal.engine.contract import Engine, Info, State
-from shoal.engine.recorder import metric_table
+from shoal.engine.core.contract import Engine, Info, State
+from shoal.engine.core.recorder import metric_table
+from shoal.engine.pso.coeffs import Constant
 from shoal.presets.build import build
 from shoal.presets.io import load
 

@@ -7,11 +7,11 @@ import numpy as np
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.fleet import ACTIVE, COLLIDED, STALL_STEPS, Fleet, FleetParams
-from shoal.engine.motion import Kinematic, Physics
-from shoal.engine.recorder import metric_table
-from shoal.engine.sensing import sense
-from shoal.engine.world import RunSpace, WorldSpec, box_walls
+from shoal.engine.core.recorder import metric_table
+from shoal.engine.kinds.fleet import ACTIVE, COLLIDED, STALL_STEPS, Fleet, FleetParams
+from shoal.engine.robots.motion import Kinematic, Physics
+from shoal.engine.robots.sensing import sense
+from shoal.engine.robots.world import RunSpace, WorldSpec, box_walls
 from shoal.presets.build import build_fleet
 from shoal.presets.io import load
 

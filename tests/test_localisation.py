@@ -7,13 +7,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.escort import escort_gap, moving_source, with_escort
-from shoal.engine.forgetting import centroid_of, forget_update
-from shoal.engine.intersections import PAIRS_I, PAIRS_J, cross2, intersect, rho_consistent
-from shoal.engine.localisation import STRATEGIES, LocInfo, Sensed, initial_memory, make_strategy
-from shoal.engine.partners import random_partner
-from shoal.engine.sensing import SectorReading
-from shoal.engine.triangulation import triangles
+from shoal.engine.acoustics.escort import escort_gap, moving_source, with_escort
+from shoal.engine.acoustics.forgetting import centroid_of, forget_update
+from shoal.engine.acoustics.intersections import PAIRS_I, PAIRS_J, cross2, intersect, rho_consistent
+from shoal.engine.acoustics.partners import random_partner
+from shoal.engine.acoustics.strategies import STRATEGIES, LocInfo, Sensed, initial_memory, make_strategy
+from shoal.engine.acoustics.triangulation import triangles
+from shoal.engine.robots.sensing import SectorReading
 
 E = np.exp(-1.0)
 

@@ -6,9 +6,17 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.band import Band
-from shoal.engine.receiver import MINUS, PLUS, angle_of_arrival, bearing, correlate, cross_spectrum, lag_samples
-from shoal.engine.signals import hydrophone_positions, intensity, synthesise, to_time
+from shoal.engine.acoustics.band import Band
+from shoal.engine.acoustics.receiver import (
+    MINUS,
+    PLUS,
+    angle_of_arrival,
+    bearing,
+    correlate,
+    cross_spectrum,
+    lag_samples,
+)
+from shoal.engine.acoustics.signals import hydrophone_positions, intensity, synthesise, to_time
 
 
 def _rngs(n: int, seed: int = 0) -> list[np.random.Generator]:
@@ -241,7 +249,7 @@ def test_batched_bearing_equals_runs_alone():
 
 
 def _both_modes(Q: float, d_over_lam: float, snr_db: float, degs, runs: int = 200):
-    from shoal.engine.acoustic_surrogate import surrogate
+    from shoal.engine.acoustics.surrogate import surrogate
 
     b = Band(Q=Q)
     D = d_over_lam * b.lam_c
@@ -272,7 +280,7 @@ def test_surrogate_statistics_match_waveform_mode(Q, d_over_lam, snr):
 
 
 def test_surrogate_is_finite_batch_independent_and_single_hydrophone_aware():
-    from shoal.engine.acoustic_surrogate import surrogate
+    from shoal.engine.acoustics.surrogate import surrogate
 
     b = Band()
     D = b.lam_c / 2

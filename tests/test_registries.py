@@ -7,14 +7,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shoal.engine.fleet import Fleet, FleetParams
-from shoal.engine.laws import LAWS, Law
-from shoal.engine.localisation import STRATEGIES, make_strategy
-from shoal.engine.robot_laws import ROBOT_LAWS
-from shoal.engine.slo_localiser import LocaliserParams
-from shoal.engine.slo_selection import SELECTIONS
-from shoal.engine.sonar import AcousticSwarm, SonarParams
-from shoal.engine.world import empty_arena
+from shoal.engine.acoustics.strategies import STRATEGIES, make_strategy
+from shoal.engine.kinds.fleet import Fleet, FleetParams
+from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams
+from shoal.engine.pso.laws import LAWS, Law
+from shoal.engine.robots.laws import ROBOT_LAWS
+from shoal.engine.robots.world import empty_arena
+from shoal.engine.slo.beliefs import LocaliserParams
+from shoal.engine.slo.selection import SELECTIONS
 from shoal.presets.io import PresetError, load
 
 REGISTRIES = (LAWS, ROBOT_LAWS, STRATEGIES, SELECTIONS)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from shoal.engine.experiments.report import REPORT, collect, run_all, write_report
+from shoal.engine.studies.experiments.report import REPORT, collect, run_all, write_report
 
 QUICK = ["fig3-5", "fig3-4"]
 

@@ -5,10 +5,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.coeffs import Constant, Physical, Segment
-from shoal.engine.laws import Law
-from shoal.engine.objectives import Objective
-from shoal.engine.sim import Simulation
+from shoal.engine.core.objectives import Objective
+from shoal.engine.kinds.swarm import Simulation
+from shoal.engine.pso.coeffs import Constant, Physical, Segment
+from shoal.engine.pso.laws import Law
 from shoal.presets.build import build_simulation
 from shoal.presets.io import load
 

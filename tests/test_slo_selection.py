@@ -8,8 +8,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.slo_localisation import Candidates, candidates
-from shoal.engine.slo_selection import Kind, akcan, css, rts
+from shoal.engine.slo.candidates import Candidates, candidates
+from shoal.engine.slo.selection import Kind, akcan, css, rts
 
 
 def random_candidates(seed: int, R: int, n: int, p_geo: float = 0.7) -> tuple[Candidates, np.ndarray, np.ndarray]:

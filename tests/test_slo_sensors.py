@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shoal.engine.slo_sensors import (
+from shoal.engine.slo.sensors import (
     ERROR_PRESETS,
     ErrorModel,
     OdometryErrors,

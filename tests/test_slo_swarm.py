@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shoal.engine.slo import SLOSwarm
-from shoal.engine.slo_localisation import Flag
-from shoal.engine.slo_objectives import QUALITY_THRESHOLDS, SLO_OBJECTIVES, slo_objective
-from shoal.engine.slo_selection import Kind
+from shoal.engine.kinds.slo_swarm import SLOSwarm
+from shoal.engine.slo.candidates import Flag
+from shoal.engine.slo.objectives import QUALITY_THRESHOLDS, SLO_OBJECTIVES, slo_objective
+from shoal.engine.slo.selection import Kind
 
 
 def run(sw: SLOSwarm, steps: int) -> list:
@@ -114,7 +114,7 @@ def test_every_method_stays_finite_under_high_error(selection, neighbourhood):
 
 
 def test_range_failures_fall_back_to_dead_reckoning():
-    from shoal.engine.slo_sensors import ErrorModel, RangeErrors
+    from shoal.engine.slo.sensors import ErrorModel, RangeErrors
 
     sw = SLOSwarm(runs=1, seed=0, particles=6, errors=ErrorModel(RangeErrors(p_fail=1.0)), motion="random_walk")
     info = run(sw, 3)[-1]

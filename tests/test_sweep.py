@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shoal.engine.recorder import metric_table
-from shoal.engine.sweep import SweepError, run_sweep, simulate_cell
-from shoal.engine.sweep.grid import parse_axis, parse_values
+from shoal.engine.core.recorder import metric_table
+from shoal.engine.studies.sweep import SweepError, run_sweep, simulate_cell
+from shoal.engine.studies.sweep.grid import parse_axis, parse_values
 from shoal.presets.build import build
 from shoal.presets.io import load
 

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from shoal.engine import tuning
+from shoal.engine.pso import tuning
 
 
 def test_figure_3_3_worked_example():

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.world import (
+from shoal.engine.robots.world import (
     CAT_ROBOT,
     OBSTACLE,
     ROBOT,

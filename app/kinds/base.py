@@ -90,4 +90,4 @@ class BaseDriver:
 
     def ghosts(self, selected: int, true_best: Any) -> Ghosts | None:
         """The selected robot's beliefs when the swarm acts on SLO-estimated positions."""
-        return host_ghosts(self.sim, self.session.scenario, selected, true_best)
+        return host_ghosts(self.sim, selected, true_best)

@@ -18,11 +18,11 @@ from typing import Any, Callable
 
 import numpy as np
 
-from shoal.engine.dvc import TABLE_4_1
-from shoal.engine.fleet import Fleet, FleetParams
-from shoal.engine.fleet_probe import RobotView, robot_view
-from shoal.engine.robot_laws import ROBOT_LAWS
-from shoal.engine.world import WorldSpec
+from shoal.engine.kinds.fleet import Fleet, FleetParams
+from shoal.engine.kinds.fleet_probe import RobotView, robot_view
+from shoal.engine.robots.dvc import TABLE_4_1
+from shoal.engine.robots.laws import ROBOT_LAWS
+from shoal.engine.robots.world import WorldSpec
 from shoal.presets.build import build_fleet, fleet_params_for, world_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario

@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.slo import SLOSwarm
-from shoal.engine.slo_selection import SELECTIONS
-from shoal.engine.slo_sensors import error_model
+from shoal.engine.kinds.slo_swarm import SLOSwarm
+from shoal.engine.slo.selection import SELECTIONS
+from shoal.engine.slo.sensors import error_model
 from shoal.presets.build import build_slo, slo_live_changes
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario, SLOErrorValues

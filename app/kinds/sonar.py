@@ -19,9 +19,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from shoal.engine.localisation import STRATEGIES
-from shoal.engine.propagation import snr_db
-from shoal.engine.sonar import AcousticSwarm, SonarParams
+from shoal.engine.acoustics.propagation import snr_db
+from shoal.engine.acoustics.strategies import STRATEGIES
+from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams
 from shoal.presets.build import build_sonar, sonar_params_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario

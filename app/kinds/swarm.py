@@ -13,10 +13,10 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine import tuning
-from shoal.engine.laws import LAWS
-from shoal.engine.objectives import Objective
-from shoal.engine.sim import Simulation
+from shoal.engine.core.objectives import Objective
+from shoal.engine.kinds.swarm import Simulation
+from shoal.engine.pso import tuning
+from shoal.engine.pso.laws import LAWS
 from shoal.presets.build import build_simulation, law_for, objective_for, policy_for, slo_unit
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import plotly.graph_objects as go
 
-from shoal.engine import stability
+from shoal.engine.pso import stability
 
 # Colours shared by the plots (CSS strings).
 ORDER1_FILL = "rgba(120, 160, 230, 0.30)"

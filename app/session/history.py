@@ -9,7 +9,7 @@ from typing import Any, Iterable
 
 import numpy as np
 
-from shoal.engine.recorder import TRAJECTORY_COLUMNS
+from shoal.engine.core.recorder import TRAJECTORY_COLUMNS
 
 TRAIL_LIMITS = (80, 40)  # at most this many trails of this many points
 

@@ -25,7 +25,7 @@ from typing import Any, Protocol
 import numpy as np
 
 import shoal
-from shoal.engine.recorder import TRAJECTORY_COLUMNS, trajectory_header, write_trajectory
+from shoal.engine.core.recorder import TRAJECTORY_COLUMNS, trajectory_header, write_trajectory
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario

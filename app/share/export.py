@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable
 
 import shoal
-from shoal.engine.atomic import atomic_write_text
+from shoal.engine.core.atomic import atomic_write_text
 from shoal.presets import io as presets_io
 from shoal.presets.models import Scenario
 

@@ -14,7 +14,7 @@ from typing import Callable, Protocol, Union
 
 import numpy as np
 
-from shoal.engine.objectives import Objective
+from shoal.engine.core.objectives import Objective
 from shoal.presets.models import Scenario
 
 from ..session.snapshot import Snapshot
