@@ -23,8 +23,7 @@ class AppKind:
 
     name: str
     title: str  # in words, for messages
-    priority: int  # kinds are asked from the highest priority down (see ``registry.kind_for``)
-    accepts: Callable[[Scenario], bool]
+    engine: str  # the engine kind it shows (``presets.build.kind_of``, a key of ``BUILDERS``)
     refuse: Callable[[Scenario], None]  # raises PresetError saying why a scenario is not this kind's
     make_driver: Callable[[Session], Driver]
     notes: str  # teaching notes ``static/notes/<notes>.md``

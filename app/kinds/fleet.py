@@ -23,7 +23,7 @@ from shoal.engine.kinds.fleet_probe import RobotView, robot_view
 from shoal.engine.robots.dvc import TABLE_4_1
 from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.engine.robots.world import WorldSpec
-from shoal.presets.build import build_fleet, fleet_params_for, world_for
+from shoal.presets.build import build_fleet, fleet_params_for, kind_of, world_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
@@ -777,7 +777,7 @@ def panel(api: PanelAPI) -> KindPanel:
 
 
 def accepts(scenario: Scenario) -> bool:
-    return scenario.world is not None
+    return kind_of(scenario) == "fleet"
 
 
 def refuse(scenario: Scenario) -> None:
@@ -785,7 +785,7 @@ def refuse(scenario: Scenario) -> None:
         raise PresetError([f"world: {scenario.name} has no [world]; it runs as a free-space swarm"])
 
 
-KIND = AppKind(name="fleet", title="Chapter 4–5 fleet", priority=20, accepts=accepts, refuse=refuse,
+KIND = AppKind(name="fleet", title="Chapter 4–5 fleet", engine="fleet", refuse=refuse,
                make_driver=FleetDriver, notes="ch4-5", layers=layers, camera=FollowCamera, make_panel=panel)
 
 

@@ -25,7 +25,7 @@ import numpy as np
 from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.engine.slo.selection import SELECTIONS
 from shoal.engine.slo.sensors import error_model
-from shoal.presets.build import build_slo, slo_live_changes
+from shoal.presets.build import build_slo, kind_of, slo_live_changes
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario, SLOErrorValues
 
@@ -476,7 +476,7 @@ def _same_run(old: Scenario, new: Scenario) -> bool:
 
 def accepts(scenario: Scenario) -> bool:
     """Mai's SLO swarm (``[slo] swarm = "slo"``); a host swarm on SLO positions keeps its own view."""
-    return scenario.slo is not None and scenario.slo.swarm == "slo"
+    return kind_of(scenario) == "slo_swarm"
 
 
 def refuse(scenario: Scenario) -> None:
@@ -487,7 +487,7 @@ def refuse(scenario: Scenario) -> None:
                            "'host'); its own scene shows it, with a Positions folder"])
 
 
-KIND = AppKind(name="mai", title="Mai's SLO swarm", priority=40, accepts=accepts, refuse=refuse,
+KIND = AppKind(name="mai", title="Mai's SLO swarm", engine="slo_swarm", refuse=refuse,
                make_driver=MaiDriver, notes="slo", layers=layers,
                camera=lambda: KeepSwarmInView(view_centre, home_first=False), make_panel=panel)
 

@@ -1,6 +1,7 @@
-"""The scene kinds the app shows, in the order they are asked: from the highest ``priority``
-down, the first kind that accepts a scenario shows it. (Mai's SLO swarm before the acoustic
-swarm, both before the Chapter 3 swarm, which would accept any scene without a world.)
+"""The scene kinds the app shows, one for each engine kind: a scenario is shown by the app kind
+of the engine kind it describes (:func:`shoal.presets.build.kind_of`, the one rule that tells
+them apart, Mai's SLO swarm before the acoustic swarm before the fleet before the Chapter 3
+swarm).
 
 A new kind is one more module in :mod:`shoal.app.kinds` and one more entry in ``KINDS``."""
 
@@ -9,6 +10,7 @@ from __future__ import annotations
 import functools
 
 from shoal.presets import io as presets_io
+from shoal.presets.build import kind_of
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
@@ -16,17 +18,17 @@ from ..session.session import Session
 from . import fleet, mai, sonar, swarm
 from .base import AppKind
 
-KINDS: tuple[AppKind, ...] = tuple(sorted((swarm.KIND, fleet.KIND, sonar.KIND, mai.KIND),
-                                          key=lambda kind: -kind.priority))
+KINDS: tuple[AppKind, ...] = (swarm.KIND, fleet.KIND, sonar.KIND, mai.KIND)
 BY_NAME = {kind.name: kind for kind in KINDS}
+BY_ENGINE = {kind.engine: kind for kind in KINDS}
 
 
 def kind_for(scenario: Scenario) -> AppKind:
     """The kind that shows ``scenario`` (:class:`PresetError` if none does)."""
-    for kind in KINDS:
-        if kind.accepts(scenario):
-            return kind
-    raise PresetError([f"{scenario.name}: no view for this kind of scene"])
+    kind = BY_ENGINE.get(kind_of(scenario))
+    if kind is None:
+        raise PresetError([f"{scenario.name}: no view for this kind of scene"])
+    return kind
 
 
 def app_kind(session: Session) -> AppKind:

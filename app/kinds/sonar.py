@@ -22,7 +22,7 @@ import numpy as np
 from shoal.engine.acoustics.propagation import snr_db
 from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams
-from shoal.presets.build import build_sonar, sonar_params_for
+from shoal.presets.build import build_sonar, kind_of, sonar_params_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
@@ -609,7 +609,7 @@ def panel(api: PanelAPI) -> KindPanel:
 
 
 def accepts(scenario: Scenario) -> bool:
-    return scenario.acoustics is not None
+    return kind_of(scenario) == "sonar"
 
 
 def refuse(scenario: Scenario) -> None:
@@ -617,7 +617,7 @@ def refuse(scenario: Scenario) -> None:
         raise PresetError([f"acoustics: {scenario.name} has no [acoustics] section"])
 
 
-KIND = AppKind(name="sonar", title="Chapter 6–8 acoustic swarm", priority=30, accepts=accepts, refuse=refuse,
+KIND = AppKind(name="sonar", title="Chapter 6–8 acoustic swarm", engine="sonar", refuse=refuse,
                make_driver=SonarDriver, notes="ch6-8", layers=layers, camera=SourceCamera, make_panel=panel)
 
 

@@ -17,7 +17,7 @@ from shoal.engine.core.objectives import Objective
 from shoal.engine.kinds.swarm import Simulation
 from shoal.engine.pso import tuning
 from shoal.engine.pso.laws import LAWS
-from shoal.presets.build import build_simulation, law_for, objective_for, policy_for, slo_unit
+from shoal.presets.build import build_simulation, kind_of, law_for, objective_for, policy_for, slo_unit
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
@@ -391,7 +391,7 @@ def supported(scenario: Scenario) -> None:
 
 def accepts(scenario: Scenario) -> bool:
     """Free-space swarms, on true or (``[slo] swarm = "host"``) SLO-estimated positions."""
-    return scenario.world is None and (scenario.slo is None or scenario.slo.swarm == "host")
+    return kind_of(scenario) == "swarm"
 
 
 def refuse(scenario: Scenario) -> None:
@@ -403,7 +403,7 @@ def refuse(scenario: Scenario) -> None:
                            "Chapter 3 swarm; set slo.swarm = 'host' for the Chapter 3 swarm on SLO positions"])
 
 
-KIND = AppKind(name="swarm", title="Chapter 3 swarm", priority=10, accepts=accepts, refuse=refuse,
+KIND = AppKind(name="swarm", title="Chapter 3 swarm", engine="swarm", refuse=refuse,
                make_driver=SwarmDriver, notes="ch3", layers=layers, camera=KeepSwarmInView, make_panel=panel)
 
 
