@@ -315,8 +315,8 @@ def test_plots_show_com_fitness_with_layer_lines_and_operational_robots(tab):
     data = p.handles["com"].data
     m = s.metric_arrays()
     np.testing.assert_allclose(data[0], m["t"])
-    np.testing.assert_allclose(data[1], m["com"])
-    assert m["com"][-1] == pytest.approx(s.sim.state.x[0, :, 0].mean())  # [4.17]
+    np.testing.assert_allclose(data[1], m["com_fitness"])
+    assert m["com_fitness"][-1] == pytest.approx(s.sim.state.x[0, :, 0].mean())  # [4.17]
     layers = s.sim.world.layer_x
     assert len(data) == 2 + len(layers)
     for j, lx in enumerate(layers):

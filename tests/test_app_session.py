@@ -59,7 +59,7 @@ def test_omega_slider_reaches_the_running_policy_without_restart(tab):
     assert s.scenario.controller.omega == pytest.approx(0.83)  # scenario kept in sync (export, download)
     assert s.sim.state.k == 7 and np.array_equal(s.sim.state.x, x_before)  # not restarted
     s.step(1)  # and the next step really uses it
-    assert s.history.metrics[-1][3] == pytest.approx(0.83)
+    assert s.metric_arrays()["omega"][-1] == pytest.approx(0.83)
 
 
 def test_c1_c2_dt_and_robots_sliders_apply_at_once(tab):

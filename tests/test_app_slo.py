@@ -120,7 +120,7 @@ def test_plots_notes_and_export(tab):
     p.refresh_plots()
     m = s.metric_arrays()
     np.testing.assert_allclose(p.handles["error"].data[1], m["e_abs_mean"])
-    np.testing.assert_allclose(p.handles["fitness"].data[1], np.log10(np.abs(m["best"])))
+    np.testing.assert_allclose(p.handles["fitness"].data[1], np.log10(np.abs(m["generation_best"])))
     assert p.handles["distance"].scales["x"]["time"] is False and p.handles["fitness"].scales["x"]["time"] is False
     assert m["e_abs_mean"][-1] == pytest.approx(s.sim.info().e_abs["mean"][0])
     p.export_csv.value = True

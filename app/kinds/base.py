@@ -56,7 +56,6 @@ class AppKind:
 class BaseDriver:
     """Defaults of a :class:`Driver`; a kind's driver fills in the rest."""
 
-    metrics: tuple[str, ...] = ()
     scene_sections: tuple[str, ...] = ()
 
     def __init__(self, session: Session) -> None:

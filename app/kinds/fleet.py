@@ -83,15 +83,9 @@ def _world_error(msg: str) -> str:
     return f"world.{ {'size': 'width'}.get(field, field)}:{rest}"
 
 
-def _changed(old: Scenario, new: Scenario, name: str) -> bool:
-    a, b = getattr(old, name), getattr(new, name)
-    return (a.model_dump() if a is not None else None) != (b.model_dump() if b is not None else None)
-
-
 class FleetDriver(BaseDriver):
     """A fleet's side of a session, and the world edits made by hand."""
 
-    metrics = ("com", "operational", "collided", "max_speed", "best")
     sim: Fleet
 
     def __init__(self, session: Session) -> None:
@@ -118,7 +112,7 @@ class FleetDriver(BaseDriver):
         change running (a :class:`FleetParams` field outside ``Fleet.LIVE``)."""
         a, b = fleet_params_for(old), fleet_params_for(new)
         fixed = {f.name for f in dataclasses.fields(FleetParams)} - Fleet.LIVE
-        return (new.sim.robots != old.sim.robots or _changed(old, new, "world") or slo_retune(old, new) is None
+        return (new.sim.robots != old.sim.robots or new.world != old.world or slo_retune(old, new) is None
                 or any(getattr(a, f) != getattr(b, f) for f in fixed))
 
     def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
@@ -206,12 +200,7 @@ class FleetDriver(BaseDriver):
             self.follow, self.zoom = follow, float(min(max(zoom, 1.0), 20.0))
             self.session.revision += 1
 
-    # ------------------------------------------------------------------ history and views
-    def metric_row(self, info: Any) -> tuple[float, ...]:
-        info = info if info is not None else self.sim.info()
-        return (float(info.com_fitness[0]), float(info.operational[0]), float(info.collided[0]),
-                float(info.max_speed[0]), float(info.best_fitness[0]))
-
+    # ------------------------------------------------------------------ views
     def view(self) -> RobotView:
         """The selected robot as its controller sees it now."""
         with self.session.lock:
@@ -687,7 +676,7 @@ def _world_layers(s: Session) -> tuple[Line, ...]:
 
 
 COM = PlotSpec("com", "swarm fitness: CoM x [m] vs time [s] · dotted: layers",
-               (Series("CoM x [m]", "com", "rgb(220,50,50)", 2),), lines=_world_layers, twin="com",
+               (Series("CoM x [m]", "com_fitness", "rgb(220,50,50)", 2),), lines=_world_layers, twin="com_fitness",
                y_range=lambda s: (float(s.sim.world.bounds[0]), float(s.sim.world.bounds[2])), aspect=1.6,
                legend={"show": False})
 ROBOTS = PlotSpec("robots", "robots vs time [s]", (

@@ -74,7 +74,6 @@ class PairView:
 class MaiDriver(BaseDriver):
     """Mai's swarm's side of a session: beliefs kept one step back for the pair inspector."""
 
-    metrics = ("e_abs_mean", "e_abs_median", "e_rel_median", "distance_median", "best", "dead_reckoning")
     sim: SLOSwarm
 
     def __init__(self, session: Session) -> None:
@@ -100,12 +99,6 @@ class MaiDriver(BaseDriver):
     def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
         """Errors, selection, w, δ, neighbourhood, objective…: the swarm keeps running."""
         return {} if _same_run(old, new) else slo_live_changes(old, new) or {}
-
-    # ------------------------------------------------------------------ history
-    def metric_row(self, info: Any) -> tuple[float, ...]:
-        info = info if info is not None else self.sim.info()
-        return (float(info.e_abs["mean"][0]), float(info.e_abs["median"][0]), float(info.e_rel["median"][0]),
-                float(info.distance["median"][0]), float(info.best_fitness[0]), float(info.dead_reckoning[0]))
 
     # ------------------------------------------------------------------ views
     def _pair(self, i: int, b: Any, x: np.ndarray) -> PairView | None:
@@ -366,7 +359,7 @@ def _inspector(s: Session, snap: Snapshot) -> str:
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
     return (f"**{sc.name}** · {state} · gen {int(r['k'])}/{sc.sim.steps} · "
-            f"mean e_abs {fmt(r['e_abs_mean'])} · best f {fmt(r['best'])}")
+            f"mean e_abs {fmt(r['e_abs_mean'])} · best f {fmt(r['generation_best'])}")
 
 
 def _compare(s: Session) -> dict[str, dict[str, Any]]:
@@ -413,7 +406,8 @@ DISTANCE_PLOT = PlotSpec("distance", "median distance between robots", (
     Series("median distance between robots", "distance_median", "rgb(30,140,70)", 2),), x_label="generation",
     y_range=None, history=2000, aspect=2.2, axes=({}, {"size": 45}))
 FITNESS_PLOT = PlotSpec("fitness", "best fitness, log10 |f|", (
-    Series("log10 |best f|", lambda m, sc: log_fitness(m["best"]), "rgb(120,60,200)", 2),), x_label="generation",
+    Series("log10 |best f|", lambda m, sc: log_fitness(m["generation_best"]), "rgb(120,60,200)", 2),),
+    x_label="generation",
     y_range=None, history=2000, aspect=2.2, axes=({}, {"size": 45}))
 
 

@@ -77,7 +77,6 @@ def true_ray_index(x: np.ndarray, rays: np.ndarray, source: np.ndarray) -> np.nd
 class SonarDriver(BaseDriver):
     """An acoustic swarm's side of a session, and the source moved by hand."""
 
-    metrics = ("com_dist", "snr_mean", "snr_max", "inside_ring")
     scene_sections = ("arena",)
     sim: AcousticSwarm
 
@@ -125,12 +124,7 @@ class SonarDriver(BaseDriver):
         """The robot within 2 % of the arena's width of (x, y)."""
         return self.session.robot_near(x, y, ROBOT_TOL * 2 * self.session.scenario.arena.half_size)
 
-    # ------------------------------------------------------------------ history and views
-    def metric_row(self, info: Any) -> tuple[float, ...]:
-        info = info if info is not None else self.sim.info()
-        snr = self.sim.state.snr_db[0]
-        return (float(info.com_dist[0]), float(snr.mean()), float(snr.max()), float(info.frac_inside_ring[0]))
-
+    # ------------------------------------------------------------------ views
     def correlation(self, robot: int | None = None) -> tuple[np.ndarray, np.ndarray, float, float] | None:
         """(lags [s], R(τ), τ_lag [s], ρ) of ``robot`` (default: the selected one) at the last
         listen; None before the first step or for one-hydrophone strategies."""

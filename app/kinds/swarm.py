@@ -60,14 +60,9 @@ ARENA = (40, 40, 40)
 BENCHMARKS = ("sphere", "rastrigin", "ackley", "rosenbrock", "griewank")
 
 
-def _changed(old: Scenario, new: Scenario, name: str) -> bool:
-    return getattr(old, name).model_dump() != getattr(new, name).model_dump()
-
-
 class SwarmDriver(BaseDriver):
     """A Chapter 3 swarm's side of a session."""
 
-    metrics = ("max_speed", "max_component", "omega", "c_hat")
     scene_sections = ("objective", "arena")
     sim: Simulation
 
@@ -75,7 +70,7 @@ class SwarmDriver(BaseDriver):
         return build_simulation(scenario, runs=1)
 
     def rebuilds(self, old: Scenario, new: Scenario) -> bool:
-        return (new.sim.d != old.sim.d or _changed(old, new, "init") or slo_retune(old, new) is None
+        return (new.sim.d != old.sim.d or new.init != old.init or slo_retune(old, new) is None
                 or (positions_of(new) == "slo" and slo_unit(new) != slo_unit(old)))
 
     def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
@@ -87,11 +82,6 @@ class SwarmDriver(BaseDriver):
 
     def frame(self, t: float) -> Frame:
         return frame_of(self.sim.state, t, accelerations=True)
-
-    def metric_row(self, info: Any) -> tuple[float, ...]:
-        u = self.sim.state.u[0]
-        omega, c_hat = self.coefficients()
-        return (float(np.linalg.norm(u, axis=-1).max()), float(np.abs(u).max()), omega, c_hat)
 
     def snapshot(self, selected: int) -> dict[str, Any]:
         s = self.sim.state

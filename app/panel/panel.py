@@ -365,9 +365,9 @@ class Panel:
                 self.notify(*note, "blue")
         return True
 
-    def select_robot(self, robot: int, neighbour: int | None = None) -> None:
-        """Single out ``robot`` (and ``neighbour``) and show it in the handles that follow it."""
-        self.session.select(robot, neighbour)
+    def select_robot(self, robot: int) -> None:
+        """Single out ``robot`` and show it in the handles that follow it."""
+        self.session.select(robot)
         self._follow()
 
     def _follow(self) -> None:

@@ -16,7 +16,6 @@ from .history import Frame
 
 
 class Driver(Protocol):
-    metrics: tuple[str, ...]  # the per-step metric columns after "t"
     scene_sections: tuple[str, ...]  # scenario sections drawn in the static scene (a change redraws it)
 
     def build(self, scenario: Scenario) -> Any:
@@ -49,10 +48,6 @@ class Driver(Protocol):
 
     def frame(self, t: float) -> Frame:
         """Run 0's robots now."""
-        ...
-
-    def metric_row(self, info: Any) -> tuple[float, ...]:
-        """One row of ``metrics`` (``info`` is None at step 0)."""
         ...
 
     def snapshot(self, selected: int) -> dict[str, Any]:

@@ -25,7 +25,7 @@ from typing import Any, Protocol
 import numpy as np
 
 import shoal
-from shoal.engine.core.recorder import TRAJECTORY_COLUMNS, trajectory_header, write_trajectory
+from shoal.engine.core.recorder import TRAJECTORY_COLUMNS, metric_table, trajectory_header, write_trajectory
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
@@ -69,7 +69,7 @@ class Session:
         self.compare: Twin | None = None  # swarm B, stepped with this one
         self.live_edits = 0  # changes made while the run went on (a replay of it cannot be re-simulated)
         self.driver = kind.driver(self)
-        self.history = History(("t",) + tuple(self.driver.metrics))
+        self.history = History(("t",))
         self.timeline = Timeline(self.history)
         self._load(scenario)
 
@@ -113,12 +113,10 @@ class Session:
         """How B differs from A ({} without B)."""
         return self.compare.overrides if self.compare is not None else {}
 
-    def select(self, robot: int, neighbour: int | None = None) -> None:
-        """Single out ``robot`` (and ``neighbour``, a second one) for the panels and the view."""
+    def select(self, robot: int) -> None:
+        """Single out ``robot`` for the panels and the view."""
         with self.lock:
             self.selected_robot = int(min(max(robot, 0), self.robots - 1))
-            if neighbour is not None:
-                self.selected_neighbour = int(min(max(neighbour, 0), self.robots - 1))
             self.revision += 1
 
     def select_neighbour(self, neighbour: int | None) -> None:
@@ -146,6 +144,7 @@ class Session:
     def _clear_history(self) -> None:
         self._t0, self._k0 = 0.0, self.k  # session clock origin (see ``clock``)
         self.history.clear()
+        self.history.names = tuple(self._metrics(self.sim.info()))
         self.timeline.clear()
         self.live_edits = 0
         self.driver.cleared()
@@ -332,12 +331,19 @@ class Session:
         it keeps counting from where it was, so trails and plots never jump back in time."""
         return self._t0 + (self.k - self._k0) * self.driver.dt()
 
+    def _metrics(self, info: Any) -> dict[str, float]:
+        """Run 0's metric columns now, as ``shoal run`` writes them (``t`` the session's clock)."""
+        table = metric_table(self.sim.state, info, self.clock())
+        return {name: float(v[0]) for name, v in table.items() if name not in ("run", "step")}
+
     def _record(self, info: Any) -> None:
-        t = self.clock()
-        self.history.record(self.driver.frame(t), (t, *self.driver.metric_row(info)))
+        """Record the robots and the metrics (``info`` of the step just taken; None at a start)."""
+        row = self._metrics(info if info is not None else self.sim.info())
+        self.history.record(self.driver.frame(row["t"]), tuple(row.values()))
 
     def metric_arrays(self) -> dict[str, np.ndarray]:
-        """The recorded metrics as columns (``t`` and the kind's ``metrics``)."""
+        """The recorded metrics as columns: ``t``, ``best_fitness``, ``max_speed``, ``mean_speed``
+        and the engine's own (``Info.columns()``)."""
         with self.lock:
             return self.history.metric_arrays()
 
