@@ -23,6 +23,7 @@ from shoal.presets.models import Scenario
 
 from . import share
 from .kinds.registry import app_kind, app_presets, kind_for, session_for
+from .lessons.panel import LessonProgress
 from .panel.panel import Panel, Services
 from .session.session import Session
 
@@ -63,12 +64,14 @@ class TabApp:
         self._ticking = threading.Lock()
         self._clicks: list[Callable[[Any], None]] = []
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
+        self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
         self._build_kind()
 
     def _build_kind(self) -> None:
         kind = app_kind(self.session)
         services = Services(notify=self.notify, send_file=self.send_file, presets=tuple(app_presets()),
-                            make_session=session_for, replace=self.replace, share=share_page)
+                            make_session=session_for, replace=self.replace, share=share_page,
+                            lessons=self.lesson_progress)
         self.panels = Panel(self.gui, self.session, kind, services)
         self.arena = kind.view(self.scene, self.panels.part)
         if self.panels.part.click is not None:

@@ -1,6 +1,6 @@
 """The control panel of one tab, the same for every scene kind: the header (preset, status,
 playback, speed, seed), the Replay folder, the kind's folders and tabs (built from their
-:mod:`.spec`), the Compare, Export and Notes tabs, and the rule that every change goes
+:mod:`.spec`), the Compare, Export, Notes and Lessons tabs, and the rule that every change goes
 through the scenario model.
 
 A change is validated by ``session.apply``; a refused value shows a red notification and
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from typing import Any, Callable, Iterator, Protocol
 
@@ -23,6 +23,8 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
+from ..lessons.panel import LessonProgress, LessonsPanel
+from ..lessons.scenes import load_scene
 from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
@@ -73,6 +75,7 @@ class Services:
     make_session: Callable[[Scenario], Session]  # a fresh session of any kind (to check a replay)
     replace: Callable[[Scenario], Session] | None = None  # load a scene, maybe of another kind
     share: Callable[[Session], bytes] | None = None  # the recorded run as one web page
+    lessons: LessonProgress = field(default_factory=LessonProgress)  # where the Lessons tab is (the tab keeps it)
 
 
 def notes_text(name: str = "ch3") -> str:
@@ -119,10 +122,15 @@ class Panel:
             self.top.append(self._build(folder))
         self.tabs = gui.add_tab_group()
         self.top.append(self.tabs)
+        focus = services.lessons.focus  # a lesson's Set up rebuilt this panel: keep its tab in view
+        if focus:
+            self._build_lessons()
         for tab in self.part.tabs:
             self._build_tab(tab)
         self.compare_gui = CompareTab(self)
         self._build_export_notes(kind.notes)
+        if not focus:
+            self._build_lessons()
         self.sync()
 
     # ------------------------------------------------------------------ building
@@ -186,6 +194,10 @@ class Panel:
         def _(event: Any) -> None:
             f = event.target.value
             self.upload_preset(f.name, f.content)
+
+    def _build_lessons(self) -> None:
+        with self.tabs.add_tab("Lessons"):
+            self.lessons = LessonsPanel(self.gui, self.set_up_lesson, self.notify, self.services.lessons)
 
     def _build(self, item: Control) -> Any:
         """A handle for ``item`` (a folder with its items), kept as ``handles[key]`` and wired."""
@@ -420,6 +432,22 @@ class Panel:
         self.notify("Preset loaded", scenario.description or name, "green")
         return True
 
+    def set_up_lesson(self, preset: str, values: dict[str, Any]) -> list[str]:
+        """A lesson step's scene: the preset with the step's field values, validated as an upload
+        would be, loaded paused at step 0. Returns the refusal's messages (empty: loaded)."""
+        try:
+            scenario = load_scene(preset, values)
+            if self.services.replace is not None:
+                session = self.services.replace(scenario)  # may rebuild the panel (another kind of scene)
+            else:
+                self.session.load_scenario(scenario)
+                self.sync()
+                session = self.session
+        except PresetError as err:
+            return list(err.messages)
+        session.pause()
+        return []
+
     def upload_preset(self, filename: str, content: bytes) -> bool:
         """Validate an uploaded preset; a bad one is listed field by field and changes nothing."""
         try:
@@ -442,6 +470,7 @@ class Panel:
     def remove(self) -> None:
         """Take every handle of this panel off the page (the tab swaps in another kind)."""
         self.removed = True
+        self.lessons.close()
         for h in reversed(self.top):
             h.remove()
         self.top.clear()
