@@ -25,6 +25,7 @@ from . import share
 from .kinds.registry import app_kind, app_presets, kind_for, session_for
 from .lessons.panel import LessonProgress
 from .panel.panel import Panel, Services
+from .preset_menu import PresetMenu
 from .session.session import Session
 
 CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
@@ -65,13 +66,13 @@ class TabApp:
         self._clicks: list[Callable[[Any], None]] = []
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
         self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
+        self.menu = PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included, across swaps
         self._build_kind()
 
     def _build_kind(self) -> None:
         kind = app_kind(self.session)
-        services = Services(notify=self.notify, send_file=self.send_file, presets=tuple(app_presets()),
-                            make_session=session_for, replace=self.replace, share=share_page,
-                            lessons=self.lesson_progress)
+        services = Services(notify=self.notify, send_file=self.send_file, menu=self.menu, make_session=session_for,
+                            replace=self.replace, share=share_page, lessons=self.lesson_progress)
         self.panels = Panel(self.gui, self.session, kind, services)
         self.arena = kind.view(self.scene, self.panels.part)
         if self.panels.part.click is not None:

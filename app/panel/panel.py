@@ -19,12 +19,12 @@ from typing import Any, Callable, Iterator, Protocol
 
 import numpy as np
 
-from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from ..lessons.panel import LessonProgress, LessonsPanel
 from ..lessons.scenes import load_scene
+from ..preset_menu import PresetMenu
 from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
@@ -71,7 +71,7 @@ class Services:
 
     notify: Notify
     send_file: SendFile
-    presets: tuple[str, ...]  # what the preset dropdown offers
+    menu: PresetMenu  # the preset dropdown's choices (the tab keeps it: uploads outlive a swap of panels)
     make_session: Callable[[Scenario], Session]  # a fresh session of any kind (to check a replay)
     replace: Callable[[Scenario], Session] | None = None  # load a scene, maybe of another kind
     share: Callable[[Session], bytes] | None = None  # the recorded run as one web page
@@ -135,11 +135,11 @@ class Panel:
 
     # ------------------------------------------------------------------ building
     def _build_header(self) -> None:
-        gui, sc = self.gui, self.session.scenario
-        names = self.services.presets
+        gui, sc, menu = self.gui, self.session.scenario, self.services.menu
+        names = menu.options()
         self.preset = gui.add_dropdown(
-            "preset", names, initial_value=sc.name if sc.name in names else names[0],
-            hint="shipped scenes; switching replaces the whole scene")
+            "preset", names, initial_value=menu.label_for(sc) or names[0],
+            hint="shipped scenes and the presets uploaded in this tab; switching replaces the whole scene")
         self.status = gui.add_markdown("")
         self.playback = gui.add_button_group("playback", PLAYBACK)
         self.top += [self.preset, self.status, self.playback, self._build(SPEED_SLIDER)]
@@ -319,8 +319,11 @@ class Panel:
             for item, h in self._controls:
                 self._sync_one(item, h, s, sc)
             self.set_quietly(self.seed, int(sc.sim.seed))
-            if sc.name in self.preset.options:
-                self.set_quietly(self.preset, sc.name)
+            menu = self.services.menu
+            if tuple(self.preset.options) != menu.options():
+                self.preset.options = menu.options()
+            if (choice := menu.label_for(sc)) is not None:
+                self.set_quietly(self.preset, choice)
         self.compare_gui.sync()
         self.refresh_readout()
 
@@ -421,15 +424,20 @@ class Panel:
             self.session.load_scenario(scenario)
             self.sync()
 
-    def load_preset(self, name: str) -> bool:
+    def load_preset(self, choice: str) -> bool:
+        """Load a choice of the preset dropdown: a shipped preset or one uploaded in this tab
+        (never a file: anything else is refused)."""
+        menu, previous = self.services.menu, self.services.menu.current
         try:
-            scenario = presets_io.load(name)
+            scenario = menu.scenario(choice)
+            menu.current = choice
             self._load(scenario)
         except PresetError as err:
-            self.refuse(err, f"preset {name}")
+            menu.current = previous
+            self.refuse(err, "preset")
             self.sync()
             return False
-        self.notify("Preset loaded", scenario.description or name, "green")
+        self.notify("Preset loaded", scenario.description or choice, "green")
         return True
 
     def set_up_lesson(self, preset: str, values: dict[str, Any]) -> list[str]:
@@ -449,14 +457,21 @@ class Panel:
         return []
 
     def upload_preset(self, filename: str, content: bytes) -> bool:
-        """Validate an uploaded preset; a bad one is listed field by field and changes nothing."""
+        """Validate an uploaded preset and load it; it stays a choice of the preset dropdown
+        (in memory, this tab only). A bad one is listed field by field and changes nothing."""
+        menu, previous = self.services.menu, self.services.menu.current
+        label = None
         try:
             sc = parse_upload(filename, content)
+            label = menu.current = menu.add_upload(sc)
             self._load(sc)
         except PresetError as err:
+            if label is not None:
+                menu.forget(label)
+            menu.current = previous
             self.refuse(err, f"uploaded {filename}")
             return False
-        self.notify("Preset uploaded", f"{filename}: scene '{sc.name}' loaded", "green")
+        self.notify("Preset uploaded", f"{filename}: scene '{sc.name}' loaded (also in the preset list)", "green")
         return True
 
     def send_file(self, name: str, content: bytes) -> None:

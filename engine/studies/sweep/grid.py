@@ -14,6 +14,7 @@ import tomllib
 from dataclasses import dataclass
 from typing import Any, Sequence
 
+from shoal.presets.build import check_world
 from shoal.presets.io import PresetError, parse_value, set_dotted, validate
 from shoal.presets.models import Scenario
 
@@ -119,11 +120,12 @@ def cells(axes: Sequence[Axis]) -> list[tuple[Any, ...]]:
 
 
 def cell_scenario(base: dict[str, Any], axes: Sequence[Axis], values: Sequence[Any]) -> Scenario:
-    """``base`` (a raw preset dict) with one cell's values, validated by the preset model."""
+    """``base`` (a raw preset dict) with one cell's values, validated by the preset model (and
+    its world laid out, if it has one)."""
     data = copy.deepcopy(base)
     for a, v in zip(axes, values):
         set_dotted(data, a.key, copy.deepcopy(v))
-    return validate(data)
+    return check_world(validate(data))
 
 
 def resolve_cells(base: dict[str, Any], axes: Sequence[Axis]) -> list[Scenario]:

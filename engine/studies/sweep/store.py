@@ -3,11 +3,13 @@
 A cell's file is written atomically the moment the cell finishes, so an interrupted sweep
 keeps every finished cell and a rerun with the same arguments skips them. ``sweep.json``
 holds the sweep's identity (preset, grid, runs, seed, ...): a different sweep is refused
-rather than mixed into the folder.
+rather than mixed into the folder, and a second sweep into a folder one is writing is
+refused by its lock file (``.lock``).
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -15,6 +17,7 @@ from pathlib import Path
 from typing import Any, Iterable, Iterator, Sequence
 
 import numpy as np
+from filelock import FileLock, Timeout
 
 from ...core.atomic import atomic_text_writer, atomic_write_text
 from .grid import SweepError
@@ -23,6 +26,7 @@ from .outcomes import INTEGER
 MANIFEST = "sweep.json"
 RESULTS = "results.csv"
 MEDIANS = "medians.csv"
+LOCK = ".lock"
 
 
 def cell_id(index: int) -> str:
@@ -53,19 +57,36 @@ class SweepDir:
         self.out = Path(out)
         self.cells = self.out / "cells"
 
-    def open(self, identity: dict[str, Any], meta: dict[str, Any]) -> None:
-        """Start or resume: refuse a folder holding anything but the same sweep."""
-        identity = _canonical(identity)
-        path = self.out / MANIFEST
+    @contextlib.contextmanager
+    def locked(self) -> Iterator[None]:
+        """Hold the folder's lock file (creating the folder; removed again if nothing else was
+        written): another sweep into the folder is refused meanwhile."""
         if self.out.exists() and not self.out.is_dir():
             raise SweepError([f"--out {self.out}: exists and is not a folder"])
+        created = not self.out.exists()
+        self.out.mkdir(parents=True, exist_ok=True)
+        try:
+            with FileLock(self.out / LOCK, timeout=0):
+                yield
+        except Timeout:
+            raise SweepError([f"--out {self.out}: another shoal sweep is writing into it; wait for it to finish "
+                              "(then rerun to resume) or choose another --out"]) from None
+        finally:
+            if created and all(p.name == LOCK for p in self.out.iterdir()):  # nothing written: leave no folder
+                (self.out / LOCK).unlink(missing_ok=True)
+                self.out.rmdir()
+
+    def open(self, identity: dict[str, Any], meta: dict[str, Any]) -> None:
+        """Start or resume: refuse a folder holding anything but the same sweep (call it under :meth:`locked`)."""
+        identity = _canonical(identity)
+        path = self.out / MANIFEST
         if path.is_file():
             old = json.loads(path.read_text(encoding="utf-8")).get("identity")
             if old != identity:
                 differ = sorted(k for k in set(identity) | set(old or {}) if (old or {}).get(k) != identity.get(k))
                 raise SweepError([f"--out {self.out}: holds a different sweep (differs in: {', '.join(differ)}); "
                                   "rerun with the same arguments to resume, or choose another --out"])
-        elif self.out.is_dir() and any(self.out.iterdir()):
+        elif self.out.is_dir() and any(p.name != LOCK for p in self.out.iterdir()):
             raise SweepError([f"--out {self.out}: is not empty and holds no {MANIFEST}; choose another --out"])
         self.write_manifest({"identity": identity, **meta})
         for stale in self.cells.glob(".*.partial-*"):  # a cell being written when the sweep was killed
