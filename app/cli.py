@@ -1,4 +1,4 @@
-"""The ``shoal`` command: serve, run, reproduce, sweep, presets (DESIGN.md contract)."""
+"""The ``shoal`` command: serve, run, reproduce, sweep, export-replay, presets."""
 
 from __future__ import annotations
 

@@ -11,8 +11,6 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError, short
 from shoal.presets.models import Scenario
 
-from .session import app_presets
-
 UPLOADED = " (uploaded)"  # an uploaded preset's choice is its name and this
 MAX_UPLOADED = 8  # uploads a tab keeps to choose again (the oldest goes first)
 
@@ -20,8 +18,9 @@ MAX_UPLOADED = 8  # uploads a tab keeps to choose again (the oldest goes first)
 class PresetMenu:
     """Choices (labels) of one tab's preset dropdown and the scenario each one loads."""
 
-    def __init__(self) -> None:
-        self.shipped = tuple(app_presets())
+    def __init__(self, shipped: tuple[str, ...]) -> None:
+        """``shipped``: the shipped presets the app can show."""
+        self.shipped = shipped
         self._uploaded: dict[str, Scenario] = {}  # label → scenario, oldest first
         self.current: str | None = None  # the choice last loaded
 

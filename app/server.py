@@ -22,16 +22,17 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from .base_session import MAX_UPLOAD_BYTES, BaseSession
 from .experiment import ExperimentService, Limits, experiment_pool
 from .input_guard import guard_inputs
+from .kinds.registry import check_supported, session_for
 from .native_memory import keep_large_blocks_returnable
 from .origin_guard import OriginPolicy, guarded_viser, is_loopback
 from .replay import MAX_REPLAY_BYTES
-from .scene import CAMERA_FOV, CAMERA_HEIGHT, camera_height
-from .session import check_supported
-from .tab import TabApp, session_for
+from .session.session import Session
+from .session.upload import MAX_UPLOAD_BYTES
+from .tab import TabApp
 from .upload_guard import guard_uploads
+from .view.camera import CAMERA_FOV, CAMERA_HEIGHT, camera_height
 
 TICK_HZ = 60.0
 PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round
@@ -101,7 +102,7 @@ class ShoalServer:
         self._thread.start()
 
     @property
-    def sessions(self) -> dict[int, BaseSession]:
+    def sessions(self) -> dict[int, Session]:
         with self._lock:
             return {cid: tab.session for cid, tab in self.tabs.items()}
 

@@ -4,11 +4,10 @@
 at most ``SCENE_HZ`` times a second and the plots and readouts at most ``PLOT_HZ`` times,
 so that plot traffic never holds up the scene.
 
-A tab shows one kind of scene at a time: a Chapter 3 swarm (``Session``, ``Panels``,
-``ArenaView``), a Chapter 4–5 fleet (``FleetSession``, ``FleetPanels``, ``FleetView``), a
-Chapter 6–8 acoustic swarm (``SonarSession``…) or Mai's SLO swarm (``SLOSession``…); the
-first three run on true or SLO-estimated positions (``[slo] swarm = "host"``) in their own
-scene. Loading a scene of another kind (preset dropdown, upload) swaps all three in place.
+A tab shows one kind of scene at a time (:mod:`.kinds.registry`): a Chapter 3 swarm, a
+Chapter 4–5 fleet, a Chapter 6–8 acoustic swarm or Mai's SLO swarm; the first three run on
+true or SLO-estimated positions (``[slo] swarm = "host"``) in their own scene. Loading a
+scene of another kind (preset dropdown, upload) swaps session, panels and arena in place.
 """
 
 from __future__ import annotations
@@ -17,58 +16,28 @@ import contextlib
 import threading
 import time
 from collections import deque
-from dataclasses import dataclass
 from typing import Any, Callable, ContextManager, Hashable
 
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from .base_session import BaseSession
-from .experiment.panel import ExperimentPanel
+from . import share
 from .experiment.service import ExperimentService
-from .fleet_panels import FleetPanels
-from .fleet_scene import FleetView
-from .fleet_session import FleetSession
+from .kinds.registry import app_kind, app_presets, kind_for, session_for
 from .lessons.panel import LessonProgress
-from .panel_base import PanelsBase
-from .panels import Panels
+from .panel.panel import Panel, Services
 from .preset_menu import PresetMenu
-from .scene import ArenaView
-from .session import Session
-from .slo_panels import SLOPanels
-from .slo_scene import SLOView
-from .slo_session import SLOSession
-from .sonar_panels import SonarPanels
-from .sonar_scene import SonarView
-from .sonar_session import SonarSession
+from .session.session import Session
 
 CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
 
 
-@dataclass(frozen=True)
-class Kind:
-    """The session, panel and view classes that together show one kind of scene."""
-
-    session: type[BaseSession]
-    panels: type[PanelsBase]
-    view: type
-
-
-KINDS = (Kind(FleetSession, FleetPanels, FleetView), Kind(Session, Panels, ArenaView))
-KINDS = (Kind(SLOSession, SLOPanels, SLOView),) + KINDS  # Mai's swarm (slo.swarm = "slo") before the free swarm
-KINDS = KINDS[:1] + (Kind(SonarSession, SonarPanels, SonarView),) + KINDS[1:]  # [acoustics] scenes
-
-
-def kind_for(scenario: Scenario) -> Kind:
-    for kind in KINDS:
-        if kind.session.accepts(scenario):
-            return kind
-    raise PresetError([f"{scenario.name}: no view for this kind of scene"])
-
-
-def session_for(scenario: Scenario) -> BaseSession:
-    """A new session of the kind ``scenario`` needs."""
-    return kind_for(scenario).session(scenario)
+def share_page(session: Session) -> bytes:
+    """The Share button's page; a busy server refuses it like a bad value."""
+    try:
+        return share.session_html(session)
+    except share.Busy as err:
+        raise PresetError(err.messages) from None
 
 
 class TabApp:
@@ -79,7 +48,7 @@ class TabApp:
 
     def __init__(
         self,
-        session: BaseSession,
+        session: Session,
         gui: Any,
         scene: Any,
         *,
@@ -91,7 +60,6 @@ class TabApp:
     ) -> None:
         self.session = session
         self.experiments, self.owner = experiments, owner  # the server's experiments; this tab's key there
-        self.experiment_panel: ExperimentPanel | None = None
         self.gui, self.scene = gui, scene
         self.messages: deque[tuple[str, str, str]] = deque(maxlen=50)  # (title, body, colour), newest last
         self.downloads: deque[tuple[str, bytes]] = deque(maxlen=5)
@@ -102,24 +70,17 @@ class TabApp:
         self._clicks: list[Callable[[Any], None]] = []
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
         self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
-        self.menu = PresetMenu()  # the preset dropdown's choices, uploads included, across swaps
+        self.menu = PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included, across swaps
         self._build_kind()
 
     def _build_kind(self) -> None:
-        kind = next(k for k in KINDS if isinstance(self.session, k.session))
-        self.panels = kind.panels(self.gui, self.session, self.notify, self.send_file, replace=self.replace,
-                                  lessons=self.lesson_progress, menu=self.menu)
-        self.arena = kind.view(self.scene)
-        if self.experiments is not None:
-            with self.panels.tabs.add_tab("Experiment"):
-                self.experiment_panel = ExperimentPanel(
-                    self.gui, self.experiments, self.owner, scenario=lambda: self.session.scenario,
-                    open_cell=self.replace, notify=self.notify, send_file=self.send_file)
-        if hasattr(self.panels, "drag_obstacle"):
-            self.arena.on_obstacle_drag = self.panels.drag_obstacle  # type: ignore[attr-defined]
-        if hasattr(self.panels, "drag_source"):
-            self.arena.on_source_drag = self.panels.drag_source  # type: ignore[attr-defined]
-        if hasattr(self.panels, "handle_click"):
+        kind = app_kind(self.session)
+        services = Services(notify=self.notify, send_file=self.send_file, menu=self.menu, make_session=session_for,
+                            replace=self.replace, share=share_page, lessons=self.lesson_progress,
+                            experiments=self.experiments, owner=self.owner)
+        self.panels = Panel(self.gui, self.session, kind, services)
+        self.arena = kind.view(self.scene, self.panels.part)
+        if self.panels.part.click is not None:
             for modifier in CLICK_MODIFIERS:
                 self._clicks.append(self.scene.on_click(modifier=modifier)(self.scene_click))
         self._acc = 0.0
@@ -133,20 +94,18 @@ class TabApp:
         for cb in self._clicks:
             self.scene.remove_click_callback(cb)
         self._clicks.clear()
-        if self.experiment_panel is not None:
-            self.experiment_panel.remove()
         self.panels.remove()
         self.arena.clear()
 
-    def replace(self, scenario: Scenario) -> BaseSession:
+    def replace(self, scenario: Scenario) -> Session:
         """Load ``scenario``; a scene of the other kind swaps session, panels and arena.
         Returns the session now shown. Raises :class:`PresetError` (nothing changed) when it
         cannot be shown."""
         kind = kind_for(scenario)
         with self._ticking:
-            if isinstance(self.session, kind.session):
+            if app_kind(self.session) is kind:
                 self.session.load_scenario(scenario)
-                self.panels.sync_from_scenario()
+                self.panels.sync()
                 return self.session
             new = kind.session(scenario)  # may refuse: then the old scene stays
             if self.session.playing:
@@ -158,22 +117,20 @@ class TabApp:
 
     def close(self) -> None:
         """The browser tab went away: stop listening to its scene and its experiment."""
-        if self.experiment_panel is not None:
-            self.experiment_panel.detach()
+        self.panels.detach()
         for cb in self._clicks:
             with contextlib.suppress(Exception):
                 self.scene.remove_click_callback(cb)
         self._clicks.clear()
 
-    def scene_click(self, event: Any) -> None:
-        """A click in the arena (viser ``SceneClickEvent``): the panels decide what it does."""
-        to_world = getattr(self.arena, "ray_to_world", None)
-        handle = getattr(self.panels, "handle_click", None)
-        if to_world is None or handle is None:
-            return
-        xy = to_world(event.ray_origin, event.ray_direction)
-        if xy is not None:
-            handle(float(xy[0]), float(xy[1]), event.modifier)
+    def scene_click(self, event: Any) -> str:
+        """A click in the arena (viser ``SceneClickEvent``): the kind decides what it does; returns
+        what it did ("none" where the kind offers nothing or the ray misses the ground)."""
+        click = self.panels.part.click
+        xy = self.arena.ray_to_world(event.ray_origin, event.ray_direction)
+        if click is None or xy is None:
+            return "none"
+        return click(self.panels, float(xy[0]), float(xy[1]), event.modifier)
 
     def notify(self, title: str, body: str, color: str = "blue") -> None:
         self.messages.append((title, body, color))
@@ -220,24 +177,21 @@ class TabApp:
         self._was_playing = s.playing
         if s.scene_revision != self.arena.built_revision:
             with self._atomic():
-                self.arena.rebuild(s.scenario, s.scene_revision)
+                self.arena.rebuild(s.scene_revision)
         if now >= self._next_scene and s.revision != self.arena.drawn_revision:
-            snap = s.shown_snapshot()  # live, or the recorded frame the timeline points at
-            twin = s.twin_view()
+            snap = s.shown_snapshot()  # live, or the recorded frame the timeline points at (and swarm B)
             with self._atomic():  # one wake-up of viser's event loop for the scene and its readouts
                 self.arena.draw(snap)
-                self.arena.draw_twin(twin)
                 self.panels.on_snapshot(snap)
             self._next_scene = now + 1.0 / self.SCENE_HZ
         if plots and now >= self._next_plot:
-            key = (s.revision, s.selected_robot, getattr(s, "selected_dim", 0), s.playing)
+            key = (s.revision, s.selected_robot, s.selected_dim, s.playing)
             if key != self._plot_key:
                 with self._atomic():  # one wake-up for all of them (wake-ups cost the ticking thread the GIL)
                     self.panels.refresh_status()
                     self.panels.refresh_readout()
                     self.panels.refresh_plots()
                     self.panels.refresh_timeline()
-                    if self.experiment_panel is not None:
-                        self.experiment_panel.sync()  # the fields worth varying follow the scene
+                    self.panels.refresh_experiment()
                 self._plot_key = key
             self._next_plot = now + 1.0 / self.PLOT_HZ

@@ -15,8 +15,8 @@ from __future__ import annotations
 import time
 
 from shoal.app import replay
-from shoal.app.tab import session_for
-from shoal.app.timeline import verify_replay
+from shoal.app.kinds.registry import session_for
+from shoal.app.session.timeline import verify_replay
 from shoal.presets import io as presets_io
 
 CASES = (("default", 400), ("course-dvc", 200), ("sonar-xb-pso", 200), ("slo-walk", 200))
@@ -43,9 +43,9 @@ def main() -> None:
     for name, steps in CASES:
         alone, _ = step_cost(name, steps, compare=False)
         both, s = step_cost(name, steps, compare=True)
-        live = per_call(lambda s=s: (s.shown_snapshot(), s.twin_view()), 20)
+        live = per_call(s.shown_snapshot, 20)
         s.scrub(steps // 2)
-        scrubbed = per_call(lambda s=s: (s.shown_snapshot(), s.twin_view()), 20)
+        scrubbed = per_call(s.shown_snapshot, 20)
         export = per_call(s.export_replay, 3)
         data = s.export_replay()
         load = per_call(lambda data=data: replay.from_bytes(data), 3)

@@ -42,7 +42,7 @@ CASES = [
 
 def measure(preset: str, overrides: list[str], steps: int) -> dict[str, dict]:
     """Wall and CPU summaries (ms) of the engine tick and of the session step + snapshot."""
-    from shoal.app.tab import session_for
+    from shoal.app.kinds.registry import session_for
     from shoal.presets.build import build
     from shoal.presets.io import load
 

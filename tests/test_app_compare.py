@@ -11,12 +11,11 @@ import numpy as np
 import pytest
 
 from shoal.app import replay
-from shoal.app.compare import parse_overrides, twin_scenario
-from shoal.app.fleet_scene import PROBE_NODES
-from shoal.app.fleet_session import FleetSession
-from shoal.app.session import Session
-from shoal.app.tab import session_for
-from shoal.app.timeline import verify_replay
+from shoal.app.kinds import fleet, sonar
+from shoal.app.kinds.fleet import PROBE_NODES
+from shoal.app.kinds.registry import session_for
+from shoal.app.session.timeline import verify_replay
+from shoal.app.session.twin import parse_overrides, twin_scenario
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 
@@ -141,7 +140,7 @@ def test_a_replay_re_simulates_to_the_same_positions(name):
     s = session(name)
     s.step(25)
     rec = replay.from_bytes(s.export_replay(), "run.npz")
-    assert rec.frames == 26 and rec.name == name and rec.metric_names == s.METRICS
+    assert rec.frames == 26 and rec.name == name and rec.metric_names == s.history.names
     verified, text = verify_replay(session_for(presets_io.validate(rec.meta["preset"])), rec)
     assert verified is True and "steps 0–20 match" in text
 
@@ -186,14 +185,14 @@ def test_compare_tab_switches_b_on_and_the_arena_and_plot_show_it(tab):
     tab.tick(1.0)
     node = tab.arena.nodes["twin"]
     assert node.visible
-    np.testing.assert_allclose(np.asarray(node.points)[:, :2], tab.arena.view_points(s.twin.sim.state.x[0])[:, :2],
+    np.testing.assert_allclose(np.asarray(node.points)[:, :2], tab.arena.to_view(s.twin.sim.state.x[0])[:, :2],
                                atol=1e-5)
-    assert p.speed_plot.series[-1]["label"] == "B: max |u|"
-    assert len(p.speed_plot.data) == len(p.speed_plot.series)
+    assert p.handles["speed"].series[-1]["label"] == "B: max |u|"
+    assert len(p.handles["speed"].data) == len(p.handles["speed"].series)
     p.compare_gui.enabled.value = False
     tab.tick(2.0)
     assert s.twin is None and not tab.arena.nodes["twin"].visible
-    assert all(not x.get("label", "").startswith("B:") for x in p.speed_plot.series)
+    assert all(not x.get("label", "").startswith("B:") for x in p.handles["speed"].series)
 
 
 def test_a_bad_override_typed_in_the_compare_tab_is_a_red_toast(tab):
@@ -215,9 +214,9 @@ def test_the_timeline_slider_scrubs_and_the_arena_shows_that_step(tab):
     assert s.cursor == 12 and not s.playing
     tab.tick(2.0)
     robots = np.asarray(tab.arena.nodes["robots"].points)[:, :2]
-    np.testing.assert_allclose(robots, tab.arena.view_points(s.frames[12].x)[:, :2], atol=1e-5)
+    np.testing.assert_allclose(robots, tab.arena.to_view(s.frames[12].x)[:, :2], atol=1e-5)
     assert not tab.arena.nodes["gbest"].visible  # bests are not recorded
-    assert tab.panels.speed_plot.data[0][-1] == pytest.approx(s.frames[12].t)
+    assert tab.panels.handles["speed"].data[0][-1] == pytest.approx(s.frames[12].t)
     assert "step 12" in tab.panels.replay_gui.where.content
 
 
@@ -227,7 +226,7 @@ def test_load_replay_swaps_the_scene_kind_and_shows_the_badge(tab):
     data = src.export_replay()
     assert tab.panels.replay_gui.load("course.npz", data)
     s = tab.session
-    assert isinstance(s, FleetSession) and s.replaying is not None and s.scenario.name == "course-dvc"
+    assert s.kind is fleet.KIND and s.replaying is not None and s.scenario.name == "course-dvc"
     assert tab.messages[-1][2] == "green" and "verified" in tab.messages[-1][1]
     tab.tick(1.0)
     badge = tab.panels.replay_gui.badge
@@ -257,7 +256,7 @@ def test_a_bad_replay_is_refused_and_nothing_changes(tab):
         title, body, color = tab.messages[-1]
         assert color == "red" and name in title and words in body
     assert tab.session is s and s.replaying is None and s.sim.state.k == 4
-    assert isinstance(s, Session)
+    assert s.kind.name == "swarm"
 
 
 @pytest.mark.parametrize("name", KINDS[1:])
@@ -274,7 +273,8 @@ def test_every_kind_draws_b_and_a_scrubbed_frame(tab, name):
     assert twin.visible
     np.testing.assert_allclose(np.asarray(twin.points)[:, :2], tab.arena.to_view(s.twin.sim.state.x[0, :, :2])[:, :2],
                                atol=1e-5)
-    plot_labels = [x["label"] for p in vars(tab.panels).values() if hasattr(p, "series") for x in p.series]
+    plot_labels = [x["label"] for key in ("speed", "com", "dist", "error") if key in tab.panels.handles
+                   for x in tab.panels.handles[key].series]
     assert any(label.startswith("B: ") for label in plot_labels)
     s.scrub(5)
     tab.tick(2.0)
@@ -290,11 +290,11 @@ def test_hand_edits_reach_b_too():
     s.enable_compare({"controller.alpha": 0.9})
     s.step(3)
     x = s.sim.world.bounds[2] - 5.0
-    s.add_obstacle(x, 0.0, 1.0)
+    fleet.driver(s).add_obstacle(x, 0.0, 1.0)
     np.testing.assert_array_equal(s.twin.sim.world.circles, s.sim.world.circles)
-    s.restore_world()
+    fleet.driver(s).restore_world()
     np.testing.assert_array_equal(s.twin.sim.world.circles, s.sim.world.circles)
-    sonar = session("sonar-xb-pso")
-    sonar.enable_compare({"acoustics.algorithm": "x-pso"})
-    sonar.move_source(12.0, -30.0)
-    np.testing.assert_array_equal(sonar.twin.sim.state.source[0], [12.0, -30.0])
+    acoustic = session("sonar-xb-pso")
+    acoustic.enable_compare({"acoustics.algorithm": "x-pso"})
+    sonar.driver(acoustic).move_source(12.0, -30.0)
+    np.testing.assert_array_equal(acoustic.twin.sim.state.source[0], [12.0, -30.0])

@@ -33,7 +33,7 @@ def _ask(panel, field1, values1, field2=NONE, values2="", runs=6, steps=30):
 
 
 def test_the_tab_offers_the_fields_and_outcomes_of_its_scene(tab):
-    p = tab.experiment_panel
+    p = tab.panels.experiment
     sc = tab.session.scenario
     keys = tuple(f.key for f in catalogue.fields(sc))
     assert tuple(p.axes[0].field.options) == keys and tuple(p.axes[1].field.options) == (NONE, *keys)
@@ -51,7 +51,7 @@ def test_the_tab_offers_the_fields_and_outcomes_of_its_scene(tab):
 
 
 def test_the_fields_follow_the_scene_as_it_changes(tab):
-    p = tab.experiment_panel
+    p = tab.panels.experiment
     assert "controller.omega" not in p.axes[0].field.options
     assert tab.panels.apply({"controller.mode": "raw"}, "mode")
     tab.tick(1.0)
@@ -60,7 +60,7 @@ def test_the_fields_follow_the_scene_as_it_changes(tab):
 
 
 def test_a_run_shows_progress_medians_cells_and_sends_the_downloads(tab):
-    p = tab.experiment_panel
+    p = tab.panels.experiment
     _ask(p, "controller.U", "6, 9", "controller.A_plus", "10, 20")
     p.run.value = True
     exp = _settle(p)
@@ -84,7 +84,7 @@ def test_a_run_shows_progress_medians_cells_and_sends_the_downloads(tab):
 
 
 def test_one_field_draws_the_median_and_its_interval_band(tab):
-    p = tab.experiment_panel
+    p = tab.panels.experiment
     _ask(p, "controller.U", "6, 9, 12", runs=8, steps=20)
     p.run.value = True
     exp = _settle(p)
@@ -96,7 +96,7 @@ def test_one_field_draws_the_median_and_its_interval_band(tab):
 
 
 def test_open_in_arena_plays_the_run_behind_the_number(tab):
-    p = tab.experiment_panel
+    p = tab.panels.experiment
     _ask(p, "controller.U", "6, 9", "controller.A_plus", "10, 20", runs=3, steps=25)
     p.run.value = True
     exp = _settle(p)
@@ -112,7 +112,7 @@ def test_open_in_arena_plays_the_run_behind_the_number(tab):
 
 
 def test_a_refused_run_says_why_in_the_page(tab):
-    p = tab.experiment_panel
+    p = tab.panels.experiment
     _ask(p, "controller.U", "0, 6")
     p.run.value = True
     assert p.experiment is None and "**Refused:**" in p.status.content and "0 is outside 0 < U ≤ 1000" in \
@@ -122,7 +122,7 @@ def test_a_refused_run_says_why_in_the_page(tab):
 
 
 def test_cancel_in_the_page_keeps_the_finished_cells(tab):
-    p = tab.experiment_panel
+    p = tab.panels.experiment
     _ask(p, "sim.robots", "20, 30, 40, 50, 60, 70, 80, 90, 100, 110, 120, 130", runs=10, steps=600)
     p.run.value = True
     wait_until(lambda: p.experiment is not None and len(p.experiment.table) >= 1, timeout=120, what="a first cell")
@@ -133,12 +133,12 @@ def test_cancel_in_the_page_keeps_the_finished_cells(tab):
 
 
 def test_a_scene_of_another_kind_still_shows_the_tabs_experiment(tab):
-    p = tab.experiment_panel
+    p = tab.panels.experiment
     _ask(p, "controller.U", "6, 9", runs=2, steps=10)
     p.run.value = True
     exp = _settle(p)
     assert tab.panels.load_preset("sonar-xb-pso")
-    q = tab.experiment_panel
+    q = tab.panels.experiment
     assert q is not p and p.removed and q.experiment is exp and "finished" in q.status.content
     assert q.axes[0].field.value == "acoustics.algorithm"
     q.axes[0].values.value = "x-pso, xb-pso"
@@ -151,7 +151,7 @@ def test_a_scene_of_another_kind_still_shows_the_tabs_experiment(tab):
 
 @pytest.mark.parametrize("bad", ["name", "sim.seed", "../x", ""])
 def test_a_field_that_is_not_offered_is_refused(tab, bad):
-    p = tab.experiment_panel
+    p = tab.panels.experiment
     p.axes[0].field.value = bad  # viser takes any value set on a dropdown; the service does not
     p.run.value = True
     assert p.experiment is None and "Refused" in tab.messages[-1][0]

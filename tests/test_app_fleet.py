@@ -16,12 +16,12 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from shoal.app.fleet_panels import CONTROLLERS
-from shoal.app.fleet_scene import FleetView
-from shoal.app.fleet_session import EditRefused, FleetSession
-from shoal.app.panels import Panels
-from shoal.app.scene import ArenaView
-from shoal.app.session import TRAJECTORY_COLUMNS, Session, app_presets
+from shoal.app.kinds import fleet as fleet_kind
+from shoal.app.kinds import swarm
+from shoal.app.kinds.fleet import CONTROLLERS, EditRefused
+from shoal.app.kinds.registry import app_presets
+from shoal.app.session.session import Session
+from shoal.engine.core.recorder import TRAJECTORY_COLUMNS
 from shoal.engine.kinds.fleet import Fleet
 from shoal.engine.robots.sensing import sense
 from shoal.presets import io as presets_io
@@ -54,16 +54,16 @@ def click_at(tab, x: float, y: float, modifier: str | None = None) -> None:
     tab.scene_click(Click(tuple(origin), tuple(d / np.linalg.norm(d)), modifier))
 
 
-def free_spot(session: FleetSession, robot: int, distance: float) -> np.ndarray:
+def free_spot(session: Session, robot: int, distance: float) -> np.ndarray:
     """A point ``distance`` m from the robot's surface (centre to centre, one default obstacle's
     radius more) that is clear of every obstacle and robot."""
-    fleet = session.sim
+    fleet, obstacle_radius = session.sim, fleet_kind.driver(session).obstacle_radius
     x = fleet.state.x[0, robot]
-    r = fleet.params.robot_radius + distance + session.obstacle_radius
+    r = fleet.params.robot_radius + distance + obstacle_radius
     for a in np.linspace(0, 2 * math.pi, 72, endpoint=False):
         p = x + r * np.array([math.cos(a), math.sin(a)])
-        clear_obstacles = fleet.world.obstacle_distance(*p).min(initial=np.inf) > session.obstacle_radius + 0.3
-        others = np.hypot(*(fleet.state.x[0] - p).T) - fleet.params.robot_radius - session.obstacle_radius
+        clear_obstacles = fleet.world.obstacle_distance(*p).min(initial=np.inf) > obstacle_radius + 0.3
+        others = np.hypot(*(fleet.state.x[0] - p).T) - fleet.params.robot_radius - obstacle_radius
         if clear_obstacles and others.min() > 0.3:
             return p
     raise AssertionError("no free spot near the robot")
@@ -72,8 +72,8 @@ def free_spot(session: FleetSession, robot: int, distance: float) -> np.ndarray:
 # ---------------------------------------------------------------------------- loading and drawing
 def test_course_preset_builds_a_fleet_and_draws_its_obstacles(tab):
     s = tab.session
-    assert isinstance(s, FleetSession) and isinstance(s.sim, Fleet)
-    assert isinstance(tab.panels, type(tab.panels)) and isinstance(tab.arena, FleetView)
+    assert s.kind is fleet_kind.KIND and isinstance(s.sim, Fleet)
+    assert isinstance(tab.panels, type(tab.panels)) and tab.arena.name == "fleet"
     assert "course-dvc" in app_presets() and "default" in app_presets()
     tab.tick(1.0)
     world = s.sim.world
@@ -109,11 +109,11 @@ def test_sliders_reach_the_fleet_params_without_restart(tab):
     s, p = tab.session, tab.panels
     s.step(4)
     fleet, x = s.sim, s.sim.state.x.copy()
-    p.sliders["controller.alpha"].value = 0.6
-    p.sliders["controller.beta"].value = 0.7
-    p.sliders["sensing.range"].value = 4.5
-    p.guard.value = True
-    p.update_order.value = "simultaneous"
+    p.handles["controller.alpha"].value = 0.6
+    p.handles["controller.beta"].value = 0.7
+    p.handles["sensing.range"].value = 4.5
+    p.handles["controller.guard"].value = True
+    p.handles["controller.update"].value = "simultaneous"
     assert (fleet.params.alpha, fleet.params.beta, fleet.params.sensing_range) == (0.6, 0.7, 4.5)
     assert fleet.params.guard and fleet.params.update == "simultaneous"
     assert s.sim is fleet and fleet.state.k == 4 and np.array_equal(fleet.state.x, x)  # not restarted
@@ -124,25 +124,25 @@ def test_sliders_reach_the_fleet_params_without_restart(tab):
 
 def test_constant_controller_budget_and_ratio_sliders(tab):
     p, s = tab.panels, tab.session
-    p.controller.value = "Adapted RPSO (constant)"
+    p.handles["controller"].value = "Adapted RPSO (constant)"
     assert (s.sim.params.law, s.sim.params.dvc) == ("adapted-rpso", False)
-    p.c_hat.value = 1.8
-    p.ratio.value = 2.0
+    p.handles["c_hat"].value = 1.8
+    p.handles["ratio"].value = 2.0
     c1, c2, c3 = s.sim.params.c
     assert c1 + c2 + c3 == pytest.approx(1.8, rel=1e-4) and c3 / (c1 + c2) == pytest.approx(2.0, rel=1e-4)
     assert c1 == pytest.approx(c2)
-    assert p.ratio.visible and not p.sliders["controller.alpha"].visible
-    p.controller.value = "Original RPSO"
+    assert p.handles["ratio"].visible and not p.handles["controller.alpha"].visible
+    p.handles["controller"].value = "Original RPSO"
     assert s.sim.params.law == "rpso" and s.sim.params.c == pytest.approx((c1, c2, c3))
 
 
 def test_non_omni_controller_switches_drive_and_rebuilds(tab):
     p = tab.panels
-    p.controller.value = "Non-omni + DVC"
+    p.handles["controller"].value = "Non-omni + DVC"
     s = tab.session
     assert s.sim.params.law == "nonomni" and s.sim.params.drive == "differential" and s.sim.state.k == 0
     assert _last(tab)[0] == "Fleet rebuilt"
-    assert tuple(p.drive.options) == ("differential",)
+    assert tuple(p.handles["robot.drive"].options) == ("differential",)
     s.step(3)
     assert s.sim.state.c.shape[0] == 5  # the five non-omni budgets
 
@@ -151,15 +151,15 @@ def test_bad_values_are_refused_and_the_fleet_is_untouched(tab):
     s, p = tab.session, tab.panels
     s.step(3)
     fleet, scenario = s.sim, s.scenario
-    p.sliders["controller.alpha"].value = 1.0  # the model wants α < 1
+    p.handles["controller.alpha"].value = 1.0  # the model wants α < 1
     title, body, color = _last(tab)
     assert color == "red" and "controller.alpha" in body
-    assert p.sliders["controller.alpha"].value == pytest.approx(0.9)  # handle restored
+    assert p.handles["controller.alpha"].value == pytest.approx(0.9)  # handle restored
     assert fleet.params.alpha == 0.9 and s.scenario is scenario and s.sim is fleet
-    p.sliders["world.length"].value = 20.0  # allowed by the model, too short for the course generator
+    p.handles["world.length"].value = 20.0  # allowed by the model, too short for the course generator
     title, body, color = _last(tab)
     assert color == "red" and "world.length" in body
-    assert p.sliders["world.length"].value == pytest.approx(60.0)
+    assert p.handles["world.length"].value == pytest.approx(60.0)
     assert s.sim is fleet and s.sim.state.k == 3
 
 
@@ -167,21 +167,21 @@ def test_world_and_robot_count_changes_rebuild_the_fleet(tab):
     s, p = tab.session, tab.panels
     s.step(5)
     old = s.sim
-    p.sliders["sim.robots"].value = 9
+    p.handles["sim.robots"].value = 9
     assert s.sim is not old and s.sim.robots == 9 and s.sim.state.k == 0
     assert _last(tab)[:1] == ("Fleet rebuilt",)
     circles = s.sim.world.circles.copy()
-    p.world_seed.value = 5
+    p.handles["world.seed"].value = 5
     assert not np.array_equal(s.sim.world.circles, circles)
-    p.world_kind.value = "forest"
-    assert s.sim.world.name == "forest" and p.sliders["world.density"].visible
-    assert not p.sliders["world.layers"].visible
+    p.handles["world.kind"].value = "forest"
+    assert s.sim.world.name == "forest" and p.handles["world.density"].visible
+    assert not p.handles["world.layers"].visible
 
 
 # ---------------------------------------------------------------------------- editing the world
 def test_click_adds_an_obstacle_that_the_next_step_senses(tab):
     s, p = tab.session, tab.panels
-    p.update_order.value = "simultaneous"  # robot 2 senses before anyone moves
+    p.handles["controller.update"].value = "simultaneous"  # robot 2 senses before anyone moves
     tab.tick(1.0)
     spot = free_spot(s, 2, 1.0)
     n = len(s.sim.world.circles)
@@ -190,7 +190,7 @@ def test_click_adds_an_obstacle_that_the_next_step_senses(tab):
     assert len(circles) == n + 1
     np.testing.assert_allclose(circles[-1, :2], spot, atol=1e-6)
     assert circles[-1, 2] == pytest.approx(0.7)
-    assert s.edits == 1
+    assert fleet_kind.driver(s).edits == 1
     s.step(1)
     reading = s.sim.state.reading
     seen = reading.hit[0, 2] & np.all(np.isclose(reading.centre[0, 2], spot), axis=-1)
@@ -212,17 +212,17 @@ def test_shift_click_removes_the_nearest_obstacle_and_drag_moves_one(tab):
     # drag obstacle 0 somewhere free: the view reports scene coordinates of the pointer
     dest = np.array([30.0, 0.5]) if s.sim.world.obstacle_distance(30.0, 0.5).min() > 1.0 else np.array([33.0, 9.0])
     event = type("Drag", (), dict(instance_index=0, phase="update", end_position=(*tab.arena.to_scene(dest), 0.0)))
-    tab.arena._dragged(event)
+    tab.arena.layer("obstacles").dragged(event)
     np.testing.assert_allclose(s.sim.world.circles[0, :2], dest, atol=1e-6)
     assert len(s.sim.world.circles) == len(after)
 
 
 def test_move_mode_picks_then_places(tab):
     s, p = tab.session, tab.panels
-    p.click_mode.value = "move obstacle"
+    p.handles["click"].value = "move obstacle"
     c = s.sim.world.circles[5].copy()
     click_at(tab, c[0], c[1] + c[2] + 0.2)
-    assert p.editor.picked == 5
+    assert p.part.state.picked == 5
     dest = (c[0] + 1.5, c[1])
     click_at(tab, *dest)
     np.testing.assert_allclose(s.sim.world.circles[5, :2], dest, atol=1e-6)
@@ -233,16 +233,16 @@ def test_edits_on_a_robot_are_refused_and_clicks_on_robots_select(tab):
     x = s.sim.state.x[0, 4]
     n = len(s.sim.world.circles)
     with pytest.raises(EditRefused, match="robot"):
-        s.add_obstacle(x[0] + 0.9, x[1])
+        fleet_kind.driver(s).add_obstacle(x[0] + 0.9, x[1])
     click_at(tab, x[0] + 0.2, x[1])
-    assert s.selected_robot == 4 and p.robot.value == 4
+    assert s.selected_robot == 4 and p.handles["robot"].value == 4
     assert len(s.sim.world.circles) == n
     s.step(2)
     s.reset()
     assert s.sim.state.k == 0 and len(s.sim.world.circles) == n  # reset keeps the world
     click_at(tab, *free_spot(s, 0, 2.0))
-    p.restore.value = True
-    assert len(s.sim.world.circles) == n and s.edits == 0
+    p.handles["restore"].value = True
+    assert len(s.sim.world.circles) == n and fleet_kind.driver(s).edits == 0
 
 
 # ---------------------------------------------------------------------------- the selected robot
@@ -251,7 +251,7 @@ def test_selected_robot_sectors_are_its_reading(tab, preset):
     tab.panels.preset.value = preset
     s, p = tab.session, tab.panels
     s.step(12)
-    p.robot.value = 3
+    p.handles["robot"].value = 3
     tab.tick(5.0)
     fleet = s.sim
     params = fleet.params
@@ -271,17 +271,18 @@ def test_selected_robot_sectors_are_its_reading(tab, preset):
     np.testing.assert_allclose(np.angle(np.exp(1j * (start - expected))), 0.0, atol=1e-5)
     hits = np.asarray(view.nodes["hits"].points)[:, :2]
     np.testing.assert_allclose(hits, view.to_view(reading.point[0, i][reading.hit[0, i]])[:, :2], atol=1e-5)
-    assert f"robot {i}" in p.budget.content
+    assert f"robot {i}" in p.handles["budget"].content
 
 
 def test_the_budget_shown_is_the_budget_the_next_step_uses(tab):
     s, p = tab.session, tab.panels
-    p.update_order.value = "simultaneous"
+    p.handles["controller.update"].value = "simultaneous"
     s.step(15)
-    p.robot.value = 1
+    p.handles["robot"].value = 1
     tab.tick(3.0)
-    shown = s.view()
-    assert f"{shown.c[0] + shown.c[1]:.3f}" in p.budget.content and f"{shown.c[2]:.3f}" in p.budget.content
+    shown = fleet_kind.driver(s).view()
+    budget = p.handles["budget"].content
+    assert f"{shown.c[0] + shown.c[1]:.3f}" in budget and f"{shown.c[2]:.3f}" in budget
     s.step(1)
     np.testing.assert_allclose(s.sim.state.reading.gap[0, 1], shown.gap)
     np.testing.assert_allclose(s.sim.state.c[:, 0, 1], shown.c)
@@ -291,11 +292,11 @@ def test_the_budget_shown_is_the_budget_the_next_step_uses(tab):
 def test_follow_views_keep_the_robot_in_the_middle_and_clicks_still_land(tab):
     s, p = tab.session, tab.panels
     s.step(20)
-    p.robot.value = 2
-    p.view_mode.value = "follow the robot"
+    p.handles["robot"].value = 2
+    p.handles["view"].value = "follow the robot"
     tab.tick(4.0)
     view = tab.arena
-    assert view.zoom == pytest.approx(2.5)
+    assert view.camera.zoom == pytest.approx(2.5)
     x = s.sim.state.x[0, 2]
     np.testing.assert_allclose(view.to_scene(x), 0.0, atol=1e-6)  # on the camera's axis
     root = np.asarray(view.nodes["root"].position)[:2]
@@ -311,17 +312,17 @@ def test_plots_show_com_fitness_with_layer_lines_and_operational_robots(tab):
     s, p = tab.session, tab.panels
     s.step(10)
     p.refresh_plots()
-    data = p.com_plot.data
+    data = p.handles["com"].data
     m = s.metric_arrays()
     np.testing.assert_allclose(data[0], m["t"])
-    np.testing.assert_allclose(data[1], m["com"])
-    assert m["com"][-1] == pytest.approx(s.sim.state.x[0, :, 0].mean())  # [4.17]
+    np.testing.assert_allclose(data[1], m["com_fitness"])
+    assert m["com_fitness"][-1] == pytest.approx(s.sim.state.x[0, :, 0].mean())  # [4.17]
     layers = s.sim.world.layer_x
     assert len(data) == 2 + len(layers)
     for j, lx in enumerate(layers):
         assert np.all(np.asarray(data[2 + j]) == lx)
-    assert p.com_plot.scales["x"]["time"] is False
-    ops = p.robots_plot.data
+    assert p.handles["com"].scales["x"]["time"] is False
+    ops = p.handles["robots"].data
     np.testing.assert_allclose(ops[1], m["operational"])
     assert ops[1][-1] == s.sim.robots - s.sim.state.status[0].sum()
 
@@ -354,17 +355,17 @@ def test_export_marks_collided_robots(tab):
 # ---------------------------------------------------------------------------- switching kinds
 def test_switching_between_chapter_3_and_fleet_scenes_in_one_tab(tab, server):
     tab.panels.preset.value = "rastrigin"
-    assert isinstance(tab.session, Session) and isinstance(tab.panels, Panels)
-    assert isinstance(tab.arena, ArenaView)
+    assert tab.session.kind is swarm.KIND and tab.panels.name == "swarm"
+    assert tab.arena.name == "swarm"
     assert server.sessions[HAND_TAB] is tab.session
     tab.tick(1.0)
     assert "landscape" in tab.arena.nodes and not any(n.startswith("obstacle") for n in tab.arena.nodes)
-    tab.panels.mode.value = "raw"
-    tab.panels.sliders["controller.omega"].value = 0.61
+    tab.panels.handles["controller.mode"].value = "raw"
+    tab.panels.handles["controller.omega"].value = 0.61
     assert tab.session.sim.policy.omega == pytest.approx(0.61)  # Chapter 3 panels work again
     text = presets_io.to_toml(presets_io.load("forest-dvc")).encode()
     assert tab.panels.upload_preset("forest.toml", text)
-    assert isinstance(tab.session, FleetSession) and tab.session.sim.world.name == "forest"
+    assert tab.session.kind is fleet_kind.KIND and tab.session.sim.world.name == "forest"
     tab.tick(2.0)
     assert "obstacles" in tab.arena.nodes and "landscape" not in tab.arena.nodes
     tab.panels.preset.value = "default"
@@ -373,13 +374,13 @@ def test_switching_between_chapter_3_and_fleet_scenes_in_one_tab(tab, server):
     s.step(3)
     tab.tick(4.0)
     drawn = np.asarray(tab.arena.nodes["robots"].points)
-    assert drawn.shape[0] == s.sim.robots and isinstance(s, Session)
+    assert drawn.shape[0] == s.sim.robots and s.kind is swarm.KIND
 
 
 def test_a_server_can_start_on_a_fleet_preset_and_sessions_accept_only_their_kind():
     with pytest.raises(Exception, match="world"):
-        Session(presets_io.load("course-dvc"))
+        Session(presets_io.load("course-dvc"), swarm.KIND)
     with pytest.raises(Exception, match="world"):
-        FleetSession(presets_io.load("default"))
+        Session(presets_io.load("default"), fleet_kind.KIND)
     assert set(CONTROLLERS.values()) >= {("rpso", "raw"), ("adapted-rpso", "raw"), ("adapted-rpso", "dvc"),
                                          ("robot-centred", "raw"), ("nonomni", "dvc")}

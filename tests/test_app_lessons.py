@@ -5,12 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-from shoal.app.fleet_panels import FleetPanels
 from shoal.app.lessons import parse_lesson
 from shoal.app.lessons.chooser import paths
 from shoal.app.lessons.panel import NAV, LessonProgress, LessonsPanel
-from shoal.app.panels import Panels
-from shoal.app.sonar_panels import SonarPanels
 
 APP_PRESET = "default"
 
@@ -47,7 +44,7 @@ def test_set_up_loads_the_steps_scene_through_the_model_and_pauses(tab):
     c = s.scenario.controller
     assert (s.scenario.name, c.law, c.omega) == ("standard-pso", "standard", 1.1)
     assert s.sim.policy.omega == 1.1 and s.sim.state.k == 0 and not s.playing
-    assert tab.panels.sliders["controller.omega"].value == 1.1  # the panel follows
+    assert tab.panels.handles["controller.omega"].value == 1.1  # the panel follows
     title, body, color = tab.messages[-1]
     assert (title, color) == ("Set up step 3: An inertia weight above 1", "green") and "Press Play" in body
     s.play()
@@ -82,7 +79,7 @@ def test_a_set_up_of_another_kind_rebuilds_the_panels_and_keeps_the_place(tab):
     old.nav.value = NAV[1]
     old.answer_button.value = True
     old.setup_button.value = True  # Adapted RPSO on the obstacle course: a fleet
-    assert isinstance(tab.panels, FleetPanels) and tab.session.scenario.name == "course-adapted-c3-equal"
+    assert tab.panels.name == "fleet" and tab.session.scenario.name == "course-adapted-c3-equal"
     assert old.closed and not tab.lesson_progress.focus
     new = tab.panels.lessons
     assert new is not old and new.progress.lesson == "04-dvc" and new.progress.step == 1
@@ -110,7 +107,7 @@ def test_the_chooser_walks_to_a_leaf_and_opens_its_scene(tab):
     assert lessons.progress.choices == path[:-1] and not lessons.open_button.visible
     lessons.choice_buttons[path[-1]].value = True
     lessons.open_button.value = True
-    assert isinstance(tab.panels, SonarPanels) and tab.session.scenario.acoustics.algorithm == "x-pso"
+    assert tab.panels.name == "sonar" and tab.session.scenario.acoustics.algorithm == "x-pso"
     again = tab.panels.lessons
     assert again.progress.choices == path and again.open_button.visible  # the rebuilt panel is where it was
     again.chooser_nav.value = "Start over"
@@ -154,7 +151,7 @@ def test_a_refused_set_up_says_why_and_changes_nothing(tab):
     title, body, color = tab.messages[-1]
     assert (title, color) == ("Refused: lesson set-up", "red")
     assert "sim.robots = 5000: the browser app runs at most 2000 robots" in body
-    assert tab.session.scenario is before and isinstance(tab.panels, Panels)
+    assert tab.session.scenario is before and tab.panels.name == "swarm"
     folder.remove()
 
 

@@ -16,12 +16,17 @@ import threading
 import numpy as np
 import pytest
 
-from shoal.app import plots
-from shoal.app.panels import SPECS, field_bounds, slider_range
-from shoal.app.scene import VIEW_HALF, landscape_rgb
+from shoal.app.kinds import swarm
+from shoal.app.kinds.registry import session_for
+from shoal.app.kinds.swarm import SPEED
+from shoal.app.panel import figures
+from shoal.app.panel.spec import field_bounds
 from shoal.app.server import PortInUseError, serve, start_server
-from shoal.app.session import MAX_UPLOAD_BYTES, TRAJECTORY_COLUMNS, Session
+from shoal.app.session.upload import MAX_UPLOAD_BYTES
+from shoal.app.view.camera import VIEW_HALF
+from shoal.app.view.layers import landscape_rgb
 from shoal.engine.core.objectives import Objective
+from shoal.engine.core.recorder import TRAJECTORY_COLUMNS
 from shoal.engine.pso import stability
 from shoal.engine.pso.coeffs import Constant, Physical
 from shoal.presets import io as presets_io
@@ -32,7 +37,7 @@ from app_helpers import HAND_TAB
 
 def _raw(tab):
     """Switch the tab to raw mode through the GUI."""
-    tab.panels.mode.value = "raw"
+    tab.panels.handles["controller.mode"].value = "raw"
     assert tab.session.scenario.controller.mode == "raw"
 
 
@@ -47,27 +52,27 @@ def test_omega_slider_reaches_the_running_policy_without_restart(tab):
     s.step(7)
     _raw(tab)
     x_before = s.sim.state.x.copy()
-    tab.panels.sliders["controller.omega"].value = 0.83
+    tab.panels.handles["controller.omega"].value = 0.83
     assert isinstance(s.sim.policy, Constant)
     assert s.sim.policy.omega == pytest.approx(0.83)
-    assert s.coefficients()[0] == pytest.approx(0.83)
+    assert swarm.driver(s).coefficients()[0] == pytest.approx(0.83)
     assert s.scenario.controller.omega == pytest.approx(0.83)  # scenario kept in sync (export, download)
     assert s.sim.state.k == 7 and np.array_equal(s.sim.state.x, x_before)  # not restarted
     s.step(1)  # and the next step really uses it
-    assert s.metrics[-1][3] == pytest.approx(0.83)
+    assert s.metric_arrays()["omega"][-1] == pytest.approx(0.83)
 
 
 def test_c1_c2_dt_and_robots_sliders_apply_at_once(tab):
     s = tab.session
     _raw(tab)
     p = tab.panels
-    p.sliders["controller.c1"].value = 1.25
-    p.sliders["controller.c2"].value = 0.75
+    p.handles["controller.c1"].value = 1.25
+    p.handles["controller.c2"].value = 0.75
     assert s.sim.policy.c == pytest.approx((1.25, 0.75))
-    p.sliders["controller.dt"].value = 0.05
+    p.handles["controller.dt"].value = 0.05
     assert s.sim.dt == pytest.approx(0.05)
     s.step(3)
-    p.sliders["sim.robots"].value = 33
+    p.handles["sim.robots"].value = 33
     assert s.sim.state.x.shape == (1, 33, 2)
     assert s.sim.state.k == 3
 
@@ -76,80 +81,80 @@ def test_physical_mode_derives_omega_c_beta_from_U_A_dt(tab):
     s = tab.session
     p = tab.panels
     assert s.scenario.controller.mode == "physical"
-    p.sliders["controller.dt"].value = 0.1
-    p.sliders["controller.U"].value = 5.0
-    p.sliders["controller.A_plus"].value = 20.0
+    p.handles["controller.dt"].value = 0.1
+    p.handles["controller.U"].value = 5.0
+    p.handles["controller.A_plus"].value = 20.0
     assert isinstance(s.sim.policy, Physical)
     beta = 20.0 * 0.1 / 5.0
-    omega, c_hat = s.coefficients()
+    omega, c_hat = swarm.driver(s).coefficients()
     assert omega == pytest.approx(1 - beta)  # [3.35]
     assert c_hat == pytest.approx(20.0 * 0.1 / np.sqrt(2))  # [3.32]
     tab.tick(10.0)
-    assert f"{beta:.4g}" in p.readout.content and f"{c_hat:.4g}" in p.readout.content
+    assert f"{beta:.4g}" in p.handles["readout"].content and f"{c_hat:.4g}" in p.handles["readout"].content
 
 
 def test_law_dropdown_swaps_the_law(tab):
-    tab.panels.law.value = "adapted-tanh"
+    tab.panels.handles["controller.law"].value = "adapted-tanh"
     assert tab.session.sim.law.name == "adapted-tanh"
-    assert tab.panels.sliders["controller.smooth_width"].visible
+    assert tab.panels.handles["controller.smooth_width"].visible
 
 
 def test_mode_switch_keeps_the_controllers_behaviour(tab):
     s = tab.session
-    before = s.coefficients()
-    tab.panels.mode.value = "raw"
-    assert s.coefficients() == pytest.approx(before, rel=1e-5)
-    tab.panels.mode.value = "physical"
-    assert s.coefficients() == pytest.approx(before, rel=1e-5)
-    assert tab.panels.physical_folder.visible and not tab.panels.raw_folder.visible
+    before = swarm.driver(s).coefficients()
+    tab.panels.handles["controller.mode"].value = "raw"
+    assert swarm.driver(s).coefficients() == pytest.approx(before, rel=1e-5)
+    tab.panels.handles["controller.mode"].value = "physical"
+    assert swarm.driver(s).coefficients() == pytest.approx(before, rel=1e-5)
+    assert tab.panels.handles["physical"].visible and not tab.panels.handles["raw"].visible
 
 
 # ---------------------------------------------------------------------------- refusals
 def test_omega_at_one_with_an_adapted_law_is_refused_and_restored(tab):
     s = tab.session
     _raw(tab)
-    tab.panels.sliders["controller.omega"].value = 0.6
+    tab.panels.handles["controller.omega"].value = 0.6
     policy, scenario = s.sim.policy, s.scenario
-    tab.panels.sliders["controller.omega"].value = 1.05
+    tab.panels.handles["controller.omega"].value = 1.05
     title, body, color = _last_message(tab)
     assert color == "red" and "omega" in body and "controller" in body
-    assert tab.panels.sliders["controller.omega"].value == pytest.approx(0.6)  # handle restored
+    assert tab.panels.handles["controller.omega"].value == pytest.approx(0.6)  # handle restored
     assert s.sim.policy is policy and s.scenario is scenario  # engine untouched
 
 
 def test_beta_above_one_is_refused(tab):
     s = tab.session
     p = tab.panels
-    p.sliders["controller.U"].value = 3.0
-    p.sliders["controller.A_plus"].value = 15.0
+    p.handles["controller.U"].value = 3.0
+    p.handles["controller.A_plus"].value = 15.0
     dt, policy = s.sim.dt, s.sim.policy
-    p.sliders["controller.dt"].value = 0.5  # β = 15·0.5/3 = 2.5
+    p.handles["controller.dt"].value = 0.5  # β = 15·0.5/3 = 2.5
     assert "beta" in _last_message(tab)[1] and _last_message(tab)[2] == "red"
-    assert p.sliders["controller.dt"].value == pytest.approx(dt)
+    assert p.handles["controller.dt"].value == pytest.approx(dt)
     assert s.sim.dt == dt and s.sim.policy is policy
 
 
 def test_standard_law_in_physical_mode_is_refused(tab):
-    tab.panels.law.value = "standard"
+    tab.panels.handles["controller.law"].value = "standard"
     assert "physical" in _last_message(tab)[1]
-    assert tab.panels.law.value == "adapted-sgn"
+    assert tab.panels.handles["controller.law"].value == "adapted-sgn"
     assert tab.session.sim.law.name == "adapted-sgn"
 
 
 def test_out_of_model_range_value_is_refused(tab):
     """viser does not clamp Python-side values; the model does."""
     before = tab.session.scenario.controller.c1_share
-    tab.panels.sliders["controller.c1_share"].value = 1.5
+    tab.panels.handles["controller.c1_share"].value = 1.5
     assert "c1_share" in _last_message(tab)[1]
     assert tab.session.scenario.controller.c1_share == before
 
 
-def test_slider_limits_come_from_the_model():
+def test_slider_limits_come_from_the_model(tab):
     lo, hi = field_bounds("controller.omega")
     assert (lo, hi) == (-1.0, 1.2)
-    assert slider_range(SPECS["controller.omega"], 0.5) == (-1.0, 1.2)
+    assert tab.panels.control("controller.omega").range(0.5) == (-1.0, 1.2)
     # a preset value above the on-screen range widens it, never past the model
-    lo, hi = slider_range(SPECS["controller.A_plus"], 900.0)
+    lo, hi = tab.panels.control("controller.A_plus").range(900.0)
     assert hi >= 900.0 and hi <= field_bounds("controller.A_plus")[1]
 
 
@@ -196,14 +201,15 @@ def test_preset_dropdown_switches_scene_and_syncs_sliders(tab):
     tab.panels.preset.value = "standard-pso"
     s = tab.session
     assert s.scenario.controller.law == "standard" and s.sim.law.name == "standard"
-    assert tab.panels.sliders["controller.omega"].value == pytest.approx(0.7)
-    assert tab.panels.law.value == "standard" and tab.panels.mode.value == "raw"
-    assert tab.panels.raw_folder.visible
+    assert tab.panels.handles["controller.omega"].value == pytest.approx(0.7)
+    h = tab.panels.handles
+    assert h["controller.law"].value == "standard" and h["controller.mode"].value == "raw"
+    assert tab.panels.handles["raw"].visible
 
 
 def test_download_preset_round_trips(tab):
     _raw(tab)
-    tab.panels.sliders["controller.omega"].value = 0.42
+    tab.panels.handles["controller.omega"].value = 0.42
     tab.panels.download.value = True  # fires on_click
     name, content = tab.downloads[-1]
     assert name.endswith(".toml")
@@ -214,7 +220,7 @@ def test_download_preset_round_trips(tab):
 # ---------------------------------------------------------------------------- playback and export
 def test_playback_buttons_and_speed(tab):
     s, p = tab.session, tab.panels
-    p.sliders["view.steps_per_second"].value = 20.0
+    p.handles["view.steps_per_second"].value = 20.0
     p.press("Play")
     tab.tick(100.0)
     tab.tick(101.0)  # one second at 20 steps/s
@@ -240,7 +246,7 @@ def test_seed_input_restarts_with_that_seed(tab):
     s.step(4)
     tab.panels.seed.value = 77
     assert s.sim.seed == 77 and s.scenario.sim.seed == 77 and s.sim.state.k == 0
-    other = Session(presets_io.load("default", ["sim.seed=77"]))
+    other = session_for(presets_io.load("default", ["sim.seed=77"]))
     assert np.array_equal(other.sim.state.x, s.sim.state.x)
 
 
@@ -275,8 +281,8 @@ def test_export_json_has_preset_seed_version_and_trajectories(tab):
 
 
 def test_history_is_a_bounded_ring_buffer():
-    s = Session(presets_io.load("default"))
-    s.MAX_STEPS = 50
+    s = session_for(presets_io.load("default"))
+    s.history.max_steps = 50
     s.step(120)
     assert len(s.frames) == 50
     rows = s.trajectory_rows()
@@ -284,7 +290,7 @@ def test_history_is_a_bounded_ring_buffer():
 
 
 def test_trails_cover_the_last_trail_seconds_and_end_at_the_robots():
-    s = Session(presets_io.load("default", ["view.trail_seconds=2.0"]))
+    s = session_for(presets_io.load("default", ["view.trail_seconds=2.0"]))
     s.step(100)  # 10 s at Δt = 0.1
     snap = s.snapshot(max_trails=5, max_trail_points=8)
     assert snap.trails.shape[0] == 5 and 2 <= snap.trails.shape[1] <= 8
@@ -295,7 +301,7 @@ def test_trails_cover_the_last_trail_seconds_and_end_at_the_robots():
 
 
 def test_time_axis_stays_monotonic_when_dt_changes():
-    s = Session(presets_io.load("default"))
+    s = session_for(presets_io.load("default"))
     s.step(10)
     s.apply({"controller.dt": 0.05})
     s.step(10)
@@ -319,8 +325,8 @@ def test_changes_from_another_thread_while_ticking(tab):
     th = threading.Thread(target=ticker)
     th.start()
     for i in range(60):
-        tab.panels.sliders["controller.omega"].value = 0.3 + 0.005 * i
-        tab.panels.sliders["sim.robots"].value = 10 + i % 7
+        tab.panels.handles["controller.omega"].value = 0.3 + 0.005 * i
+        tab.panels.handles["sim.robots"].value = 10 + i % 7
     th.join()
     assert not errors
     assert tab.session.sim.policy.omega == pytest.approx(0.3 + 0.005 * 59)
@@ -330,16 +336,16 @@ def test_changes_from_another_thread_while_ticking(tab):
 def test_phase_plane_follows_the_chosen_particle_and_dimension(tab):
     s, p = tab.session, tab.panels
     s.step(30)
-    p.particle.value = 3
-    p.dimension.value = "y"
+    p.handles["particle"].value = 3
+    p.handles["dimension"].value = "y"
     p.refresh_plots()
-    traces = {t.name: t for t in p.phase_plot.figure.data}
+    traces = {t.name: t for t in p.handles["phase"].figure.data}
     u_hist = np.array([f.u[3, 1] for f in list(s.frames)[-len(traces["recent"].x):]])
     a_hist = np.array([f.a[3, 1] for f in list(s.frames)[-len(traces["recent"].y):]])
     np.testing.assert_allclose(traces["recent"].x, u_hist)
     np.testing.assert_allclose(traces["recent"].y, a_hist)
     assert (traces["now"].x[0], traces["now"].y[0]) == (s.sim.state.u[0, 3, 1], s.sim.state.a[0, 3, 1])
-    assert "particle 3, y" in p.phase_plot.figure.layout.title.text
+    assert "particle 3, y" in p.handles["phase"].figure.layout.title.text
 
 
 # ---------------------------------------------------------------------------- scene
@@ -363,18 +369,18 @@ def test_one_dimensional_preset_draws_on_the_x_axis_and_follows(tab):
     drawn = np.asarray(tab.arena.nodes["robots"].points)
     assert drawn.shape == (s.sim.robots, 3) and np.all(drawn[:, 1] == 0)
     if np.any(s.sim.state.x[0, :, 0] > s.scenario.arena.half_size):
-        assert tab.arena.offset[0] > 0  # view moved with the swarm
+        assert tab.arena.focus[0] > 0  # view moved with the swarm
     tab.panels.refresh_plots()  # plots for d = 1 do not fail either
 
 
 def test_a_diverging_swarm_keeps_the_home_view_and_is_reported(tab):
     tab.panels.preset.value = "standard-pso"
-    tab.panels.sliders["controller.omega"].value = 1.1  # standard PSO outside its stable regions
+    tab.panels.handles["controller.omega"].value = 1.1  # standard PSO outside its stable regions
     s = tab.session
     s.step(250)
     tab.tick(70.0)
-    assert s.outside_arena() > 0
-    assert np.all(tab.arena.offset == 0)  # too spread to follow: the arena stays in view
+    assert swarm.driver(s).outside_arena() > 0
+    assert np.all(tab.arena.focus == 0)  # too spread to follow: the arena stays in view
     assert "outside the arena" in tab.panels.status.content
 
 
@@ -387,7 +393,7 @@ def test_landscape_image_is_oriented_with_plus_y_up():
 
 # ---------------------------------------------------------------------------- plots
 def test_stability_figure_draws_the_region_boundaries_and_live_point():
-    fig = plots.stability_figure(0.42, 3.1, adapted=False)
+    fig = figures.stability_figure(0.42, 3.1, adapted=False)
     traces = {t.name: t for t in fig.data}
     w = np.asarray(traces["order-2 (standard)"].x)
     np.testing.assert_allclose(traces["order-2 (standard)"].y, 24 * (1 - w**2) / (7 - 5 * w))
@@ -398,14 +404,14 @@ def test_stability_figure_draws_the_region_boundaries_and_live_point():
     robots = traces["Adapted on robots (0 ≤ ω < 1)"]
     assert min(robots.x) == 0 and max(robots.x) == 1
     # the live point is judged against the active law's region
-    assert plots.in_region(0.9, 3.0, adapted=True) and not plots.in_region(0.9, 3.0, adapted=False)
-    assert not plots.in_region(1.0, 3.0, adapted=True)
+    assert figures.in_region(0.9, 3.0, adapted=True) and not figures.in_region(0.9, 3.0, adapted=False)
+    assert not figures.in_region(1.0, 3.0, adapted=True)
 
 
 def test_plots_update_in_place_like_a_fresh_figure():
-    fig = plots.stability_figure(0.5, 1.0, adapted=True)
-    plots.update_stability_point(fig, 1.1, 12.0, adapted=False)
-    fresh = plots.stability_figure(1.1, 12.0, adapted=False)
+    fig = figures.stability_figure(0.5, 1.0, adapted=True)
+    figures.update_stability_point(fig, 1.1, 12.0, adapted=False)
+    fresh = figures.stability_figure(1.1, 12.0, adapted=False)
     for name in ("current", "Adapted (−1 < ω < 1)"):
         a = next(t for t in fig.data if t.name == name)
         b = next(t for t in fresh.data if t.name == name)
@@ -413,19 +419,19 @@ def test_plots_update_in_place_like_a_fresh_figure():
     assert fig.layout.title.text == fresh.layout.title.text and "OUTSIDE" in fig.layout.title.text
     assert list(fig.layout.yaxis.range) == list(fresh.layout.yaxis.range)
 
-    phase = plots.phase_figure(0.6, 4.0, 1.0, np.array([1.0]), np.array([1.0]))
-    assert plots.update_phase_points(phase, np.array([1.0, 30.0]), np.array([2.0, -3.0]))
+    phase = figures.phase_figure(0.6, 4.0, 1.0, np.array([1.0]), np.array([1.0]))
+    assert figures.update_phase_points(phase, np.array([1.0, 30.0]), np.array([2.0, -3.0]))
     now = next(t for t in phase.data if t.name == "now")
     assert (now.x[0], now.y[0]) == (30.0, -3.0)
     assert phase.layout.xaxis.range[1] >= 30.0  # the axis widened to show the point
-    assert not plots.update_phase_points(plots.phase_figure(0.6, 4.0, 1.0), np.array([1.0]), np.array([1.0]))
+    assert not figures.update_phase_points(figures.phase_figure(0.6, 4.0, 1.0), np.array([1.0]), np.array([1.0]))
 
 
 def test_phase_figure_matches_fig_3_3_worked_example():
     """ω = 0.6, ĉ = 4, Δt = 1: U_j = 10, star (10, 0), square (2, −8), diamond (4, 4)."""
     u = np.array([1.0, 2.0, 3.0])
     a = np.array([0.5, -1.0, 2.0])
-    fig = plots.phase_figure(0.6, 4.0, 1.0, u, a)
+    fig = figures.phase_figure(0.6, 4.0, 1.0, u, a)
     traces = {t.name: t for t in fig.data}
     stars = set(zip(traces["★ ±U_j"].x, traces["★ ±U_j"].y))
     assert stars == {(10.0, 0.0), (-10.0, 0.0)}
@@ -442,23 +448,25 @@ def test_phase_figure_matches_fig_3_3_worked_example():
 
 
 def test_phase_geometry_at_omega_zero_and_without_bound():
-    geo = plots.phase_geometry(0.0, 2.0, 0.5)
+    geo = figures.phase_geometry(0.0, 2.0, 0.5)
     assert np.all(geo["a1"][:, 0] == 0)  # vertical a1 at ω = 0
     assert np.all(geo["a2"][:, 0] == 2.0) and np.all(geo["a3"][:, 0] == -2.0)
-    assert plots.phase_geometry(1.0, 2.0, 0.5) == {}
-    names = {t.name for t in plots.phase_figure(0.7, 1.0, 0.1, adapted=False).data}
+    assert figures.phase_geometry(1.0, 2.0, 0.5) == {}
+    names = {t.name for t in figures.phase_figure(0.7, 1.0, 0.1, adapted=False).data}
     assert "a1" not in names  # standard PSO: no bounds drawn
 
 
 def test_speed_series_bounds():
-    t = np.array([0.0, 0.1, 0.2])
-    data = plots.speed_data(t, np.array([1.0, 2, 3]), np.array([1.0, 1, 2]), np.full(3, 0.5), np.full(3, 2.0),
-                            adapted=True, d=2)
-    assert len(data) == len(plots.speed_series_config(True)) == 5
+    s = session_for(presets_io.load("default"))  # an Adapted law in 2-D
+    m = {"t": np.array([0.0, 0.1, 0.2]), "max_speed": np.array([1.0, 2, 3]), "max_component": np.array([1.0, 1, 2]),
+         "omega": np.full(3, 0.5), "c_hat": np.full(3, 2.0)}
+    data = SPEED.data(m, s)
+    assert len(data) == len(SPEED.options(s)) == 5
     np.testing.assert_allclose(data[4], 2.0 / (1 - 0.5))  # U_j = ĉ/(1 − ω)
     np.testing.assert_allclose(data[3], 4.0 * np.sqrt(2))  # U = U_j √d
-    assert plots.speed_scales(t)["x"]["time"] is False
-    hidden = plots.speed_series_config(False)
+    assert SPEED.scales((0.0, 0.2), s)["x"]["time"] is False
+    s.apply({"controller.mode": "raw", "controller.law": "standard"})
+    hidden = SPEED.options(s)
     assert hidden[3]["show"] is False and hidden[4]["show"] is False
 
 

@@ -12,11 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from shoal.app import sonar_plots
-from shoal.app.fleet_session import FleetSession
-from shoal.app.sonar_panels import SonarPanels
-from shoal.app.sonar_scene import SonarView
-from shoal.app.sonar_session import SonarSession, true_ray_index
+from shoal.app.kinds import sonar
+from shoal.app.kinds.sonar import corr_data, true_ray_index
 from shoal.engine.kinds.sonar import AcousticSwarm
 
 
@@ -39,8 +36,8 @@ def _drawn(tab, now: float):
 
 def test_sonar_preset_builds_an_acoustic_swarm_and_draws_rays_from_the_robots(tab):
     s = tab.session
-    assert isinstance(s, SonarSession) and isinstance(s.sim, AcousticSwarm)
-    assert isinstance(tab.panels, SonarPanels) and isinstance(tab.arena, SonarView)
+    assert s.kind.name == "sonar" and isinstance(s.sim, AcousticSwarm)
+    assert tab.panels.name == "sonar" and tab.arena.name == "sonar"
     s.step(3)
     view = _drawn(tab, 1.0)
     x = s.sim.state.x[0]
@@ -65,16 +62,16 @@ def test_algorithm_and_Q_reach_the_scenario_and_the_swarm(tab):
     s, p = tab.session, tab.panels
     s.step(2)
     swarm = s.sim
-    p.sliders["acoustics.Q"].value = 4.0  # live: no rebuild
+    p.handles["acoustics.Q"].value = 4.0  # live: no rebuild
     assert s.scenario.acoustics.Q == 4.0 and swarm.params.Q == 4.0 and swarm.band.Q == 4.0
     assert s.sim is swarm and swarm.state.k == 2
-    p.sliders["acoustics.a"].value = 0.5
+    p.handles["acoustics.a"].value = 0.5
     assert swarm.strategy.a == 0.5
-    p.algorithm.value = "B-PSO"  # rebuilds
+    p.handles["acoustics.algorithm"].value = "B-PSO"  # rebuilds
     assert s.scenario.acoustics.algorithm == "b-pso" and s.sim.params.algorithm == "b-pso"
     assert s.sim.state.k == 0 and s.sim.params.Q == 4.0
     assert tab.messages[-1][0] == "Swarm rebuilt"
-    p.algorithm.value = "GT-PSO"
+    p.handles["acoustics.algorithm"].value = "GT-PSO"
     s.step(2)
     tab.tick(1.0)
     assert s.sim.params.algorithm == "gt-pso" and s.sim.state.loc.triangles is not None
@@ -83,13 +80,13 @@ def test_algorithm_and_Q_reach_the_scenario_and_the_swarm(tab):
 
 def test_a_bad_value_is_refused_and_the_slider_restored(tab):
     s, p = tab.session, tab.panels
-    p.sliders["acoustics.r"].value = 30.0  # escorting needs the non-omni controller
+    p.handles["acoustics.r"].value = 30.0  # escorting needs the non-omni controller
     title, body, colour = tab.messages[-1]
     assert colour == "red" and "acoustics" in body and "nonomni" in body
-    assert s.scenario.acoustics.r == 0.0 and p.sliders["acoustics.r"].value == 0.0
-    p.sliders["acoustics.Q"].value = 5000.0  # beyond the model's range
+    assert s.scenario.acoustics.r == 0.0 and p.handles["acoustics.r"].value == 0.0
+    p.handles["acoustics.Q"].value = 5000.0  # beyond the model's range
     assert tab.messages[-1][2] == "red" and s.scenario.acoustics.Q == 1.5
-    assert p.sliders["acoustics.Q"].value == 1.5
+    assert p.handles["acoustics.Q"].value == 1.5
 
 
 def test_dragging_the_source_moves_it_in_the_engine(tab):
@@ -98,9 +95,9 @@ def test_dragging_the_source_moves_it_in_the_engine(tab):
     _drawn(tab, 1.0)
     target = np.array([-150.0, 120.0])
     sx, sy = view.to_scene(target)
-    view._dragged(Drag((float(sx), float(sy), 0.0), "start"))
-    view._dragged(Drag((float(sx), float(sy), 0.0), "update"))
-    view._dragged(Drag((float(sx), float(sy), 0.0), "end"))
+    view.layer("source").dragged(Drag((float(sx), float(sy), 0.0), "start"))
+    view.layer("source").dragged(Drag((float(sx), float(sy), 0.0), "update"))
+    view.layer("source").dragged(Drag((float(sx), float(sy), 0.0), "end"))
     np.testing.assert_allclose(s.sim.state.source[0], target, atol=1e-6)
     d = np.linalg.norm(s.sim.state.x[0] - target, axis=-1)
     np.testing.assert_allclose(s.sim.state.snr_db[0], 60.0 - 20 * np.log10(np.maximum(d, 1.0)), atol=1e-9)
@@ -114,9 +111,9 @@ def test_dragging_the_source_moves_it_in_the_engine(tab):
 def test_a_moving_source_continues_from_where_it_was_dropped(tab):
     tab.panels.preset.value = "escort-moving"
     s = tab.session
-    assert isinstance(s, SonarSession) and s.scenario.acoustics.v_n > 0
+    assert s.kind.name == "sonar" and s.scenario.acoustics.v_n > 0
     s.step(2)
-    s.move_source(10.0, 20.0)
+    sonar.driver(s).move_source(10.0, 20.0)
     s.step(1)
     v = s.scenario.acoustics.v_n * s.scenario.acoustics.U * s.scenario.acoustics.dt
     np.testing.assert_allclose(s.sim.state.source[0], [10.0 + v, 20.0], atol=1e-9)
@@ -126,26 +123,26 @@ def test_the_correlation_plot_shows_the_selected_robots_corr(tab):
     s, p = tab.session, tab.panels
     s.step(2)
     for robot in (0, 4):
-        p.robot.value = robot
+        p.handles["robot"].value = robot
         assert s.selected_robot == robot
         tab.tick(float(robot) + 1.0)
         b = s.sim.state.bearing
-        x, y, mark = (np.asarray(a) for a in p.corr_plot.data)
+        x, y, mark = (np.asarray(a) for a in p.handles["corr"].data)
         lags_ms = b.lags * 1e3
         on_grid = np.isin(x, lags_ms)
         np.testing.assert_allclose(y[on_grid], b.corr[0, robot], rtol=1e-12)
         assert mark.max() == pytest.approx(b.rho[0, robot])
         assert x[np.argmax(mark)] == pytest.approx(b.tau[0, robot] * 1e3)
-    snr = np.asarray(p.snr_plot.data[1])
+    snr = np.asarray(p.handles["snr"].data[1])
     assert snr.max() == pytest.approx(s.sim.state.snr_db[0].max())
 
 
 def test_switching_kinds_and_export(tab):
     p = tab.panels
     p.preset.value = "course-dvc"
-    assert isinstance(tab.session, FleetSession)
+    assert tab.session.kind.name == "fleet"
     tab.panels.preset.value = "sonar-gt-pso"
-    assert isinstance(tab.session, SonarSession) and tab.session.sim.params.algorithm == "gt-pso"
+    assert tab.session.kind.name == "sonar" and tab.session.sim.params.algorithm == "gt-pso"
     assert "Chapters 6–8" in tab.panels.notes.content
     tab.session.step(3)
     csv_text = tab.session.export_csv().decode()
@@ -160,14 +157,14 @@ def test_upload_of_an_acoustic_preset(tab):
     text = (b'name = "mine"\n[sim]\nrobots = 6\nsteps = 100\nseed = 3\n'
             b'[acoustics]\nalgorithm = "x-pso"\nsnr0_db = 4.0\n')
     assert tab.panels.upload_preset("mine.toml", text)
-    assert isinstance(tab.session, SonarSession) and tab.session.sim.robots == 6
+    assert tab.session.kind.name == "sonar" and tab.session.sim.robots == 6
     assert tab.session.sim.params.algorithm == "x-pso"
 
 
 def test_corr_data_marks_tau_with_a_vertical_line():
     lags = np.linspace(-1e-3, 1e-3, 21)
     corr = np.cos(lags * 3000)
-    x, y, mark = sonar_plots.corr_data(lags, corr, 2.5e-4, 0.9)
+    x, y, mark = corr_data(lags, corr, 2.5e-4, 0.9)
     assert np.all(np.diff(x) >= 0)
     assert mark.max() == 0.9 and x[np.argmax(mark)] == pytest.approx(0.25)
     np.testing.assert_allclose(y, np.interp(x / 1e3, lags, corr))

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import pytest
 
+from shoal.app.kinds.registry import kind_for
 from shoal.app.lessons import LessonError
 from shoal.app.lessons.chooser import Leaf, Question, parse_tree, paths, shipped_tree, trail, walk
 from shoal.app.lessons.scenes import load_scene
 from shoal.app.limits import check_app_limits
-from shoal.app.tab import kind_for
 
 TREE = shipped_tree()
 

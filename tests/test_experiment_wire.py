@@ -63,7 +63,7 @@ def _set(c, label, value):
 def test_values_no_control_can_hold_are_refused_before_the_tab_sees_them(served, label, value):
     c, tab = _tab(served, with_tab=True)
     try:
-        panel = tab.experiment_panel
+        panel = tab.panels.experiment
         handle = {"field 1": panel.axes[0].field, "field 2": panel.axes[1].field, "values 1 as": panel.axes[0].given,
                   "outcome": panel.outcome, "runs per cell": panel.runs, "from 1": panel.axes[0].start,
                   "values 1": panel.axes[0].values}[label]
@@ -130,7 +130,7 @@ def test_a_tab_that_closes_cancels_its_experiment(served):
     _set(c, "steps per run", 2000)
     _set(c, "Run experiment", True)
     wait_until(lambda: c.saw("running:"), timeout=60, what="the experiment running")
-    (cid,) = [k for k, t in served.tabs.items() if t.experiment_panel and t.experiment_panel.experiment]
+    (cid,) = [k for k, t in served.tabs.items() if t.panels.experiment and t.panels.experiment.experiment]
     exp = served.experiments.experiment(cid)
     c.close()
     wait_until(lambda: exp.over, timeout=120, what="the experiment over after the tab closed")

@@ -9,11 +9,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from shoal.app.kinds.registry import kind_for
 from shoal.app.lessons import LessonError, library, parse_lesson
 from shoal.app.lessons.library import read_lesson, shipped
 from shoal.app.lessons.scenes import load_scene, overrides, scene_errors, toml_literal
 from shoal.app.lessons.verify import check_failures, lesson_check_failures, run_metrics
-from shoal.app.tab import kind_for
 from shoal.presets.io import PresetError, parse_value
 
 GOOD = '''+++

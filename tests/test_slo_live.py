@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shoal.app.session import Session
-from shoal.app.slo_session import SLOSession
+from shoal.app.kinds.registry import session_for
 from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.presets import io as presets_io
 
@@ -68,7 +67,7 @@ def test_fields_that_need_a_new_swarm_are_refused_by_name():
 
 
 def test_the_session_retunes_live_and_rebuilds_only_when_it_must():
-    s = SLOSession(presets_io.load("slo-walk"))
+    s = session_for(presets_io.load("slo-walk"))
     s.step(5)
     engine = s.sim
     s.apply({"slo.selection": "akcan", "slo.errors": "high", "slo.prediction_weight": 0.75})
@@ -82,7 +81,7 @@ def test_the_session_retunes_live_and_rebuilds_only_when_it_must():
 
 
 def test_the_chapter3_swarm_on_slo_positions_retunes_its_source():
-    s = Session(presets_io.load("slo-adapted"))  # the Chapter 3 scene runs it (Positions folder)
+    s = session_for(presets_io.load("slo-adapted"))  # the Chapter 3 scene runs it (Positions folder)
     assert not s.sim.positions.exact
     s.step(4)
     engine, x = s.sim, s.sim.state.x.copy()

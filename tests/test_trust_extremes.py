@@ -18,8 +18,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from pydantic import BaseModel
 
+from shoal.app.kinds.registry import session_for
 from shoal.app.limits import MAX_ROBOTS, check_app_limits, scene_kind
-from shoal.app.tab import session_for
 from shoal.presets.io import PresetError, load, read_raw, set_dotted, validate
 from shoal.presets.models import Scenario
 

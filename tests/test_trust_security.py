@@ -30,9 +30,9 @@ import urllib.request
 import pytest
 from websockets.exceptions import InvalidStatus
 
-from shoal.app.base_session import MAX_UPLOAD_BYTES
 from shoal.app.cli import build_parser
 from shoal.app.server import is_loopback, start_server
+from shoal.app.session.upload import MAX_UPLOAD_BYTES
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError, file_stem
 
@@ -210,7 +210,7 @@ def test_shoal_run_puts_its_output_inside_out_whatever_the_preset_name(tmp_path)
 
 
 def test_the_size_limit_is_checked_before_parsing():
-    from shoal.app.base_session import parse_upload
+    from shoal.app.session.upload import parse_upload
 
     with pytest.raises(presets_io.PresetError, match="KiB limit"):
         parse_upload("x.json", b"{" * (MAX_UPLOAD_BYTES + 1))  # would be a nesting bomb if it were parsed

@@ -17,8 +17,9 @@ import numpy as np
 import pytest
 
 from shoal.app.cli import build_parser
+from shoal.app.kinds.registry import session_for
 from shoal.app.server import DEFAULT_MAX_SESSIONS, FULL_TITLE, start_server
-from shoal.app.tab import TabApp, session_for
+from shoal.app.tab import TabApp
 from shoal.presets.io import load
 
 from browser.browser_helpers import wait_until  # noqa: E402  (tests/ is on sys.path)

@@ -15,7 +15,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from shoal.app.base_session import MAX_UPLOAD_BYTES
+from shoal.app.session.upload import MAX_UPLOAD_BYTES
 from shoal.presets import io as presets_io
 
 from app_helpers import hand_tab

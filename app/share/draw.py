@@ -1,8 +1,8 @@
 """The one place the exporter meets the app: sessions and the arena view of a kind of scene.
 
-An exported page is drawn by the view the app shows for that kind of scene (an object with
-``rebuild(scenario, revision)``, ``draw(snapshot)`` and ``draw_twin(view)``) on a scene that
-only records, so the page shows the layers the app draws. The frames come from either
+An exported page is drawn by the view the app shows for that kind of scene (``rebuild``,
+``draw(snapshot)``) on a scene that only records, so the page shows the layers the app draws.
+The frames come from either
 
 * a seeded run (:func:`run_frames`): a fresh session of the preset steps on and every kept
   step is drawn as the app draws it while playing (bests, rays, sensing sectors, beliefs);
@@ -13,51 +13,44 @@ only records, so the page shows the layers the app draws. The frames come from e
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, Callable, Iterator
-
-import numpy as np
 
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
+from ..kinds.registry import kind_for
 from ..replay import Recording
+from ..session.session import Session
+from ..session.snapshot import Snapshot
+from ..view.view import View
 from .frames import FramePlan
 
-Twin = tuple[np.ndarray, np.ndarray] | None  # swarm B's robots and trails, as ``BaseSession.twin_view``
-Drawn = tuple[Any, Twin]  # (snapshot, twin) of one kept step
 
-
-def _kind(scenario: Scenario) -> Any:
-    from ..tab import kind_for  # the tab module imports every panel: load it only when exporting
-
-    return kind_for(scenario)
-
-
-def new_session(scenario: Scenario) -> Any:
+def new_session(scenario: Scenario) -> Session:
     """A fresh session of the kind ``scenario`` needs (refuses, like the app, what it cannot show)."""
-    return _kind(scenario).session(scenario)
+    return kind_for(scenario).session(scenario)
 
 
-def new_view(scenario: Scenario, scene: Any) -> Any:
-    """The arena view the app shows ``scenario`` in, on ``scene``, with its static scene built."""
-    view = _kind(scenario).view(scene)
-    view.rebuild(scenario, 0)
+def new_view(scenario: Scenario, scene: Any) -> View:
+    """The arena view the app shows ``scenario`` in, on ``scene`` (nothing to drag on a page)."""
+    view = kind_for(scenario).view(scene, None)
+    view.rebuild(0)
     return view
 
 
-def draw_frame(view: Any, frame: Drawn) -> None:
-    """One kept step, as the app's tab draws it."""
-    snap, twin = frame
-    view.draw(snap)
-    view.draw_twin(twin)
+def draw_frame(view: View, frame: Snapshot) -> None:
+    """One kept step (swarm B with it), as the app's tab draws it."""
+    view.draw(frame)
 
 
-def _last_step(session: Any) -> int:
-    return session.timeline()[1]
+def _last_step(session: Session) -> int:
+    return session.timeline_span()[1]
 
 
-def run_frames(session: Any, plan: FramePlan, on_steps: Callable[[int], None] | None = None) -> Iterator[Drawn]:
+def run_frames(session: Session, plan: FramePlan, on_steps: Callable[[int], None] | None = None
+               ) -> Iterator[Snapshot]:
     """Step a fresh ``session`` (with swarm B if Compare is on) and yield the live snapshot at
     every kept step."""
     for k in plan.steps:
@@ -67,10 +60,10 @@ def run_frames(session: Any, plan: FramePlan, on_steps: Callable[[int], None] | 
                 on_steps(done)
             if not done:
                 raise PresetError([f"sim.steps: the run ends at step {_last_step(session)}, before step {k}"])
-        yield session.shown_snapshot(), session.twin_view()
+        yield session.shown_snapshot()
 
 
-def replay_session(rec: Recording) -> Any:
+def replay_session(rec: Recording) -> Session:
     """A session showing ``rec`` (its embedded preset validated, its shape checked)."""
     try:
         scenario = presets_io.validate(rec.meta["preset"])
@@ -81,21 +74,21 @@ def replay_session(rec: Recording) -> Any:
     return session
 
 
-def recorded_frames(a: Any, b: Any | None, plan: FramePlan) -> Iterator[Drawn]:
+def recorded_frames(a: Session, b: Session | None, plan: FramePlan) -> Iterator[Snapshot]:
     """The recorded frame of every kept step from replay sessions ``a`` and ``b`` (swarm B,
     drawn where it recorded that step)."""
     b_steps = {f.k for f in b.frames} if b is not None else set()
     for k in plan.steps:
         a.scrub(k)
-        view_b: Twin = None
+        twin = None
         if b is not None and k in b_steps:
             b.scrub(k)
             snap_b = b.shown_snapshot()
-            view_b = (snap_b.x, snap_b.trails)
-        yield a.shown_snapshot(), view_b
+            twin = (snap_b.x, snap_b.trails)
+        yield dataclasses.replace(a.shown_snapshot(), twin=twin)
 
 
-def session_recordings(session: Any) -> tuple[Recording, Recording | None, dict[str, Any]]:
+def session_recordings(session: Session) -> tuple[Recording, Recording | None, dict[str, Any]]:
     """A session's recorded history, swarm B's (None without B) and B's overrides."""
     with session.lock:
         twin = session.twin

@@ -13,18 +13,19 @@ from shoal.presets.models import Scenario
 
 from ..limits import scene_kind
 from ..replay import Recording
+from ..session.snapshot import Snapshot
 from . import draw, page
 from .frames import MAX_FRAMES, FramePlan, frame_budget, plan, run_plan
 
 
-def _page(scenario: Scenario, frames: Iterable[draw.Drawn], info: page.PageInfo) -> str:
+def _page(scenario: Scenario, frames: Iterable[Snapshot], info: page.PageInfo) -> str:
     stem = presets_io.file_stem(scenario.name)
     with page.recording_scene() as (scene, serializer):
         view = draw.new_view(scenario, scene)
         label = page.step_label(scene)
         for frame in frames:
             draw.draw_frame(view, frame)
-            label.text = page.step_text(frame[0].k, frame[0].t)
+            label.text = page.step_text(frame.k, frame.t)
             serializer.insert_sleep(info.seconds_per_frame)
         return page.to_html(serializer, info, stem)
 

@@ -19,8 +19,8 @@ import urllib.parse
 from dataclasses import dataclass, field
 from typing import Any, Iterator
 
-from ..compare import literal
-from ..scene import CAMERA_FOV, CAMERA_HEIGHT, VIEW_HALF
+from ..session.twin import literal
+from ..view.camera import CAMERA_FOV, CAMERA_HEIGHT, VIEW_HALF
 from .frames import MAX_FRAMES, MAX_ROBOT_FRAMES
 
 _LOCK = threading.Lock()  # one export at a time per process: CPU, and stdout is swapped while viser prints

@@ -23,7 +23,8 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from shoal.app.scene import ROBOT, ROBOT_SIZE, VIEW_HALF  # noqa: E402
+from shoal.app.kinds.swarm import ROBOT, ROBOT_SIZE  # noqa: E402
+from shoal.app.view.camera import VIEW_HALF  # noqa: E402
 
 from browser_helpers import ARGS, VIEWPORT, canvas_box, choose, dismiss_toasts, number_box, upload_input, wait_until  # noqa: E402
 

@@ -25,9 +25,8 @@ pytestmark = [
 sync_api = pytest.importorskip("playwright.sync_api")
 
 from shoal.app import replay  # noqa: E402
-from shoal.app.scene import ROBOT_SIZE  # noqa: E402
+from shoal.app.kinds.swarm import ROBOT_SIZE  # noqa: E402
 from shoal.app.server import start_server  # noqa: E402
-from shoal.app.session import Session  # noqa: E402
 
 from browser_helpers import (  # noqa: E402
     ARGS,
@@ -166,7 +165,7 @@ def test_a_replay_exported_here_plays_back_in_another_server(server, browser, pa
                 {"name": "run-replay.npz", "mimeType": "application/octet-stream", "buffer": data})
             wait_until(lambda: getattr(other.tabs[cid2].session, "replaying", None) is not None, what="the replay")
             tab2 = other.tabs[cid2]
-            assert isinstance(tab2.session, Session) and tab2.session.scenario.name == "default"
+            assert tab2.session.kind.name == "swarm" and tab2.session.scenario.name == "default"
             page2.wait_for_selector("text=Replay of default, seed 1", timeout=30000)
             page2.wait_for_selector(".mantine-Notification-root:has-text('verified')", timeout=30000)
             # scrub to step 12: the arena shows the recorded robots of that step
@@ -178,7 +177,7 @@ def test_a_replay_exported_here_plays_back_in_another_server(server, browser, pa
             x = rec.robots(int(np.flatnonzero(rec.k == k)[0]))[0]
             wait_until(lambda: tab2.arena.drawn_revision == tab2.session.revision, what="the frame drawn")
             np.testing.assert_allclose(np.asarray(tab2.arena.nodes["robots"].points)[:, :2],
-                                       tab2.arena.view_points(x)[:, :2], atol=1e-5)
+                                       tab2.arena.to_view(x)[:, :2], atol=1e-5)
             dismiss_toasts(page2)
             pixels = np.round(to_pixel(other, cid2, page2, x)).astype(int)
             hits = seen(page2, pixels, red)

@@ -41,7 +41,7 @@ def test_an_experiment_run_from_the_page_shows_progress_and_the_result_plot(serv
     page.get_by_role("tab", name="Experiment").click()
     text_box(page, "values 1").fill("6, 8, 10, 12")
     choose(page, "field 2", "controller.A_plus")
-    panel = server.tabs[cid].experiment_panel
+    panel = server.tabs[cid].panels.experiment
     wait_until(lambda: panel.axes[1].values.value.startswith("15.0"), what="field 2's values suggested")
     text_box(page, "values 2").fill("10, 20, 30")
     for label, value in (("runs per cell", "10"), ("steps per run", "600")):

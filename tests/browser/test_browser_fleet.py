@@ -24,7 +24,7 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from shoal.app.fleet_session import FleetSession  # noqa: E402
+from shoal.app.kinds import fleet  # noqa: E402
 
 from browser_helpers import choose, dismiss_toasts, root_for, to_pixel, wait_until  # noqa: E402
 
@@ -42,7 +42,7 @@ def pause(server, cid, page):
     return session
 
 
-def free_point(session: FleetSession, x_min: float, x_max: float) -> np.ndarray:
+def free_point(session, x_min: float, x_max: float) -> np.ndarray:
     """A spot clear of obstacles (2 m) and robots (3 m) in the strip x_min < x < x_max."""
     world, x = session.sim.world, session.sim.state.x[0]
     for px in np.linspace(x_min, x_max, 9):
@@ -58,7 +58,7 @@ def test_the_preset_dropdown_switches_to_the_obstacle_course(server, page, cid):
     server.tabs[cid].session.pause()  # stays paused across the switch (a still scene renders faster)
     dismiss_toasts(page)
     choose(page, "preset", "course-dvc")
-    wait_until(lambda: isinstance(server.tabs[cid].session, FleetSession), what="a fleet session")
+    wait_until(lambda: server.tabs[cid].session.kind.name == "fleet", what="a fleet session")
     tab = server.tabs[cid]
     page.wait_for_selector("label:has-text('controller')", timeout=20000)
     wait_until(lambda: "obstacles" in tab.arena.nodes, what="the obstacles drawn")
@@ -95,7 +95,7 @@ def test_a_click_in_the_arena_adds_an_obstacle_there(server, page, cid):
     wait_until(lambda: len(session.sim.world.circles) == n + 1, what="a new obstacle")
     new = session.sim.world.circles[-1]
     assert np.hypot(*(new[:2] - target)) < 0.3, f"added at {new[:2]}, clicked {target}"
-    assert new[2] == pytest.approx(session.obstacle_radius)
+    assert new[2] == pytest.approx(fleet.driver(session).obstacle_radius)
     wait_until(lambda: len(server.tabs[cid].arena.nodes["obstacles"].batched_positions) == n + 1,
                what="the new obstacle drawn")
 
@@ -140,4 +140,4 @@ def test_the_sector_view_follows_the_robot_chosen_in_the_gui(server, page, cid):
     wait_until(lambda: np.allclose(_sector_centre(tab), session.sim.state.x[0, j], atol=1e-4),
                what=f"the sectors on robot {j}")
     wait_until(lambda: field.input_value() == str(j), what="the robot box to show the clicked robot")
-    assert f"robot {j}" in tab.panels.budget.content
+    assert f"robot {j}" in tab.panels.handles["budget"].content

@@ -35,15 +35,16 @@ from browser_helpers import ARGS, VIEWPORT, canvas_box, dismiss_toasts, wait_unt
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from share_pages import data_block  # noqa: E402
 
-from shoal.app.scene import CAMERA_FOV, CAMERA_HEIGHT, VIEW_HALF  # noqa: E402
 from shoal.app.share import preset_html  # noqa: E402
 from shoal.app.share.draw import new_session  # noqa: E402
+from shoal.app.view.camera import CAMERA_FOV, CAMERA_HEIGHT, VIEW_HALF  # noqa: E402
 from shoal.presets import io as presets_io  # noqa: E402
 
 STEPS = 200
 ROBOTS_JS = """() => {
   const m = window.__viserMutable;
-  const o = m && m.nodeRefFromName['/world/robots'];
+  const name = m && Object.keys(m.nodeRefFromName).find(n => n.endsWith('/robots'));
+  const o = name && m.nodeRefFromName[name];
   if (!o) return null;
   let pts = null;
   o.traverse(c => {
@@ -66,7 +67,7 @@ class Run:
         session.step(STEPS)
         self.positions = {f.k: f.x.copy() for f in session.frames}
         self.kept = data_block(self.page)["run"]
-        self.scale = VIEW_HALF / float(self.scenario.arena.half_size)  # metres → view units (ArenaView)
+        self.scale = VIEW_HALF / float(self.scenario.arena.half_size)  # metres → scene units (the Chapter 3 view)
 
     def step_of(self, pts: list[float]) -> int:
         """The recorded step whose robots the client shows (asserts an exact match, float32)."""

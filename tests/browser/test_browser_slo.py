@@ -19,9 +19,7 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from shoal.app.fleet_session import FleetSession  # noqa: E402
-from shoal.app.session import Session  # noqa: E402
-from shoal.app.slo_session import SLOSession  # noqa: E402
+from shoal.app.kinds import swarm  # noqa: E402
 from shoal.engine.kinds.fleet import Fleet  # noqa: E402
 from shoal.engine.kinds.slo_swarm import SLOSwarm  # noqa: E402
 
@@ -31,7 +29,7 @@ from browser_helpers import choose, dismiss_toasts, number_box, wait_until  # no
 def test_the_dropdown_switches_to_slo_walk_and_the_ghosts_are_drawn(server, page, cid):
     dismiss_toasts(page)
     choose(page, "preset", "slo-walk")
-    wait_until(lambda: isinstance(server.tabs[cid].session, SLOSession), what="an SLO session")
+    wait_until(lambda: server.tabs[cid].session.kind.name == "mai", what="an SLO session")
     page.wait_for_selector("label:has-text('selection')", timeout=20000)
     tab = server.tabs[cid]
     session = tab.session
@@ -50,7 +48,7 @@ def test_the_dropdown_switches_to_slo_walk_and_the_ghosts_are_drawn(server, page
 def test_the_chapter3_positions_switch_and_controller_in_the_gui(server, page, cid):
     dismiss_toasts(page)
     choose(page, "preset", "slo-adapted")
-    wait_until(lambda: isinstance(server.tabs[cid].session, Session), what="the Chapter 3 scene")
+    wait_until(lambda: server.tabs[cid].session.kind.name == "swarm", what="the Chapter 3 scene")
     session = server.tabs[cid].session
     assert not session.sim.positions.exact
     page.get_by_role("tab", name="Controller", exact=True).click()
@@ -59,7 +57,7 @@ def test_the_chapter3_positions_switch_and_controller_in_the_gui(server, page, c
     box.fill("4")
     box.press("Enter")
     wait_until(lambda: session.scenario.controller.U == 4.0, what="U = 4")
-    assert session.sim is sim and session.coefficients()[0] == pytest.approx(0.25)  # no rebuild
+    assert session.sim is sim and swarm.driver(session).coefficients()[0] == pytest.approx(0.25)  # no rebuild
     choose(page, "positions", "oracle (true)")  # the Positions folder starts open on SLO positions
     wait_until(lambda: session.sim.positions.exact, what="the oracle swarm")
     assert server.tabs[cid].session is session and session.scenario.controller.U == 4.0
@@ -74,7 +72,7 @@ def test_the_chapter3_positions_switch_and_controller_in_the_gui(server, page, c
 def test_the_positions_switch_of_a_fleet_scene_changes_the_engine(server, page, cid):
     dismiss_toasts(page)
     choose(page, "preset", "course-dvc")
-    wait_until(lambda: isinstance(server.tabs[cid].session, FleetSession), what="a fleet session")
+    wait_until(lambda: server.tabs[cid].session.kind.name == "fleet", what="a fleet session")
     session = server.tabs[cid].session
     assert type(session.sim) is Fleet and session.sim.positions.exact
     page.get_by_text("Positions", exact=True).click()  # the folder starts closed on true positions

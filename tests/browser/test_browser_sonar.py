@@ -22,8 +22,6 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from shoal.app.sonar_session import SonarSession  # noqa: E402
-
 from browser_helpers import choose, dismiss_toasts, root_for, to_pixel, wait_until  # noqa: E402
 
 
@@ -31,7 +29,7 @@ def _plot_matches(tab, robot: int) -> bool:
     b = tab.session.sim.state.bearing
     if b is None or tab.session.selected_robot != robot:
         return False
-    x, y, _ = (np.asarray(a) for a in tab.panels.corr_plot.data)
+    x, y, _ = (np.asarray(a) for a in tab.panels.handles["corr"].data)
     on_grid = np.isin(x, b.lags * 1e3)
     return on_grid.sum() == b.corr.shape[-1] and np.allclose(y[on_grid], b.corr[0, robot])
 
@@ -40,7 +38,7 @@ def test_switching_to_sonar_draws_rays_and_the_correlation_follows_the_robot(ser
     server.tabs[cid].session.pause()
     dismiss_toasts(page)
     choose(page, "preset", "sonar-xb-pso")
-    wait_until(lambda: isinstance(server.tabs[cid].session, SonarSession), what="an acoustic session")
+    wait_until(lambda: server.tabs[cid].session.kind.name == "sonar", what="an acoustic session")
     page.wait_for_selector("label:has-text('algorithm')", timeout=20000)
     tab = server.tabs[cid]
     page.get_by_role("button", name="Step", exact=True).click()
@@ -51,13 +49,13 @@ def test_switching_to_sonar_draws_rays_and_the_correlation_follows_the_robot(ser
     pts = np.asarray(tab.arena.nodes["rays_true"].points)
     np.testing.assert_allclose(pts[:, 0, :2], tab.arena.to_view(x)[:, :2], atol=1e-4)
     wait_until(lambda: _plot_matches(tab, 0), what="robot 0's R(τ) plotted")
-    before = np.asarray(tab.panels.corr_plot.data[1]).copy()
+    before = np.asarray(tab.panels.handles["corr"].data[1]).copy()
     field = root_for(page, "robot")
     field.fill("6")
     field.press("Enter")
     wait_until(lambda: session.selected_robot == 6, what="robot 6 selected")
     wait_until(lambda: _plot_matches(tab, 6), what="robot 6's R(τ) plotted")
-    assert not np.allclose(np.asarray(tab.panels.corr_plot.data[1]), before)
+    assert not np.allclose(np.asarray(tab.panels.handles["corr"].data[1]), before)
     page.get_by_role("tab", name="Plots").click()
     page.wait_for_selector("text=R(τ) vs τ", timeout=10000)
 

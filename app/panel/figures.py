@@ -1,0 +1,237 @@
+"""The Chapter 3 figures as plotly figures: pure functions of numbers, no viser.
+
+* the (ω, ĉ) plane of Fig. 3-1: standard-PSO order-1 and order-2 regions [3.7], [3.9],
+  the Adapted PSO strip [3.13] and its robot subset [3.14], and the live point;
+* the (u, a) phase plane of Fig. 3-3: lines a1, a2, a3 [3.24]-[3.25], the reachable
+  parallelogram and the marked points, plus one particle's recent states;
+* the speed bounds U [3.29] and U_j [3.26] of the speed plot.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import plotly.graph_objects as go
+
+from shoal.engine.pso import stability
+
+# Colours shared by the plots (CSS strings).
+ORDER1_FILL = "rgba(120, 160, 230, 0.30)"
+ORDER2_FILL = "rgba(40, 90, 200, 0.45)"
+ADAPTED_FILL = "rgba(250, 200, 90, 0.18)"
+ROBOT_FILL = "rgba(60, 170, 90, 0.22)"
+POINT_OK = "rgb(20, 130, 60)"
+POINT_BAD = "rgb(210, 40, 40)"
+
+_FONT = dict(size=11)
+_MARGIN = dict(l=48, r=10, t=34, b=40)
+
+
+def _layout(fig: go.Figure, *, title: str, x: str, y: str, revision: str, legend: dict | None = None) -> go.Figure:
+    fig.update_layout(
+        title=dict(text=title, font=dict(size=13), x=0.02, y=0.98),
+        xaxis_title=x,
+        yaxis_title=y,
+        uirevision=revision,  # keep the user's zoom across updates
+        margin=_MARGIN,
+        font=_FONT,
+        template="plotly_white",
+        legend=legend or dict(orientation="h", yanchor="top", y=-0.2, x=0.0, font=dict(size=10)),
+        showlegend=True,
+    )
+    return fig
+
+
+# --------------------------------------------------------------------- (ω, ĉ) plane
+def stability_curves(n: int = 201) -> dict[str, np.ndarray]:
+    """Boundaries of the standard-PSO regions on ω ∈ [−1, 1]: ĉ = 4(ω+1) and 24(1−ω²)/(7−5ω)."""
+    omega = np.linspace(-1.0, 1.0, n)
+    return {
+        "omega": omega,
+        "order1": stability.order1_boundary(omega),
+        "order2": stability.order2_boundary(omega),
+    }
+
+
+def in_region(omega: float, c_hat: float, adapted: bool) -> bool:
+    """Is the live point inside the region that matters for the active law?"""
+    if adapted:
+        return bool(stability.adapted_stable(omega, c_hat, robot_subset=True))
+    return bool(stability.order2_stable(omega, c_hat))
+
+
+def stability_figure(omega: float, c_hat: float, *, adapted: bool, n: int = 201) -> go.Figure:
+    """Fig. 3-1 with the live (ω, ĉ).
+
+    Traces, by name: ``Adapted (−1 < ω < 1)``, ``Adapted on robots (0 ≤ ω < 1)``,
+    ``order-1 (standard)``, ``order-2 (standard)``, ``current``.
+    """
+    cur = stability_curves(n)
+    w = cur["omega"]
+    top = max(8.5, 1.15 * float(c_hat) if math.isfinite(c_hat) else 8.5)
+    fig = go.Figure()
+    fig.add_trace(go.Scatter(
+        x=[-1, 1, 1, -1, -1], y=[0, 0, top, top, 0], fill="toself", fillcolor=ADAPTED_FILL,
+        line=dict(color="rgba(220,150,30,0.9)", dash="dot", width=1), name="Adapted (−1 < ω < 1)", mode="lines",
+        hoverinfo="skip",
+    ))
+    fig.add_trace(go.Scatter(
+        x=[0, 1, 1, 0, 0], y=[0, 0, top, top, 0], fill="toself", fillcolor=ROBOT_FILL,
+        line=dict(color="rgba(40,140,70,0.9)", width=1), name="Adapted on robots (0 ≤ ω < 1)", mode="lines",
+        hoverinfo="skip",
+    ))
+    fig.add_trace(go.Scatter(
+        x=w, y=cur["order1"], fill="tozeroy", fillcolor=ORDER1_FILL, mode="lines",
+        line=dict(color="rgb(90,130,210)", width=1.5), name="order-1 (standard)",
+    ))
+    fig.add_trace(go.Scatter(
+        x=w, y=cur["order2"], fill="tozeroy", fillcolor=ORDER2_FILL, mode="lines",
+        line=dict(color="rgb(30,70,170)", width=1.5), name="order-2 (standard)",
+    ))
+    ok = in_region(omega, c_hat, adapted)
+    fig.add_trace(go.Scatter(
+        x=[omega], y=[c_hat], mode="markers", name="current",
+        marker=dict(size=13, color=POINT_OK if ok else POINT_BAD, symbol="x", line=dict(width=1, color="white")),
+    ))
+    fig = _layout(
+        fig, title=_stability_title(omega, c_hat, adapted, ok),
+        x="inertia weight ω", y=_stability_ylabel(adapted), revision="stability",
+
+    )
+    fig.update_xaxes(range=[-1.05, 1.25], autorange=False, zeroline=True)
+    fig.update_yaxes(range=[0, top], autorange=False)
+    return fig
+
+
+def update_stability_point(fig: go.Figure, omega: float, c_hat: float, *, adapted: bool) -> go.Figure:
+    """Move the live point of a :func:`stability_figure` in place (cheap: no new figure)."""
+    top = max(8.5, 1.15 * float(c_hat) if math.isfinite(c_hat) else 8.5)
+    ok = in_region(omega, c_hat, adapted)
+    with fig.batch_update():
+        for trace in fig.data:
+            if trace.name == "current":
+                trace.x, trace.y = [omega], [c_hat]
+                trace.marker.color = POINT_OK if ok else POINT_BAD
+            elif trace.name.startswith("Adapted"):
+                trace.y = [0, 0, top, top, 0]
+        fig.layout.title.text = _stability_title(omega, c_hat, adapted, ok)
+        fig.layout.yaxis.title.text = _stability_ylabel(adapted)
+        fig.layout.yaxis.range = [0, top]
+    return fig
+
+
+def _stability_title(omega: float, c_hat: float, adapted: bool, ok: bool) -> str:
+    verdict = "inside" if ok else "OUTSIDE"
+    region = "the Adapted region" if adapted else "the order-2 region"
+    return f"(ω, ĉ) = ({omega:.3g}, {c_hat:.3g}): {verdict} {region}"
+
+
+def _stability_ylabel(adapted: bool) -> str:
+    return f"ĉ = c1 + c2 ({'m/s, Adapted law' if adapted else 'no unit, standard law'})"
+
+
+# --------------------------------------------------------------------- (u, a) plane
+def phase_geometry(omega: float, c_hat: float, dt: float) -> dict[str, Any]:
+    """Everything Fig. 3-3b draws for one dimension, or ``{}`` when no bound exists (ω ∉ [0, 1), ĉ ≤ 0).
+
+    Lines are given by two far end points (the plot's axis range clips them): a2 and a3 are
+    a1 moved by ±(ĉ, ĉ/Δt), which is [3.25] and also works for the vertical a1 at ω = 0.
+    """
+    if not (0.0 <= omega < 1.0) or c_hat <= 0 or dt <= 0:
+        return {}
+    U_j = c_hat / (1.0 - omega)
+    A_minus_j = 2.0 * c_hat / dt
+    u_lim, a_lim = 1.3 * U_j, 1.3 * A_minus_j
+    line1 = stability.line_a1(omega, dt, 10 * u_lim, 10 * a_lim)
+    shift = np.array([c_hat, c_hat / dt])
+    poly = stability.reachable_parallelogram(omega, c_hat, dt)
+    markers = stability.phase_markers(omega, c_hat, dt)
+    return {
+        "U_j": U_j, "A_plus_j": c_hat / dt, "A_minus_j": A_minus_j, "u_lim": u_lim, "a_lim": a_lim,
+        "a1": line1, "a2": line1 + shift, "a3": line1 - shift,
+        "parallelogram": np.vstack([poly, poly[:1]]),
+        **markers,
+    }
+
+
+def phase_figure(
+    omega: float, c_hat: float, dt: float, u: np.ndarray | None = None, a: np.ndarray | None = None,
+    *, adapted: bool = True, label: str = "particle",
+) -> go.Figure:
+    """Fig. 3-3b plus a particle's recent (u_j, a_j).
+
+    Traces, by name: ``reachable set``, ``a1``, ``a2``, ``a3``, ``★ ±U_j``, ``■ max deceleration``,
+    ``◆ max acceleration``, ``recent``, ``now``.
+    """
+    geo = phase_geometry(omega, c_hat, dt) if adapted else {}
+    fig = go.Figure()
+    if geo:
+        p = geo["parallelogram"]
+        fig.add_trace(go.Scatter(
+            x=p[:, 0], y=p[:, 1], fill="toself", fillcolor="rgba(120,160,230,0.22)", mode="lines",
+            line=dict(color="rgba(90,130,210,0.8)", width=1), name="reachable set", hoverinfo="skip",
+        ))
+        for name, color, dash in (("a1", "rgb(60,60,60)", "dash"), ("a2", "rgb(200,90,30)", "solid"),
+                                  ("a3", "rgb(120,60,170)", "solid")):
+            pts = geo[name]
+            fig.add_trace(go.Scatter(x=pts[:, 0], y=pts[:, 1], mode="lines", name=name,
+                                     line=dict(color=color, dash=dash, width=1.5)))
+        for key, name, symbol, color in (
+            ("star", "★ ±U_j", "star", "rgb(230,170,0)"),
+            ("square", "■ max deceleration", "square", "rgb(200,40,40)"),
+            ("diamond", "◆ max acceleration", "diamond", "rgb(40,150,70)"),
+        ):
+            pts = geo[key]
+            fig.add_trace(go.Scatter(x=pts[:, 0], y=pts[:, 1], mode="markers", name=name,
+                                     marker=dict(symbol=symbol, size=12, color=color,
+                                                 line=dict(width=1, color="black"))))
+    if u is not None and a is not None and len(u):
+        u, a = np.asarray(u, float), np.asarray(a, float)
+        fig.add_trace(go.Scatter(x=u, y=a, mode="markers", name="recent",
+                                 marker=dict(size=5, color="rgba(30,30,30,0.45)")))
+        fig.add_trace(go.Scatter(x=u[-1:], y=a[-1:], mode="markers", name="now",
+                                 marker=dict(size=11, color="rgb(220,50,50)", line=dict(width=1, color="black"))))
+    if geo:
+        u_lim, a_lim = geo["u_lim"], geo["a_lim"]
+        if u is not None and len(u):
+            u_lim = max(u_lim, 1.1 * float(np.nanmax(np.abs(u))))
+            a_lim = max(a_lim, 1.1 * float(np.nanmax(np.abs(a))))
+        fig.update_xaxes(range=[-u_lim, u_lim])
+        fig.update_yaxes(range=[-a_lim, a_lim])
+        title = (f"{label}: U_j = {geo['U_j']:.3g}, A+_j = {geo['A_plus_j']:.3g}, "
+                 f"A−_j = {geo['A_minus_j']:.3g}")
+    elif not adapted:
+        title = f"{label} (standard PSO: no bound)"
+    else:
+        title = f"{label} (no bound for ω = {omega:.3g})"
+    return _layout(fig, title=title, x="velocity u_j [m/s]", y="acceleration a_j [m/s²]",
+                   revision="phase")
+
+
+def update_phase_points(fig: go.Figure, u: np.ndarray, a: np.ndarray) -> bool:
+    """Replace the ``recent``/``now`` points of a :func:`phase_figure` in place, widening the axes
+    if the points leave them. Returns False when the figure has no such traces (rebuild it)."""
+    names = {t.name: t for t in fig.data}
+    if "recent" not in names or "now" not in names or not len(u):
+        return False
+    u, a = np.asarray(u, float), np.asarray(a, float)
+    with fig.batch_update():
+        names["recent"].x, names["recent"].y = u, a
+        names["now"].x, names["now"].y = u[-1:], a[-1:]
+        for axis, values in ((fig.layout.xaxis, u), (fig.layout.yaxis, a)):
+            if axis.range is not None:
+                lim = max(abs(axis.range[1]), 1.1 * float(np.nanmax(np.abs(values))))
+                if lim > axis.range[1]:
+                    axis.range = [-lim, lim]
+    return True
+
+
+# --------------------------------------------------------------------- speed vs time
+def speed_bounds(omega: np.ndarray, c_hat: np.ndarray, d: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per-step U_j = ĉ/(1 − ω) [3.26] and U = U_j √d [3.29]; NaN where ω ∉ [0, 1)."""
+    omega, c_hat = np.asarray(omega, float), np.asarray(c_hat, float)
+    ok = (omega >= 0) & (omega < 1)
+    U_j = np.where(ok, c_hat / np.where(ok, 1.0 - omega, 1.0), np.nan)
+    return U_j * math.sqrt(d), U_j

@@ -1,0 +1,582 @@
+"""The control panel of one tab, the same for every scene kind: the header (preset, status,
+playback, speed, seed), the Replay folder, the kind's folders and tabs (built from their
+:mod:`.spec`), the Compare, Export, Notes and Lessons tabs, and the rule that every change goes
+through the scenario model.
+
+A change is validated by ``session.apply``; a refused value shows a red notification and
+every handle goes back to the scenario, the running scene untouched. ``sync`` pushes the
+scenario into the handles (values, slider ranges, options, visibility, readouts) after a
+load, a change or a refusal; a guard tells those Python-side assignments from a user's.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+from dataclasses import dataclass, field
+from importlib import resources
+from typing import Any, Callable, Hashable, Iterator, Protocol
+
+import numpy as np
+
+from shoal.presets.io import PresetError
+from shoal.presets.models import Scenario
+
+from ..experiment.panel import ExperimentPanel
+from ..experiment.service import ExperimentService
+from ..lessons.panel import LessonProgress, LessonsPanel
+from ..lessons.scenes import load_scene
+from ..preset_menu import PresetMenu
+from ..session.session import Session
+from ..session.snapshot import Snapshot
+from ..session.upload import parse_upload
+from .compare import CompareTab
+from .plots import Chart, PlotSpec, twin_series
+from .replay import ReplayFolder
+from .spec import (
+    Button,
+    Checkbox,
+    Control,
+    Dropdown,
+    Figure,
+    Folder,
+    KindPanel,
+    Number,
+    PanelAPI,
+    Slider,
+    Tab,
+    Text,
+    get_path,
+)
+
+PLAYBACK = ("Play", "Pause", "Step", "Reset")
+SPEED_SLIDER = Slider("view.steps_per_second", "speed [steps/s]", 1.0, 240.0, 1.0, "playback rate")
+TRAIL_SLIDER = Slider("view.trail_seconds", "trail [s]", 0.0, 60.0, 1.0, "length of the drawn trails")
+
+SHOWN_WHEN = (Slider, Dropdown, Checkbox, Number, Text, Folder)  # controls that may be hidden (``visible``)
+Notify = Callable[[str, str, str], None]
+SendFile = Callable[[str, bytes], None]
+
+
+class PanelKind(Protocol):
+    """A scene kind as a panel sees it (the whole plug-in is :class:`shoal.app.kinds.base.AppKind`)."""
+
+    name: str
+    notes: str  # teaching notes ``static/notes/<notes>.md``
+
+    def panel(self, api: PanelAPI) -> KindPanel: ...
+
+
+@dataclass(frozen=True)
+class Services:
+    """What a panel asks of the tab and the app around it."""
+
+    notify: Notify
+    send_file: SendFile
+    menu: PresetMenu  # the preset dropdown's choices (the tab keeps it: uploads outlive a swap of panels)
+    make_session: Callable[[Scenario], Session]  # a fresh session of any kind (to check a replay)
+    replace: Callable[[Scenario], Session] | None = None  # load a scene, maybe of another kind
+    share: Callable[[Session], bytes] | None = None  # the recorded run as one web page
+    lessons: LessonProgress = field(default_factory=LessonProgress)  # where the Lessons tab is (the tab keeps it)
+    experiments: ExperimentService | None = None  # the server's experiments (None: no Experiment tab)
+    owner: Hashable = None  # this browser tab's key among the experiments
+
+
+def notes_text(name: str = "ch3") -> str:
+    """Teaching notes ``notes/<name>.md`` shipped in ``shoal.static``, or a short fallback."""
+    try:
+        return resources.files("shoal.static").joinpath(f"notes/{name}.md").read_text(encoding="utf-8")
+    except (FileNotFoundError, ModuleNotFoundError, OSError):
+        return (f"# Teaching notes\n\nThe notes `notes/{name}.md` are not installed. "
+                "Move the sliders and watch the arena and the *Plots* tab.")
+
+
+def _coerce(control: Any, value: Any) -> Any:
+    if isinstance(control, Slider):
+        return int(round(value)) if control.integer else float(value)
+    if isinstance(control, Number):
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            return -1
+        return int(v) if control.step == 1 and v == int(v) else v
+    if isinstance(control, Checkbox):
+        return bool(value)
+    return value
+
+
+class Panel:
+    """The GUI handles of one tab (``handles``: key → viser handle), wired to its session.
+    ``gui`` is a viser ``GuiApi`` (``client.gui`` for a browser tab, ``server.gui`` in tests)."""
+
+    def __init__(self, gui: Any, session: Session, kind: PanelKind, services: Services) -> None:
+        self.gui, self.session, self.services = gui, session, services
+        self.name = kind.name  # the scene kind it shows
+        self.notify = services.notify
+        self.handles: dict[str, Any] = {}
+        self.top: list[Any] = []  # top-level handles: removing them removes the whole panel
+        self.removed = False
+        self._local = threading.local()  # per thread: programmatic .value fires callbacks inline
+        self._controls: list[tuple[Any, Any]] = []  # (spec, handle) in build order
+        self._series: dict[int, tuple] = {}  # uPlot series last sent, by handle (see push_uplot)
+        self.part = kind.panel(self)
+        self._build_header()
+        self.replay_gui = ReplayFolder(self)
+        for folder in self.part.folders:
+            self.top.append(self._build(folder))
+        self.tabs = gui.add_tab_group()
+        self.top.append(self.tabs)
+        focus = services.lessons.focus  # a lesson's Set up rebuilt this panel: keep its tab in view
+        if focus:
+            self._build_lessons()
+        for tab in self.part.tabs:
+            self._build_tab(tab)
+        self.compare_gui = CompareTab(self)
+        self._build_export_notes(kind.notes)
+        if not focus:
+            self._build_lessons()
+        self.experiment = self._build_experiment()
+        self.sync()
+
+    # ------------------------------------------------------------------ building
+    def _build_header(self) -> None:
+        gui, sc, menu = self.gui, self.session.scenario, self.services.menu
+        names = menu.options()
+        self.preset = gui.add_dropdown(
+            "preset", names, initial_value=menu.label_for(sc) or names[0],
+            hint="shipped scenes and the presets uploaded in this tab; switching replaces the whole scene")
+        self.status = gui.add_markdown("")
+        self.playback = gui.add_button_group("playback", PLAYBACK)
+        self.top += [self.preset, self.status, self.playback, self._build(SPEED_SLIDER)]
+        self.seed = gui.add_number("seed", initial_value=int(sc.sim.seed), min=0, step=1,
+                                   hint="random seed; changing it restarts the run")
+        self.top.append(self.seed)
+
+        @self.preset.on_update
+        def _(event: Any) -> None:
+            if not self.syncing:
+                self.load_preset(self.preset.value)
+
+        @self.playback.on_click
+        def _(event: Any) -> None:
+            self.press(event.target.value)
+
+        @self.seed.on_update
+        def _(event: Any) -> None:
+            if not self.syncing:
+                self._seed_changed()
+
+    def _build_tab(self, tab: Tab) -> None:
+        with self.tabs.add_tab(tab.label):
+            for item in tab.items:
+                self._build(item)
+
+    def _build_export_notes(self, notes: str) -> None:
+        gui = self.gui
+        with self.tabs.add_tab("Export"):
+            gui.add_markdown("Trajectories of the current run (the last steps kept in memory), "
+                             "the scenario as a preset file, or load your own preset." + self.part.export_note)
+            self.export_csv = gui.add_button("Export CSV", hint="run,step,t,robot,x,y,heading,vx,vy,status")
+            self.export_json = gui.add_button("Export JSON", hint="resolved preset, seed, version, trajectories")
+            self.download = gui.add_button("Download preset", hint="the current scenario as TOML")
+            self.upload = gui.add_upload_button("Upload preset", hint=".toml or .json, at most 256 KiB")
+        with self.tabs.add_tab("Notes"):
+            self.notes = gui.add_markdown(notes_text(notes))
+
+        @self.export_csv.on_click
+        def _(event: Any) -> None:
+            self.send_file(f"{self.stem()}-trajectories.csv", self.session.export_csv())
+
+        @self.export_json.on_click
+        def _(event: Any) -> None:
+            self.send_file(f"{self.stem()}-run.json", self.session.export_json())
+
+        @self.download.on_click
+        def _(event: Any) -> None:
+            self.send_file(f"{self.stem()}.toml", self.session.preset_toml())
+
+        @self.upload.on_upload
+        def _(event: Any) -> None:
+            f = event.target.value
+            self.upload_preset(f.name, f.content)
+
+    def _build_experiment(self) -> ExperimentPanel | None:
+        sv = self.services
+        if sv.experiments is None:
+            return None
+        with self.tabs.add_tab("Experiment"):
+            return ExperimentPanel(self.gui, sv.experiments, sv.owner, scenario=lambda: self.session.scenario,
+                                   open_cell=sv.replace, notify=self.notify, send_file=self.send_file)
+
+    def _build_lessons(self) -> None:
+        with self.tabs.add_tab("Lessons"):
+            self.lessons = LessonsPanel(self.gui, self.set_up_lesson, self.notify, self.services.lessons)
+
+    def _build(self, item: Control) -> Any:
+        """A handle for ``item`` (a folder with its items), kept as ``handles[key]`` and wired."""
+        gui, s = self.gui, self.session
+        if isinstance(item, Folder):
+            expand = item.expand(s) if callable(item.expand) else item.expand
+            with gui.add_folder(item.label, expand_by_default=expand) as h:
+                for child in item.items:
+                    self._build(child)
+        elif isinstance(item, Slider):
+            value = self._read(item)
+            value = item.initial if value is None else value
+            lo, hi = item.range(value)
+            h = gui.add_slider(item.label, min=lo, max=hi, step=item.step, marks=item.marks, hint=item.hint,
+                               initial_value=int(value) if item.integer else float(value))
+        elif isinstance(item, Dropdown):
+            options = self._options(item)
+            value = self._read(item)
+            h = gui.add_dropdown(item.label, options, initial_value=value if value in options else options[0],
+                                 hint=item.hint)
+        elif isinstance(item, Checkbox):
+            h = gui.add_checkbox(item.label, bool(self._read(item)), hint=item.hint)
+        elif isinstance(item, Number):
+            value = item.read(s) if item.read is not None else None
+            value = item.low if value is None else value
+            h = gui.add_number(item.label, initial_value=value, min=item.low, step=item.step, hint=item.hint,
+                               max=item.high(s) if item.high is not None else None)
+        elif isinstance(item, Button):
+            h = gui.add_button(item.label, hint=item.hint)
+        elif isinstance(item, Text):
+            h = gui.add_markdown(item.text)
+        elif isinstance(item, Figure):
+            h = gui.add_plotly(item.make(s), aspect=item.aspect)  # (plotly's aspect is height/width)
+        elif isinstance(item, PlotSpec):
+            empty = {name: np.zeros(0) for name in s.history.names}
+            h = gui.add_uplot(data=item.data(empty, s), series=item.options(s), scales=item.scales((0.0, 0.0), s),
+                              title=item.title, aspect=item.aspect, axes=item.axes, legend=item.legend)
+        elif isinstance(item, Chart):
+            data = item.data(s)
+            h = gui.add_uplot(data=data, series=item.series, scales=item.scales(s, data), title=item.title,
+                              aspect=item.aspect, axes=item.axes, legend=item.legend)
+        else:
+            raise TypeError(f"not a control: {item!r}")
+        if item.key:
+            self.handles[item.key] = h
+        self._controls.append((item, h))
+        self._wire(item, h)
+        return h
+
+    def control(self, key: str) -> Any:
+        """The spec of the control ``handles[key]`` shows."""
+        h = self.handles[key]
+        return next(item for item, handle in self._controls if handle is h)
+
+    def _wire(self, item: Any, h: Any) -> None:
+        if isinstance(item, Button):
+            @h.on_click
+            def _(event: Any) -> None:
+                item.act(self)
+        elif isinstance(item, (Slider, Dropdown, Checkbox, Number)):
+            @h.on_update
+            def _(event: Any) -> None:
+                if not self.syncing:
+                    self._changed(item, _coerce(item, h.value))
+
+    # ------------------------------------------------------------------ values
+    def _read(self, item: Any) -> Any:
+        """What ``item`` shows now (None: a local control that keeps its own value)."""
+        if item.read is not None:
+            return item.read(self.session)
+        if item.act is not None:
+            return None
+        return get_path(self.session.scenario, item.key)
+
+    def _options(self, item: Dropdown) -> tuple[str, ...]:
+        return tuple(item.options(self.session) if callable(item.options) else item.options)
+
+    def _changed(self, item: Any, value: Any) -> None:
+        """A user's change of a control's value."""
+        if item.act is not None:
+            item.act(self, value)
+            return
+        if item.write is not None:
+            changes = item.write(self.session, value)
+        else:
+            changes = None if value == get_path(self.session.scenario, item.key) else {item.key: value}
+        if changes is not None:
+            shown = f"{value:g}" if isinstance(item, Slider) else f"{value}"
+            self.apply(changes, f"{item.label} = {shown}")
+
+    # ------------------------------------------------------------------ sync guard
+    @property
+    def syncing(self) -> bool:
+        return getattr(self._local, "depth", 0) > 0
+
+    @contextlib.contextmanager
+    def quietly(self) -> Iterator[None]:
+        """Set handle values from Python without treating them as user changes. Viser runs the
+        callbacks of a Python-side assignment in the assigning thread, so a thread-local flag
+        tells them apart from a user's change arriving at the same time on another thread."""
+        self._local.depth = getattr(self._local, "depth", 0) + 1
+        try:
+            yield
+        finally:
+            self._local.depth -= 1
+
+    def set_quietly(self, handle: Any, value: Any) -> None:
+        with self.quietly():
+            if handle.value != value:
+                handle.value = value
+
+    def sync(self) -> None:
+        """Push the session's scenario into every handle (after a load, a refusal or a change)."""
+        if self.removed:
+            return
+        s = self.session
+        sc = s.scenario
+        with self.quietly():
+            for item, h in self._controls:
+                self._sync_one(item, h, s, sc)
+            self.set_quietly(self.seed, int(sc.sim.seed))
+            menu = self.services.menu
+            if tuple(self.preset.options) != menu.options():
+                self.preset.options = menu.options()
+            if (choice := menu.label_for(sc)) is not None:
+                self.set_quietly(self.preset, choice)
+        self.compare_gui.sync()
+        self.refresh_readout()
+
+    def _sync_one(self, item: Any, h: Any, s: Session, sc: Scenario) -> None:
+        if isinstance(item, SHOWN_WHEN) and item.visible is not None:
+            h.visible = bool(item.visible(s))
+        if isinstance(item, Slider):
+            if item.label_of is not None:
+                h.label = item.label_of(sc)
+            value = self._read(item)
+            if value is None:
+                return
+            lo, hi = item.range(value)
+            if (h.min, h.max) != (lo, hi):
+                h.min, h.max = lo, hi
+            self.set_quietly(h, int(value) if item.integer else float(value))
+        elif isinstance(item, Dropdown):
+            options = self._options(item)
+            if tuple(h.options) != options:
+                h.options = options
+            value = self._read(item)
+            if value in options:
+                self.set_quietly(h, value)
+        elif isinstance(item, Checkbox):
+            value = self._read(item)
+            if value is not None:
+                self.set_quietly(h, bool(value))
+        elif isinstance(item, Number):
+            if item.high is not None and h.max != item.high(s):
+                h.max = item.high(s)
+            value = item.read(s) if item.read is not None else None
+            if value is not None:
+                self.set_quietly(h, value)
+
+    # ------------------------------------------------------------------ changes
+    def refuse(self, err: Any, what: str) -> None:
+        """A red notification listing why ``what`` was refused (``err.messages``)."""
+        self.notify(f"Refused: {what}", "\n".join(err.messages[:6]), "red")
+
+    def apply(self, changes: dict[str, Any], what: str) -> bool:
+        """Validate and apply; on refusal notify and put every handle back. Returns True if applied."""
+        s = self.session
+        before = s.scene_revision
+        try:
+            s.apply(changes)
+        except PresetError as err:
+            self.refuse(err, what)
+            self.sync()  # restores the refused handle to the previous value
+            return False
+        self.sync()
+        if s.scene_revision != before:
+            note = self.part.rebuilt(s, what, changes)
+            if note is not None:
+                self.notify(*note, "blue")
+        return True
+
+    def select_robot(self, robot: int) -> None:
+        """Single out ``robot`` and show it in the handles that follow it."""
+        self.session.select(robot)
+        self._follow()
+
+    def _follow(self) -> None:
+        with self.quietly():
+            for item, h in self._controls:
+                if isinstance(item, Number) and item.follow and item.read is not None:
+                    self.set_quietly(h, item.read(self.session))
+
+    def _seed_changed(self) -> None:
+        try:
+            seed = int(self.seed.value)
+        except (TypeError, ValueError):
+            seed = -1
+        try:
+            self.session.reset(seed)
+        except PresetError as err:
+            self.refuse(err, f"seed = {self.seed.value}")
+        self.sync()
+
+    def press(self, what: str) -> None:
+        """A playback button: Play, Pause, Step or Reset."""
+        s = self.session
+        if what == "Play":
+            s.play()
+        elif what == "Pause":
+            s.pause()
+        elif what == "Step":
+            s.pause()
+            s.step(1)
+        elif what == "Reset":
+            s.reset()
+        self.refresh_status()
+
+    # ------------------------------------------------------------------ loading
+    def _load(self, scenario: Scenario) -> None:
+        if self.services.replace is not None:
+            self.services.replace(scenario)  # the tab syncs whichever panel is current afterwards
+        else:
+            self.session.load_scenario(scenario)
+            self.sync()
+
+    def load_preset(self, choice: str) -> bool:
+        """Load a choice of the preset dropdown: a shipped preset or one uploaded in this tab
+        (never a file: anything else is refused)."""
+        menu, previous = self.services.menu, self.services.menu.current
+        try:
+            scenario = menu.scenario(choice)
+            menu.current = choice
+            self._load(scenario)
+        except PresetError as err:
+            menu.current = previous
+            self.refuse(err, "preset")
+            self.sync()
+            return False
+        self.notify("Preset loaded", scenario.description or choice, "green")
+        return True
+
+    def set_up_lesson(self, preset: str, values: dict[str, Any]) -> list[str]:
+        """A lesson step's scene: the preset with the step's field values, validated as an upload
+        would be, loaded paused at step 0. Returns the refusal's messages (empty: loaded)."""
+        try:
+            scenario = load_scene(preset, values)
+            if self.services.replace is not None:
+                session = self.services.replace(scenario)  # may rebuild the panel (another kind of scene)
+            else:
+                self.session.load_scenario(scenario)
+                self.sync()
+                session = self.session
+        except PresetError as err:
+            return list(err.messages)
+        session.pause()
+        return []
+
+    def upload_preset(self, filename: str, content: bytes) -> bool:
+        """Validate an uploaded preset and load it; it stays a choice of the preset dropdown
+        (in memory, this tab only). A bad one is listed field by field and changes nothing."""
+        menu, previous = self.services.menu, self.services.menu.current
+        label = None
+        try:
+            sc = parse_upload(filename, content)
+            label = menu.current = menu.add_upload(sc)
+            self._load(sc)
+        except PresetError as err:
+            if label is not None:
+                menu.forget(label)
+            menu.current = previous
+            self.refuse(err, f"uploaded {filename}")
+            return False
+        self.notify("Preset uploaded", f"{filename}: scene '{sc.name}' loaded (also in the preset list)", "green")
+        return True
+
+    def send_file(self, name: str, content: bytes) -> None:
+        self.services.send_file(name, content)
+
+    def stem(self) -> str:
+        """The scene's name as a file name."""
+        name = self.session.scenario.name
+        return "".join(c if c.isalnum() or c in "-_" else "_" for c in name) or "shoal"
+
+    def remove(self) -> None:
+        """Take every handle of this panel off the page (the tab swaps in another kind)."""
+        self.removed = True
+        self.lessons.close()
+        if self.experiment is not None:
+            self.experiment.remove()
+        for h in reversed(self.top):
+            h.remove()
+        self.top.clear()
+
+    def detach(self) -> None:
+        """The browser tab went away: stop following its experiment (which the server cancels)."""
+        if self.experiment is not None:
+            self.experiment.detach()
+
+    # ------------------------------------------------------------------ readouts and plots
+    def refresh_experiment(self) -> None:
+        """The Experiment tab offers the fields of the scene as it is now."""
+        if self.experiment is not None:
+            self.experiment.sync()
+
+    def compare_choices(self) -> dict[str, dict[str, Any]]:
+        """Quick choices of how swarm B differs from A: label → overrides."""
+        return self.part.compare(self.session)
+
+    def refresh_status(self) -> None:
+        s = self.session
+        state = "▶ playing" if s.playing else ("■ finished" if s.finished else "paused")
+        self.status.content = self.part.status(s, s.readout(), state)
+
+    def refresh_readout(self) -> None:
+        """Readouts that follow the scenario (derived numbers beside the controls)."""
+        for item, h in self._controls:
+            if isinstance(item, Text) and item.compute is not None:
+                h.content = item.compute(self.session)
+
+    def on_snapshot(self, snap: Snapshot) -> None:
+        """After each scene redraw: the handles that follow the selected robot and the readouts of
+        what was drawn."""
+        if self.removed:
+            return
+        self._follow()
+        for item, h in self._controls:
+            if isinstance(item, Text) and item.on_snapshot is not None:
+                text = item.on_snapshot(self.session, snap)
+                if h.content != text:
+                    h.content = text
+
+    def refresh_plots(self) -> None:
+        """Redraw the live plots (the caller throttles this)."""
+        if self.removed:
+            return
+        s = self.session
+        for item, h in self._controls:
+            if isinstance(item, PlotSpec):
+                m, span = s.shown_metrics(item.history)
+                self.push_uplot(h, item.data(m, s), item.options(s), item.scales(span, s),
+                                twin=(item.twin, item.twin_label()) if item.twin is not None else None)
+            elif isinstance(item, Chart):
+                data = item.data(s)
+                h.data = data
+                h.scales = item.scales(s, data)
+            elif isinstance(item, Figure):
+                item.refresh(self, h)
+
+    def refresh_timeline(self) -> None:
+        """The Replay folder: timeline and badge (the caller throttles this)."""
+        self.replay_gui.refresh()
+
+    def push_uplot(self, handle: Any, data: tuple, series: tuple, scales: dict[str, Any],
+                   twin: tuple[str, str] | None = None) -> None:
+        """Set a uPlot's data and scales (its series only when they change). ``twin = (metric,
+        label)``: with swarm B on, B's metric at the same times is one more (dashed teal) series.
+        An explicit x range goes with every update: viser's client keeps a *relative* x range
+        across data pushes, which goes wrong for a chart first mounted in a hidden tab."""
+        if twin is not None:
+            b = self.session.twin_metric(twin[0], data[0])
+            if b is not None:
+                data = tuple(data) + (np.nan_to_num(b, nan=0.0),)
+                series = tuple(series) + (twin_series(twin[1]),)
+        if self._series.get(id(handle)) != series:
+            handle.series = series
+            self._series[id(handle)] = series
+        handle.data = data
+        handle.scales = scales

@@ -1,0 +1,159 @@
+"""The timeline of a session: which recorded step is shown, and a loaded replay.
+
+* **Scrub**: a cursor on a recorded step (``cursor``; None shows the live end). The session
+  pauses and shows that frame: the robots, the trails up to then and the plots cut there.
+* **Replay**: a loaded :class:`~shoal.app.replay.Recording` replaces the history; the engine
+  does not advance and Play and Step move the cursor through the recording.
+* :func:`verify_replay` re-simulates the first steps of a recording's preset and seed in a
+  fresh session and compares the positions.
+"""
+
+from __future__ import annotations
+
+import bisect
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from ..replay import Recording
+from .history import Frame, History
+
+VERIFY_STEPS = 20  # steps re-simulated to check a loaded replay
+MAX_VERIFY_START = 2000  # a recording that starts later than this step is not re-simulated
+
+
+@dataclass(frozen=True)
+class ReplayInfo:
+    """What the badge says about the replay shown."""
+
+    name: str
+    seed: int
+    shoal: str
+    verified: bool | None  # None: not checked
+    check: str  # the determinism check, in words
+    live_edits: int
+
+
+class Rerun(Protocol):
+    """A fresh session to re-simulate a recording in."""
+
+    history: History
+
+    @property
+    def k(self) -> int: ...
+
+    def step(self, n: int = 1) -> int: ...
+
+
+def verify_replay(fresh: Rerun, rec: Recording, steps: int = VERIFY_STEPS) -> tuple[bool | None, str]:
+    """Run a ``fresh`` session of the embedded preset and seed through the first ``steps``
+    recorded steps and compare the robots' positions with the recording."""
+    k0 = int(rec.k[0])
+    if k0 > MAX_VERIFY_START:
+        return None, f"not checked: the recording starts at step {k0}"
+    upto = [i for i in range(rec.frames) if rec.k[i] <= k0 + steps]
+    fresh.step(int(rec.k[upto[-1]]) - fresh.k)
+    frames = {f.k: f for f in fresh.history.frames}
+    for i in upto:
+        x, _, _ = rec.robots(i)
+        f = frames.get(int(rec.k[i]))
+        if f is None or f.x.shape != x.shape or not np.allclose(f.x, x, rtol=0.0, atol=1e-9, equal_nan=True):
+            gap = float(np.nanmax(np.abs(f.x - x))) if f is not None and f.x.shape == x.shape else float("nan")
+            what = f"max gap {gap:.3g}" if np.isfinite(gap) else "other robots"
+            return False, (f"not reproduced: step {int(rec.k[i])} differs from a fresh run of the preset and seed "
+                           f"({what}); it was probably changed while it ran")
+    span = int(rec.k[upto[-1]]) - k0
+    return True, f"verified: steps {k0}–{k0 + span} match a fresh run of the preset and seed"
+
+
+def recorded_frames(rec: Recording) -> list[Frame]:
+    """The frames of a recording (velocities are not recorded: zero)."""
+    frames = []
+    for i in range(rec.frames):
+        x, heading, status = rec.robots(i)
+        zeros = np.zeros_like(x)
+        frames.append(Frame(k=int(rec.k[i]), t=float(rec.t[i]), x=x.copy(), u=zeros, a=zeros,
+                            heading=heading.copy(), status=status.copy()))
+    return frames
+
+
+class Timeline:
+    """Cursor (``cursor``: the step shown, None = live) and replay (``replaying``) over a history."""
+
+    def __init__(self, history: History) -> None:
+        self.history = history
+        self.clear()
+
+    def clear(self) -> None:
+        self.cursor: int | None = None
+        self.replaying: ReplayInfo | None = None
+
+    @property
+    def live(self) -> bool:
+        """Is the live end shown (no scrubbed step, no replay)?"""
+        return self.cursor is None and self.replaying is None
+
+    def shown_index(self) -> int:
+        frames = self.history.frames
+        if self.cursor is None:
+            return len(frames) - 1
+        ks = self.history.steps()
+        return min(bisect.bisect_left(ks, self.cursor), len(ks) - 1)
+
+    def shown_frame(self) -> Frame:
+        return self.history.frames[self.shown_index()]
+
+    def span(self) -> tuple[int, int, int]:
+        """(first, last, shown) recorded step numbers."""
+        frames = self.history.frames
+        return frames[0].k, frames[-1].k, frames[self.shown_index()].k
+
+    def scrub(self, k: int) -> int:
+        """Put the cursor on the recorded step nearest ``k``; returns that step."""
+        ks = self.history.steps()
+        i = min(bisect.bisect_left(ks, int(k)), len(ks) - 1)
+        if i > 0 and abs(ks[i - 1] - k) <= abs(ks[i] - k):
+            i -= 1
+        self.cursor = ks[i]
+        return self.cursor
+
+    def advance(self, n: int) -> tuple[int, bool]:
+        """Move ``n`` frames on; returns (frames moved, at the end)."""
+        frames = self.history.frames
+        i = self.shown_index()
+        j = min(i + max(n, 0), len(frames) - 1)
+        self.cursor = frames[j].k
+        return j - i, j == len(frames) - 1
+
+    def rewind_if_at_end(self) -> bool:
+        """A replay at its last frame goes back to its first (Play again); True if it did."""
+        frames = self.history.frames
+        if frames and self.cursor == frames[-1].k:
+            self.cursor = frames[0].k
+            return True
+        return False
+
+    def load(self, rec: Recording, check: tuple[bool | None, str], metrics_match: bool) -> None:
+        """Show ``rec`` instead of the live history (its metric rows too if their names match)."""
+        self.history.replace(recorded_frames(rec), (tuple(float(v) for v in row) for row in rec.metrics)
+                             if metrics_match else ())
+        self.cursor = self.history.frames[-1].k
+        self.replaying = ReplayInfo(name=rec.name, seed=rec.seed, shoal=str(rec.meta["shoal"]), verified=check[0],
+                                    check=check[1], live_edits=int(rec.meta["live_edits"]))
+
+    def shown_metrics(self, n: int) -> tuple[dict[str, np.ndarray], tuple[float, float]]:
+        """The last ``n`` metric rows up to the time shown, and the time span of all ``n`` (the x range)."""
+        m = {k: v[-n:] for k, v in self.history.metric_arrays().items()}
+        t = m["t"]
+        span = (float(t[0]), float(t[-1])) if len(t) else (0.0, 1.0)
+        if not self.live:
+            keep = t <= self.shown_frame().t + 1e-9
+            m = {k: v[keep] for k, v in m.items()}
+        return m, span
+
+    def metadata(self) -> dict[str, Any]:
+        """Version and live edits of the replay shown (empty when live)."""
+        if self.replaying is None:
+            return {}
+        return {"shoal": self.replaying.shoal, "live_edits": self.replaying.live_edits}

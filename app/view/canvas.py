@@ -1,0 +1,155 @@
+"""The scene nodes of one view, under one root frame, and the map between world metres and
+scene coordinates.
+
+The world is drawn scaled by ``scale`` (scene units per metre) around ``centre``, the world
+point at the root frame's origin; ``focus`` is the world point in the middle of the screen
+(the camera looks straight down at the scene origin), and moving it moves the root frame.
+Nodes are batched: one point cloud or one segment list per key, created on first use and
+hidden when they have nothing to show.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Any
+
+import numpy as np
+
+from .shapes import lift, plane, ray_ground
+
+# Every build of a scene gets a root name never used before (and so do re-created nodes that
+# ask for one): viser lets a create supersede a pending remove of the same name in its send
+# queue, which can reorder a subtree's removal and re-creation and leave the scene empty.
+_SERIAL = itertools.count()
+
+Colour = tuple[int, int, int]
+
+
+class Canvas:
+    """Nodes (``nodes``: key → viser handle) of one view on a viser ``SceneApi``."""
+
+    def __init__(self, scene: Any, prefix: str) -> None:
+        self.scene, self.prefix = scene, prefix
+        self.nodes: dict[str, Any] = {}
+        self.root = f"/{prefix}"
+        self.scale = 1.0
+        self.centre = np.zeros(2)
+        self.focus = np.zeros(2)
+
+    # ------------------------------------------------------------------ lifecycle
+    def reset(self, centre: np.ndarray, scale: float) -> None:
+        """Drop every node and start a fresh root frame with world ``centre`` in the middle."""
+        self.clear()
+        self.centre = np.asarray(centre, dtype=float).copy()
+        self.focus = self.centre.copy()
+        self.scale = float(scale)
+        self.root = self.name(self.prefix, fresh=True, under_root=False)
+        self.nodes["root"] = self.scene.add_frame(self.root, show_axes=False)
+
+    def clear(self) -> None:
+        for node in reversed(list(self.nodes.values())):
+            node.remove()
+        self.nodes.clear()
+
+    def name(self, key: str, fresh: bool = False, under_root: bool = True) -> str:
+        """The scene path of node ``key`` (``fresh``: a name not used before, for a re-created node)."""
+        base = f"{self.root}/{key}" if under_root else f"/{key}"
+        return base + (f"_{next(_SERIAL)}" if fresh else "")
+
+    def add(self, key: str, node: Any) -> Any:
+        """Keep ``node`` as ``key`` (a node made by a layer itself: meshes, grids, images)."""
+        self.nodes[key] = node
+        return node
+
+    def drop(self, key: str) -> None:
+        node = self.nodes.pop(key, None)
+        if node is not None:
+            node.remove()
+
+    def hide(self, *keys: str) -> None:
+        for key in keys:
+            if key in self.nodes:
+                self.nodes[key].visible = False
+
+    def shown(self, key: str) -> bool:
+        node = self.nodes.get(key)
+        return node is not None and bool(node.visible)
+
+    # ------------------------------------------------------------------ coordinates
+    def to_view(self, xy: np.ndarray, z: float = 0.0) -> np.ndarray:
+        """World metres (…, d) → coordinates under the root frame (…, 3) float32."""
+        return lift((plane(xy) - self.centre) * self.scale, z)
+
+    def to_scene(self, xy: np.ndarray) -> np.ndarray:
+        """World metres (…, d) → scene coordinates (…, 2), as the camera sees them."""
+        return (plane(xy) - self.focus) * self.scale
+
+    def to_world(self, scene_xy: np.ndarray) -> np.ndarray:
+        """Scene coordinates (what clicks and drags report) → world metres."""
+        return np.asarray(scene_xy, dtype=float)[..., :2] / self.scale + self.focus
+
+    def ray_to_world(self, origin: Any, direction: Any) -> np.ndarray | None:
+        """Where a click ray meets the ground (z = 0), in world metres; None if it misses."""
+        p = ray_ground(origin, direction)
+        return None if p is None else self.to_world(p)
+
+    def set_focus(self, target: np.ndarray) -> bool:
+        """Put world point ``target`` in the middle of the screen; True if the view moved."""
+        target = np.asarray(target, dtype=float)
+        if np.allclose(target, self.focus):
+            return False
+        self.focus = target.copy()
+        off = (self.centre - self.focus) * self.scale
+        self.nodes["root"].position = (float(off[0]), float(off[1]), 0.0)
+        return True
+
+    # ------------------------------------------------------------------ batched nodes
+    def points(self, key: str, xy: np.ndarray, color: Colour | np.ndarray, size: float, shape: str, z: float) -> None:
+        """One point cloud: ``size`` in scene units, ``color`` one RGB or one per point."""
+        xy = np.asarray(xy, dtype=float)
+        xy = plane(xy.reshape(-1, xy.shape[-1]))
+        finite = np.all(np.isfinite(xy), axis=1)
+        per_point = isinstance(color, np.ndarray) and color.ndim == 2
+        colors = color[finite] if per_point else color
+        xy = xy[finite]
+        pts = self.to_view(xy, z) if len(xy) else self.to_view(np.zeros((1, 2)), z)
+        if per_point and not len(xy):
+            colors = np.zeros((1, 3), np.uint8)
+        node = self.nodes.get(key)
+        if node is None:
+            self.nodes[key] = self.scene.add_point_cloud(
+                self.name(key), pts, colors=colors, point_size=size, point_shape=shape, precision="float32",
+                point_shading="flat")
+        else:
+            node.points = pts
+            if per_point:
+                node.colors = colors
+        self.nodes[key].visible = bool(len(xy))
+
+    def lines(self, key: str, segs: np.ndarray, color: Colour | np.ndarray, px: float, z: float) -> None:
+        """One segment list (S, 2, 2) in world metres: ``px`` screen pixels thick, ``color`` one
+        RGB or one per segment end (S, 2, 3); an empty list hides the node."""
+        segs = np.asarray(segs, dtype=float).reshape(-1, 2, 2)
+        pts = self.to_view(segs, z) if len(segs) else np.zeros((1, 2, 3), np.float32)
+        per_segment = isinstance(color, np.ndarray) and color.ndim == 3
+        colors = color if not per_segment or len(segs) else np.zeros((1, 2, 3), np.uint8)
+        node = self.nodes.get(key)
+        if node is None:
+            self.nodes[key] = self.scene.add_line_segments(self.name(key), pts, colors=colors, thickness=px,
+                                                           thickness_units="screen")
+        else:
+            node.points = pts
+            if per_segment:
+                node.colors = colors
+        self.nodes[key].visible = bool(len(segs))
+
+    def label(self, key: str, text: str, xy: np.ndarray | None, z: float = 0.0) -> None:
+        """A text label at world ``xy`` (hidden when None or not finite)."""
+        ok = xy is not None and bool(np.all(np.isfinite(xy)))
+        pos = tuple(float(v) for v in self.to_view(np.asarray(xy, dtype=float), z)) if ok else (0.0, 0.0, 0.0)
+        node = self.nodes.get(key)
+        if node is None:
+            self.nodes[key] = self.scene.add_label(self.name(key), text, position=pos)
+        else:
+            node.position = pos
+        self.nodes[key].visible = ok
