@@ -354,7 +354,7 @@ def _coefficients(gap: np.ndarray, p: TickParams, c: np.ndarray) -> float:
 def _virtual_force(xi: float, yi: float, gap: np.ndarray, centre: np.ndarray, hit: np.ndarray,
                    p: TickParams) -> tuple[float, float]:
     """F_t = Σ_p γ (x_i − x_p)/(s_p |x_i − x_p|) over the sectors [4.3], [4.4] (sensing.virtual_force)."""
-    fx = fy = 0.0
+    fx = fy = 0.0  # numpy's sum starts from +0
     for k in range(SECTORS):
         dx, dy = xi - centre[k, 0], yi - centre[k, 1]
         ok = hit[k] and math.isfinite(dx) and math.isfinite(dy)
@@ -363,11 +363,7 @@ def _virtual_force(xi: float, yi: float, gap: np.ndarray, centre: np.ndarray, hi
         norm = math.sqrt(dx * dx + dy * dy)
         den = norm if norm > 0.0 else 1.0
         s = _maximum(gap[k] if ok else 1.0, p.s_floor)
-        tx, ty = p.gamma * (dx / den) / s, p.gamma * (dy / den) / s
-        if k == 0:
-            fx, fy = tx, ty
-        else:
-            fx, fy = fx + tx, fy + ty
+        fx, fy = fx + p.gamma * (dx / den) / s, fy + p.gamma * (dy / den) / s
     return fx, fy
 
 
@@ -399,8 +395,8 @@ def _command(prev: np.ndarray, gp: np.ndarray, gg: np.ndarray, fx: float, fy: fl
             g0, g1, g2 = gp[d], gg[d], (fx if d == 0 else fy)
             if p.law == ADAPTED_RPSO:
                 g0, g1, g2 = _sgn(g0), _sgn(g1), _sgn(g2)
-            s = (c[0] * r[0, d]) * g0 + (c[1] * r[1, d]) * g1
-            out[d] = omega * prev[d] + (s + (c[2] * r[2, d]) * g2)
+            s = 0.0 + (c[0] * r[0, d]) * g0 + (c[1] * r[1, d]) * g1 + (c[2] * r[2, d]) * g2  # numpy's sum: from +0
+            out[d] = omega * prev[d] + s
         if p.law == RPSO:  # clipped to v_max keeping its direction
             speed = math.sqrt(out[0] * out[0] + out[1] * out[1])
             if speed > p.v_max:
@@ -411,8 +407,8 @@ def _command(prev: np.ndarray, gp: np.ndarray, gg: np.ndarray, fx: float, fy: fl
     y0 = _to_body(gp[0], gp[1], cos, sin)
     y1 = _to_body(gg[0], gg[1], cos, sin)
     if p.law == ROBOT_CENTRED:
-        v = omega * prev[0] + ((c[0] * r[0, 0]) * _sgn(y0[0]) + (c[1] * r[1, 0]) * _sgn(y1[0]))
-        w = omega * prev[1] + ((c[0] * r[0, 1]) * _sgn(y0[1]) + (c[1] * r[1, 1]) * _sgn(y1[1]))
+        v = omega * prev[0] + (0.0 + (c[0] * r[0, 0]) * _sgn(y0[0]) + (c[1] * r[1, 0]) * _sgn(y1[0]))
+        w = omega * prev[1] + (0.0 + (c[0] * r[0, 1]) * _sgn(y0[1]) + (c[1] * r[1, 1]) * _sgn(y1[1]))
         return _limited(v, w, p)
     cr = np.empty(5)
     for n in range(5):
