@@ -1,5 +1,6 @@
 """What every tab's control panel shares: the header (preset, status, playback, speed, seed),
-the Export and Notes tabs, and the rule that every change goes through the scenario model.
+the Export, Notes and Lessons tabs, and the rule that every change goes through the scenario
+model.
 
 A slider is a preset field (a dotted path into :class:`Scenario`); its limits come from the
 pydantic model, narrowed to a range that is useful on screen. A change is validated by
@@ -30,6 +31,8 @@ from shoal.presets.models import Scenario
 
 from .base_session import BaseSession, parse_upload
 from .compare_panel import CompareGui
+from .lessons.panel import LessonProgress, LessonsPanel
+from .lessons.scenes import load_scene
 from .replay_panel import ReplayGui
 from .session import app_presets
 from .twin_view import twin_series
@@ -130,9 +133,10 @@ class PanelsBase:
     EXPORT_NOTE: ClassVar[str] = ""  # more words for the Export tab
 
     def __init__(self, gui: Any, session: BaseSession, notify: Notify, send_file: SendFile,
-                 replace: Replace | None = None) -> None:
+                 replace: Replace | None = None, lessons: LessonProgress | None = None) -> None:
         self.gui, self.session, self.notify, self.send_file = gui, session, notify, send_file
         self.replace = replace
+        self.lesson_progress = lessons if lessons is not None else LessonProgress()  # the tab keeps it
         self._local = threading.local()  # per thread: programmatic .value fires callbacks inline
         self.sliders: dict[str, Any] = {}
         self.top: list[Any] = []  # top-level handles: removing them removes the whole panel
@@ -143,9 +147,14 @@ class PanelsBase:
         self._build_above_tabs()
         self.tabs = gui.add_tab_group()
         self.top.append(self.tabs)
+        focus = self.lesson_progress.focus  # a lesson's Set up rebuilt this panel: keep its tab in view
+        if focus:
+            self._build_lessons()
         self._build_tabs()
         self.compare_gui = CompareGui(self)
         self._build_export_notes()
+        if not focus:
+            self._build_lessons()
         self._wire_common()
         self.sync_from_scenario()
 
@@ -181,6 +190,10 @@ class PanelsBase:
             self.upload = gui.add_upload_button("Upload preset", hint=".toml or .json, at most 256 KiB")
         with self.tabs.add_tab("Notes"):
             self.notes = gui.add_markdown(notes_text(self.session.NOTES))
+
+    def _build_lessons(self) -> None:
+        with self.tabs.add_tab("Lessons"):
+            self.lessons = LessonsPanel(self.gui, self.set_up_lesson, self.notify, self.lesson_progress)
 
     def _slider(self, spec: SliderSpec) -> Any:
         value = get_path(self.session.scenario, spec.path)
@@ -234,6 +247,7 @@ class PanelsBase:
     def remove(self) -> None:
         """Take every handle of this panel off the page (the tab swaps in another kind)."""
         self.removed = True
+        self.lessons.close()
         for h in reversed(self.top):
             h.remove()
         self.top.clear()
@@ -358,6 +372,22 @@ class PanelsBase:
             return False
         self.notify("Preset loaded", scenario.description or name, "green")
         return True
+
+    def set_up_lesson(self, preset: str, values: dict[str, Any]) -> list[str]:
+        """A lesson step's scene: the preset with the step's field values, validated as an upload
+        would be, loaded paused at step 0. Returns the refusal's messages (empty: loaded)."""
+        try:
+            scenario = load_scene(preset, values)
+            if self.replace is not None:
+                session = self.replace(scenario)  # may rebuild the panels (another kind of scene)
+            else:
+                self.session.load_scenario(scenario)
+                self.sync_from_scenario()
+                session = self.session
+        except PresetError as err:
+            return list(err.messages)
+        session.pause()
+        return []
 
     def upload_preset(self, filename: str, content: bytes) -> bool:
         """Validate an uploaded preset; a bad one is listed field by field and changes nothing."""

@@ -4,8 +4,8 @@ Playback, history and export come from :class:`BaseSession`; this module adds wh
 particular to the Chapter 3 swarm: its controller changes without restart, the (ω, ĉ)
 readout, the phase-plane history and the arena snapshot.
 
-The swarm may act on SLO-estimated positions (``[slo] swarm = "host"``: an
-:class:`~shoal.engine.slo.tracker.SLOSimulation`, the *Positions* folder of
+The swarm may act on SLO-estimated positions (``[slo] swarm = "host"``: its
+:class:`~shoal.engine.slo.positions.Estimated` positions, the *Positions* folder of
 :mod:`.positions_panel`). Controller, swarm size and objective changes reach it like the
 oracle swarm; the error set and the localisation settings retune its running SLO source;
 the oracle/SLO switch (and the SLO unit) rebuild it with the same seed.

@@ -27,6 +27,7 @@ from .base_session import BaseSession
 from .fleet_panels import FleetPanels
 from .fleet_scene import FleetView
 from .fleet_session import FleetSession
+from .lessons.panel import LessonProgress
 from .panel_base import PanelsBase
 from .panels import Panels
 from .scene import ArenaView
@@ -93,11 +94,13 @@ class TabApp:
         self._ticking = threading.Lock()
         self._clicks: list[Callable[[Any], None]] = []
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
+        self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
         self._build_kind()
 
     def _build_kind(self) -> None:
         kind = next(k for k in KINDS if isinstance(self.session, k.session))
-        self.panels = kind.panels(self.gui, self.session, self.notify, self.send_file, replace=self.replace)
+        self.panels = kind.panels(self.gui, self.session, self.notify, self.send_file, replace=self.replace,
+                                  lessons=self.lesson_progress)
         self.arena = kind.view(self.scene)
         if hasattr(self.panels, "drag_obstacle"):
             self.arena.on_obstacle_drag = self.panels.drag_obstacle  # type: ignore[attr-defined]

@@ -10,16 +10,14 @@ import numpy as np
 from shoal.engine.core.contract import Engine
 from shoal.engine.core.objectives import Objective
 from shoal.engine.kinds.fleet import Fleet, FleetParams
-from shoal.engine.kinds.slo_fleet import SLOFleet
-from shoal.engine.kinds.slo_sonar import SLOAcousticSwarm
 from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams
 from shoal.engine.kinds.swarm import Simulation
 from shoal.engine.pso.coeffs import Constant, Physical, Segment
 from shoal.engine.pso.laws import Law
 from shoal.engine.robots.world import WorldSpec, empty_arena, forest, obstacle_course
+from shoal.engine.slo.positions import Estimated, Oracle, PositionSource
 from shoal.engine.slo.sensors import ErrorModel, error_model
-from shoal.engine.slo.tracker import SLOSimulation
 
 from .models import SLO, Acoustics, Controller, ObjectiveModel, Scenario, WorldModel
 
@@ -49,9 +47,8 @@ def build_simulation(
 ) -> Simulation:
     """A Chapter 3 swarm for runs ``first_run … first_run + runs − 1`` of the seed (on SLO
     positions with ``[slo] swarm = "host"``)."""
-    kwargs = _simulation_kwargs(scenario, runs=runs, seed=seed, first_run=first_run)
-    slo = slo_host_params(scenario)
-    return Simulation(**kwargs) if slo is None else SLOSimulation(slo=slo, **kwargs)
+    return Simulation(**_simulation_kwargs(scenario, runs=runs, seed=seed, first_run=first_run),
+                      positions=positions_for(scenario))
 
 
 def _simulation_kwargs(scenario: Scenario, *, runs: int | None, seed: int | None, first_run: int) -> dict:
@@ -100,10 +97,9 @@ def build_fleet(scenario: Scenario, *, runs: int | None = None, seed: int | None
     if scenario.world is None:
         raise ValueError("this scenario has no [world] section")
     world = world_for(scenario.world)
-    kwargs = dict(world=world, robots=scenario.sim.robots, params=fleet_params_for(scenario),
-                  runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed, first_run=first_run)
-    slo = slo_host_params(scenario, world)
-    return Fleet(**kwargs) if slo is None else SLOFleet(slo=slo, **kwargs)
+    return Fleet(world=world, robots=scenario.sim.robots, params=fleet_params_for(scenario),
+                 runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed, first_run=first_run,
+                 positions=positions_for(scenario, world))
 
 
 def sonar_params_for(a: Acoustics) -> SonarParams:
@@ -125,11 +121,9 @@ def build_sonar(scenario: Scenario, *, runs: int | None = None, seed: int | None
     ``[slo] swarm = "host"``)."""
     if scenario.acoustics is None:
         raise ValueError("this scenario has no [acoustics] section")
-    kwargs = dict(robots=scenario.sim.robots, runs=runs or scenario.sim.runs,
-                  seed=scenario.sim.seed if seed is None else seed, first_run=first_run)
-    params = sonar_params_for(scenario.acoustics)
-    slo = slo_host_params(scenario)
-    return AcousticSwarm(params, **kwargs) if slo is None else SLOAcousticSwarm(params, slo=slo, **kwargs)
+    return AcousticSwarm(sonar_params_for(scenario.acoustics), robots=scenario.sim.robots,
+                         runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed,
+                         first_run=first_run, positions=positions_for(scenario))
 
 
 def slo_errors_for(slo: SLO) -> str | ErrorModel:
@@ -154,18 +148,18 @@ def slo_unit(scenario: Scenario, world: WorldSpec | None = None) -> float:
     return 2.0 * scenario.arena.half_size / 100.0
 
 
-def slo_host_params(scenario: Scenario, world: WorldSpec | None = None) -> dict | None:
-    """The :class:`~shoal.engine.slo.tracker.SLOPositionSource` keywords when the scene's own
-    swarm runs on SLO positions (``[slo] swarm = "host"``, ``positions = "slo"``), else None."""
+def positions_for(scenario: Scenario, world: WorldSpec | None = None) -> PositionSource:
+    """Where the scene's own swarm gets its positions: SLO estimates with ``[slo] swarm = "host"``,
+    ``positions = "slo"``, else the truth."""
     slo = scenario.slo
     if slo is None or slo.swarm != "host" or slo.positions == "oracle":
-        return None
-    return {**slo_localiser_for(slo), "unit": slo_unit(scenario, world)}
+        return Oracle()
+    return Estimated(**slo_localiser_for(slo), unit=slo_unit(scenario, world))
 
 
 def slo_localiser_for(slo: SLO) -> dict:
     """The localisation keywords shared by :class:`SLOSwarm` and the host swarms on SLO
-    positions (:class:`SLOSimulation`, :class:`SLOFleet`, :class:`SLOAcousticSwarm`)."""
+    positions (:class:`~shoal.engine.slo.positions.Estimated`)."""
     return dict(
         errors=slo_errors_for(slo), selection=slo.selection, prediction_weight=slo.prediction_weight,
         delta_cos=slo.delta_cos, delta_v=slo.delta_v, literal_eq_3_1=slo.literal_eq_3_1, entry_policy=slo.entry_policy,

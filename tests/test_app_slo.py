@@ -20,7 +20,6 @@ from shoal.app.slo_panels import SLOPanels
 from shoal.app.slo_scene import SLOView
 from shoal.app.slo_session import SLOSession
 from shoal.engine.kinds.slo_swarm import SLOSwarm
-from shoal.engine.slo.tracker import SLOSimulation
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 
@@ -108,7 +107,7 @@ def test_slo_adapted_opens_in_the_chapter3_scene_and_the_slo_session_keeps_mais_
     test_app_positions.py); the SLO session runs Mai's swarm only and says why."""
     tab.panels.preset.value = "slo-adapted"
     assert isinstance(tab.session, Session) and isinstance(tab.panels, Panels)
-    assert type(tab.session.sim) is SLOSimulation
+    assert not tab.session.sim.positions.exact
     with pytest.raises(PresetError, match="slo.swarm"):
         SLOSession(presets_io.load("slo-adapted"))
     tab.panels.preset.value = "slo-walk"

@@ -22,6 +22,7 @@ from ..robots.laws import ROBOT_LAWS, Inertia, Limits, rotational_energy_factor
 from ..robots.motion import Drive, Kinematic, Physics
 from ..robots.sensing import S_FLOOR, SECTORS, SectorReading, sense, virtual_force
 from ..robots.world import RunSpace, WorldSpec
+from ..slo.positions import Oracle, PositionSource
 
 ACTIVE, COLLIDED = 0, 1
 # A stall (ours, a metric only): an operational robot slower than STALL_SPEED m/s for at
@@ -34,7 +35,7 @@ STALL_STEPS = 10
 class FleetParams:
     """Controller and robot parameters of a fleet (Tables 4.1 and 5.1 by default)."""
 
-    law: str = "adapted-rpso"  # a key of robot_laws.ROBOT_LAWS
+    law: str = "adapted-rpso"  # a key of robots.laws.ROBOT_LAWS
     dvc: bool = True
     dt: float = 1.0
     omega: float = 0.1  # constant mode; ω = 1 − β (spec §20 item 17)
@@ -165,23 +166,30 @@ def spawn_positions(
 class Fleet:
     """A seeded swarm of robots in a world, for ``runs`` Monte-Carlo runs at once.
 
-    Implements :class:`~shoal.engine.core.contract.Engine`; :meth:`retune` takes the :class:`FleetParams` of the
-    controller and the sensing (in force from the next tick) and, on SLO positions, the
-    localisation keywords (``slo``). The world, the robots' bodies and drive and their number
-    need a new fleet."""
+    Implements :class:`~shoal.engine.core.contract.Engine`; :meth:`retune` takes the
+    :class:`FleetParams` of the controller and the sensing (in force from the next tick) and, on
+    SLO positions, the localisation keywords (``slo``). The world, the robots' bodies and drive
+    and their number need a new fleet.
+
+    ``positions``: true (the default) or SLO-estimated positions. On SLO positions only the two
+    attractors use positions; obstacle sensing stays local (six range sectors need none), the
+    cost is read at the true position, and a collided robot stays in the swarm as a still robot:
+    still ranged, still ranging the others, its personal best still a candidate global best."""
 
     LIVE: ClassVar[frozenset[str]] = frozenset(
         {"law", "dvc", "dt", "omega", "c", "alpha", "beta", "gamma", "c1_share", "sensing_range", "r_min", "s_min",
          "rotational_energy", "update", "guard", "slo"})
 
     def __init__(self, *, world: WorldSpec, robots: int, params: FleetParams | None = None,
-                 runs: int = 1, seed: int = 0, first_run: int = 0, compiled: bool = True) -> None:
+                 runs: int = 1, seed: int = 0, first_run: int = 0, positions: PositionSource | None = None,
+                 compiled: bool = True) -> None:
         """``compiled`` False keeps the numpy tick (the reference the compiled one is tested
         against) in kinematic mode too."""
         if robots < 1 or runs < 1:
             raise ValueError("robots and runs must be >= 1")
         self.world, self.params = world, params or FleetParams()
         self.runs, self.first_run, self._robots = runs, first_run, robots
+        self.positions: PositionSource = positions or Oracle()
         self.compiled = compiled
         self.reset(seed)
 
@@ -222,6 +230,7 @@ class Fleet:
             yg=x[np.arange(R), best], best_fitness=f[np.arange(R), best], f=f, status=np.zeros((R, N), np.int8),
             slow=np.zeros((R, N), np.int64),
         )
+        self.positions.start(x, self.state.y, self.state.k, self.seed, self.first_run)
         if p.motion == "physics":
             self._build_spaces()
 
@@ -265,14 +274,10 @@ class Fleet:
         params = replace(self.params, **changes)  # validates
         changed = [k for k in changes if getattr(params, k) != getattr(self.params, k)]
         if slo:
-            self._retune_positions(slo)
+            self.positions.retune(**slo)
             changed.append("slo")
         self.params = params
         return changed
-
-    def _retune_positions(self, slo: dict[str, Any]) -> None:
-        """New localisation settings: only a fleet on SLO positions has any."""
-        raise ValueError("slo: this fleet acts on true positions; switch it to SLO positions first")
 
     def cost(self, x: np.ndarray) -> np.ndarray:
         """Distance to the source, the cost of Algorithms 1 and 2."""
@@ -292,7 +297,10 @@ class Fleet:
         return np.stack([g.random((shape[0],) + shape[2:]) for g in self.rngs], axis=1)
 
     def _update_bests(self) -> None:
+        """Phase A: localise (on SLO positions), then the bests, scored at the true positions."""
         s = self.state
+        self.positions.observe(s.x, s.k)
+        before = s.f_y.copy()
         active = s.status == ACTIVE
         s.f = self.cost(s.x)
         better = active & (s.f < s.f_y)  # disabled robots keep their last best (spec §20 item 20)
@@ -301,6 +309,7 @@ class Fleet:
         idx = np.argmin(s.f_y, axis=1)
         runs = np.arange(self.runs)
         s.yg, s.best_fitness = s.y[runs, idx], s.f_y[runs, idx]
+        self.positions.keep(s.f_y != before)  # a new best is where the robot stands
 
     def _coefficients(self, gap: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         p, shape = self.params, gap.shape[:2]
@@ -321,10 +330,18 @@ class Fleet:
         return self._draw((law.terms,) + (shape[:2] if law.draws == "robot" else shape))
 
     def _attractors(self) -> tuple[np.ndarray, np.ndarray]:
-        """Each robot's vectors to its personal best and to the global best, (R, N, 2) each:
-        from the true positions here, from beliefs on SLO positions (``slo_fleet``)."""
+        """Each robot's vectors to its personal best and to the global best, (R, N, 2) each, as
+        the robots know them (true or SLO positions)."""
         s = self.state
-        return s.y - s.x, s.yg[:, None, :] - s.x
+        return self.positions.to_personal(s.x, s.y), self._to_global()
+
+    def _to_global(self) -> np.ndarray:
+        s = self.state
+        return self.positions.to_owner(s.x, s.y, np.argmin(s.f_y, axis=1))
+
+    def believed_gbest(self) -> np.ndarray:
+        """(R, N, 2) where each robot believes the global best is (y_g itself on true positions)."""
+        return self.state.x + self._to_global()
 
     def _velocity(self, omega: np.ndarray, c: np.ndarray, force: np.ndarray, r: np.ndarray) -> np.ndarray:
         p, s = self.params, self.state
@@ -391,6 +408,7 @@ class Fleet:
         s.reading = SectorReading(out.gap, out.point, out.centre, out.hit) if sensed else None
         s.force, s.omega, s.c = out.force, out.omega, out.c
         s.k += 1
+        self.positions.observe(s.x, s.k)  # where the moves ended: current beliefs for drawing
         return self.info()
 
     def _phase_b(self, r: np.ndarray, out: kernels.Outputs) -> bool:

@@ -8,7 +8,8 @@
    when the strategy needs it. ``mode="surrogate"`` draws the same statistics directly
    (``acoustics.surrogate``): APPROXIMATE, not in the thesis.
 2. bests: ``strategy.update`` (A/X/B/XB/GT-PSO, forgetting a [7.2]/[7.9]/[8.6]) in ``_bests``,
-   which also gives the attractor vectors (from beliefs on SLO positions: ``slo_sonar``).
+   which also gives the attractor vectors (on SLO positions each robot decides in its own
+   believed frame: ``acoustics.frames``).
 3. velocity: ``adapted`` = Adapted PSO [3.11]/[3.10] in the global frame (Ch. 7: unbounded
    plane, kinematic, collisions ignored, heading = direction of u, spec §1.1), tuned by
    β: ω = 1 − β, ĉ = βU/√2 [4.15]; ``nonomni`` = non-omnidirectional controller
@@ -44,6 +45,8 @@ import numpy as np
 
 from ..acoustics.band import Band
 from ..acoustics.escort import moving_source, with_escort
+from ..acoustics.forgetting import forget_update, improves
+from ..acoustics.frames import in_own_frames
 from ..acoustics.propagation import r_ref, snr_db, source_distance_for_snr
 from ..acoustics.receiver import Bearing, bearing
 from ..acoustics.signals import hydrophone_positions, intensity, synthesise
@@ -57,6 +60,7 @@ from ..robots.dvc import dvc_nonomni, forward_guard, w_max
 from ..robots.laws import arc_pose_update, energy_limit, nonomni_velocity, to_body
 from ..robots.sensing import SectorReading
 from ..robots.swarm_sensing import contacts, pairwise, sense_robots
+from ..slo.positions import Oracle, PositionSource
 
 ControllerName = Literal["adapted", "nonomni"]
 AcousticMode = Literal["waveform", "surrogate"]
@@ -67,7 +71,7 @@ Start = Literal["origin", "source"]
 class SonarParams:
     """Everything an acoustic swarm needs (spec §8 defaults: Table 7.1, Table 8.1)."""
 
-    algorithm: str = "xb-pso"  # a key of localisation.STRATEGIES
+    algorithm: str = "xb-pso"  # a key of acoustics.strategies.STRATEGIES
     controller: ControllerName = "adapted"
     mode: AcousticMode = "waveform"
     snr0_db: float = 10.0  # SNR at the origin, sets d_s (spec §4.2)
@@ -218,7 +222,7 @@ class AcousticSwarm:
     LIVE: ClassVar[frozenset[str]] = frozenset({f.name for f in fields(SonarParams)} - _FIXED | {"slo"})
 
     def __init__(self, params: SonarParams | None = None, *, robots: int = 10, runs: int = 1, seed: int = 0,
-                 first_run: int = 0) -> None:
+                 first_run: int = 0, positions: PositionSource | None = None) -> None:
         if robots < 1 or runs < 1:
             raise ValueError("robots and runs must be >= 1")
         self.params = params or SonarParams()
@@ -229,6 +233,7 @@ class AcousticSwarm:
         if robots < self.strategy.min_robots:
             raise ValueError(f"{p.algorithm} needs at least {self.strategy.min_robots} robots")
         self.runs, self.first_run, self._robots = runs, first_run, robots
+        self.positions: PositionSource = positions or Oracle()
         self.reset(seed)
 
     def _tune(self) -> None:
@@ -250,7 +255,7 @@ class AcousticSwarm:
         old, params = self.params, replace(self.params, **changes)  # validates
         changed = [k for k in changes if getattr(params, k) != getattr(old, k)]
         if slo:
-            self._retune_positions(slo)
+            self.positions.retune(**slo)
             changed.append("slo")
         if {"v_n", "source_heading", "U", "dt"} & set(changed):
             self._restart_source_motion(params)
@@ -258,10 +263,6 @@ class AcousticSwarm:
         self._tune()
         self._refresh(np.arange(self.runs))
         return changed
-
-    def _retune_positions(self, slo: dict[str, Any]) -> None:
-        """New localisation settings: only a swarm on SLO positions has any."""
-        raise ValueError("slo: this swarm acts on true positions; switch it to SLO positions first")
 
     def _restart_source_motion(self, params: SonarParams) -> None:
         """A moving source under new ``params`` carries on from where it is now [8.8]."""
@@ -314,6 +315,8 @@ class AcousticSwarm:
         )
         self._refresh(np.arange(R))
         self._converge(np.arange(R))
+        s = self.state
+        self.positions.start(s.x, s.y, s.k, self.seed, self.first_run)
 
     # ------------------------------------------------------------------ pieces
     def _listen(self, x: np.ndarray, heading: np.ndarray, src: np.ndarray,
@@ -339,10 +342,55 @@ class AcousticSwarm:
 
     def _bests(self, idx: np.ndarray, x: np.ndarray, sensed: Sensed, rngs: list) -> Decision:
         """Step 2 for runs ``idx`` at positions ``x``: the strategy's memory and global best,
-        and the attractor vectors from the true positions."""
+        and the attractor vectors. On true positions the strategy decides once for the swarm."""
         s = self.state
+        if not self.positions.exact:
+            return self._believed_bests(idx, x, sensed, rngs)
         f_hat, y, yg, loc = self.strategy.update(s.f_hat[idx], s.y[idx], x, sensed, rngs)
         return Decision(f_hat, y, yg, loc, np.stack([y - x, yg[:, None, :] - x]), yg)
+
+    def _believed_bests(self, idx: np.ndarray, x: np.ndarray, sensed: Sensed, rngs: list) -> Decision:
+        """Step 2 on SLO positions: every robot decides in its own believed frame
+        (:func:`~shoal.engine.acoustics.frames.in_own_frames`), keeps its personal best relative
+        to itself with the forgetting rule [7.2]/[7.9]/[8.6] on the candidate's offset, and heads
+        for the global best as it places it: the best robot's x̂_i,owner + P_owner (A-/X-PSO) or
+        the centroid of x̂_ij + P_j [7.11]. ``y`` is then x_i + P_i and ``y_g`` the swarm's own
+        version of the global best (the owner's x + P, or the centroid of x + P)."""
+        s, strat, pos = self.state, self.strategy, self.positions
+        pos.observe(s.x, s.k - 1)  # done at the end of the last tick (the counter moved on since)
+        mine = in_own_frames(strat, s.f_hat[idx], pos.placed(s.x)[idx], sensed, rngs)
+        offset = mine["candidate"] - x  # the candidate as seen from the robot
+        f_old = s.f_hat[idx]
+        better = improves(f_old, mine["fitness"], offset, mine["valid"])
+        f_hat, pbest = forget_update(f_old, pos.to_personal(s.x, s.y)[idx], mine["fitness"], offset, mine["valid"],
+                                     strat.a)
+        stepped, at = np.zeros(s.f_hat.shape, bool), np.zeros(s.x.shape)
+        stepped[idx], at[idx] = True, pbest
+        pos.keep(stepped, at)  # the runs that advance: their bests after forgetting
+        y = x + pbest
+        f_all = s.f_hat.copy()
+        f_all[idx] = f_hat
+        to_g = self._to_global(f_all)[idx]
+        f_g = None
+        if strat.global_best == "best":
+            owner = np.argmax(f_hat, axis=1)
+            y_g, f_g = y[np.arange(len(idx)), owner], f_hat[np.arange(len(idx)), owner]
+        else:
+            y_g = y.mean(axis=1)
+        loc = LocInfo(improved=better, f_g=f_g, **mine)
+        return Decision(f_hat, y, y_g, loc, np.stack([pbest, to_g]), x + to_g)
+
+    def _to_global(self, f_hat: np.ndarray) -> np.ndarray:
+        """Each robot's vector to the global best as it knows it, from the memory ``f_hat`` (R, N):
+        the best robot's personal best (A-/X-PSO) or the centroid of all of them [7.11]."""
+        s = self.state
+        if self.strategy.global_best == "best":
+            return self.positions.to_owner(s.x, s.y, np.argmax(f_hat, axis=1))
+        return self.positions.to_centroid(s.x, s.y)
+
+    def believed_gbest(self) -> np.ndarray:
+        """(R, N, 2) where each robot believes the global best is."""
+        return self.state.x + self._to_global(self.state.f_hat)
 
     def _adapted(self, idx: np.ndarray, x: np.ndarray, g: np.ndarray, rngs: list):
         """Adapted PSO [3.11], [3.10] towards the attractor vectors ``g`` (2, R', N, 2);
@@ -388,11 +436,17 @@ class AcousticSwarm:
     # ------------------------------------------------------------------ tick
     def step(self) -> SonarInfo:
         """Advance every running run by one tick Δt."""
-        p, s = self.params, self.state
+        s = self.state
         idx = np.flatnonzero(s.running)
         s.k += 1
-        if idx.size == 0:
-            return self.info()
+        if idx.size:
+            self._advance(idx)
+        self.positions.observe(s.x, s.k)  # where the moves ended: current beliefs for drawing
+        return self.info()
+
+    def _advance(self, idx: np.ndarray) -> None:
+        """The tick of the running runs ``idx``."""
+        p, s = self.params, self.state
         rngs = [self.rngs[i] for i in idx]
         x, src = s.x[idx], s.source[idx]
         sensed, power, b = self._listen(x, s.heading[idx], src, rngs)  # 1 listen
@@ -409,7 +463,6 @@ class AcousticSwarm:
         s.intensity, s.bearing, s.loc, s.reading, s.stepped = power, b, d.loc, reading, idx
         self._refresh(idx)  # 5 metrics
         self._converge(idx)
-        return self.info()
 
     def info(self) -> SonarInfo:
         """Metrics of the current state."""

@@ -16,10 +16,11 @@ from ..core.contract import check_live
 from ..core.objectives import Objective
 from ..core.rng import run_generators
 from ..pso import kernels
-from ..pso.bests import global_best, update_personal
+from ..pso.bests import best_index, global_best, update_personal
 from ..pso.coeffs import CoefficientPolicy
 from ..pso.laws import Law
 from ..pso.laws import motion_heading as _heading
+from ..slo.positions import Oracle, PositionSource
 
 Attractors = Literal["literal", "ahead"]
 PbestOrder = Literal["before_velocity", "after_velocity"]
@@ -75,10 +76,14 @@ def _per_run(value: np.ndarray | float, R: int) -> np.ndarray:
 class Simulation:
     """A seeded swarm: positions, velocities and bests of ``runs`` independent runs.
 
-    Implements :class:`~shoal.engine.core.contract.Engine`; :meth:`retune` takes the controller (``policy``,
-    ``law``, ``dt``), the swarm size (``robots``), the bests' bookkeeping (``attractors``,
-    ``pbest_order``), the ``objective`` and, on SLO positions, the localisation keywords
-    (``slo``)."""
+    Implements :class:`~shoal.engine.core.contract.Engine`; :meth:`retune` takes the controller
+    (``policy``, ``law``, ``dt``), the swarm size (``robots``), the bests' bookkeeping
+    (``attractors``, ``pbest_order``), the ``objective`` and, on SLO positions, the localisation
+    keywords (``slo``).
+
+    ``positions`` says where the robots' positions come from: the truth (``Oracle``, the
+    default) or their SLO estimates (``Estimated``, :mod:`shoal.engine.slo.positions`). Only the
+    "literal" attractors read positions; fitness is always read at the true position."""
 
     LIVE: ClassVar[frozenset[str]] = frozenset(
         {"policy", "law", "dt", "slo", "robots", "attractors", "pbest_order", "objective"})
@@ -101,6 +106,7 @@ class Simulation:
         init_center: np.ndarray | None = None,
         init_spread: float = 1.0,
         init_speed: float = 0.0,
+        positions: PositionSource | None = None,
         compiled: bool = True,
     ) -> None:
         """``compiled`` False keeps the numpy tick, the reference of the compiled one."""
@@ -121,6 +127,7 @@ class Simulation:
         self.init_center = np.zeros(d) if init_center is None else np.asarray(init_center, float)[:d]
         self.init_spread, self.init_speed = float(init_spread), float(init_speed)
         self._robots = robots
+        self.positions: PositionSource = positions or Oracle()
         self.compiled = compiled
         self.reset(seed)
 
@@ -141,6 +148,8 @@ class Simulation:
         x, u = self._spawn(self._robots)
         self.state = self._fresh_state(x, u)
         self._coefficients: tuple[np.ndarray | float, np.ndarray] = (np.nan, np.full(1, np.nan))
+        s = self.state
+        self.positions.start(s.x, s.y, s.k, self.seed, self.first_run)
 
     def _spawn(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         shape = (n, self.d)
@@ -157,7 +166,8 @@ class Simulation:
         )
 
     def set_robots(self, n: int) -> None:
-        """Grow or shrink the swarm in place: new robots spawn in the start region."""
+        """Grow or shrink the swarm in place: new robots spawn in the start region. On SLO
+        positions kept robots keep their beliefs and believed bests."""
         if n < 1:
             raise ValueError(f"need at least one robot, got {n}")
         s, cur = self.state, self.robots
@@ -173,6 +183,7 @@ class Simulation:
             for name in ("x", "u", "a", "y", "f_y", "f", "heading", "status"):
                 setattr(s, name, np.concatenate([getattr(s, name), getattr(new, name)], axis=1))
         s.yg, s.best_fitness = global_best(s.y, s.f_y, self.objective)
+        self.positions.resize(s.x, s.k)
 
     def set_objective(self, objective: Objective) -> None:
         """Swap the objective and re-score the bests at the current positions."""
@@ -181,6 +192,7 @@ class Simulation:
         s.f = objective(s.x)
         s.y, s.f_y = s.x.copy(), s.f.copy()
         s.yg, s.best_fitness = global_best(s.y, s.f_y, objective)
+        self.positions.keep(np.ones(s.f.shape, bool))  # every best is where its robot stands
 
     def retune(self, **changes: Any) -> list[str]:
         """Change :data:`LIVE` settings from the next tick on, keeping the swarm; returns the names
@@ -200,7 +212,7 @@ class Simulation:
                "attractors": self.attractors, "pbest_order": self.pbest_order, "objective": self.objective}
         changed = [k for k, v in changes.items() if now[k] != v]
         if slo:
-            self._retune_positions(slo)
+            self.positions.retune(**slo)
             changed.append("slo")
         for name in ("policy", "law", "attractors", "pbest_order"):
             if name in changed:
@@ -213,24 +225,33 @@ class Simulation:
             self.set_objective(changes["objective"])
         return changed
 
-    def _retune_positions(self, slo: dict[str, Any]) -> None:
-        """New localisation settings: only a swarm on SLO positions has any."""
-        raise ValueError("slo: this swarm acts on true positions; switch it to SLO positions first")
-
     # ------------------------------------------------------------------ tick
     def _update_bests(self) -> None:
         s = self.state
+        self.positions.observe(s.x, s.k)
+        before = s.f_y.copy()
         s.f = self.objective(s.x)
         s.y, s.f_y = update_personal(s.x, s.f, s.y, s.f_y, self.objective)
         s.yg, s.best_fitness = global_best(s.y, s.f_y, self.objective)
+        self.positions.keep(s.f_y != before)  # a new best is where the robot stands
 
     def _directions(self) -> np.ndarray:
-        """Direction inputs g_n of the accelerating terms, (2, R, N, d)."""
+        """Direction inputs g_n of the accelerating terms, (2, R, N, d): the vectors to the
+        personal and the global best, as the robots know them."""
         s = self.state
         if self.attractors == "ahead":  # spec §22: both attractors always ahead
             g = np.broadcast_to(self.ahead_direction, s.x.shape)
             return np.stack([g, g])
-        return np.stack([s.y - s.x, s.yg[:, None, :] - s.x])
+        self.positions.observe(s.x, s.k)
+        return np.stack([self.positions.to_personal(s.x, s.y), self._to_global()])
+
+    def _to_global(self) -> np.ndarray:
+        s = self.state
+        return self.positions.to_owner(s.x, s.y, best_index(s.f_y, self.objective))
+
+    def believed_gbest(self) -> np.ndarray:
+        """(R, N, d) where each robot believes the global best is (y_g itself on true positions)."""
+        return self.state.x + self._to_global()
 
     def _draw(self, n_terms: int) -> np.ndarray:
         """Fresh U(0,1) draws per term, robot and component [3.1]/[3.37], (n, R, N, d)."""
@@ -255,15 +276,15 @@ class Simulation:
         s.u = u_new
         s.heading = _heading(u_new, s.heading)
         s.k += 1
+        self.positions.observe(s.x, s.k)  # where the moves ended: current beliefs for drawing
         return self.info()
 
     def _compiled_tick(self) -> bool:
         """:func:`kernels.swarm_step` does the tick: the laws it knows (standard, Adapted with
-        sgn) in up to 128 dimensions, unless the swarm was made with ``compiled=False`` or a
-        subclass senses its bests or directions its own way (SLO positions)."""
-        cls = type(self)
+        sgn) in up to 128 dimensions, on true positions, unless the swarm was made with
+        ``compiled=False``."""
         return (self.compiled and self.law.name in ("standard", "adapted-sgn") and self.d <= kernels.MAX_TERMS
-                and cls._update_bests is Simulation._update_bests and cls._directions is Simulation._directions)
+                and isinstance(self.positions, Oracle))
 
     def _compiled_step(self) -> StepInfo:
         """The tick of :meth:`step` in one compiled call; the same numbers."""

@@ -15,8 +15,13 @@ def update_personal(
     return np.where(better[..., None], x, y), np.where(better, f, f_y)
 
 
+def best_index(f_y: np.ndarray, objective: Objective) -> np.ndarray:
+    """The robot holding the best personal best of each run (the first of equals), (R,)."""
+    return np.argmax(f_y, axis=1) if objective.maximise else np.argmin(f_y, axis=1)
+
+
 def global_best(y: np.ndarray, f_y: np.ndarray, objective: Objective) -> tuple[np.ndarray, np.ndarray]:
     """[3.3]: the best personal best of each run. Returns (R, d) and (R,)."""
-    idx = np.argmax(f_y, axis=1) if objective.maximise else np.argmin(f_y, axis=1)
+    idx = best_index(f_y, objective)
     runs = np.arange(y.shape[0])
     return y[runs, idx], f_y[runs, idx]

@@ -21,7 +21,7 @@ from .selection import SELECTIONS, Kind, RTSTriangle
 from .sensors import ErrorModel, measure_odometry, measure_ranges, permanent_errors, permanent_normals
 
 PERFECT = "perfect"  # the oracle baseline: every estimate is the truth
-Selection = str  # a key of slo_selection.SELECTIONS, or PERFECT
+Selection = str  # a key of selection.SELECTIONS, or PERFECT
 EntryPolicy = Literal["stale", "geometric_random"]
 
 

@@ -1,132 +1,185 @@
-"""SLO-estimated positions for a host swarm (spec §15): the bests a robot can know without
-an oracle, and a mixin that puts any Shoal swarm on them.
+"""The positions a host swarm acts on (spec §15): a collaborator each scene kind with robots in
+the plane (the Chapter 3 swarm, the fleet, the acoustic swarm) asks wherever its controller
+reads a position.
 
-A robot on SLO positions knows its own displacement (odometry) and its estimates x̂_ij of
-the vectors to the others, never a position. So it keeps its personal best *relative to
-itself*, P_i ≈ y_i − x_i, shifted by the measured odometry every tick (gap A35) and reset to
-the offset of a new best; and it places another robot's best at x̂_ij + P_j, P_j being
-communicated (gap A36). :class:`BelievedBests` holds P and forms the two global bests of
-the theses from it: the best robot's best (Chapters 3–5, A-/X-PSO) and the centroid of all
-personal bests (B-/XB-/GT-PSO [7.11]). :class:`SLOHost` starts an
-:class:`~.slo_source.SLOPositionSource` with the host's seed at every reset.
+* :class:`Oracle`: every robot knows every true position, as in the theses (the default).
+* :class:`Estimated`: each robot localises the others with SLO (a :class:`~.tracker.BeliefTracker`)
+  and knows only its own displacement (odometry) and its estimates x̂_ij of the vectors to the
+  others, never a position. So it keeps its personal best *relative to itself*, P_i ≈ y_i − x_i,
+  shifted by the measured odometry every tick (gap A35) and reset to the offset of a new best;
+  and it places another robot's best at x̂_ij + P_j, P_j being communicated (gap A36).
 
-With the None error set and true initial beliefs the relative vectors equal the oracle's
-y − x and y_g − x up to floating-point error.
+The vectors a kind asks for are the two attractors of the theses: to a robot's own best, to the
+best robot's best (Chapters 3–5, A-/X-PSO) or to the centroid of all personal bests
+(B-/XB-/GT-PSO [7.11]). With the None error set and true initial beliefs :class:`Estimated`
+gives :class:`Oracle`'s vectors up to floating-point error.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
-if TYPE_CHECKING:  # slo_source's SLOSimulation is itself an SLOHost
-    from .tracker import SLOPositionSource
+from .beliefs import Beliefs
+from .tracker import BeliefTracker
 
 
-class BelievedBests:
-    """Personal bests kept relative to their robots, (R, N, 2), and the global best each
-    robot believes, from the estimates of ``source``.
+class PositionSource(Protocol):
+    """What a scene kind asks about positions. Shapes: x, y (R, N, 2); owner (R,)."""
 
-    ``pbest`` is P at the start (y − x, 0 for a fresh swarm); ``k`` the tick the source
-    last localised at (its start).
-    """
+    exact: bool  # every robot knows the true positions (the kind may decide once for the swarm)
 
-    def __init__(self, source: SLOPositionSource, pbest: np.ndarray, k: int = 0) -> None:
-        self.source = source
-        self.pbest = np.array(pbest, dtype=float)
+    def start(self, x: np.ndarray, y: np.ndarray, k: int, seed: int, first_run: int) -> None:
+        """A fresh swarm at true positions ``x`` with personal bests ``y`` at tick ``k``."""
+        ...
+
+    def observe(self, x: np.ndarray, k: int) -> bool:
+        """Localise at the true positions ``x`` once per tick ``k`` (False: done already)."""
+        ...
+
+    def keep(self, improved: np.ndarray, offset: np.ndarray | float = 0.0) -> None:
+        """Where ``improved`` (R, N), the personal best is now at ``offset`` from the robot."""
+        ...
+
+    def to_personal(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Each robot's vector to its own personal best, (R, N, 2)."""
+        ...
+
+    def to_owner(self, x: np.ndarray, y: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        """Each robot's vector to the personal best of robot ``owner`` (one per run), (R, N, 2)."""
+        ...
+
+    def to_centroid(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Each robot's vector to the centroid of all personal bests [7.11], (R, N, 2)."""
+        ...
+
+    def placed(self, x: np.ndarray) -> np.ndarray:
+        """(R, N, N, 2): where robot i places robot j, itself at its true position."""
+        ...
+
+    def resize(self, x: np.ndarray, k: int) -> None:
+        """The swarm grew or shrank to the robots at ``x`` at tick ``k``, the first ones kept."""
+        ...
+
+    def retune(self, **slo: Any) -> None:
+        """New localisation settings (errors, selection, …), beliefs kept."""
+        ...
+
+
+class Oracle:
+    """Every robot knows every true position."""
+
+    exact = True
+
+    def start(self, x: np.ndarray, y: np.ndarray, k: int, seed: int, first_run: int) -> None:
+        pass
+
+    def observe(self, x: np.ndarray, k: int) -> bool:
+        return False
+
+    def keep(self, improved: np.ndarray, offset: np.ndarray | float = 0.0) -> None:
+        pass
+
+    def to_personal(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return y - x
+
+    def to_owner(self, x: np.ndarray, y: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        return y[np.arange(y.shape[0]), owner][:, None, :] - x
+
+    def to_centroid(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return y.mean(axis=1)[:, None, :] - x
+
+    def placed(self, x: np.ndarray) -> np.ndarray:
+        return np.broadcast_to(x[:, None, :, :], x.shape[:2] + x.shape[1:])
+
+    def resize(self, x: np.ndarray, k: int) -> None:
+        pass
+
+    def retune(self, **slo: Any) -> None:
+        raise ValueError("slo: this swarm acts on true positions; switch it to SLO positions first")
+
+
+class Estimated:
+    """Positions each robot estimates with SLO. The keywords are the :class:`~.tracker.BeliefTracker`
+    ones (errors, selection, neighbourhood, …) with lengths in thesis units, ``unit`` metres each."""
+
+    exact = False
+
+    def __init__(self, *, unit: float = 1.0, **slo: Any) -> None:
+        self.params: dict[str, Any] = {**slo, "unit": float(unit)}
+        self.tracker: BeliefTracker
+        self.pbest: np.ndarray  # (R, N, 2) P: each personal best relative to its robot
+        self.sensed_k = 0  # the tick the tracker last localised at
+
+    @property
+    def unit(self) -> float:
+        """Metres per thesis length unit."""
+        return self.params["unit"]
+
+    @property
+    def beliefs(self) -> Beliefs:
+        return self.tracker.beliefs
+
+    def start(self, x: np.ndarray, y: np.ndarray, k: int, seed: int, first_run: int) -> None:
+        """Fresh beliefs (and sensor streams, from ``seed``) at the true positions ``x``."""
+        if x.shape[-1] != 2:
+            raise ValueError(f"SLO positions need d = 2, got {x.shape[-1]}")
+        self.tracker = BeliefTracker(x, seed=seed, first_run=first_run, **self.params)
+        self.pbest = np.array(y - x, dtype=float)
         self.sensed_k = k
 
-    def sense(self, x: np.ndarray, k: int) -> bool:
-        """Localise at the true positions ``x`` once per tick ``k`` and carry every personal
-        best along by the measured odometry: P_i ← P_i − v*_i ([3.13], measured, gap A35).
-        False (nothing done) when tick ``k`` was sensed already."""
+    def observe(self, x: np.ndarray, k: int) -> bool:
+        """Localise at ``x`` and carry every personal best along by the measured odometry:
+        P_i ← P_i − v*_i ([3.13], measured, gap A35)."""
         if k == self.sensed_k:
             return False
-        self.source.observe(x)
-        self.pbest = self.pbest - self.source.odometry
+        self.tracker.observe(x)
+        self.pbest = self.pbest - self.tracker.odometry
         self.sensed_k = k
         return True
 
     def keep(self, improved: np.ndarray, offset: np.ndarray | float = 0.0) -> None:
-        """Where ``improved`` (R, N), the personal best becomes the new best: the robot's own
-        position (``offset`` 0) or a remote candidate at ``offset`` (R, N, 2) from it."""
+        """The new best is the robot's own position (``offset`` 0) or a remote candidate at
+        ``offset`` (R, N, 2) from it."""
         self.pbest = np.where(np.asarray(improved, bool)[..., None], offset, self.pbest)
 
     def estimates(self) -> np.ndarray:
         """x̂_ij of every ordered pair, (R, N, N, 2), exactly 0 for i = j."""
-        est = self.source.beliefs.est
+        est = self.tracker.beliefs.est
         n = est.shape[1]
         return np.where(np.eye(n, dtype=bool)[None, :, :, None], 0.0, est)
 
-    def to_owner(self, owner: np.ndarray) -> np.ndarray:
-        """Each robot's vector to the personal best of robot ``owner`` (R,): x̂_i,owner +
-        P_owner (gap A36), (R, N, 2)."""
-        own = np.take_along_axis(self.pbest, np.asarray(owner)[:, None, None], axis=1)  # (R, 1, 2)
-        return self.source.relative(owner) + own
+    def to_personal(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return self.pbest
 
-    def to_centroid(self) -> np.ndarray:
-        """Each robot's vector to the centroid of all personal bests [7.11] as it places
-        them, mean_j (x̂_ij + P_j), (R, N, 2)."""
+    def to_owner(self, x: np.ndarray, y: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        """x̂_i,owner + P_owner (gap A36)."""
+        own = np.take_along_axis(self.pbest, np.asarray(owner)[:, None, None], axis=1)  # (R, 1, 2)
+        return self.tracker.relative(owner) + own
+
+    def to_centroid(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """mean_j (x̂_ij + P_j): the centroid of the personal bests as robot i places them."""
         return (self.estimates() + self.pbest[:, None, :, :]).mean(axis=2)
 
+    def placed(self, x: np.ndarray) -> np.ndarray:
+        """x_i + x̂_ij."""
+        return x[:, :, None, :] + self.estimates()
 
-class SLOHost:
-    """Mixin: a host swarm (:class:`~.sim.Simulation`, :class:`~.fleet.Fleet`,
-    :class:`~.sonar.AcousticSwarm`) whose robots localise each other with SLO.
+    def resize(self, x: np.ndarray, k: int) -> None:
+        """Kept robots keep their beliefs, calibration and relative bests; a new robot's best is
+        where it stands (:meth:`~.tracker.BeliefTracker.resize`)."""
+        m = min(x.shape[1], self.pbest.shape[1])
+        self.tracker.resize(x)
+        fresh = np.zeros_like(x, dtype=float)
+        fresh[:, :m] = self.pbest[:, :m]
+        self.pbest, self.sensed_k = fresh, k
 
-    ``slo`` holds the :class:`SLOPositionSource` keywords (errors, selection, unit, …); the
-    source is ``slo_source``. The host needs ``state.x``, ``state.y``, ``state.k``, ``seed``
-    and ``first_run``, and calls ``self.bests`` where it would read positions.
-    """
-
-    slo_params: dict[str, Any]
-    slo_source: SLOPositionSource  # not ``source``: a fleet's source is where it is going
-    bests: BelievedBests
-
-    def __init__(self, *args: Any, slo: dict[str, Any] | None = None, **kwargs: Any) -> None:
-        self.slo_params = dict(slo or {})
-        super().__init__(*args, **kwargs)
-
-    def reset(self, seed: int | None = None) -> None:
-        super().reset(seed)  # type: ignore[misc]
-        self._start_source()
-
-    def step(self) -> Any:
-        """The host's tick, then localisation where the moves ended: the beliefs are current
-        for drawing, and the next tick's sensing finds them done (same positions, same draws)."""
-        info = super().step()  # type: ignore[misc]
-        s = self.state  # type: ignore[attr-defined]
-        self.bests.sense(s.x, s.k)
-        return info
-
-    def _to_global(self) -> np.ndarray:
-        """Each robot's vector to the global best as it believes it, (R, N, 2)."""
-        raise NotImplementedError
-
-    def believed_gbest(self) -> np.ndarray:
-        """(R, N, 2) where each robot believes the global best is, put at its true position."""
-        return self.state.x + self._to_global()  # type: ignore[attr-defined]
-
-    def _start_source(self) -> None:
-        """Fresh beliefs (and sensor streams) at the current true positions."""
-        from .tracker import SLOPositionSource
-
-        s = self.state  # type: ignore[attr-defined]
-        if s.x.shape[-1] != 2:
-            raise ValueError(f"SLO positions need d = 2, got {s.x.shape[-1]}")
-        self.slo_source = SLOPositionSource(s.x, seed=self.seed, first_run=self.first_run,  # type: ignore[attr-defined]
-                                            **self.slo_params)
-        self.bests = BelievedBests(self.slo_source, s.y - s.x, s.k)
-
-    def _retune_positions(self, slo: dict[str, Any]) -> None:
-        """Change the SLO keywords (errors, selection, …) mid-run, beliefs kept (the host's
-        ``retune(slo=...)``); see :meth:`SLOPositionSource.retune`."""
-        merged = {**self.slo_params, **slo}
-        self.slo_source.retune(**{k: merged[k] for k in slo if k != "unit"}, unit=merged.get("unit", 1.0),
-                               **({"neighbourhood_param": merged.get("neighbourhood_param")}
-                                  if "neighbourhood" in slo and "neighbourhood_param" not in slo else {}))
-        self.slo_params = merged
-
-
-__all__ = ["BelievedBests", "SLOHost"]
+    def retune(self, **slo: Any) -> None:
+        """New SLO keywords mid-run, beliefs kept (:meth:`~.tracker.BeliefTracker.retune`); a new
+        neighbourhood without its parameter keeps the one set before."""
+        merged = {**self.params, **slo}
+        keep_param = "neighbourhood" in slo and "neighbourhood_param" not in slo
+        self.tracker.retune(**{k: merged[k] for k in slo if k != "unit"}, unit=merged["unit"],
+                            **({"neighbourhood_param": merged.get("neighbourhood_param")} if keep_param else {}))
+        self.params = merged

@@ -1,11 +1,11 @@
-"""SLO-estimated positions for any Shoal swarm (spec §15): instead of reading oracle
-positions, each robot localises the others from noisy ranges and odometry and acts on what
-it believes. :class:`SLOPositionSource` follows a swarm given its true positions step by
-step; :class:`SLOSimulation` is the Chapter 3 :class:`~.sim.Simulation` driven by it (the
-fleet and the acoustic swarm: ``slo_fleet``, ``slo_sonar``; shared parts: ``slo_host``).
+"""Beliefs of a swarm's robots about each other, followed step by step from the swarm's true
+positions (spec §15): each robot localises the others from noisy ranges and odometry
+(:class:`~.beliefs.Localiser`) with the SLO settings of a preset. :class:`BeliefTracker` is what
+:class:`~.positions.Estimated` positions of a host swarm (the Chapter 3 swarm, the fleet, the
+acoustic swarm) are made of.
 
-With the None error set and true initial beliefs the believed vectors equal the oracle ones
-up to floating-point error, so an SLO run and an oracle run of the same seed coincide.
+With the None error set and true initial beliefs the believed vectors equal the true ones up to
+floating-point error.
 """
 
 from __future__ import annotations
@@ -16,10 +16,8 @@ from typing import Any, Literal
 import numpy as np
 
 from ..core.rng import component_generators
-from ..kinds.swarm import Simulation
 from .beliefs import Beliefs, Localiser, LocaliserParams, random_estimates, relative_truth
 from .neighbourhoods import Neighbourhood, NeighbourhoodKind
-from .positions import BelievedBests, SLOHost
 from .sensors import ErrorModel, error_model
 
 # Component keys of an SLO layer inside another simulation: children (i, 100 + k) of run i,
@@ -27,7 +25,7 @@ from .sensors import ErrorModel, error_model
 SOURCE_STREAM_OFFSET = 100
 
 
-class SLOPositionSource:
+class BeliefTracker:
     """Beliefs of N robots about each other, updated from the swarm's true positions.
 
     ``x0`` (R, N, 2) are the true starting positions. ``errors`` is a preset name (none, low,
@@ -136,56 +134,3 @@ class SLOPositionSource:
         ``x_self`` (default: the true one) — the ghost overlay."""
         anchor = self.x if x_self is None else x_self
         return anchor[:, :, None, :] + self.beliefs.est
-
-
-class SLOSimulation(SLOHost, Simulation):
-    """The Chapter 3 swarm acting on SLO beliefs instead of oracle positions.
-
-    Each robot steers towards its personal best, kept relative to itself from its odometry
-    (gap A35, measured shift; reset to 0 when it improves), and the swarm's global best,
-    located as x̂_i,owner + P_owner (the owner's estimate of its own best, communicated;
-    gap A36): :class:`~.slo_host.BelievedBests`. ``slo`` holds the
-    :class:`SLOPositionSource` keywords (errors, selection, …). Fitness is still read at
-    the true position; positions must be 2-D; only the "literal" attractors use positions.
-    """
-
-    @property
-    def source(self) -> SLOPositionSource:
-        """The position source (``slo_source``)."""
-        return self.slo_source
-
-    def _update_bests(self) -> None:
-        s = self.state
-        self.bests.sense(s.x, s.k)
-        before = s.f_y.copy()
-        super()._update_bests()
-        self.bests.keep(self.state.f_y != before)
-
-    def _directions(self) -> np.ndarray:
-        if self.attractors != "literal":
-            return super()._directions()
-        s = self.state
-        self.bests.sense(s.x, s.k)
-        return np.stack([self.bests.pbest, self._to_global()])
-
-    def _to_global(self) -> np.ndarray:
-        f_y = self.state.f_y
-        return self.bests.to_owner(f_y.argmax(axis=1) if self.objective.maximise else f_y.argmin(axis=1))
-
-    def set_robots(self, n: int) -> None:
-        """Grow or shrink the swarm mid-run (new robots spawn in the start region). The SLO
-        source goes on (:meth:`SLOPositionSource.resize`): kept robots keep their beliefs,
-        calibration and believed personal bests; a new robot's best is where it starts."""
-        cur, pbest = self.robots, self.bests.pbest
-        super().set_robots(n)
-        if n == cur:
-            return
-        s, m = self.state, min(n, cur)
-        self.slo_source.resize(s.x)
-        fresh = np.zeros_like(s.x)  # a new robot: y = x
-        fresh[:, :m] = pbest[:, :m]
-        self.bests = BelievedBests(self.slo_source, fresh, s.k)
-
-    def set_objective(self, objective) -> None:  # type: ignore[no-untyped-def]
-        super().set_objective(objective)
-        self.bests.pbest = np.zeros_like(self.state.x)
