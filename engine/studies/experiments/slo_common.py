@@ -22,6 +22,7 @@ import numpy as np
 from shoal.presets.build import build_slo
 from shoal.presets.io import load
 
+from ..cost import run_cost
 from .output import num
 
 WALK = "slo-walk"
@@ -56,6 +57,11 @@ class SLOJob:
     seed: int
     runs: int
     generations: int
+
+    @property
+    def cost(self) -> float:
+        """Estimated CPU seconds of one run (:func:`~shoal.engine.studies.cost.run_cost`)."""
+        return run_cost(load(self.preset, list(self.overrides)), self.generations)
 
 
 def jobs_for(cases: Iterable[Case], runs: int, generations: int | dict[str, int]) -> list[SLOJob]:
