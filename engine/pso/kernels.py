@@ -59,42 +59,52 @@ def numpy_sum(a: np.ndarray, n: int) -> float:
 
 
 @kernel
-def objective(code: int, x: np.ndarray, r: int, i: int, source: np.ndarray, scale: float, buf: np.ndarray) -> float:
-    """Objective ``code`` at the position ``x[r, i]``, as :class:`~shoal.engine.core.objectives.Objective`
-    computes it (``buf``: scratch of length d)."""
-    d = x.shape[2]
-    if code == LINEAR:
-        return x[r, i, 0]
-    if code == SOURCE_DISTANCE:
-        for k in range(d):
-            t = x[r, i, k] - source[k]
-            buf[k] = t * t
-        return math.sqrt((0.0 + _block(buf, 0, d)))
+def objective(code: int, x: np.ndarray, r: int, source: np.ndarray, scale: float, buf: np.ndarray,
+              f: np.ndarray) -> None:
+    """``f[r, i]``: objective ``code`` at every position ``x[r, i]`` of run r, as
+    :class:`~shoal.engine.core.objectives.Objective` computes it (``buf``: scratch of length d)."""
+    n, d = x.shape[1], x.shape[2]
     shift = False
     for k in range(d):
         shift = shift or source[k] != 0.0
-    for k in range(d):  # the benchmarks see (x − source)/scale (skipping − 0 and / 1 changes no bit they use)
-        z = x[r, i, k] - source[k] if shift else x[r, i, k]
-        buf[k] = z / scale if scale != 1.0 else z
-    if code == ROSENBROCK:
-        if d < 2:
-            t = 1.0 - buf[0]
-            return t * t
-        for k in range(d - 1):
-            q, p = buf[k + 1] - buf[k] * buf[k], 1.0 - buf[k]
-            buf[k] = 100.0 * (q * q) + p * p
-        return (0.0 + _block(buf, 0, d - 1))
-    if code == GRIEWANK:
-        prod = 1.0
-        for k in range(d):
-            prod *= math.cos(buf[k] / math.sqrt(k + 1.0))
-        for k in range(d):
-            buf[k] = buf[k] * buf[k]
-        return 1.0 + (0.0 + _block(buf, 0, d)) / 4000.0 - prod
-    for k in range(d):
-        z = buf[k]
-        buf[k] = z * z if code == SPHERE else z * z - 10.0 * math.cos(TWO_PI * z)
-    return (0.0 + _block(buf, 0, d)) if code == SPHERE else 10.0 * d + (0.0 + _block(buf, 0, d))
+    for i in range(n):
+        if code == LINEAR:
+            f[r, i] = x[r, i, 0]
+            continue
+        if code == SOURCE_DISTANCE:
+            for k in range(d):
+                t = x[r, i, k] - source[k]
+                buf[k] = t * t
+            f[r, i] = math.sqrt(0.0 + _block(buf, 0, d))
+            continue
+        for k in range(d):  # the benchmarks see (x − source)/scale (skipping − 0 and / 1 changes no bit they use)
+            z = x[r, i, k] - source[k] if shift else x[r, i, k]
+            buf[k] = z / scale if scale != 1.0 else z
+        if code == SPHERE:
+            for k in range(d):
+                buf[k] = buf[k] * buf[k]
+            f[r, i] = 0.0 + _block(buf, 0, d)
+        elif code == RASTRIGIN:
+            for k in range(d):
+                z = buf[k]
+                buf[k] = z * z - 10.0 * math.cos(TWO_PI * z)
+            f[r, i] = 10.0 * d + (0.0 + _block(buf, 0, d))
+        elif code == ROSENBROCK:
+            if d < 2:
+                t = 1.0 - buf[0]
+                f[r, i] = t * t
+                continue
+            for k in range(d - 1):
+                q, p = buf[k + 1] - buf[k] * buf[k], 1.0 - buf[k]
+                buf[k] = 100.0 * (q * q) + p * p
+            f[r, i] = 0.0 + _block(buf, 0, d - 1)
+        else:  # GRIEWANK
+            prod = 1.0
+            for k in range(d):
+                prod *= math.cos(buf[k] / math.sqrt(k + 1.0))
+            for k in range(d):
+                buf[k] = buf[k] * buf[k]
+            f[r, i] = 1.0 + (0.0 + _block(buf, 0, d)) / 4000.0 - prod
 
 
 @kernel
@@ -158,32 +168,33 @@ def swarm_step(x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: 
     ``omega_robots`` (R, N) and ``c_robots`` (2, R, N) where those are not empty; ``ahead`` (d,)
     is both attractors' direction unless ``literal``."""
     R, N, d = x.shape
-    buf = np.empty(d)
+    buf, ga, gb = np.empty(d), np.empty(d), np.empty(d)
     per_robot = omega_robots.shape[0] > 0
     for r in range(R):
         if code != GIVEN:
-            for i in range(N):
-                f[r, i] = objective(code, x, r, i, source, scale, buf)
+            objective(code, x, r, source, scale, buf, f)
         if before:  # Algorithm 1 phase A first
             _bests(r, x, f, y, f_y, yg, best, maximise)
         top = big = -np.inf
         for i in range(N):
             w, c1, c2 = (omega_robots[r, i], c_robots[0, r, i], c_robots[1, r, i]) if per_robot else (omega, c[0], c[1])
-            move = False
+            for k in range(d):  # the directions g_1, g_2
+                ga[k], gb[k] = (y[r, i, k] - x[r, i, k], yg[r, k] - x[r, i, k]) if literal else (ahead[k], ahead[k])
+            if adapted:
+                for k in range(d):
+                    ga[k], gb[k] = _sgn(ga[k]), _sgn(gb[k])
             for k in range(d):
-                g1, g2 = (y[r, i, k] - x[r, i, k], yg[r, k] - x[r, i, k]) if literal else (ahead[k], ahead[k])
-                if adapted:
-                    g1, g2 = _sgn(g1), _sgn(g2)
-                v = w * u[r, i, k] + (0.0 + (c1 * draws[r, 0, i, k]) * g1 + (c2 * draws[r, 1, i, k]) * g2)  # [2.1]
-                new[1, r, i, k] = v
+                v = w * u[r, i, k] + (0.0 + (c1 * draws[r, 0, i, k]) * ga[k] + (c2 * draws[r, 1, i, k]) * gb[k])
+                new[1, r, i, k] = v  # [2.1] / [3.11]
                 new[2, r, i, k] = (v - u[r, i, k]) / dt if dt != 1.0 else v - u[r, i, k]  # [3.22] (/1: no bit)
                 new[0, r, i, k] = x[r, i, k] + (dt * v if adapted else v)  # [3.10] / [2.2]
                 buf[k] = v * v
-                move = move or v != 0.0
-            moving[r, i] = move
-            top = _maximum(top, math.sqrt((0.0 + _block(buf, 0, d))))
+            move = False
             for k in range(d):
+                move = move or new[1, r, i, k] != 0.0
                 big = _maximum(big, abs(new[1, r, i, k]))
+            moving[r, i] = move
+            top = _maximum(top, math.sqrt(0.0 + _block(buf, 0, d)))
         speeds[0, r], speeds[1, r] = top, big
         if not before:  # the velocity saw last tick's bests
             _bests(r, x, f, y, f_y, yg, best, maximise)
