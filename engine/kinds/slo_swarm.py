@@ -181,8 +181,8 @@ class SLOState:
         return self.beliefs.candidates
 
 
-METRICS = ("e_abs", "e_rel", "e_ang", "distance")  # statistics of pair values: mean, std, sem, median, count
-STATS = ("mean", "std", "sem", "median", "count")
+METRICS = ("e_abs", "e_rel", "e_ang", "distance")  # statistics (metrics.STATS) of pair values
+STATS = metrics.STATS
 
 
 @dataclass
@@ -200,32 +200,48 @@ class SLOInfo:
     quality_met_at: np.ndarray  # first generation with best ≤ T, inf if not yet
     x: np.ndarray = field(repr=False)  # (R, N, 2)
     beliefs: Beliefs = field(repr=False)
+    _pairs: dict[str, np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)  # pair values
+    _done: dict[tuple[str, str], np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def t(self) -> float:
         return float(self.k)
 
-    @cached_property
-    def _distance_errors(self) -> tuple[np.ndarray, np.ndarray]:
-        return metrics.distance_errors(self.x, self.beliefs.est, self.beliefs.valid)
+    def _values(self, name: str) -> np.ndarray:
+        if name not in self._pairs:
+            b = self.beliefs
+            if name in ("e_abs", "e_rel"):
+                self._pairs["e_abs"], self._pairs["e_rel"] = metrics.distance_errors(self.x, b.est, b.valid)
+            elif name == "e_ang":
+                self._pairs[name] = metrics.angular_errors(self.x, b.est, b.valid)
+            else:
+                self._pairs[name] = metrics.pair_distances(self.x)
+        return self._pairs[name]
 
-    @cached_property
+    def _stats(self, name: str, keys: Iterable[str] = STATS) -> dict[str, np.ndarray]:
+        """Statistics ``keys`` of metric ``name`` (one of :data:`METRICS`), each worked out once."""
+        todo = [k for k in keys if (name, k) not in self._done]
+        if todo:
+            self._done.update({(name, k): v for k, v in metrics.stats(self._values(name), todo).items()})
+        return {k: self._done[(name, k)] for k in keys}
+
+    @property
     def e_abs(self) -> dict[str, np.ndarray]:
         """Statistics of e_abs over the neighbour pairs."""
-        return metrics.stats(self._distance_errors[0])
+        return self._stats("e_abs")
 
-    @cached_property
+    @property
     def e_rel(self) -> dict[str, np.ndarray]:
-        return metrics.stats(self._distance_errors[1])
+        return self._stats("e_rel")
 
-    @cached_property
+    @property
     def e_ang(self) -> dict[str, np.ndarray]:
-        return metrics.stats(metrics.angular_errors(self.x, self.beliefs.est, self.beliefs.valid))
+        return self._stats("e_ang")
 
-    @cached_property
+    @property
     def distance(self) -> dict[str, np.ndarray]:
         """Statistics of the distances of all unordered pairs."""
-        return metrics.stats(metrics.pair_distances(self.x))
+        return self._stats("distance")
 
     @cached_property
     def dead_reckoning(self) -> np.ndarray:
@@ -235,7 +251,7 @@ class SLOInfo:
     @cached_property
     def round_trip(self) -> np.ndarray:
         """Mean e_r over the first triangles."""
-        return metrics.stats(metrics.round_trip_errors(self.beliefs.est, self.beliefs.adjacency))["mean"]
+        return metrics.stats(metrics.round_trip_errors(self.beliefs.est, self.beliefs.adjacency), ["mean"])["mean"]
 
     def series(self, names: Iterable[str] | None = None) -> dict[str, np.ndarray]:
         """Flat per-run values under Mai's names, e.g. ``best_fitness`` (of this generation),
@@ -246,8 +262,7 @@ class SLOInfo:
             if name in METRICS:
                 keys = [k for k in STATS if want is None or f"{name}_{k}" in want]
                 if keys:
-                    values = getattr(self, name)
-                    out.update({f"{name}_{k}": np.asarray(values[k], dtype=float) for k in keys})
+                    out.update({f"{name}_{k}": np.asarray(v, dtype=float) for k, v in self._stats(name, keys).items()})
             elif want is None or name in want:
                 out[name] = np.asarray(getattr(self, name), dtype=float)
         return out

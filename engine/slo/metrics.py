@@ -8,6 +8,8 @@ NaN when a run has no pair.
 
 from __future__ import annotations
 
+from typing import Sequence
+
 import numpy as np
 
 from ..core.vectors import norm
@@ -47,24 +49,32 @@ def pair_errors(x: np.ndarray, est: np.ndarray, valid: np.ndarray) -> dict[str, 
     return {"abs": e_abs, "rel": e_rel, "ang": angular_errors(x, est, valid)}
 
 
-def stats(values: np.ndarray) -> dict[str, np.ndarray]:
-    """Mean, std, SEM, median and count per run over all trailing axes, ignoring NaN."""
+STATS = ("mean", "std", "sem", "median", "count")
+
+
+def stats(values: np.ndarray, keys: Sequence[str] = STATS) -> dict[str, np.ndarray]:
+    """Mean, std, SEM, median and count per run over all trailing axes, ignoring NaN; only
+    the ``keys`` asked for are worked out."""
     flat = values.reshape(values.shape[0], -1)
     good = np.isfinite(flat)
     n = good.sum(axis=1)
-    safe = np.where(good, flat, 0.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean = safe.sum(axis=1) / n
-        var = np.where(good, (safe - mean[:, None]) ** 2, 0.0).sum(axis=1) / n
-        std = np.sqrt(var)
-        sem = std / np.sqrt(n)
-    ordered = np.sort(np.where(good, flat, np.inf), axis=1)
-    lo, hi = np.maximum((n - 1) // 2, 0), np.maximum(n // 2, 0)
-    rows = np.arange(flat.shape[0])
-    median = np.where(n > 0, 0.5 * (ordered[rows, lo] + ordered[rows, hi]), np.nan)
     empty = n == 0
-    return {"mean": np.where(empty, np.nan, mean), "std": np.where(empty, np.nan, std),
-            "sem": np.where(empty, np.nan, sem), "median": median, "count": n}
+    out: dict[str, np.ndarray] = {"count": n}
+    if {"mean", "std", "sem"} & set(keys):
+        safe = np.where(good, flat, 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean = safe.sum(axis=1) / n
+            var = np.where(good, (safe - mean[:, None]) ** 2, 0.0).sum(axis=1) / n
+            std = np.sqrt(var)
+            sem = std / np.sqrt(n)
+        out |= {"mean": np.where(empty, np.nan, mean), "std": np.where(empty, np.nan, std),
+                "sem": np.where(empty, np.nan, sem)}
+    if "median" in keys:
+        ordered = np.sort(np.where(good, flat, np.inf), axis=1)
+        lo, hi = np.maximum((n - 1) // 2, 0), np.maximum(n // 2, 0)
+        rows = np.arange(flat.shape[0])
+        out["median"] = np.where(n > 0, 0.5 * (ordered[rows, lo] + ordered[rows, hi]), np.nan)
+    return {k: out[k] for k in keys}
 
 
 def pair_distances(x: np.ndarray) -> np.ndarray:
