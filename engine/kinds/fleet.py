@@ -220,6 +220,7 @@ class Fleet:
         self._spaces: list[RunSpace] | None = None
         self._stale = False
         self._world_arrays: tuple[kernels.WorldArrays, kernels.Grid] | None = None
+        self._tick_params: tuple[FleetParams | None, kernels.TickParams | None] = (None, None)
         self.motion = self._motion()
         heading = np.zeros(x.shape[:2])
         f = self.cost(x)
@@ -463,7 +464,9 @@ class Fleet:
         draws = np.ascontiguousarray(r if r.ndim == 4 else r[..., None])
         s.x, s.heading, s.u, s.cmd = (np.array(a, dtype=float) for a in (s.x, s.heading, s.u, s.cmd))
         s.status = np.array(s.status, dtype=np.int8)
-        sensed = kernels.phase_b(s.x, s.heading, s.u, s.cmd, s.status, g_p, g_g, draws, p.tick_params(), world,
+        if self._tick_params[0] != p:  # built again after a retune (or a change in place)
+            self._tick_params = (replace(p), p.tick_params())
+        sensed = kernels.phase_b(s.x, s.heading, s.u, s.cmd, s.status, g_p, g_g, draws, self._tick_params[1], world,
                                  grid, out)
         self._stale = True
         return bool(sensed)
