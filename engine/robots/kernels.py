@@ -12,9 +12,11 @@ for a swarm of constant density.
 
 The numpy tick stays the reference (and the path of physics mode, where pymunk steps the
 bodies, and of worlds with polygons); ``tests/test_kernels.py`` runs both on seeded scenes with
-collisions in every kinematic mode and requires equal bits. The one place they may part:
-sensing breaks an exact tie between two bodies' gaps in one sector by its own candidate order
-(pymunk by its tree's), which needs two gaps equal to the last bit.
+collisions in every kinematic mode and requires equal bits. Where they may part, in cases
+that need equality to the last bit: sensing breaks an exact tie between two bodies' gaps in
+one sector by its own candidate order (pymunk by its tree's), and takes a bearing with the C
+library's atan2, which differs from numpy's in the last bit now and then, so a body within
+one rounding of a sector border may fall in the other sector.
 """
 
 from __future__ import annotations
