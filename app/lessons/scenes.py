@@ -52,7 +52,7 @@ def overrides(values: dict[str, Any]) -> list[str]:
 
 def load_scene(preset: str, values: dict[str, Any]) -> Scenario:
     """The validated scenario of ``preset`` with ``values``, or :class:`PresetError`."""
-    return presets_io.load(preset, overrides(values))
+    return presets_io.load_shipped(preset, overrides(values))  # lessons name shipped presets only
 
 
 def describe(preset: str, values: dict[str, Any]) -> str:
