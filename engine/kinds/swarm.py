@@ -281,10 +281,11 @@ class Simulation:
 
     def _compiled_tick(self) -> bool:
         """:func:`kernels.swarm_step` does the tick: the laws it knows (standard, Adapted with
-        sgn) in up to 128 dimensions, on true positions, unless the swarm was made with
-        ``compiled=False``."""
+        sgn) in up to 128 dimensions, on true positions and float64 states, unless the swarm was
+        made with ``compiled=False``."""
+        s = self.state
         return (self.compiled and self.law.name in ("standard", "adapted-sgn") and self.d <= kernels.MAX_TERMS
-                and isinstance(self.positions, Oracle))
+                and isinstance(self.positions, Oracle) and s.x.dtype == s.u.dtype == s.y.dtype == np.float64)
 
     def _compiled_step(self) -> StepInfo:
         """The tick of :meth:`step` in one compiled call; the same numbers."""
