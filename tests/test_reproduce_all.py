@@ -74,3 +74,17 @@ def test_cli_report_and_all_refuse_bad_input(reproduced: Path, tmp_path: Path) -
     assert bad.returncode == 2 and "--runs must be >= 1" in bad.stderr
     none = subprocess.run([*run, "reproduce", "--report", str(tmp_path / "nothing")], capture_output=True, text=True)
     assert none.returncode == 2 and "no reproduced target" in none.stderr
+
+
+def test_information_is_shown_beside_the_checks_but_not_counted() -> None:
+    from shoal.engine.experiments.output import check, info
+    from shoal.engine.experiments.report import Outcome, render
+
+    summary = {"runs": 3, "elapsed_s": 1.0, "checks": [check("median run collision-free", "none", "0", True)],
+               "information": [info("every run collision-free", "none", "2 robots in 1 run", False)]}
+    text = render([Outcome("fig4-6", summary=summary)])
+    assert "| [fig4-6](#fig4-6) | Rossides, Figs. 4-6 and 4-7 | 3 | 1/1 |" in text
+    assert "In all: 1 of 1 checks pass" in text
+    assert "information, not counted as checks" in text
+    assert "| every run collision-free | none | 2 robots in 1 run | no |" in text
+    assert "Every check holds." in text

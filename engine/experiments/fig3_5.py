@@ -125,11 +125,11 @@ def run(
     settle = {p: settle_times(R[p], t1, t2) for p in PANELS}
 
     def slow(key: str, thesis: float | str, claim: str) -> dict[str, Any]:
-        return c3.check(f"{key}: {claim}; pass = lags, median ≥ {SLOW:g} s ({big} particles, per run)",
+        return c3.check(f"{key}: {claim}; pass = lags, median ≥ {SLOW:g} s, threshold ours ({big} particles, per run)",
                         thesis, _fmt(times[key]), med[key] >= SLOW and math.isfinite(med[key]))
 
     def fast(key: str, thesis: float | str) -> dict[str, Any]:
-        return c3.check(f"{key}: high β follows at once; pass = median ≤ {FAST:g} s ({big} particles, per run)",
+        return c3.check(f"{key}: high β follows at once; pass = median ≤ {FAST:g} s, threshold ours ({big} particles, per run)",
                         thesis, _fmt(times[key]), med[key] <= FAST)
 
     checks = [

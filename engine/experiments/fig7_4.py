@@ -147,7 +147,7 @@ def unaffected(res, alg: str, pts: Sequence[Point], what: str, steps: int) -> di
             f"{v:.0f}" for v in f) + " m"
         ok = not any(np.isfinite(t)) and max(f) <= 1.2 * min(f)
     return check(f"{ch.LABELS[alg]} is not affected by {what} (median times within ×1.3, or if none converges the "
-                 "median final distances within ±20 %)", "no effect", shown, ok)
+                 "median final distances within ±20 %; thresholds ours)", "no effect", shown, ok)
 
 
 def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: bool = True, *,
@@ -175,7 +175,7 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
                             f"{ch.time_text(med(res, alg, qhi), steps)} vs {ch.time_text(med(res, alg, qlo), steps)}",
                             med(res, alg, qhi) > med(res, alg, qlo)))
     pairs = [(med(res, "xb-pso", x), med(res, "b-pso", x)) for x in q]
-    checks.append(check("XB-PSO at least as fast as B-PSO at every Q (D = λ_c/2; pass: XB ≤ 1.05 × B)",
+    checks.append(check("XB-PSO at least as fast as B-PSO at every Q (D = λ_c/2; pass: XB ≤ 1.05 × B; threshold ours)",
                         "XB-PSO slightly faster than B-PSO at every Q",
                         "; ".join(f"Q {x:g}: {ch.time_text(a, steps)} vs {ch.time_text(b, steps)}"
                                   for x, (a, b) in zip(q, pairs)),

@@ -20,6 +20,7 @@ from typing import Any, Callable, Iterable, Sequence
 from shoal import __version__
 
 from ..atomic import atomic_write_text
+from .output import cell, information_table
 from .registry import TARGETS, reproduce
 
 REPORT = "REPRODUCTION.md"
@@ -200,10 +201,6 @@ def _demote(text: str) -> str:
     return re.sub(r"^(#+) ", lambda m: "#" * (len(m.group(1)) + 2) + " ", text, flags=re.M)
 
 
-def _cell(v: Any) -> str:
-    return str(v).replace("|", "\\|").replace("\n", " ")
-
-
 def render(outcomes: Sequence[Outcome], *, image_prefix: str = "") -> str:
     """The text of ``REPRODUCTION.md``; figures are linked as ``<image_prefix><target>/<png>``."""
     lines = [
@@ -229,7 +226,7 @@ def render(outcomes: Sequence[Outcome], *, image_prefix: str = "") -> str:
     for o in outcomes:
         lines += [f'<a id="{o.name}"></a>', "", f"## {o.name}: {SOURCES.get(o.name, '')}", ""]
         if o.error is not None:
-            lines += [f"This target failed to run: `{_cell(o.error)}`. Rerun it alone with "
+            lines += [f"This target failed to run: `{cell(o.error)}`. Rerun it alone with "
                       f"`shoal reproduce {o.name}` to see the whole error.", ""]
             continue
         s = o.summary or {}
@@ -244,16 +241,18 @@ def render(outcomes: Sequence[Outcome], *, image_prefix: str = "") -> str:
             lines += [f"![{o.name} {png}]({image_prefix}{o.name}/{png})" for png in o.figures]
             lines.append("")
         lines += ["### Thesis beside Shoal", "", "| check | thesis | Shoal | holds |", "|---|---|---|---|"]
-        lines += [f"| {_cell(c['name'])} | {_cell(c.get('thesis', ''))} | {_cell(c.get('measured', ''))} | "
+        lines += [f"| {cell(c['name'])} | {cell(c.get('thesis', ''))} | {cell(c.get('measured', ''))} | "
                   f"{'yes' if c.get('pass') else '**no**'} |" for c in o.checks]
         lines.append("")
+        if s.get("information"):
+            lines += [information_table(s["information"]), ""]
         discussion = {k: v for k, v in sections.items() if k not in ("Files", "Checks")}
         failed = [c for c in o.checks if not c.get("pass")]
         lines += ["### Where and why they differ", ""]
         if failed:
             lines += [f"{len(failed)} of {len(o.checks)} checks do not hold: "
-                      + "; ".join(f"*{_cell(c['name'])}* (thesis: {_cell(c.get('thesis', ''))}; "
-                                  f"Shoal: {_cell(c.get('measured', ''))})" for c in failed) + ".", ""]
+                      + "; ".join(f"*{cell(c['name'])}* (thesis: {cell(c.get('thesis', ''))}; "
+                                  f"Shoal: {cell(c.get('measured', ''))})" for c in failed) + ".", ""]
         else:
             lines += ["Every check holds.", ""]
         for title, body in discussion.items():

@@ -175,7 +175,7 @@ def run_errors(out_dir: Path, runs: int, workers: int = 1, progress: bool = True
     grow = {n: float(rts[n][-1] / rts[n][25]) for n in NEIGHBOURHOODS}
     checks.append(check(
         f"RTS runs away under a velocity offset in static neighbourhoods: in full and ring the median error at "
-        f"generation {generations} is > 1.5x the one at generation 25",
+        f"generation {generations} is > 1.5x the one at generation 25 (threshold ours)",
         "RTS runs away in full and ring neighbourhoods (Fig. 4.2)",
         "growth gen 25 -> end: " + ", ".join(f"{n} {sc.g3(grow[n])}x" for n in NEIGHBOURHOODS),
         all(grow[n] > 1.5 for n in STATIC)))
@@ -200,7 +200,7 @@ def run_errors(out_dir: Path, runs: int, workers: int = 1, progress: bool = True
         rel = sc.med(res[c30.name].final("e_rel_median"))
         checks.append(check(
             f"30 % {p.split('_')[0]} failures tolerated (CSS): median relative error at generation {generations} "
-            "below 0.1", "even a 30 % failure rate leaves an acceptably small error (Fig. 4.3)",
+            "below 0.1 (threshold ours)", "even a 30 % failure rate leaves an acceptably small error (Fig. 4.3)",
             f"relative error {sc.g3(rel)}, abs. error {sc.g3(_fin(res, c30.name))} (no error: "
             f"{sc.g3(_fin(res, base.name))})", rel < 0.1))
     beats = {p: {s: _avg(res, fig43[(p, s)][-1].name) for s in SELECTIONS} for p in ("range_p_fail", "odometry_p_fail")}
@@ -288,7 +288,7 @@ def run_mitigation(out_dir: Path, runs: int, workers: int = 1, progress: bool = 
         all(none[(0.03, dv)] > none[(0.03, 0.0)] for dv in DELTAS[1:])))
     rnd = val["fig4-6"]
     checks.append(check(
-        "random topology, CSS, no error: mitigation (δ_cos = δ_v = 0.03) at least doubles the error of no mitigation",
+        "random topology, CSS, no error: mitigation (δ_cos = δ_v = 0.03) at least doubles the error of no mitigation (threshold ours)",
         "mitigation ruins performance completely (Fig. 4.6)",
         f"none {sc.g3(rnd[(0.0, 0.0)])}, 0.03/0.03 {sc.g3(rnd[(0.03, 0.03)])}, 0.1/0.1 {sc.g3(rnd[(0.1, 0.1)])}",
         rnd[(0.03, 0.03)] >= 2 * rnd[(0.0, 0.0)]))
@@ -346,7 +346,7 @@ def run_neighbourhood(out_dir: Path, runs: int, workers: int = 1, progress: bool
     fin = {n: _fin(res, c.name) for n, c in ring.items()}
     curve = {k: res[c.name].median("e_abs_mean") for k, c in rnd.items()}
     checks = [check(
-        "ring, CSS: connectedness n hardly matters (largest / smallest end error over n <= 1.5)",
+        "ring, CSS: connectedness n hardly matters (largest / smallest end error over n <= 1.5; threshold ours)",
         "connectedness has almost no influence on the absolute error (Fig. 4.7)",
         ", ".join(f"n={n}: {sc.g3(v)}" for n, v in fin.items()), max(fin.values()) <= 1.5 * min(fin.values()))]
     late = {p: float(np.mean(curve[("css", p)][25:])) for p in P_RANDOM}
@@ -373,7 +373,7 @@ def run_neighbourhood(out_dir: Path, runs: int, workers: int = 1, progress: bool
         ", ".join(f"p={p:g}: RTS {sc.g3(rts_late[p])} vs CSS {sc.g3(late[p])}" for p in P_RANDOM),
         all(rts_late[p] < late[p] for p in P_RANDOM)))
     checks.append(check(
-        "random, RTS: hardly affected by p after generation 25 (largest / smallest <= 1.5)",
+        "random, RTS: hardly affected by p after generation 25 (largest / smallest <= 1.5; threshold ours)",
         "RTS is otherwise hardly affected by p (Fig. 4.8b)",
         ", ".join(f"p={p:g}: {sc.g3(v)}" for p, v in rts_late.items()),
         max(rts_late.values()) <= 1.5 * min(rts_late.values())))
