@@ -65,7 +65,7 @@ class SLOConfig:
     pbest_shift: PbestShift = "commanded"  # gap A35 (thesis mode)
     init_area: tuple[float, float] | None = None  # S = [lo, hi]²; None: [−50, 50]² PSO (A29), [0, 100]² walk
     walk_speed: float = 5.0
-    entry_policy: EntryPolicy = "stale"  # gap A25
+    entry_policy: EntryPolicy = "dead_reckoning"  # docs/readings.md
     initial_estimates: InitialEstimates = "random"  # gap A9
     measure_all_ranges: bool = True
     max_range: float = np.inf

@@ -257,8 +257,9 @@ class SLO(_Model):
     delta_cos: Annotated[float, Field(ge=0.0, le=1.0, description="mitigation threshold δ_cos [3.5]")] = 0.03
     delta_v: Annotated[float, Field(ge=0.0, le=10.0, description="mitigation threshold δ_v [3.6]")] = 0.03
     literal_eq_3_1: bool = Field(False, description="use [3.1] as printed (known slip) instead of the corrected law of cosines")
-    entry_policy: Literal["stale", "geometric_random"] = Field(
-        "stale", description="a neighbour that just arrived: reuse the last estimate, or a random mirror candidate (gap A25)")
+    entry_policy: Literal["dead_reckoning", "stale", "geometric_random"] = Field(
+        "dead_reckoning", description="estimates of robots outside the neighbourhood: carried by odometry (exact with "
+        "perfect sensors), frozen, or frozen with an arriving neighbour placed on a random mirror candidate")
     neighbourhood: Literal["knn", "radius", "full", "random", "ring"] = Field("knn", description="who localises whom")
     neighbourhood_param: Annotated[float | None, Field(ge=0.0, le=1e4, description="k (knn), r (radius), n (ring), p (random); unset = 5, 25, 2, 0.5")] = None
     walk_speed: Annotated[float, Field(gt=0.0, le=100.0, description="random walk: top step length (thesis units)")] = 5.0
