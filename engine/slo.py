@@ -59,7 +59,7 @@ class SLOConfig:
     c2: float = C_SPSO
     c3: float = 1.0
     c4: float = 0.0
-    radial: Radial = "uniform_radius"  # gap A3
+    radial: Radial = "uniform_radius"  # the SPSO 2011 reference code; docs/readings.md
     spso_self_best_halving: bool = False  # gap A5
     local_best: LocalBest = "current"  # gap A36
     pbest_shift: PbestShift = "commanded"  # gap A35 (thesis mode)

@@ -263,6 +263,10 @@ class SLO(_Model):
     neighbourhood: Literal["knn", "radius", "full", "random", "ring"] = Field("knn", description="who localises whom")
     neighbourhood_param: Annotated[float | None, Field(ge=0.0, le=1e4, description="k (knn), r (radius), n (ring), p (random); unset = 5, 25, 2, 0.5")] = None
     walk_speed: Annotated[float, Field(gt=0.0, le=100.0, description="random walk: top step length (thesis units)")] = 5.0
+    radial: Literal["uniform_radius", "uniform_area"] = Field(
+        "uniform_radius", description="SLO swarm, SPSO 2011 [3.11]: the point in the hypersphere H(G, r) is r·ρ·g/|g| "
+        "with ρ ~ U(0, 1), as the SPSO 2011 reference code draws it (denser near G; Mai does not say), or √ρ, uniform "
+        "over the disc")
     unit: Annotated[float | None, Field(gt=0.0, le=1e4, description="host swarm: metres per thesis length unit (the thesis area is 100 wide); unset = the scene's size / 100")] = None
     quality_threshold: Annotated[float | None, Field(ge=-1e12, le=1e12, description="fitness T of 'first generation with best <= T'; unset = the benchmark's")] = None
 
