@@ -66,6 +66,12 @@ def _fig7_2(out_dir: Path, runs: int, workers: int, progress: bool, **options: A
     return fig7_2.run(out_dir, runs, workers, progress, **options)
 
 
+def _fig7_3(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
+    from . import fig7_3
+
+    return fig7_3.run(out_dir, runs, workers, progress, **options)
+
+
 def _fig7_4(out_dir: Path, runs: int, workers: int, progress: bool, **options: Any) -> dict[str, Any]:
     from . import fig7_4
 
@@ -127,11 +133,13 @@ TARGETS: dict[str, Target] = {
         Target("fig5-5", "Ch. 5 Fig. 5-5: omni vs non-omni DVC on the obstacle course (median CoM fitness, "
                "5th-95th percentile bands)", 100, _fig5_5),
         Target("fig7-2", "Ch. 7 Fig. 7-2: A-/X-/B-/XB-PSO convergence from SNR0 = 10, 4, 0 dB (waveform level, "
-               "10 robots, 6000 steps)", 100, _fig7_2),
+               "10 robots, 6000 steps; c1:c2 1:3 and 1:1)", 100, _fig7_2),
+        Target("fig7-3", "Ch. 7 Fig. 7-3: CoM routes of the 10 dB swarms of Fig. 7-2 and where they passed "
+               "(routes from a fig7-2 run beside it, else the same runs simulated)", 100, _fig7_3),
         Target("fig7-4", "Ch. 7 Fig. 7-4: median time to convergence over (Q, D/lambda_c) at 10 dB "
                "(20 runs per point by default)", 20, _fig7_4),
         Target("fig7-5", "Ch. 7 Fig. 7-5: median time to convergence over (Q, U) at 10 dB, D = lambda_c/2 "
-               "(20 runs per point by default)", 20, _fig7_5),
+               "(20 runs per point by default; c1:c2 1:3 and 1:1)", 20, _fig7_5),
         Target("fig8-2", "Ch. 8 Fig. 8-2: GT-PSO vs XB-PSO with the non-omni DVC controller from SNR0 = 10, 6, 4, 0 dB "
                "(2000 steps)", 100, _fig8_2),
         Target("fig8-4", "Ch. 8 Fig. 8-4: escorting a stationary source, 10 and 40 robots at r = 25, 50, 75 m "

@@ -30,6 +30,7 @@ FAILED = "failed.json"  # written into a target's folder slot when the target ra
 SOURCES: dict[str, str] = {
     "fig3-4": "Rossides, Fig. 3-4", "fig3-5": "Rossides, Fig. 3-5", "fig4-6": "Rossides, Figs. 4-6 and 4-7",
     "fig5-4": "Rossides, Fig. 5-4", "fig5-5": "Rossides, Fig. 5-5", "fig7-2": "Rossides, Fig. 7-2",
+    "fig7-3": "Rossides, Fig. 7-3",
     "fig7-4": "Rossides, Fig. 7-4", "fig7-5": "Rossides, Fig. 7-5", "fig8-2": "Rossides, Fig. 8-2",
     "fig8-4": "Rossides, Fig. 8-4", "fig8-5": "Rossides, Fig. 8-5", "slo-errors": "Mai, Figs. 4.1-4.3",
     "slo-mitigation": "Mai, Figs. 4.4-4.6", "slo-neighbourhood": "Mai, Figs. 4.7-4.8",
