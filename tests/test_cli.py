@@ -88,3 +88,10 @@ def test_reproduce_list():
 def test_help_for_every_command():
     for cmd in ("serve", "run", "reproduce", "presets"):
         assert shoal(cmd, "--help").returncode == 0
+
+
+def test_reproduce_quick_runs_the_classroom_size(tmp_path):
+    out = shoal("reproduce", "fig3-5", "--quick", "--out", str(tmp_path / "q"))
+    assert out.returncode == 0, out.stderr
+    summary = json.loads((tmp_path / "q" / "summary.json").read_text(encoding="utf-8"))
+    assert summary["quick"] is True and summary["runs"] == 20

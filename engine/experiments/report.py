@@ -129,14 +129,16 @@ def run_all(
     progress: bool = True,
     targets: Sequence[str] | None = None,
     resume: bool = False,
+    quick: bool = False,
     log: Callable[[str], None] = print,
     **options: Any,
 ) -> Path:
     """Reproduce ``targets`` (default: all) into ``out_dir/<target>`` and write the report.
 
-    ``runs`` overrides every target's default run count (``None`` keeps each default).
-    With ``resume``, a target folder that already holds a ``summary.json`` of the same run
-    count is kept. ``options`` go to :func:`reproduce` (e.g. a scheduler)."""
+    ``runs`` overrides every target's default run count (``None`` keeps each default);
+    ``quick`` runs every target at its classroom size (``Target.quick``). With ``resume``, a
+    target folder that already holds a ``summary.json`` of the same run count and size is
+    kept. ``options`` go to :func:`reproduce` (e.g. a scheduler)."""
     out_dir = Path(out_dir)
     names = list(TARGETS) if targets is None else list(targets)
     unknown = [n for n in names if n not in TARGETS]
@@ -145,15 +147,17 @@ def run_all(
     out_dir.mkdir(parents=True, exist_ok=True)
     for i, name in enumerate(names, 1):
         folder = out_dir / name
-        wanted = TARGETS[name].default_runs if runs is None else runs
-        if resume and _finished(folder, wanted):
+        spec = TARGETS[name]
+        wanted = (spec.quick_runs if quick else spec.default_runs) if runs is None else runs
+        if resume and _finished(folder, wanted, quick):
             log(f"[{i}/{len(names)}] {name}: kept (finished earlier with {wanted} runs)")
             continue
-        log(f"[{i}/{len(names)}] {name} ({wanted} runs)")
+        log(f"[{i}/{len(names)}] {name} ({wanted} runs{', quick' if quick else ''})")
         (out_dir / f"{name}.{FAILED}").unlink(missing_ok=True)
         start = time.perf_counter()
         try:
-            summary = reproduce(name, folder, runs=wanted, workers=workers, progress=progress, **options)
+            summary = reproduce(name, folder, runs=wanted, workers=workers, progress=progress, quick=quick,
+                                **options)
         except KeyboardInterrupt:
             raise
         except Exception as e:  # one broken target must not cost the others
@@ -166,9 +170,10 @@ def run_all(
     return write_report(out_dir, names)
 
 
-def _finished(folder: Path, runs: int) -> bool:
+def _finished(folder: Path, runs: int, quick: bool = False) -> bool:
     try:
-        return int(json.loads((folder / "summary.json").read_text(encoding="utf-8"))["runs"]) == runs
+        summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+        return int(summary["runs"]) == runs and bool(summary.get("quick", False)) == quick
     except (OSError, ValueError, KeyError, TypeError):
         return False
 
@@ -212,14 +217,20 @@ def render(outcomes: Sequence[Outcome], *, image_prefix: str = "") -> str:
         "differ. A check that does not hold is reported as not passed, never hidden. Each target folder also "
         "holds `runs.csv` and `summary.json`; a fresh run also writes the series behind the figures. Times are wall-clock seconds with the "
         "workers named in each section.", "",
-        "| target | thesis | runs | checks passed | time (s) |", "|---|---|---:|---:|---:|",
     ]
+    quick = [o.name for o in outcomes if (o.summary or {}).get("quick")]
+    if quick:
+        lines += [f"**Quick (classroom) size:** {'every target' if len(quick) == len(outcomes) else ', '.join(quick)} "
+                  "ran with `--quick`: few runs per case (marked \"quick\" below), the same checks. The numbers are "
+                  "noisier than at full size; `shoal reproduce --all` regenerates the full report.", ""]
+    lines += ["| target | thesis | runs | checks passed | time (s) |", "|---|---|---:|---:|---:|"]
     for o in outcomes:
         if o.error is not None:
             lines.append(f"| [{o.name}](#{o.name}) | {SOURCES.get(o.name, '')} | | failed to run | |")
         else:
             s = o.summary or {}
-            lines.append(f"| [{o.name}](#{o.name}) | {SOURCES.get(o.name, '')} | {s.get('runs', '')} | "
+            runs = f"{s.get('runs', '')}{' (quick)' if s.get('quick') else ''}"
+            lines.append(f"| [{o.name}](#{o.name}) | {SOURCES.get(o.name, '')} | {runs} | "
                          f"{o.passed}/{len(o.checks)} | {s.get('elapsed_s', '')} |")
     total = sum(len(o.checks) for o in outcomes)
     lines += ["", f"In all: {sum(o.passed for o in outcomes)} of {total} checks pass over "
@@ -233,8 +244,9 @@ def render(outcomes: Sequence[Outcome], *, image_prefix: str = "") -> str:
         s = o.summary or {}
         lead, sections = _sections(o.readme)
         lines += [TARGETS[o.name].description if o.name in TARGETS else "", ""]
-        lines += [f"Regenerate: `shoal reproduce {o.name} --runs {s.get('runs')}` "
-                  f"({s.get('elapsed_s')} s with {s.get('workers', 1)} worker(s)).", ""]
+        flag = " --quick" if s.get("quick") else ""
+        lines += [f"Regenerate: `shoal reproduce {o.name}{flag} --runs {s.get('runs')}` "
+                  f"({s.get('elapsed_s')} s with {s.get('workers', 1)} worker(s){', quick size' if flag else ''}).", ""]
         if lead:
             lines += ["### Setup", "", _demote(lead), ""]
         if o.figures:
