@@ -64,7 +64,7 @@ def constant_case(law: str, ratio: str) -> Case:
     ))
 
 
-# The seven Chapter 4 cases (spec §12.1) and the non-omni controller of Chapter 5.
+# The seven Chapter 4 cases (Table 4.1) and the non-omni controller of Chapter 5.
 RATIOS = ("c3-high", "c3-equal", "c3-low")
 CH4_CASES: tuple[Case, ...] = (
     *(constant_case("rpso", r) for r in RATIOS),

@@ -1,8 +1,8 @@
-"""Figs. 4-6 and 4-7: the seven Chapter 4 cases on the obstacle course (spec §12).
+"""Figs. 4-6 and 4-7: the seven Chapter 4 cases on the obstacle course (Section 4.4, p. 102).
 
 Six omnidirectional robots start in the square on the left and seek the source on the
-right through layers of circular obstacles (our course in the spirit of Fig. 4-1, spec §20
-item 22). Cases (spec §12.1, Table 4.1, ω = 0.1): Original RPSO [4.2] and Adapted RPSO [4.5]
+right through layers of circular obstacles (our course in the spirit of Fig. 4-1, which
+gives no dimensions). Cases (Table 4.1, ω = 0.1): Original RPSO [4.2] and Adapted RPSO [4.5]
 with constant coefficients at c3/(c1 + c2) = 2, 1, 0.5 (``-c3-high/-equal/-low``), and
 Adapted RPSO with DVC (Algorithm 1). Two motion modes: ``kinematic`` (ideal particles, the
 thesis' MATLAB runs) and ``physics`` (pymunk bodies with inertia and mecanum wheels, in the

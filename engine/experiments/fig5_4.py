@@ -1,13 +1,13 @@
-"""Fig. 5-4: twenty non-omnidirectional robots in open space (spec §16).
+"""Fig. 5-4: twenty non-omnidirectional robots in open space (Section 5.3, p. 123).
 
 Differential-drive robots run the non-omni controller [5.13] with its DVC (Algorithm 2,
-typos fixed as in spec §15) in an empty walled arena (preset ``open-nonomni``). The thesis
+read through [5.14]–[5.16]) in an empty walled arena (preset ``open-nonomni``). The thesis
 reports that they roam for ever without settling, even after reaching the source, and that
 no two robots collide; its figure draws each robot's path over the last 15 s.
 
 Two cases: ``nonomni-dvc`` with the DVC inertia guard (ours, the preset's default) and
 ``nonomni-dvc-noguard``, Algorithm 2 exactly as written. DVC bounds the forward push c5 by
-the frontal clearance, but not the carried-over ω·v (spec §20 item 19), so without the
+the frontal clearance, but not the carried-over ω·v (docs/readings.md, "The DVC guard"), so without the
 guard a robot that has just turned toward a close body can still reach it in one step.
 """
 
@@ -164,7 +164,7 @@ def run(
         "seed_rule": "run i of both cases uses child i of SeedSequence(seed), seed = the preset seed",
         "cases": {c.name: c.command() + f" --steps {int(duration)}" for c in CASES},
         "why_guard": "DVC sets the forward push c5 = beta*alpha*sf_1/dt from the nearest frontal gap, but the "
-                     "carried-over omega*v is not bounded by it (spec §20 item 19): a robot that was fast and "
+                     "carried-over omega*v is not bounded by it (docs/readings.md, 'The DVC guard'): a robot that was fast and "
                      "then turns toward a close body, or sees one appear in front, can close more than the gap in "
                      "one step. The guard (ours) caps v at alpha*sf_1/dt after the update, which makes the "
                      "one-step clearance toward the frontal bodies exact in exact arithmetic; the thesis reports no "

@@ -1,4 +1,4 @@
-"""Fig. 5-5: omnidirectional vs non-omnidirectional DVC on the Chapter 4 course (spec §16).
+"""Fig. 5-5: omnidirectional vs non-omnidirectional DVC on the Chapter 4 course (Section 5.3.1, p. 123).
 
 Same course, six robots, 3 m sensing in six sectors and Table 5.1 parameters as in
 Chapter 4, kinematic motion (the thesis uses MATLAB here). Cases:
@@ -150,5 +150,5 @@ The Chapter 4 course and robots (fig4-6), {summary['duration_s']:g} s, kinematic
 
 - The thesis gives no numbers for this figure, so the checks are its qualitative claims.
 - `nonomni-dvc` adds our DVC inertia guard (the forward speed is capped at α·sf_1/Δt after
-  the update, spec §20 item 19); `nonomni-dvc-noguard` is the thesis algorithm.
+  the update; docs/readings.md, "The DVC guard"); `nonomni-dvc-noguard` is the thesis algorithm.
 """
