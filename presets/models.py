@@ -175,6 +175,9 @@ class Acoustics(_Model):
     c: Annotated[float, Field(ge=1000.0, le=2000.0, description="sound speed [m/s]")] = 1500.0
     fs: Annotated[float, Field(ge=1000.0, le=1_000_000.0, description="sample rate of the lag grid [Hz]")] = 48_000.0
     full_lag: bool = Field(False, description="search the lag over the whole window instead of ±D/c (waveform mode)")
+    lag_peak: Literal["parabolic", "sample"] = Field(
+        "parabolic", description="τ_lag: the correlation peak refined by a parabola, or the sample lag itself as Alg. 5 "
+        "takes it (then fs sets how finely bearings are resolved)")
     a: Annotated[float, Field(ge=0.0, le=20.0, description="forgetting scale a [7.2]: memory × e^(−a) per step")] = 1.0
     d_0: Annotated[float, Field(ge=0.0, le=10_000.0, description="deployment radius d_0 [m]")] = 50.0
     d_c: Annotated[float, Field(gt=0.0, le=10_000.0, description="convergence radius d_c [m]")] = 50.0
