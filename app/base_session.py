@@ -24,7 +24,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 import shoal
-from shoal.engine.recorder import TRAJECTORY_COLUMNS, trajectory_header, write_trajectory
+from shoal.engine.core.recorder import TRAJECTORY_COLUMNS, trajectory_header, write_trajectory
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
@@ -90,7 +90,7 @@ def frame_rows(frames: list[Frame]) -> np.ndarray:
     blocks = []
     for f in frames:
         n, d = f.x.shape
-        comp = lambda a, j: a[:, j] if d > j else np.zeros(n)  # noqa: E731
+        comp = lambda a, j, n=n, d=d: a[:, j] if d > j else np.zeros(n)  # noqa: E731
         blocks.append(np.column_stack([
             np.zeros(n), np.full(n, f.k), np.full(n, f.t), np.arange(n),
             comp(f.x, 0), comp(f.x, 1), f.heading, comp(f.u, 0), comp(f.u, 1), f.status,

@@ -12,9 +12,9 @@ import math
 
 import numpy as np
 
-from shoal.engine.dvc import w_max
-from shoal.engine.fleet import FleetParams
-from shoal.engine.fleet_probe import RobotView
+from shoal.engine.kinds.fleet import FleetParams
+from shoal.engine.kinds.fleet_probe import RobotView
+from shoal.engine.robots.dvc import w_max
 
 BAR = 12
 

@@ -38,7 +38,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 def _cmd_run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from shoal.engine.runs import run_to_dir
+    from shoal.engine.core.runs import run_to_dir
     from shoal.presets.build import build
     from shoal.presets.io import PresetError, file_stem, load
 
@@ -67,7 +67,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from shoal.engine.experiments import TARGETS, OutputDirError, reproduce
+    from shoal.engine.studies.experiments import TARGETS, OutputDirError, reproduce
 
     if args.report:
         return _report(args.report)
@@ -97,7 +97,7 @@ def _cmd_reproduce_on(args: argparse.Namespace) -> int:
     """``reproduce`` with ``--scheduler``: every target's chunks of runs go to the Dask cluster."""
     if not args.scheduler or args.list or args.report:
         return _cmd_reproduce(args)
-    from shoal.engine.experiments.schedulers import SchedulerError, connect, using
+    from shoal.engine.studies.experiments.schedulers import SchedulerError, connect, using
 
     try:
         with connect(args.scheduler) as cluster, using(cluster):
@@ -107,8 +107,8 @@ def _cmd_reproduce_on(args: argparse.Namespace) -> int:
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from shoal.engine.experiments.schedulers import SchedulerError, connect
-    from shoal.engine.sweep import SweepError, run_sweep
+    from shoal.engine.studies.experiments.schedulers import SchedulerError, connect
+    from shoal.engine.studies.sweep import SweepError, run_sweep
 
     if args.workers < 1:
         return _err("--workers must be >= 1")
@@ -130,6 +130,16 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_export_replay(args: argparse.Namespace) -> int:
+    from shoal.app.share.command import ExportError, export_replay
+
+    try:
+        print(export_replay(args.preset, args.out, seed=args.seed, steps=args.steps, sets=args.set or ()))
+    except ExportError as e:
+        return _err(str(e))
+    return 0
+
+
 def _check_counts(args: argparse.Namespace) -> str | None:
     if args.runs is not None and args.runs < 1:
         return "--runs must be >= 1"
@@ -139,7 +149,7 @@ def _check_counts(args: argparse.Namespace) -> str | None:
 
 
 def _reproduce_all(args: argparse.Namespace) -> int:
-    from shoal.engine.experiments.report import run_all
+    from shoal.engine.studies.experiments.report import run_all
 
     if args.target:
         return _err("--all takes no TARGET")
@@ -155,7 +165,7 @@ def _reproduce_all(args: argparse.Namespace) -> int:
 
 
 def _report(folder: str) -> int:
-    from shoal.engine.experiments.report import write_report
+    from shoal.engine.studies.experiments.report import write_report
 
     try:
         print(f"wrote {write_report(Path(folder))}")
@@ -234,6 +244,14 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--workers", type=int, default=1)
     w.add_argument("--scheduler", help="Dask scheduler address (tcp://HOST:PORT)")
     w.set_defaults(func=_cmd_sweep)
+
+    e = sub.add_parser("export-replay", help="a seeded run as one HTML page that plays in any browser")
+    e.add_argument("preset", help="preset name or TOML/JSON file")
+    e.add_argument("--seed", type=int)
+    e.add_argument("--steps", type=int)
+    e.add_argument("--out", required=True, help="the page to write (.html)")
+    e.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field by dotted path")
+    e.set_defaults(func=_cmd_export_replay)
 
     ps = sub.add_parser("presets", help="list, show or validate presets")
     ps.add_argument("action", choices=["list", "show", "validate"])

@@ -11,7 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.dvc import TABLE_4_1
+from shoal.engine.robots.dvc import TABLE_4_1
+from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.presets.models import Scenario
 
 from . import fleet_plots
@@ -30,7 +31,7 @@ CONTROLLERS: dict[str, tuple[str, str]] = {
     "Robot-centred (constant)": ("robot-centred", "raw"),
     "Non-omni + DVC": ("nonomni", "dvc"),
 }
-BODY_FRAME_LAWS = ("robot-centred", "nonomni")
+BODY_FRAME_LAWS = tuple(name for name, law in ROBOT_LAWS.items() if law.body_frame)
 OMNI_DRIVES = ("holonomic", "mecanum")
 WORLDS = ("obstacle-course", "forest", "empty")
 

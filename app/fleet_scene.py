@@ -15,7 +15,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from shoal.engine.world import WorldSpec
+from shoal.engine.robots.world import WorldSpec
 from shoal.presets.models import Scenario
 
 from . import shapes

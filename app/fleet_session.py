@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.fleet import Fleet, FleetParams
-from shoal.engine.fleet_probe import RobotView, robot_view
-from shoal.engine.world import WorldSpec
+from shoal.engine.kinds.fleet import Fleet, FleetParams
+from shoal.engine.kinds.fleet_probe import RobotView, robot_view
+from shoal.engine.robots.world import WorldSpec
 from shoal.presets.build import build_fleet, fleet_params_for, world_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
@@ -134,17 +134,12 @@ class FleetSession(BaseSession):
             self.revision += 1
             return
         old, fleet = self.scenario, self.sim
-        self.scenario = new
         params = fleet_params_for(new)
         if params.dt != fleet.params.dt:
             self._keep_clock()
-        for f in dataclasses.fields(FleetParams):
-            value = getattr(params, f.name)
-            if getattr(fleet.params, f.name) != value:
-                setattr(fleet.params, f.name, value)  # in force from the next step
-        retune = slo_retune(old, new)
-        if retune:  # errors, selection, neighbourhood…: the running fleet keeps its beliefs
-            fleet.retune_slo(**retune)
+        retune = slo_retune(old, new)  # errors, selection, neighbourhood…: the running fleet keeps its beliefs
+        fleet.retune(**{k: getattr(params, k) for k in fleet.LIVE - {"slo"}}, **({"slo": retune} if retune else {}))
+        self.scenario = new  # in force from the next step
         if new.sim.seed != old.sim.seed:
             self._reset_locked(new.sim.seed)
         self.revision += 1

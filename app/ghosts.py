@@ -49,7 +49,7 @@ class Ghosts:
 
 def ghosts_of(beliefs: Any, x: np.ndarray, i: int, scale: float, *, best: np.ndarray | None = None,
               true_best: np.ndarray | None = None) -> Ghosts:
-    """Observer ``i``'s ghosts (run 0) from :class:`~shoal.engine.slo_localiser.Beliefs` and
+    """Observer ``i``'s ghosts (run 0) from :class:`~shoal.engine.slo.beliefs.Beliefs` and
     the true positions ``x`` (N, 2): every neighbour it localised at its last step."""
     of = np.flatnonzero(beliefs.valid[0, i])
     points = x[i] + beliefs.est[0, i, of]
@@ -60,16 +60,13 @@ def ghosts_of(beliefs: Any, x: np.ndarray, i: int, scale: float, *, best: np.nda
 
 
 def host_ghosts(sim: Any, i: int, true_best: np.ndarray) -> Ghosts | None:
-    """The ghosts of observer ``i`` of a host swarm on SLO positions (:class:`~shoal.engine.
-    slo_host.SLOHost`: Chapter 3 swarm, fleet, acoustic swarm), or None on oracle positions.
-    Errors show fully red at 10 thesis units."""
-    source = getattr(sim, "slo_source", None)
-    if source is None:
+    """The ghosts of observer ``i`` of a host swarm (Chapter 3 swarm, fleet, acoustic swarm) on
+    SLO positions, or None on true positions. Errors show fully red at 10 thesis units."""
+    positions = sim.positions
+    if positions.exact:
         return None
-    x = sim.state.x[0]
-    unit = float(sim.slo_params.get("unit", 1.0))
-    return ghosts_of(source.beliefs, x, i, 10.0 * unit, best=sim.believed_gbest()[0, i].copy(),
-                     true_best=np.asarray(true_best, dtype=float))
+    return ghosts_of(positions.beliefs, sim.state.x[0], i, 10.0 * positions.unit,
+                     best=sim.believed_gbest()[0, i].copy(), true_best=np.asarray(true_best, dtype=float))
 
 
 class GhostLayer:

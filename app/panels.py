@@ -10,32 +10,34 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine import tuning
+from shoal.engine.pso import tuning
+from shoal.engine.pso.laws import LAWS as VELOCITY_LAWS
 from shoal.presets.models import Scenario
 
 from . import plots
-from .panel_base import (
-    TRAIL, PanelsBase, SliderSpec, field_bounds, fmt, get_path, notes_text, round_sig, slider_range,
-)
+from .panel_base import TRAIL, PanelsBase, SliderSpec, field_bounds, fmt, get_path, notes_text, round_sig, slider_range
 from .positions_panel import PositionsGui
 from .session import Session, Snapshot
 
 __all__ = ["LAWS", "MODES", "Panels", "SLIDERS", "SPECS", "field_bounds", "get_path", "notes_text",
            "slider_range"]
 
-LAWS = ("standard", "adapted-sgn", "adapted-tanh", "adapted-logistic")
+LAWS = VELOCITY_LAWS.names()
 MODES = ("raw", "physical")
 
 SLIDERS = (
     SliderSpec("controller.dt", "Δt [s]", 0.01, 2.0, 0.01, "controller period: the real time of one PSO iteration"),
-    SliderSpec("sim.robots", "robots", 1, 1000, 1, "number of particles; changes at once, new ones spawn at the start", True),
-    SliderSpec("controller.omega", "omega ω", -1.0, 1.2, 0.01, "inertia weight (raw mode); Adapted laws need 0 ≤ ω < 1"),
+    SliderSpec("sim.robots", "robots", 1, 1000, 1,
+               "number of particles; changes at once, new ones spawn at the start", True),
+    SliderSpec("controller.omega", "omega ω", -1.0, 1.2, 0.01,
+               "inertia weight (raw mode); Adapted laws need 0 ≤ ω < 1"),
     SliderSpec("controller.c1", "c1", 0.0, 5.0, 0.05, "cognitive coefficient: pull towards the personal best"),
     SliderSpec("controller.c2", "c2", 0.0, 5.0, 0.05, "social coefficient: pull towards the global best"),
     SliderSpec("controller.U", "U [m/s]", 0.1, 30.0, 0.1, "top speed (physical mode)"),
     SliderSpec("controller.A_plus", "A+ [m/s²]", 0.1, 200.0, 0.1, "top acceleration (physical mode)"),
     SliderSpec("controller.c1_share", "c1 : c2 split", 0.0, 1.0, 0.05, "c1/(c1+c2): 0 = all social, 1 = all cognitive"),
-    SliderSpec("controller.smooth_width", "smooth width [m]", 0.05, 10.0, 0.05, "width of tanh / logistic in place of sgn"),
+    SliderSpec("controller.smooth_width", "smooth width [m]", 0.05, 10.0, 0.05,
+               "width of tanh / logistic in place of sgn"),
     TRAIL,
 )
 SPECS = {spec.path: spec for spec in SLIDERS}

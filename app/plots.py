@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import plotly.graph_objects as go
 
-from shoal.engine import stability
+from shoal.engine.pso import stability
 
 # Colours shared by the plots (CSS strings).
 ORDER1_FILL = "rgba(120, 160, 230, 0.30)"
@@ -185,7 +185,8 @@ def phase_figure(
         ):
             pts = geo[key]
             fig.add_trace(go.Scatter(x=pts[:, 0], y=pts[:, 1], mode="markers", name=name,
-                                     marker=dict(symbol=symbol, size=12, color=color, line=dict(width=1, color="black"))))
+                                     marker=dict(symbol=symbol, size=12, color=color,
+                                                 line=dict(width=1, color="black"))))
     if u is not None and a is not None and len(u):
         u, a = np.asarray(u, float), np.asarray(a, float)
         fig.add_trace(go.Scatter(x=u, y=a, mode="markers", name="recent",

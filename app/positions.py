@@ -39,7 +39,7 @@ def switch_changes(sc: Scenario, positions: str) -> dict[str, Any]:
 
 
 def slo_retune(old: Scenario, new: Scenario) -> dict[str, Any] | None:
-    """``retune_slo`` keywords taking a running host swarm from ``old``'s ``[slo]`` to
+    """``retune(slo=...)`` keywords taking a running host swarm from ``old``'s ``[slo]`` to
     ``new``'s: {} when the engine has nothing to change (no change, or oracle positions
     both), None when the change needs a rebuild (the switch, the unit, or a setting that
     cannot change mid-run)."""

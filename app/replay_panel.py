@@ -1,11 +1,13 @@
 """The Replay folder of every panel: a timeline over the recorded steps, a badge while a
-loaded replay is shown, and the Export replay / Load replay buttons.
+loaded replay is shown, and the Export replay / Load replay / Share buttons.
 
 Dragging the timeline pauses and shows the recorded frame of that step (robots, trails up
 to then, the plots cut there); Play carries on from the live end. *Load replay* reads a
 file from *Export replay* (checked by :func:`replay.from_bytes`; a bad one is refused with
 a red notification and changes nothing), builds the scene from the preset inside it, checks
-that a fresh run of that preset and seed reproduces its first steps, and shows it.
+that a fresh run of that preset and seed reproduces its first steps, and shows it. *Share*
+sends the recorded steps (swarm B's too) as one web page that plays in any browser
+(:mod:`.share`).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 
-from . import replay
+from . import replay, share
 from .replay import ReplayError
 from .timeline import verify_replay
 
@@ -38,6 +40,8 @@ class ReplayGui:
             self.export = gui.add_button("Export replay", hint="the recorded steps, preset and seed as one .npz file")
             self.upload = gui.add_upload_button(
                 "Load replay", hint=f"a .npz from Export replay, at most {replay.MAX_REPLAY_BYTES // 2**20} MiB")
+            self.share = gui.add_button(
+                "Share", hint="the recorded steps as one web page (.html) that plays in any browser, no install")
         panels.top.append(self.folder)
         self._wire()
 
@@ -55,6 +59,15 @@ class ReplayGui:
         @self.export.on_click
         def _(event: Any) -> None:
             self.panels.send_file(f"{self.panels._stem()}-replay.npz", self.session.export_replay())
+
+        @self.share.on_click
+        def _(event: Any) -> None:
+            try:
+                page = share.session_html(self.session)
+            except (PresetError, ReplayError, share.Busy) as err:
+                self.panels._refuse(err, "share")
+                return
+            self.panels.send_file(f"{self.panels._stem()}-run.html", page)
 
         @self.upload.on_upload
         def _(event: Any) -> None:

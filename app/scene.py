@@ -15,13 +15,13 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.objectives import Objective
+from shoal.engine.core.objectives import Objective
 from shoal.presets.build import objective_for
 from shoal.presets.models import Scenario
 
 from .ghosts import GhostLayer
-from .shapes import PointLayer
 from .session import Snapshot
+from .shapes import PointLayer
 from .twin_view import TWIN, TWIN_TRAIL, trail_segments
 
 VIEW_HALF = 10.0  # the arena's half size in view units

@@ -4,8 +4,8 @@ Playback, history and export come from :class:`BaseSession`; this module adds wh
 particular to the Chapter 3 swarm: its controller changes without restart, the (ω, ĉ)
 readout, the phase-plane history and the arena snapshot.
 
-The swarm may act on SLO-estimated positions (``[slo] swarm = "host"``: an
-:class:`~shoal.engine.slo_source.SLOSimulation`, the *Positions* folder of
+The swarm may act on SLO-estimated positions (``[slo] swarm = "host"``: its
+:class:`~shoal.engine.slo.positions.Estimated` positions, the *Positions* folder of
 :mod:`.positions_panel`). Controller, swarm size and objective changes reach it like the
 oracle swarm; the error set and the localisation settings retune its running SLO source;
 the oracle/SLO switch (and the SLO unit) rebuild it with the same seed.
@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.recorder import TRAJECTORY_COLUMNS
-from shoal.engine.sim import Simulation
+from shoal.engine.core.recorder import TRAJECTORY_COLUMNS
+from shoal.engine.kinds.swarm import Simulation
 from shoal.presets import io as presets_io
 from shoal.presets.build import build_simulation, law_for, objective_for, policy_for, slo_unit
 from shoal.presets.io import PresetError
@@ -123,22 +123,17 @@ class Session(BaseSession):
             self.selected_robot = min(self.selected_robot, new.sim.robots - 1)
             self.revision += 1
             return
-        self.scenario = new
-        if _section_changed(old, new, "controller"):  # an SLOSimulation too: the same attributes
+        if _section_changed(old, new, "controller"):
             self._keep_clock()
-            sim.policy = policy_for(new.controller)
-            sim.law = law_for(new.controller)
-            sim.dt = float(new.controller.dt)
-        if retune:  # errors, selection, neighbourhood…: the running SLO source keeps its beliefs
-            sim.retune_slo(**retune)
-        if new.sim.robots != old.sim.robots:
-            sim.set_robots(new.sim.robots)
+        # errors, selection, neighbourhood… (``slo``): the running SLO source keeps its beliefs
+        changed = sim.retune(policy=policy_for(new.controller), law=law_for(new.controller),
+                             dt=float(new.controller.dt), robots=new.sim.robots, attractors=new.bests.attractors,
+                             pbest_order=new.bests.pbest_order, objective=objective_for(new.objective),
+                             **({"slo": retune} if retune else {}))
+        self.scenario = new
+        if "robots" in changed:
             self.selected_robot = min(self.selected_robot, new.sim.robots - 1)
-        if _section_changed(old, new, "bests"):
-            sim.attractors = new.bests.attractors
-            sim.pbest_order = new.bests.pbest_order
-        if _section_changed(old, new, "objective"):
-            sim.set_objective(objective_for(new.objective))
+        if "objective" in changed:
             self.scene_revision += 1
         if _section_changed(old, new, "arena"):
             self.scene_revision += 1
@@ -181,7 +176,7 @@ class Session(BaseSession):
             return {
                 "omega": omega, "c_hat": c_hat, "beta": (1.0 - omega) if bounded else math.nan,
                 "U": U_j * math.sqrt(d), "U_j": U_j, "A_plus": A_plus, "A_minus": 2 * A_plus,
-                "t": self.clock(), "k": float(self.sim.state.k), "best": float(self.sim.state.f_yg[0]),
+                "t": self.clock(), "k": float(self.sim.state.k), "best": float(self.sim.state.best_fitness[0]),
                 "outside": float(self.outside_arena()),
             }
 

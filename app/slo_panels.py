@@ -15,14 +15,15 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.slo_sensors import error_model
-from shoal.presets.models import SLOErrorValues, Scenario
+from shoal.engine.slo.selection import SELECTIONS as SLO_SELECTIONS
+from shoal.engine.slo.sensors import error_model
+from shoal.presets.models import Scenario, SLOErrorValues
 
 from . import slo_plots
 from .panel_base import TRAIL, PanelsBase, SliderSpec, fmt
 from .slo_session import FLAG_NAMES, KIND_NAMES, SLOSession
 
-SELECTIONS = {"CSS (closest solution)": "css", "RTS (round trip)": "rts", "Akcan (GDL)": "akcan"}
+SELECTIONS = SLO_SELECTIONS.labels()
 ERROR_SETS = {"None": "none", "Low": "low", "High": "high"}
 NEIGHBOURHOODS = ("knn", "radius", "full", "random", "ring")
 OBJECTIVES = ("sphere", "ackley", "griewank", "rastrigin", "rosenbrock", "plane", "line")
@@ -32,7 +33,8 @@ PARAM_DEFAULT = {"knn": 5, "radius": 25, "ring": 2, "random": 0.5, "full": math.
 SLIDERS = (
     SliderSpec("slo.prediction_weight", "w (prediction weight)", 0.0, 1.0, 0.01,
                "CSS: how far the kept estimate leans to dead reckoning x3 [3.7]"),
-    SliderSpec("slo.delta_cos", "δ_cos", 0.0, 0.2, 0.005, "mitigation: dead reckoning when |cos α| is within δ_cos of 1"),
+    SliderSpec("slo.delta_cos", "δ_cos", 0.0, 0.2, 0.005,
+               "mitigation: dead reckoning when |cos α| is within δ_cos of 1"),
     SliderSpec("slo.delta_v", "δ_v", 0.0, 0.5, 0.005, "mitigation: dead reckoning when |v|/d < δ_v (thin triangle)"),
     SliderSpec("slo.walk_speed", "walk speed", 0.5, 20.0, 0.5, "random walk: longest step (thesis units)"),
     SliderSpec("sim.robots", "robots", 2, 60, 1, "swarm size P; RTS and Akcan slow down above ~30", True),

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.slo import SLOSwarm
+from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.presets.build import build_slo, slo_live_changes
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.presets.models import Scenario
 
 from . import sonar_plots
@@ -20,7 +21,7 @@ from .panel_base import TRAIL, PanelsBase, SliderSpec, fmt
 from .positions_panel import PositionsGui
 from .sonar_session import SonarSession, SonarSnapshot
 
-ALGORITHMS = {"A-PSO": "a-pso", "X-PSO": "x-pso", "B-PSO": "b-pso", "XB-PSO": "xb-pso", "GT-PSO": "gt-pso"}
+ALGORITHMS = STRATEGIES.labels()
 LABELS = {v: k for k, v in ALGORITHMS.items()}
 
 SLIDERS = (
@@ -30,7 +31,8 @@ SLIDERS = (
     SliderSpec("acoustics.Q", "Q = f_c/B", 0.5, 20.0, 0.1, "quality factor: high Q = narrow band, side peaks",
                marks=((1.0, "1"), (1.5, "1.5"), (10.0, "10"))),
     SliderSpec("acoustics.d_over_lambda", "D/λ_c", 0.1, 4.0, 0.05,
-               "hydrophone separation in wavelengths; above ½ the phase wraps", marks=((0.5, "½"), (1.0, "1"), (2.0, "2"))),
+               "hydrophone separation in wavelengths; above ½ the phase wraps",
+               marks=((0.5, "½"), (1.0, "1"), (2.0, "2"))),
     SliderSpec("acoustics.tbp", "TBP = B·T", 10.0, 1000.0, 10.0, "time-bandwidth product of one listening window"),
     SliderSpec("acoustics.a", "forgetting a", 0.0, 5.0, 0.05, "memory × e^(−a) each step [7.2]; 0 = never forget"),
     SliderSpec("sim.robots", "swarm size", 2, 60, 1, "number of robots (rebuilds the swarm)", True),

@@ -22,11 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.dvc import w_max
-from shoal.engine.localisation import make_strategy
-from shoal.engine.propagation import snr_db
-from shoal.engine.sonar import AcousticSwarm, SonarParams
-from shoal.engine.tuning import from_beta, split
+from shoal.engine.acoustics.propagation import snr_db
+from shoal.engine.kinds.sonar import AcousticSwarm
 from shoal.presets.build import build_sonar, sonar_params_for
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
@@ -124,33 +121,15 @@ class SonarSession(BaseSession):
         except ValueError as err:
             raise PresetError([f"acoustics.{err}"]) from None
         sw = self.sim
-        old, old_arena = sw.params, self.scenario.arena
-        if params.dt != old.dt:
+        old_arena = self.scenario.arena
+        if params.dt != sw.params.dt:
             self._keep_clock()
-        if (params.v_n, params.source_heading, params.U, params.dt) != (old.v_n, old.source_heading, old.U, old.dt):
-            self._restart_source_motion(params)
-        sw.params = params
-        sw.band = params.band
-        sw.strategy = make_strategy(params.algorithm, a=params.a)
-        tune = from_beta(params.dt, params.U, params.beta, d=2)
-        sw.omega = tune.omega
-        sw.c = np.array(split(tune.c_hat, params.c1_share))
-        sw.w_max = w_max(params.U, params.dt)
-        retune = slo_retune(self.scenario, new)
-        if retune:  # errors, selection, neighbourhood…: the running swarm keeps its beliefs
-            sw.retune_slo(**retune)
+        retune = slo_retune(self.scenario, new)  # errors, selection, neighbourhood…: the swarm keeps its beliefs
+        sw.retune(**{k: getattr(params, k) for k in sw.LIVE - {"slo"}}, **({"slo": retune} if retune else {}))
         self.scenario = new
-        self._refresh_snr()
         if new.arena != old_arena:
             self.scene_revision += 1
         self.revision += 1
-
-    def _restart_source_motion(self, params: SonarParams) -> None:
-        """A new speed or heading: the source carries on from where it is now."""
-        sw = self.sim
-        h = params.source_heading
-        step = np.array([np.cos(h), np.sin(h)]) * params.v_n * params.U * params.dt
-        sw.source0 = sw.state.source - sw.state.steps[:, None] * step
 
     def _refresh_snr(self) -> None:
         s, p = self.sim.state, self.sim.params

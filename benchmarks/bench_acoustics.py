@@ -3,8 +3,8 @@ receiver, vectorised over runs × robots × hydrophones.
 
 Run: python benchmarks/bench_acoustics.py
 Prints the best and median wall time per step (ms) and per robot-step (µs) for a few
-batch sizes and bands, and the same for the APPROXIMATE surrogate mode. The machine may be shared: read the best time as the cost and the
-median as what a busy machine gives.
+batch sizes and bands, and the same for the APPROXIMATE surrogate mode. The machine may be
+shared: read the best time as the cost and the median as what a busy machine gives.
 """
 
 from __future__ import annotations
@@ -13,10 +13,10 @@ import time
 
 import numpy as np
 
-from shoal.engine.acoustic_surrogate import surrogate
-from shoal.engine.band import Band
-from shoal.engine.receiver import bearing
-from shoal.engine.signals import hydrophone_positions, synthesise
+from shoal.engine.acoustics.band import Band
+from shoal.engine.acoustics.receiver import bearing
+from shoal.engine.acoustics.signals import hydrophone_positions, synthesise
+from shoal.engine.acoustics.surrogate import surrogate
 
 
 def measure(runs: int, robots: int, band: Band, full_lag: bool = False, reps: int = 30) -> tuple[float, float, float]:
@@ -67,14 +67,16 @@ def main() -> None:
         ("full-lag search", 100, 10, Band(), True),
         ("full-lag search", 1, 10, Band(), True),
     ]
-    print(f"{'case':<24} {'runs':>5} {'robots':>6} {'K':>4} {'best ms':>8} {'median ms':>9} {'µs/robot-step':>13} {'synth %':>7}")
+    print(f"{'case':<24} {'runs':>5} {'robots':>6} {'K':>4} {'best ms':>8} {'median ms':>9} "
+          f"{'µs/robot-step':>13} {'synth %':>7}")
     for name, runs, robots, band, full in cases:
         best, med, share = measure(runs, robots, band, full, reps=10 if full or runs > 100 else 30)
         per = best * 1e3 / (runs * robots)
         print(f"{name:<24} {runs:>5} {robots:>6} {band.K:>4} {best:>8.2f} {med:>9.2f} {per:>13.2f} {100 * share:>7.0f}")
     for runs in (100, 1000):
         best, med = measure_surrogate(runs, 10, Band())
-        print(f"{'surrogate (approximate)':<24} {runs:>5} {10:>6} {Band().K:>4} {best:>8.2f} {med:>9.2f} {best * 1e3 / (runs * 10):>13.2f} {'-':>7}")
+        print(f"{'surrogate (approximate)':<24} {runs:>5} {10:>6} {Band().K:>4} {best:>8.2f} {med:>9.2f} "
+              f"{best * 1e3 / (runs * 10):>13.2f} {'-':>7}")
 
 
 if __name__ == "__main__":

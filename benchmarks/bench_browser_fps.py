@@ -36,6 +36,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "browser"))
 from bench_common import fmt, table  # noqa: E402
+
 from browser_helpers import ARGS, VIEWPORT, wait_until  # noqa: E402
 
 CHROMIUM = shutil.which("chromium")

@@ -122,7 +122,7 @@ def save_png(fig, path) -> None:  # type: ignore[no-untyped-def]
 
     import matplotlib.pyplot as plt
 
-    from shoal.engine.atomic import atomic_write_bytes
+    from shoal.engine.core.atomic import atomic_write_bytes
 
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)

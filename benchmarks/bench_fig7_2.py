@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from shoal.engine.experiments import reproduce
-from shoal.engine.sonar import AcousticSwarm, SonarParams
+from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams
+from shoal.engine.studies.experiments import reproduce
 
 TICK_CASES = [
     ("A-PSO, adapted", SonarParams(algorithm="a-pso"), 100, 10),

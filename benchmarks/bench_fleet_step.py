@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import time
 
-from shoal.engine.fleet import Fleet, FleetParams
-from shoal.engine.world import obstacle_course
+from shoal.engine.kinds.fleet import Fleet, FleetParams
+from shoal.engine.robots.world import obstacle_course
 
 
 def measure(robots: int, runs: int, params: FleetParams, steps: int = 30) -> float:

@@ -95,8 +95,9 @@ def run_clients(kind: str, port: int, n: int, ready: Any, go: Any, stop: Any, ou
             c.close()
     else:
         from bench_browser_fps import FrameCounter
-        from browser_helpers import ARGS, VIEWPORT
         from playwright.sync_api import sync_playwright
+
+        from browser_helpers import ARGS, VIEWPORT
 
         with sync_playwright() as p:
             browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)

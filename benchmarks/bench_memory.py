@@ -4,7 +4,8 @@ Run: python benchmarks/bench_memory.py [--quick] [--minutes 60] [--runs 10000] [
      [--skip-batch] [--png benchmarks/memory.png]
 
 (a) For each scene kind (Ch. 3 swarm, Ch. 4–5 fleet, Ch. 7 acoustic swarm, SLO walk), in a
-    fresh Python process each, the app's tab (session, panels, plots and arena on a real viser server, no browser) is ticked
+    fresh Python process each, the app's tab (session, panels, plots and arena on a real viser
+    server, no browser) is ticked
     headless as the server's 60 Hz ticking thread would, on a simulated clock, with playback
     at 30 steps/s and a run that never ends: ``--minutes`` of session time are
     1800 × minutes scene frames. The resident set size (RSS) of the process, the history
@@ -122,7 +123,7 @@ class RssSampler:
 
 def batch_memory(runs: int, workers: int, keep: bool) -> list[dict]:
     """RSS after every 1000 finished runs of ``runs`` one-run jobs."""
-    from shoal.engine.experiments.runner import Job, iter_jobs
+    from shoal.engine.studies.experiments.runner import Job, iter_jobs
 
     jobs = [Job(key=("spread", i), preset="default", overrides=("sim.robots=10", f"init.spread={1 + i % 97 / 10}"),
                 seed=i, runs=1, steps=20) for i in range(runs)]
@@ -151,7 +152,7 @@ def sweep_memory(runs: int, workers: int) -> list[dict]:
     """RSS (this process + workers) against runs saved, over a ``runs``-run ``run_sweep``."""
     import tempfile
 
-    from shoal.engine.sweep.run import run_sweep
+    from shoal.engine.studies.sweep.run import run_sweep
 
     cells, per_cell = 100, max(1, runs // 100)
     grid = ["init.spread=" + ",".join(f"{1 + i / 10:g}" for i in range(cells))]
@@ -257,7 +258,7 @@ def main() -> None:
     if not args.skip_batch:
         import matplotlib.pyplot  # noqa: F401  (imported once up front: the sweep plots its medians at the end)
 
-        import shoal.engine.sweep.run  # noqa: F401
+        import shoal.engine.studies.sweep.run  # noqa: F401
 
         rows = []
         for workers in (1, 2):
@@ -265,13 +266,15 @@ def main() -> None:
             s = sweep_memory(runs, workers)
             batches[label] = s
             marks = per_thousand(s)
-            rows.append([label, str(s[-1]["runs"]), fmt(s[0]["rss"]), fmt(marks[1]["rss"] if len(marks) > 1 else s[0]["rss"]),
+            first = marks[1]["rss"] if len(marks) > 1 else s[0]["rss"]
+            rows.append([label, str(s[-1]["runs"]), fmt(s[0]["rss"]), fmt(first),
                          fmt(s[-1]["rss"]), fmt(s[-1]["peak"]), " ".join(str(round(x["rss"])) for x in marks[1:]),
                          fmt(s[-1]["wall"])])
             print(f"  {label}: {[(x['runs'], round(x['rss'])) for x in marks]}", file=sys.stderr)
         for workers in (1, 2):
             for keep in (False, True):
-                label = f"{'run_jobs (keep all)' if keep else 'iter_jobs (stream)'}, {workers} worker{'s' * (workers > 1)}"
+                kind = "run_jobs (keep all)" if keep else "iter_jobs (stream)"
+                label = f"{kind}, {workers} worker{'s' * (workers > 1)}"
                 s = batch_memory(runs, workers, keep)
                 batches[label] = s
                 per_k = [round(x["rss"]) for x in s[1:]]

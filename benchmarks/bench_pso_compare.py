@@ -5,7 +5,7 @@ Run: python benchmarks/bench_pso_compare.py [--quick]   (part b needs: pip insta
 
 (a) ``loop_step`` below is a reference written only for this comparison: one robot and one
     component at a time with Python floats and ``math``, the equations of
-    ``engine/laws.py``/``engine/sim.py`` (bests [3.2]/[3.3], Adapted PSO [3.11], position
+    ``engine/pso/laws.py``/``engine/kinds/swarm.py`` (bests [3.2]/[3.3], Adapted PSO [3.11], position
     [3.10], acceleration [3.22], heading). Both sides start from the same state with copies of
     the same generators, so they draw the same numbers; the script asserts that positions,
     velocities, accelerations and bests agree bit for bit (headings to 2 ulp) before it
@@ -50,14 +50,14 @@ class LoopSwarm:
     y: list[list[list[float]]]
     f_y: list[list[float]]
     yg: list[list[float]]
-    f_yg: list[float]
+    best_fitness: list[float]
     heading: list[list[float]]
 
     @classmethod
     def from_state(cls, s) -> "LoopSwarm":
-        """Copy a :class:`shoal.engine.sim.SwarmState` into lists."""
+        """Copy a :class:`shoal.engine.kinds.swarm.SwarmState` into lists."""
         return cls(x=s.x.tolist(), u=s.u.tolist(), a=s.a.tolist(), y=s.y.tolist(), f_y=s.f_y.tolist(),
-                   yg=s.yg.tolist(), f_yg=s.f_yg.tolist(), heading=s.heading.tolist())
+                   yg=s.yg.tolist(), best_fitness=s.best_fitness.tolist(), heading=s.heading.tolist())
 
 
 def _sgn(v: float) -> float:
@@ -87,7 +87,7 @@ def loop_step(sw: LoopSwarm, rngs: list[np.random.Generator], omega: float, c: t
             if f_y[i] < f_y[best]:
                 best = i
         yg = list(y[best])
-        sw.yg[r], sw.f_yg[r] = yg, f_y[best]
+        sw.yg[r], sw.best_fitness[r] = yg, f_y[best]
         r1 = [[gen.random() for _ in range(d)] for _ in range(n)]  # draws in the engine's order:
         r2 = [[gen.random() for _ in range(d)] for _ in range(n)]  # term, robot, component
         for i in range(n):
@@ -124,7 +124,7 @@ def check_same(sim, loop: LoopSwarm) -> None:
     for positions, velocities, accelerations and bests; headings within 2 ulp (numpy's
     ``arctan2`` and ``math.atan2`` may round the last bit differently)."""
     s = sim.state
-    for name in ("x", "u", "a", "y", "f_y", "yg", "f_yg"):
+    for name in ("x", "u", "a", "y", "f_y", "yg", "best_fitness"):
         a, b = getattr(s, name), np.asarray(getattr(loop, name))
         assert np.array_equal(a, b), f"{name} differs: max |Δ| = {np.max(np.abs(a - b))}"
     np.testing.assert_array_max_ulp(s.heading, np.asarray(loop.heading), maxulp=2)
@@ -163,10 +163,10 @@ HALF = 5.12  # start positions uniform in [−5.12, 5.12]^D
 
 def shoal_standard(fn: str, dim: int, particles: int, iters: int, runs: int, seed: int):
     """Standard PSO with a global best in Shoal: (best fitness per run, seconds)."""
-    from shoal.engine.coeffs import Constant
-    from shoal.engine.laws import Law
-    from shoal.engine.objectives import Objective
-    from shoal.engine.sim import Simulation
+    from shoal.engine.core.objectives import Objective
+    from shoal.engine.kinds.swarm import Simulation
+    from shoal.engine.pso.coeffs import Constant
+    from shoal.engine.pso.laws import Law
 
     sim = Simulation(robots=particles, d=dim, dt=1.0, law=Law("standard"), policy=Constant(W, (C1, C2)),
                      objective=Objective(fn, source=np.zeros(dim)), runs=runs, seed=seed,
@@ -175,7 +175,7 @@ def shoal_standard(fn: str, dim: int, particles: int, iters: int, runs: int, see
     t0 = time.thread_time()
     for _ in range(iters):
         sim.step()
-    return sim.state.f_yg.copy(), time.thread_time() - t0, x0
+    return sim.state.best_fitness.copy(), time.thread_time() - t0, x0
 
 
 def pyswarms_standard(fn: str, dim: int, x0: np.ndarray, iters: int, seed: int) -> tuple[float, float]:
@@ -184,7 +184,7 @@ def pyswarms_standard(fn: str, dim: int, x0: np.ndarray, iters: int, seed: int) 
 
     from pyswarms.single import GlobalBestPSO
 
-    from shoal.engine.objectives import Objective
+    from shoal.engine.core.objectives import Objective
 
     logging.getLogger("pyswarms").setLevel(logging.WARNING)
     objective = Objective(fn, source=np.zeros(dim))
@@ -201,7 +201,7 @@ def check_functions(dim: int) -> None:
     """Shoal's Sphere and Rastrigin equal pyswarms' on in-bounds points."""
     from pyswarms.utils.functions import single_obj
 
-    from shoal.engine.objectives import Objective
+    from shoal.engine.core.objectives import Objective
 
     pts = np.random.default_rng(1).uniform(-HALF, HALF, (50, dim))
     for fn in ("sphere", "rastrigin"):

@@ -88,7 +88,8 @@ def plot(points: list[dict], path: Path) -> None:
                 left.plot([p["robots"] for p in pts], [p["rate"] for p in pts], style, marker=marker, color=f"C{i}",
                           label=f"{engine}, {runs} run{'s' if runs > 1 else ''}")
         pts = [p for p in points if p["engine"] == engine and p["robots"] == 10]
-        right.plot([p["runs"] for p in pts], [p["rate"] for p in pts], "-", marker=marker, color=f"C{i}", label=f"{engine}, 10 robots")
+        right.plot([p["runs"] for p in pts], [p["rate"] for p in pts], "-", marker=marker, color=f"C{i}",
+                   label=f"{engine}, 10 robots")
     for ax, xlabel, title in ((left, "robots per run", "robots"), (right, "runs batched in one step", "runs")):
         ax.set_xscale("log")
         ax.set_yscale("log")

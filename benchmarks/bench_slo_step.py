@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import time
 
-from shoal.engine.slo import SLOSwarm
+from shoal.engine.kinds.slo_swarm import SLOSwarm
 
 
 def measure(selection: str, particles: int, runs: int, steps: int = 100) -> tuple[float, float]:

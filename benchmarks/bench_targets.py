@@ -78,10 +78,10 @@ class TickMeter:
         self._undo.append(lambda: setattr(cls, "step", original))
 
     def install(self) -> "TickMeter":
-        from shoal.engine.fleet import Fleet
-        from shoal.engine.sim import Simulation
-        from shoal.engine.slo import SLOSwarm
-        from shoal.engine.sonar import AcousticSwarm
+        from shoal.engine.kinds.fleet import Fleet
+        from shoal.engine.kinds.slo_swarm import SLOSwarm
+        from shoal.engine.kinds.sonar import AcousticSwarm
+        from shoal.engine.kinds.swarm import Simulation
 
         self.wrap(Simulation, lambda e: "Ch. 3 swarm" + (" (SLO positions)" if type(e) is not Simulation else ""),
                   lambda e: e.runs * e.robots)
@@ -117,7 +117,7 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="one run and half the horizon per target")
     ap.add_argument("--only", nargs="*", help="these targets only")
     args = ap.parse_args()
-    from shoal.engine.experiments.registry import TARGETS, reproduce
+    from shoal.engine.studies.experiments.registry import TARGETS, reproduce
 
     missing = sorted(set(TARGETS) - set(SMALL))
     if missing:

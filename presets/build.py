@@ -1,23 +1,23 @@
-"""Turn a validated :class:`Scenario` into engine objects."""
+"""Turn a validated :class:`Scenario` into engine objects: :data:`BUILDERS` holds one build
+function per scene kind, each returning a :class:`~shoal.engine.core.contract.Engine`."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
-from shoal.engine.coeffs import Constant, Physical, Segment
-from shoal.engine.fleet import Fleet, FleetParams
-from shoal.engine.laws import Law
-from shoal.engine.objectives import Objective
-from shoal.engine.sim import Simulation
-from shoal.engine.slo import SLOSwarm
-from shoal.engine.slo_fleet import SLOFleet
-from shoal.engine.slo_sensors import ErrorModel, error_model
-from shoal.engine.slo_sonar import SLOAcousticSwarm
-from shoal.engine.slo_source import SLOSimulation
-from shoal.engine.sonar import AcousticSwarm, SonarParams
-from shoal.engine.world import WorldSpec, empty_arena, forest, obstacle_course
+from shoal.engine.core.contract import Engine
+from shoal.engine.core.objectives import Objective
+from shoal.engine.kinds.fleet import Fleet, FleetParams
+from shoal.engine.kinds.slo_swarm import SLOSwarm
+from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams
+from shoal.engine.kinds.swarm import Simulation
+from shoal.engine.pso.coeffs import Constant, Physical, Segment
+from shoal.engine.pso.laws import Law
+from shoal.engine.robots.world import WorldSpec, empty_arena, forest, obstacle_course
+from shoal.engine.slo.positions import Estimated, Oracle, PositionSource
+from shoal.engine.slo.sensors import ErrorModel, error_model
 
 from .models import SLO, Acoustics, Controller, ObjectiveModel, Scenario, WorldModel
 
@@ -47,9 +47,8 @@ def build_simulation(
 ) -> Simulation:
     """A Chapter 3 swarm for runs ``first_run … first_run + runs − 1`` of the seed (on SLO
     positions with ``[slo] swarm = "host"``)."""
-    kwargs = _simulation_kwargs(scenario, runs=runs, seed=seed, first_run=first_run)
-    slo = slo_host_params(scenario)
-    return Simulation(**kwargs) if slo is None else SLOSimulation(slo=slo, **kwargs)
+    return Simulation(**_simulation_kwargs(scenario, runs=runs, seed=seed, first_run=first_run),
+                      positions=positions_for(scenario))
 
 
 def _simulation_kwargs(scenario: Scenario, *, runs: int | None, seed: int | None, first_run: int) -> dict:
@@ -98,10 +97,9 @@ def build_fleet(scenario: Scenario, *, runs: int | None = None, seed: int | None
     if scenario.world is None:
         raise ValueError("this scenario has no [world] section")
     world = world_for(scenario.world)
-    kwargs = dict(world=world, robots=scenario.sim.robots, params=fleet_params_for(scenario),
-                  runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed, first_run=first_run)
-    slo = slo_host_params(scenario, world)
-    return Fleet(**kwargs) if slo is None else SLOFleet(slo=slo, **kwargs)
+    return Fleet(world=world, robots=scenario.sim.robots, params=fleet_params_for(scenario),
+                 runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed, first_run=first_run,
+                 positions=positions_for(scenario, world))
 
 
 def sonar_params_for(a: Acoustics) -> SonarParams:
@@ -109,7 +107,8 @@ def sonar_params_for(a: Acoustics) -> SonarParams:
     return SonarParams(
         algorithm=a.algorithm, controller=a.controller, mode=a.mode, snr0_db=a.snr0_db, psd_s_db=a.psd_s,
         psd_n_db=a.psd_n, f_c=a.f_c, Q=a.Q, tbp=a.tbp, c=a.c, fs=a.fs, d_over_lambda=a.d_over_lambda,
-        full_lag=a.full_lag, lag_peak=a.lag_peak, a=a.a, d0=a.d_0, dc=a.d_c, U=a.U, dt=a.dt, beta=a.beta, c1_share=a.c1_share,
+        full_lag=a.full_lag, lag_peak=a.lag_peak, a=a.a, d0=a.d_0, dc=a.d_c, U=a.U, dt=a.dt, beta=a.beta,
+        c1_share=a.c1_share,
         alpha_dvc=a.alpha_dvc, sensing_range=a.sensing_range, robot_radius=a.robot_radius, r_trap=a.r, v_n=a.v_n,
         source_heading=np.deg2rad(a.source_heading_deg),
         source_bearing=None if a.source_bearing_deg is None else float(np.deg2rad(a.source_bearing_deg)),
@@ -123,11 +122,9 @@ def build_sonar(scenario: Scenario, *, runs: int | None = None, seed: int | None
     ``[slo] swarm = "host"``)."""
     if scenario.acoustics is None:
         raise ValueError("this scenario has no [acoustics] section")
-    kwargs = dict(robots=scenario.sim.robots, runs=runs or scenario.sim.runs,
-                  seed=scenario.sim.seed if seed is None else seed, first_run=first_run)
-    params = sonar_params_for(scenario.acoustics)
-    slo = slo_host_params(scenario)
-    return AcousticSwarm(params, **kwargs) if slo is None else SLOAcousticSwarm(params, slo=slo, **kwargs)
+    return AcousticSwarm(sonar_params_for(scenario.acoustics), robots=scenario.sim.robots,
+                         runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed,
+                         first_run=first_run, positions=positions_for(scenario))
 
 
 def slo_errors_for(slo: SLO) -> str | ErrorModel:
@@ -152,18 +149,18 @@ def slo_unit(scenario: Scenario, world: WorldSpec | None = None) -> float:
     return 2.0 * scenario.arena.half_size / 100.0
 
 
-def slo_host_params(scenario: Scenario, world: WorldSpec | None = None) -> dict | None:
-    """The :class:`~shoal.engine.slo_source.SLOPositionSource` keywords when the scene's own
-    swarm runs on SLO positions (``[slo] swarm = "host"``, ``positions = "slo"``), else None."""
+def positions_for(scenario: Scenario, world: WorldSpec | None = None) -> PositionSource:
+    """Where the scene's own swarm gets its positions: SLO estimates with ``[slo] swarm = "host"``,
+    ``positions = "slo"``, else the truth."""
     slo = scenario.slo
     if slo is None or slo.swarm != "host" or slo.positions == "oracle":
-        return None
-    return {**slo_localiser_for(slo), "unit": slo_unit(scenario, world)}
+        return Oracle()
+    return Estimated(**slo_localiser_for(slo), unit=slo_unit(scenario, world))
 
 
 def slo_localiser_for(slo: SLO) -> dict:
     """The localisation keywords shared by :class:`SLOSwarm` and the host swarms on SLO
-    positions (:class:`SLOSimulation`, :class:`SLOFleet`, :class:`SLOAcousticSwarm`)."""
+    positions (:class:`~shoal.engine.slo.positions.Estimated`)."""
     return dict(
         errors=slo_errors_for(slo), selection=slo.selection, prediction_weight=slo.prediction_weight,
         delta_cos=slo.delta_cos, delta_v=slo.delta_v, literal_eq_3_1=slo.literal_eq_3_1, entry_policy=slo.entry_policy,
@@ -171,7 +168,7 @@ def slo_localiser_for(slo: SLO) -> dict:
     )
 
 
-# [slo] fields an engine can change mid-run (SLOSwarm.retune, SLOSimulation.retune_slo).
+# [slo] fields an engine can change mid-run (SLOSwarm.retune, a host swarm's retune(slo=...)).
 SLO_LIVE = ("selection", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1", "entry_policy", "neighbourhood",
             "neighbourhood_param", "errors", "error_values", "objective", "walk_speed", "quality_threshold")
 
@@ -199,22 +196,12 @@ def slo_live_changes(old: Scenario, new: Scenario) -> dict[str, Any] | None:
     return out
 
 
-def _host_builder(scenario: Scenario):  # type: ignore[no-untyped-def]
-    """The builder of the scene's own swarm: acoustic (Ch. 7–8), fleet (Ch. 4–5) or Ch. 3."""
-    if scenario.acoustics is not None:
-        return build_sonar
-    return build_fleet if scenario.world is not None else build_simulation
-
-
-def build_slo(scenario: Scenario, *, runs: int | None = None, seed: int | None = None,
-              first_run: int = 0) -> SLOSwarm | Simulation | Fleet | AcousticSwarm:
-    """An ``[slo]`` scene: Mai's SLO swarm, or the scene's own swarm (``swarm = "host"``) on
-    SLO-estimated (or, with ``positions = "oracle"``, true) positions with the same seed."""
+def build_slo_swarm(scenario: Scenario, *, runs: int | None = None, seed: int | None = None,
+                    first_run: int = 0) -> SLOSwarm:
+    """Mai's SLO swarm of an ``[slo]`` section (``swarm = "slo"``)."""
     slo = scenario.slo
     if slo is None:
         raise ValueError("this scenario has no [slo] section")
-    if slo.swarm == "host":
-        return _host_builder(scenario)(scenario, runs=runs, seed=seed, first_run=first_run)
     return SLOSwarm(
         runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed, first_run=first_run,
         particles=scenario.sim.robots, objective=slo.objective, motion=slo.motion, walk_speed=slo.walk_speed,
@@ -222,10 +209,37 @@ def build_slo(scenario: Scenario, *, runs: int | None = None, seed: int | None =
     )
 
 
-def build(scenario: Scenario, *, runs: int | None = None, seed: int | None = None,
-          first_run: int = 0) -> Simulation | Fleet | AcousticSwarm | SLOSwarm:
-    """Whatever the scenario describes: Mai's SLO swarm, an acoustic swarm (Ch. 7–8), a
-    fleet in a world (Ch. 4–5) or a free-space swarm (Ch. 3), the last three on SLO or
-    true positions as ``[slo]`` says."""
-    make = build_slo if scenario.slo is not None and scenario.slo.swarm == "slo" else _host_builder(scenario)
-    return make(scenario, runs=runs, seed=seed, first_run=first_run)
+class Builder(Protocol):
+    def __call__(self, scenario: Scenario, *, runs: int | None = None, seed: int | None = None,
+                 first_run: int = 0) -> Engine: ...
+
+
+# scene kind (the module of engine/kinds) → its build function
+BUILDERS: dict[str, Builder] = {
+    "swarm": build_simulation, "fleet": build_fleet, "sonar": build_sonar, "slo_swarm": build_slo_swarm,
+}
+
+
+def kind_of(scenario: Scenario) -> str:
+    """The scene kind a scenario describes: Mai's SLO swarm (``[slo] swarm = "slo"``), an acoustic
+    swarm (``[acoustics]``, Ch. 7–8), a fleet in a world (``[world]``, Ch. 4–5) or the free-space
+    swarm (Ch. 3); the last three on SLO or true positions as ``[slo]`` says."""
+    if scenario.slo is not None and scenario.slo.swarm == "slo":
+        return "slo_swarm"
+    if scenario.acoustics is not None:
+        return "sonar"
+    return "fleet" if scenario.world is not None else "swarm"
+
+
+def build(scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0) -> Engine:
+    """The engine of whatever the scenario describes (:func:`kind_of`), for runs ``first_run …
+    first_run + runs − 1`` of the seed (default: the preset's)."""
+    return BUILDERS[kind_of(scenario)](scenario, runs=runs, seed=seed, first_run=first_run)
+
+
+def build_slo(scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0) -> Engine:
+    """An ``[slo]`` scene: Mai's SLO swarm, or the scene's own swarm (``swarm = "host"``) on
+    SLO-estimated (or, with ``positions = "oracle"``, true) positions with the same seed."""
+    if scenario.slo is None:
+        raise ValueError("this scenario has no [slo] section")
+    return build(scenario, runs=runs, seed=seed, first_run=first_run)

@@ -41,7 +41,8 @@ def format_errors(err: ValidationError) -> list[str]:
     for e in err.errors(include_url=False):
         loc = ".".join(_short_name(p) for p in e["loc"])
         msg = e["msg"].removeprefix("Value error, ")
-        got = "" if e["type"] in ("missing",) or isinstance(e.get("input"), dict) else f" (got {_SHORT.repr(e.get('input'))})"
+        quiet = e["type"] in ("missing",) or isinstance(e.get("input"), dict)
+        got = "" if quiet else f" (got {_SHORT.repr(e.get('input'))})"
         lines.append(f"{loc}: {msg}{got}" if loc else f"{msg}{got}")
     return lines
 

@@ -1,7 +1,8 @@
 """Pydantic models of a Shoal scenario (one preset file = one ``Scenario``).
 
 Every field has a range; unknown fields are refused; error locations are dotted paths
-such as ``controller.omega`` so the CLI and the UI can name the bad field.
+such as ``controller.omega`` so the CLI and the UI can name the bad field. The choices of
+variants (laws, strategies, selections) and their rules come from the engine's registries.
 """
 
 from __future__ import annotations
@@ -10,11 +11,13 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from shoal.engine.laws import LawName
+from shoal.engine.acoustics.strategies import STRATEGIES
+from shoal.engine.core.objectives import ObjectiveName
+from shoal.engine.pso.laws import LAWS
+from shoal.engine.robots.laws import ROBOT_LAWS
+from shoal.engine.slo.selection import SELECTIONS
 
-RobotLawName = Literal["rpso", "adapted-rpso", "robot-centred", "nonomni"]
-ROBOT_LAWS = ("rpso", "adapted-rpso", "robot-centred", "nonomni")
-from shoal.engine.objectives import ObjectiveName
+DVC_LAWS = tuple(name for name, law in ROBOT_LAWS.items() if law.dvc is not None)
 
 Coefficient = Annotated[float, Field(ge=0.0, le=100.0)]
 
@@ -52,7 +55,7 @@ class StepChange(_Model):
 class Controller(_Model):
     """Velocity law and its coefficients, raw (ω, c1, c2) or physical (U, A+, Δt)."""
 
-    law: Literal[LawName, RobotLawName] = "adapted-sgn"
+    law: Literal[LAWS.names() + ROBOT_LAWS.names()] = "adapted-sgn"
     mode: Literal["raw", "physical", "dvc"] = "physical"
     dt: Annotated[float, Field(ge=1e-6, le=10.0, description="controller period Δt [s]")] = 0.1
     omega: Annotated[float, Field(ge=-1.0, le=1.2, description="inertia weight ω (raw mode)")] = 0.5
@@ -82,11 +85,11 @@ class Controller(_Model):
         robot_law = self.law in ROBOT_LAWS
         if robot_law and self.mode == "physical":
             raise ValueError(f"law {self.law!r} takes mode 'raw' (constant c1..c3, omega) or 'dvc'")
-        if self.mode == "dvc" and self.law not in ("adapted-rpso", "nonomni"):
-            raise ValueError("mode 'dvc' needs law 'adapted-rpso' or 'nonomni'")
+        if self.mode == "dvc" and self.law not in DVC_LAWS:
+            raise ValueError(f"mode 'dvc' needs law {' or '.join(map(repr, DVC_LAWS))}")
         if robot_law:
             return self
-        adapted = self.law != "standard"
+        adapted = LAWS[self.law].adapted
         if self.mode == "raw" and adapted and not (0.0 <= self.omega < 1.0):
             raise ValueError(f"omega = {self.omega:g}: an Adapted law needs 0 <= omega < 1 [3.14]")
         if self.mode == "physical":
@@ -128,7 +131,8 @@ class Robot(_Model):
     motion: Literal["kinematic", "physics"] = "kinematic"
     drive: Literal["holonomic", "mecanum", "differential"] = "holonomic"
     spawn_gap: Annotated[float, Field(ge=0.0, le=10.0, description="free space between robots at the start [m]")] = 0.3
-    contact_tolerance: Annotated[float, Field(ge=0.0, le=0.1, description="a collision is an overlap deeper than this [m]; a shallower touch only stops the robot")] = 1e-3
+    contact_tolerance: Annotated[float, Field(ge=0.0, le=0.1, description=(
+        "a collision is an overlap deeper than this [m]; a shallower touch only stops the robot"))] = 1e-3
 
 
 class Sensing(_Model):
@@ -159,25 +163,28 @@ class Acoustics(_Model):
     ``[robot]`` and ``[sensing]`` sections do not apply (their values are here).
     """
 
-    algorithm: Literal["a-pso", "x-pso", "b-pso", "xb-pso", "gt-pso"] = Field(
+    algorithm: Literal[STRATEGIES.names()] = Field(
         "xb-pso", description="best-location strategy: A-/X-/B-/XB-PSO (Ch. 7) or GT-PSO (Ch. 8)")
     controller: Literal["adapted", "nonomni"] = Field(
-        "adapted", description="Adapted PSO [3.11] in the global frame (Ch. 7) or the non-omni DVC controller [8.7] (Ch. 8)")
+        "adapted",
+        description="Adapted PSO [3.11] in the global frame (Ch. 7) or the non-omni DVC controller [8.7] (Ch. 8)")
     mode: Literal["waveform", "surrogate"] = Field(
         "waveform", description="band spectra and cross-correlation, or the APPROXIMATE statistical surrogate")
-    snr0_db: Annotated[float, Field(ge=-30.0, le=40.0, description="SNR at the origin [dB]; sets d_s = R_ref·10^(−SNR0/20)")] = 10.0
+    snr0_db: Annotated[float, Field(ge=-30.0, le=40.0,
+                                    description="SNR at the origin [dB]; sets d_s = R_ref·10^(−SNR0/20)")] = 10.0
     psd_s: Annotated[float, Field(ge=0.0, le=250.0, description="source PSD at 1 m [dB re 1 µPa²/Hz]")] = 120.0
     psd_n: Annotated[float, Field(ge=0.0, le=200.0, description="noise PSD [dB re 1 µPa²/Hz]")] = 60.0
     f_c: Annotated[float, Field(ge=10.0, le=100_000.0, description="centre frequency f_c [Hz]")] = 1000.0
     Q: Annotated[float, Field(ge=0.1, le=1000.0, description="quality factor Q = f_c/B [7.13]")] = 1.5
     tbp: Annotated[float, Field(ge=2.0, le=5000.0, description="time-bandwidth product B·T of a window")] = 100.0
-    d_over_lambda: Annotated[float, Field(gt=0.0, le=50.0, description="hydrophone separation D/λ_c (two-hydrophone strategies)")] = 0.5
+    d_over_lambda: Annotated[float, Field(gt=0.0, le=50.0,
+                                          description="hydrophone separation D/λ_c (two-hydrophone strategies)")] = 0.5
     c: Annotated[float, Field(ge=1000.0, le=2000.0, description="sound speed [m/s]")] = 1500.0
     fs: Annotated[float, Field(ge=1000.0, le=1_000_000.0, description="sample rate of the lag grid [Hz]")] = 48_000.0
     full_lag: bool = Field(False, description="search the lag over the whole window instead of ±D/c (waveform mode)")
     lag_peak: Literal["parabolic", "sample"] = Field(
-        "parabolic", description="τ_lag: the correlation peak refined by a parabola, or the sample lag itself as Alg. 5 "
-        "takes it (then fs sets how finely bearings are resolved)")
+        "parabolic", description="τ_lag: the correlation peak refined by a parabola, or the sample lag itself as "
+        "Alg. 5 takes it (then fs sets how finely bearings are resolved)")
     a: Annotated[float, Field(ge=0.0, le=20.0, description="forgetting scale a [7.2]: memory × e^(−a) per step")] = 1.0
     d_0: Annotated[float, Field(ge=0.0, le=10_000.0, description="deployment radius d_0 [m]")] = 50.0
     d_c: Annotated[float, Field(gt=0.0, le=10_000.0, description="convergence radius d_c [m]")] = 50.0
@@ -186,14 +193,20 @@ class Acoustics(_Model):
     beta: Annotated[float, Field(gt=0.0, le=1.0, description="sensitivity β: ω = 1 − β, ĉ = βU/√d")] = 0.9
     c1_share: Annotated[float, Field(ge=0.0, le=1.0, description="c1/(c1 + c2)")] = 0.5
     alpha_dvc: Annotated[float, Field(gt=0.0, lt=1.0, description="DVC safety factor α (nonomni)")] = 0.9
-    sensing_range: Annotated[float, Field(gt=0.0, le=1000.0, description="six-sector sensing range [m] (nonomni)")] = 10.0
-    robot_radius: Annotated[float, Field(gt=0.0, le=20.0, description="robot disc radius [m] (1 m encloses a 2 × 1 m hull)")] = 1.0
+    sensing_range: Annotated[float, Field(gt=0.0, le=1000.0,
+                                          description="six-sector sensing range [m] (nonomni)")] = 10.0
+    robot_radius: Annotated[float, Field(gt=0.0, le=20.0,
+                                         description="robot disc radius [m] (1 m encloses a 2 × 1 m hull)")] = 1.0
     guard: bool = Field(False, description="DVC forward guard (ours, not in the thesis): v ≤ α·s_f/Δt")
-    r: Annotated[float, Field(ge=0.0, le=10_000.0, description="escort ring radius r [m] round y_g (0 = no escort; nonomni)")] = 0.0
+    r: Annotated[float, Field(ge=0.0, le=10_000.0,
+                              description="escort ring radius r [m] round y_g (0 = no escort; nonomni)")] = 0.0
     v_n: Annotated[float, Field(ge=0.0, le=2.0, description="source speed / U [8.8]")] = 0.0
-    source_heading_deg: Annotated[float, Field(ge=-360.0, le=360.0, description="direction the source moves [°] (0 = +x)")] = 0.0
-    source_bearing_deg: Annotated[float | None, Field(ge=-360.0, le=360.0, description="source bearing from the origin [°]; unset = random per run")] = None
-    start: Literal["origin", "source"] = Field("origin", description="deploy the robots round the origin or round the source")
+    source_heading_deg: Annotated[float, Field(ge=-360.0, le=360.0,
+                                               description="direction the source moves [°] (0 = +x)")] = 0.0
+    source_bearing_deg: Annotated[float | None, Field(
+        ge=-360.0, le=360.0, description="source bearing from the origin [°]; unset = random per run")] = None
+    start: Literal["origin", "source"] = Field(
+        "origin", description="deploy the robots round the origin or round the source")
     stop_on_converge: bool = Field(False, description="freeze a run once its CoM is within d_c of the source")
 
     @model_validator(mode="after")
@@ -221,10 +234,12 @@ class SLOErrorValues(_Model):
     range_perm_sigma_m: Annotated[SLOErrorValue, Field(description="range: permanent multiplicative σ̂_m")] = None
     range_perm_sigma_a: Annotated[SLOErrorValue, Field(description="range: permanent additive σ̂_a")] = None
     range_p_fail: Annotated[float | None, Field(ge=0.0, le=1.0, description="range: failure probability")] = None
-    odometry_sigma_m: Annotated[SLOErrorValue, Field(description="odometry: stochastic multiplicative σ_m [4.4]")] = None
+    odometry_sigma_m: Annotated[SLOErrorValue, Field(
+        description="odometry: stochastic multiplicative σ_m [4.4]")] = None
     odometry_sigma_a: Annotated[SLOErrorValue, Field(description="odometry: stochastic additive σ_a")] = None
     odometry_perm_sigma_m: Annotated[SLOErrorValue, Field(description="odometry: permanent multiplicative σ̂_m")] = None
-    odometry_perm_sigma_a: Annotated[SLOErrorValue, Field(description="odometry: permanent additive σ̂_a (velocity offset)")] = None
+    odometry_perm_sigma_a: Annotated[SLOErrorValue, Field(
+        description="odometry: permanent additive σ̂_a (velocity offset)")] = None
     odometry_p_fail: Annotated[float | None, Field(ge=0.0, le=1.0, description="odometry: failure probability")] = None
     odometry_sigma_r: Annotated[SLOErrorValue, Field(description="odometry: stochastic rotation σ_r [rad]")] = None
     odometry_perm_sigma_r: Annotated[SLOErrorValue, Field(description="odometry: permanent rotation σ̂_r [rad]")] = None
@@ -248,30 +263,40 @@ class SLO(_Model):
     """
 
     swarm: Literal["slo", "host"] = Field(
-        "slo", description="Mai's SLO swarm, or the scene's own swarm (Ch. 3, [world] fleet, [acoustics]) on SLO positions")
+        "slo",
+        description="Mai's SLO swarm, or the scene's own swarm (Ch. 3, [world] fleet, [acoustics]) on SLO positions")
     positions: Literal["slo", "oracle"] = Field("slo", description="host swarm: estimated or true positions")
-    motion: Literal["pso", "random_walk"] = Field("pso", description="SLO swarm: SPSO 2011 in each robot's frame or a random walk")
+    motion: Literal["pso", "random_walk"] = Field(
+        "pso", description="SLO swarm: SPSO 2011 in each robot's frame or a random walk")
     objective: Literal["ackley", "griewank", "line", "plane", "rastrigin", "rosenbrock", "sphere"] = Field(
         "sphere", description="SLO swarm: 2-D benchmark, minimised (DEAP forms)")
-    selection: Literal["css", "rts", "akcan"] = Field("css", description="candidate selection [3.7]-[3.9]")
+    selection: Literal[SELECTIONS.names()] = Field("css", description="candidate selection [3.7]-[3.9]")
     errors: Literal["none", "low", "high"] = Field("low", description="sensor error set of Tab. 4.3")
-    error_values: SLOErrorValues = Field(default_factory=SLOErrorValues, description="single error parameters replacing the set's")
+    error_values: SLOErrorValues = Field(default_factory=SLOErrorValues,
+                                         description="single error parameters replacing the set's")
     prediction_weight: Annotated[float, Field(ge=0.0, le=1.0, description="prediction weight w of [3.7]")] = 0.5
     delta_cos: Annotated[float, Field(ge=0.0, le=1.0, description="mitigation threshold δ_cos [3.5]")] = 0.03
     delta_v: Annotated[float, Field(ge=0.0, le=10.0, description="mitigation threshold δ_v [3.6]")] = 0.03
-    literal_eq_3_1: bool = Field(False, description="use [3.1] as printed (known slip) instead of the corrected law of cosines")
+    literal_eq_3_1: bool = Field(
+        False, description="use [3.1] as printed (known slip) instead of the corrected law of cosines")
     entry_policy: Literal["dead_reckoning", "stale", "geometric_random"] = Field(
         "dead_reckoning", description="estimates of robots outside the neighbourhood: carried by odometry (exact with "
         "perfect sensors), frozen, or frozen with an arriving neighbour placed on a random mirror candidate")
     neighbourhood: Literal["knn", "radius", "full", "random", "ring"] = Field("knn", description="who localises whom")
-    neighbourhood_param: Annotated[float | None, Field(ge=0.0, le=1e4, description="k (knn), r (radius), n (ring), p (random); unset = 5, 25, 2, 0.5")] = None
-    walk_speed: Annotated[float, Field(gt=0.0, le=100.0, description="random walk: top step length (thesis units)")] = 5.0
+    neighbourhood_param: Annotated[float | None, Field(
+        ge=0.0, le=1e4, description="k (knn), r (radius), n (ring), p (random); unset = 5, 25, 2, 0.5")] = None
+    walk_speed: Annotated[float, Field(gt=0.0, le=100.0,
+                                       description="random walk: top step length (thesis units)")] = 5.0
     radial: Literal["uniform_radius", "uniform_area"] = Field(
         "uniform_radius", description="SLO swarm, SPSO 2011 [3.11]: the point in the hypersphere H(G, r) is r·ρ·g/|g| "
         "with ρ ~ U(0, 1), as the SPSO 2011 reference code draws it (denser near G; Mai does not say), or √ρ, uniform "
         "over the disc")
-    unit: Annotated[float | None, Field(gt=0.0, le=1e4, description="host swarm: metres per thesis length unit (the thesis area is 100 wide); unset = the scene's size / 100")] = None
-    quality_threshold: Annotated[float | None, Field(ge=-1e12, le=1e12, description="fitness T of 'first generation with best <= T'; unset = the benchmark's")] = None
+    unit: Annotated[float | None, Field(
+        gt=0.0, le=1e4, description="host swarm: metres per thesis length unit (the thesis area is 100 wide); "
+                                    "unset = the scene's size / 100")] = None
+    quality_threshold: Annotated[float | None, Field(
+        ge=-1e12, le=1e12,
+        description="fitness T of 'first generation with best <= T'; unset = the benchmark's")] = None
 
     @field_validator("swarm", mode="before")
     @classmethod
@@ -333,7 +358,8 @@ class Scenario(_Model):
         if self.world is not None and 2.0 * self.robot.radius >= self.world.start_size:
             raise ValueError(f"robot.radius = {self.robot.radius:g}: a robot must fit the start square "
                              f"(world.start_size = {self.world.start_size:g})")
-        if self.controller.law in ("robot-centred", "nonomni") and self.robot.drive != "differential":
+        law = ROBOT_LAWS.get(self.controller.law)
+        if law is not None and law.body_frame and self.robot.drive != "differential":
             raise ValueError(f"controller.law {self.controller.law!r} needs robot.drive = 'differential'")
         if self.world is not None and self.sim.d != 2:
             raise ValueError("sim.d must be 2 with a [world]")
@@ -343,9 +369,10 @@ class Scenario(_Model):
                 raise ValueError("[acoustics] runs in an open sea: remove the [world] section")
             if self.sim.d != 2:
                 raise ValueError("sim.d must be 2 with [acoustics]")
-            need = {"gt-pso": 4, "b-pso": 2, "xb-pso": 2}.get(a.algorithm, 1)
+            need = STRATEGIES[a.algorithm].min_robots
             if self.sim.robots < need:
-                raise ValueError(f"sim.robots = {self.sim.robots}: acoustics.algorithm {a.algorithm!r} needs at least {need}")
+                raise ValueError(f"sim.robots = {self.sim.robots}: acoustics.algorithm {a.algorithm!r} "
+                                 f"needs at least {need}")
         if self.slo is not None:
             if self.slo.swarm == "slo" and (self.world is not None or self.acoustics is not None):
                 raise ValueError("slo.swarm = 'slo': Mai's SLO swarm runs in free space; set slo.swarm = 'host' to "

@@ -7,6 +7,7 @@ settings.load_profile("shoal")
 
 
 import pytest  # noqa: E402
+
 from app_helpers import hand_tab  # noqa: E402
 
 

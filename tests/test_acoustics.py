@@ -5,8 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.band import Band
-from shoal.engine.propagation import (
+from shoal.engine.acoustics.band import Band
+from shoal.engine.acoustics.propagation import (
     R_FLOOR_M,
     alpha_abs,
     noise_intensity,
@@ -17,7 +17,7 @@ from shoal.engine.propagation import (
     source_distance_for_snr,
     source_intensity,
 )
-from shoal.engine.signals import hydrophone_positions, intensity, synthesise, to_time
+from shoal.engine.acoustics.signals import hydrophone_positions, intensity, synthesise, to_time
 
 
 def _rngs(n: int, seed: int = 0) -> list[np.random.Generator]:

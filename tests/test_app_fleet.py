@@ -15,17 +15,18 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from app_helpers import HAND_TAB
 
 from shoal.app.fleet_panels import CONTROLLERS
 from shoal.app.fleet_scene import FleetView
 from shoal.app.fleet_session import EditRefused, FleetSession
 from shoal.app.panels import Panels
 from shoal.app.scene import ArenaView
-from shoal.app.session import Session, TRAJECTORY_COLUMNS, app_presets
-from shoal.engine.fleet import Fleet
-from shoal.engine.sensing import sense
+from shoal.app.session import TRAJECTORY_COLUMNS, Session, app_presets
+from shoal.engine.kinds.fleet import Fleet
+from shoal.engine.robots.sensing import sense
 from shoal.presets import io as presets_io
+
+from app_helpers import HAND_TAB
 
 
 @dataclass

@@ -15,18 +15,19 @@ import threading
 
 import numpy as np
 import pytest
-from app_helpers import HAND_TAB
 
 from shoal.app import plots
-from shoal.app.panels import field_bounds, slider_range, SPECS
+from shoal.app.panels import SPECS, field_bounds, slider_range
 from shoal.app.scene import VIEW_HALF, landscape_rgb
 from shoal.app.server import PortInUseError, serve, start_server
-from shoal.app.session import MAX_UPLOAD_BYTES, Session, TRAJECTORY_COLUMNS
-from shoal.engine import stability
-from shoal.engine.coeffs import Constant, Physical
-from shoal.engine.objectives import Objective
+from shoal.app.session import MAX_UPLOAD_BYTES, TRAJECTORY_COLUMNS, Session
+from shoal.engine.core.objectives import Objective
+from shoal.engine.pso import stability
+from shoal.engine.pso.coeffs import Constant, Physical
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
+
+from app_helpers import HAND_TAB
 
 
 def _raw(tab):

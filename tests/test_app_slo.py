@@ -15,15 +15,13 @@ import numpy as np
 import pytest
 
 from shoal.app.panels import Panels
-from shoal.app.session import Session, TRAJECTORY_COLUMNS
+from shoal.app.session import TRAJECTORY_COLUMNS, Session
 from shoal.app.slo_panels import SLOPanels
 from shoal.app.slo_scene import SLOView
 from shoal.app.slo_session import SLOSession
-from shoal.engine.slo import SLOSwarm
-from shoal.engine.slo_source import SLOSimulation
+from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
-
 
 APP_PRESET = "slo-walk"  # the shared ``server`` fixture (conftest.py) shows this scene
 
@@ -53,7 +51,8 @@ def test_slo_walk_builds_an_slo_swarm_and_draws_the_selected_robots_estimates(ta
     expected = x[3] + est[3, j]  # ghost = observer's true position + its estimated vector
     np.testing.assert_allclose(_drawn(tab, "ghosts"), expected, atol=1e-4)
     np.testing.assert_allclose(_drawn(tab, "robots"), x, atol=1e-4)
-    errs = np.asarray(tab.arena.nodes["ghost_errors"].points, dtype=float)[:, :, :2] / tab.arena.scale + tab.arena.centre
+    drawn = np.asarray(tab.arena.nodes["ghost_errors"].points, dtype=float)[:, :, :2]
+    errs = drawn / tab.arena.scale + tab.arena.centre
     np.testing.assert_allclose(errs[:, 0], expected, atol=1e-4)  # error segment: ghost → true neighbour
     np.testing.assert_allclose(errs[:, 1], x[j], atol=1e-4)
     edges = np.asarray(tab.arena.nodes["edges"].points)
@@ -108,7 +107,7 @@ def test_slo_adapted_opens_in_the_chapter3_scene_and_the_slo_session_keeps_mais_
     test_app_positions.py); the SLO session runs Mai's swarm only and says why."""
     tab.panels.preset.value = "slo-adapted"
     assert isinstance(tab.session, Session) and isinstance(tab.panels, Panels)
-    assert type(tab.session.sim) is SLOSimulation
+    assert not tab.session.sim.positions.exact
     with pytest.raises(PresetError, match="slo.swarm"):
         SLOSession(presets_io.load("slo-adapted"))
     tab.panels.preset.value = "slo-walk"

@@ -17,7 +17,7 @@ from shoal.app.fleet_session import FleetSession
 from shoal.app.sonar_panels import SonarPanels
 from shoal.app.sonar_scene import SonarView
 from shoal.app.sonar_session import SonarSession, true_ray_index
-from shoal.engine.sonar import AcousticSwarm
+from shoal.engine.kinds.sonar import AcousticSwarm
 
 
 @dataclass

@@ -4,13 +4,10 @@ import csv
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
-import pytest
 
 from shoal.presets.build import build_simulation
-from shoal.presets.io import load
 
 
 def shoal(*args, cwd=None):
@@ -37,7 +34,8 @@ def test_validate_names_the_bad_field(tmp_path):
 
 def test_run_writes_the_contract_files_and_matches_the_engine(tmp_path):
     out_dir = tmp_path / "r"
-    res = shoal("run", "default", "--runs", "2", "--seed", "11", "--steps", "30", "--set", "sim.robots=7", "--out", str(out_dir))
+    res = shoal("run", "default", "--runs", "2", "--seed", "11", "--steps", "30", "--set", "sim.robots=7",
+                "--out", str(out_dir))
     assert res.returncode == 0, res.stderr
     meta = json.loads((out_dir / "run.json").read_text())
     assert meta["seed"] == 11 and meta["preset"]["sim"]["robots"] == 7 and meta["shoal_version"]
@@ -60,7 +58,8 @@ def test_run_writes_the_contract_files_and_matches_the_engine(tmp_path):
 
 def test_run_is_deterministic(tmp_path):
     for name in ("a", "b"):
-        assert shoal("run", "smooth-tanh", "--steps", "15", "--seed", "3", "--out", str(tmp_path / name)).returncode == 0
+        res = shoal("run", "smooth-tanh", "--steps", "15", "--seed", "3", "--out", str(tmp_path / name))
+        assert res.returncode == 0
     assert (tmp_path / "a" / "trajectories.csv").read_bytes() == (tmp_path / "b" / "trajectories.csv").read_bytes()
 
 

@@ -14,9 +14,9 @@ import pytest
 distributed = pytest.importorskip("distributed")
 cloudpickle = pytest.importorskip("cloudpickle")
 
-from shoal.engine.experiments import reproduce  # noqa: E402
-from shoal.engine.experiments.schedulers import DaskCluster  # noqa: E402
-from shoal.engine.sweep import run_sweep, simulate_cell  # noqa: E402
+from shoal.engine.studies.experiments import reproduce  # noqa: E402
+from shoal.engine.studies.experiments.schedulers import DaskCluster  # noqa: E402
+from shoal.engine.studies.sweep import run_sweep, simulate_cell  # noqa: E402
 
 GRID = ["controller.U=2,4", "controller.A_plus=5,10"]
 
@@ -84,8 +84,8 @@ def test_a_worker_that_dies_mid_sweep_costs_a_retry_not_the_sweep(cluster, local
 
 def test_cli_sweep_and_reproduce_take_a_scheduler_address(cluster, tmp_path):
     out = tmp_path / "cli"
-    res = subprocess.run([sys.executable, "-m", "shoal", "sweep", "default", "--grid", "controller.U=6,8", "--runs", "2",
-                          "--steps", "10", "--out", str(out), "--scheduler", cluster.address],
+    res = subprocess.run([sys.executable, "-m", "shoal", "sweep", "default", "--grid", "controller.U=6,8",
+                          "--runs", "2", "--steps", "10", "--out", str(out), "--scheduler", cluster.address],
                          capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stderr
     assert (out / "results.csv").is_file()

@@ -8,9 +8,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from shoal.engine.dvc import TABLE_4_1, constant_rpso, dvc_nonomni, dvc_omni, w_max
-from shoal.engine.laws import adapted_velocity
-from shoal.engine.robot_laws import nonomni_velocity
+from shoal.engine.pso.laws import adapted_velocity
+from shoal.engine.robots.dvc import TABLE_4_1, constant_rpso, dvc_nonomni, dvc_omni, w_max
+from shoal.engine.robots.laws import nonomni_velocity
 
 RANGE = 3.0
 SHAPE = (2, 3)

@@ -7,11 +7,11 @@ import numpy as np
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.fleet import ACTIVE, COLLIDED, STALL_STEPS, Fleet, FleetParams
-from shoal.engine.motion import Kinematic, Physics
-from shoal.engine.recorder import metric_table
-from shoal.engine.sensing import sense
-from shoal.engine.world import RunSpace, WorldSpec, box_walls
+from shoal.engine.core.recorder import metric_table
+from shoal.engine.kinds.fleet import ACTIVE, COLLIDED, STALL_STEPS, Fleet, FleetParams
+from shoal.engine.robots.motion import Kinematic, Physics
+from shoal.engine.robots.sensing import sense
+from shoal.engine.robots.world import RunSpace, WorldSpec, box_walls
 from shoal.presets.build import build_fleet
 from shoal.presets.io import load
 
@@ -33,6 +33,7 @@ def test_same_seed_same_trajectories_and_runs_do_not_depend_on_the_batch():
     for xa, xb in zip(_state(a), _state(b)):
         np.testing.assert_array_equal(xa, xb)
     np.testing.assert_array_equal(a.state.x[1:], tail.state.x)
+    np.testing.assert_array_equal(ia.com_fitness, ib.com_fitness)
     np.testing.assert_array_equal(ia.com_fitness[1:], it.com_fitness)
     assert not np.array_equal(a.state.x, other.state.x)
 
@@ -117,7 +118,7 @@ def test_dvc_with_guard_never_reaches_the_nearest_sensed_body_in_one_step(circle
     u0 = speed * np.array([np.cos(direction), np.sin(direction)])
     s.u[0, 0] = s.cmd[0, 0] = u0  # any prior velocity up to the top speed
     s.y[0, 0] = s.yg[0] = best
-    s.f_y[0, 0] = s.f_yg[0] = f.cost(s.y)[0, 0]
+    s.f_y[0, 0] = s.best_fitness[0] = f.cost(s.y)[0, 0]
     f.spaces[0].set_positions(s.x[0])
     gaps = np.hypot(c[:, 0], c[:, 1]) - c[:, 2] - r_robot
     k = int(np.argmin(gaps))
@@ -154,7 +155,7 @@ def test_without_the_guard_dvc_can_reach_the_nearest_body():
         s.x[:, 0] = (0.0, 0.0)
         s.u[:, 0] = s.cmd[:, 0] = (3.0, 0.0)
         s.y[:, 0] = s.yg[:] = (20.0, 0.5)
-        s.f_y[:, 0] = s.f_yg[:] = f.cost(s.y)[:, 0]
+        s.f_y[:, 0] = s.best_fitness[:] = f.cost(s.y)[:, 0]
         for sp, x in zip(f.spaces, s.x):
             sp.set_positions(x)
         f.step()

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from shoal.engine.laws import Law, adapted_velocity, squash, standard_velocity
+from shoal.engine.pso.laws import Law, adapted_velocity, squash, standard_velocity
 
 
 def test_sgn_keeps_zero_at_zero():

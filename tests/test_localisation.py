@@ -7,13 +7,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.escort import escort_gap, moving_source, with_escort
-from shoal.engine.forgetting import best_of, centroid_of, forget_update
-from shoal.engine.intersections import PAIRS_I, PAIRS_J, cross2, intersect, rho_consistent
-from shoal.engine.localisation import STRATEGIES, LocInfo, Sensed, initial_memory, make_strategy
-from shoal.engine.partners import random_partner
-from shoal.engine.sensing import SectorReading
-from shoal.engine.triangulation import triangles
+from shoal.engine.acoustics.escort import escort_gap, moving_source, with_escort
+from shoal.engine.acoustics.forgetting import centroid_of, forget_update
+from shoal.engine.acoustics.intersections import PAIRS_I, PAIRS_J, cross2, intersect, rho_consistent
+from shoal.engine.acoustics.partners import random_partner
+from shoal.engine.acoustics.strategies import STRATEGIES, LocInfo, Sensed, initial_memory, make_strategy
+from shoal.engine.acoustics.triangulation import triangles
+from shoal.engine.robots.sensing import SectorReading
 
 E = np.exp(-1.0)
 
@@ -268,7 +268,8 @@ def test_gtpso_degenerate_triangles():
 
 def test_gtpso_too_few_robots_for_a_partner():
     x = np.array([[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]])
-    f, y, yg, info = step("gt-pso", x, Sensed(intensity=inverse_square(x, np.array([30.0, 40.0]))), f_hat=np.ones((1, 3)))
+    sensed = Sensed(intensity=inverse_square(x, np.array([30.0, 40.0])))
+    f, y, yg, info = step("gt-pso", x, sensed, f_hat=np.ones((1, 3)))
     assert info.triangles.valid.all() and np.all(info.partner == -1) and np.allclose(f, E)
     f, y, yg, info = step("gt-pso", x[:, :2], Sensed(intensity=np.ones((1, 2))))
     assert not info.triangles.valid.any() and all_finite(f, y, yg, *info_arrays(info))

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from shoal.engine.bests import global_best, update_personal
-from shoal.engine.objectives import Objective
+from shoal.engine.core.objectives import Objective
+from shoal.engine.pso.bests import global_best, update_personal
 
 
 @pytest.mark.parametrize("name", ["sphere", "rastrigin", "ackley", "griewank"])

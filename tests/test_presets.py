@@ -7,7 +7,16 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from shoal.presets.io import (
-    PresetError, apply_overrides, list_presets, load, parse_text, parse_value, read_raw, to_json, to_toml, validate,
+    PresetError,
+    apply_overrides,
+    list_presets,
+    load,
+    parse_text,
+    parse_value,
+    read_raw,
+    to_json,
+    to_toml,
+    validate,
 )
 from shoal.presets.models import Scenario
 

@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.band import Band
-from shoal.engine.receiver import (
+from shoal.engine.acoustics.band import Band
+from shoal.engine.acoustics.receiver import (
     MINUS,
     PLUS,
     angle_of_arrival,
@@ -16,7 +16,7 @@ from shoal.engine.receiver import (
     cross_spectrum,
     lag_samples,
 )
-from shoal.engine.signals import hydrophone_positions, intensity, synthesise, to_time
+from shoal.engine.acoustics.signals import hydrophone_positions, intensity, synthesise, to_time
 
 
 def _rngs(n: int, seed: int = 0) -> list[np.random.Generator]:
@@ -239,7 +239,8 @@ def test_batched_bearing_equals_runs_alone():
     pos = hydrophone_positions(x, o, D)
     batch = bearing(synthesise(_rngs(runs, 4), pos, src, b, 1000.0), b, D, o)
     for i in range(runs):
-        alone = bearing(synthesise([np.random.default_rng([4, i])], pos[i : i + 1], src[i : i + 1], b, 1000.0), b, D, o[i : i + 1])
+        spectra = synthesise([np.random.default_rng([4, i])], pos[i : i + 1], src[i : i + 1], b, 1000.0)
+        alone = bearing(spectra, b, D, o[i : i + 1])
         for name in ("tau", "rho", "alpha", "rays", "corr"):
             assert np.allclose(getattr(batch, name)[i], getattr(alone, name)[0], rtol=1e-12, atol=1e-12), name
 
@@ -248,7 +249,7 @@ def test_batched_bearing_equals_runs_alone():
 
 
 def _both_modes(Q: float, d_over_lam: float, snr_db: float, degs, runs: int = 200):
-    from shoal.engine.acoustic_surrogate import surrogate
+    from shoal.engine.acoustics.surrogate import surrogate
 
     b = Band(Q=Q)
     D = d_over_lam * b.lam_c
@@ -279,7 +280,7 @@ def test_surrogate_statistics_match_waveform_mode(Q, d_over_lam, snr):
 
 
 def test_surrogate_is_finite_batch_independent_and_single_hydrophone_aware():
-    from shoal.engine.acoustic_surrogate import surrogate
+    from shoal.engine.acoustics.surrogate import surrogate
 
     b = Band()
     D = b.lam_c / 2

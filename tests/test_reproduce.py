@@ -12,10 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shoal.engine.experiments import TARGETS, reproduce, run_batch, run_jobs
-from shoal.engine.experiments import chapter3
-from shoal.engine.experiments.registry import OutputDirError
-from shoal.engine.experiments.runner import Job
+from shoal.engine.studies.experiments import TARGETS, chapter3, reproduce, run_batch, run_jobs
+from shoal.engine.studies.experiments.registry import OutputDirError
+from shoal.engine.studies.experiments.runner import Job
 from shoal.presets.io import load
 
 HEADER = "case,run,seed,swarm_size,U,A_plus,dt,beta,max_speed"

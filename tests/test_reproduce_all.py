@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from shoal.engine.experiments.report import REPORT, collect, run_all, write_report
+from shoal.engine.studies.experiments.report import REPORT, collect, run_all, write_report
 
 QUICK = ["fig3-5", "fig3-4"]
 
@@ -67,7 +67,8 @@ def test_resume_keeps_finished_targets_and_reruns_others(tmp_path: Path) -> None
     assert any("fig3-5: kept" in s for s in said) and (tmp_path / "fig3-4" / "summary.json").is_file()
     run_all(tmp_path, runs=2, targets=["fig3-5"], progress=False, resume=True, log=said.append)  # other runs
     assert json.loads((tmp_path / "fig3-5" / "summary.json").read_text())["runs"] == 2
-    run_all(tmp_path, runs=2, targets=["fig3-5"], progress=False, resume=True, quick=True, log=said.append)  # other size
+    run_all(tmp_path, runs=2, targets=["fig3-5"], progress=False, resume=True, quick=True,
+            log=said.append)  # the same runs at the other size
     assert json.loads((tmp_path / "fig3-5" / "summary.json").read_text())["quick"] is True
 
 

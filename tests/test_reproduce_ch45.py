@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shoal.engine.experiments import TARGETS, reproduce
-from shoal.engine.experiments import chapter45 as ch
-from shoal.engine.experiments.runner import run_jobs
+from shoal.engine.studies.experiments import TARGETS, reproduce
+from shoal.engine.studies.experiments import chapter45 as ch
+from shoal.engine.studies.experiments.runner import run_jobs
 
 RUNS_HEADER = "case,run,seed,mode,com_fitness_final,layers_passed,collided,operational,stalled"
 CH4 = ["rpso-c3-high", "rpso-c3-equal", "rpso-c3-low", "adapted-c3-high", "adapted-c3-equal", "adapted-c3-low",
@@ -104,7 +104,8 @@ def test_fig5_4_tiny_guard_keeps_robots_apart(fig54):
     assert len(guarded) == 2 and all(r["robot_robot_collided"] == "0" and r["collided"] == "0" for r in guarded)
     assert (fig54 / "fig5-4.png").stat().st_size > 0
     summary = _summary(fig54)
-    typical = [c for c in summary["checks"] if c["name"].startswith("nonomni-dvc: no robot-robot collision in a typical")]
+    typical = [c for c in summary["checks"]
+               if c["name"].startswith("nonomni-dvc: no robot-robot collision in a typical")]
     assert len(typical) == 1 and typical[0]["pass"]
     strict = {c["name"]: c for c in summary["information"]}
     assert strict["nonomni-dvc: no robot-robot collision in any run, with the DVC guard (ours)"]["holds"]

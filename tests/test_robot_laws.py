@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from shoal.engine.laws import adapted_velocity
-from shoal.engine.robot_laws import (
+from shoal.engine.pso.laws import adapted_velocity
+from shoal.engine.robots.laws import (
     adapted_rpso_velocity,
     arc_pose_update,
     energy_limit,

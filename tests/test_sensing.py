@@ -7,7 +7,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.sensing import (
+from shoal.engine.robots.sensing import (
     FRONT,
     LEFT,
     RIGHT,
@@ -19,7 +19,7 @@ from shoal.engine.sensing import (
     sorted_gaps,
     virtual_force,
 )
-from shoal.engine.world import RunSpace, WorldSpec, obstacle_course
+from shoal.engine.robots.world import RunSpace, WorldSpec, obstacle_course
 
 RANGE = 3.0
 

@@ -5,10 +5,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.coeffs import Constant, Physical, Segment
-from shoal.engine.laws import Law
-from shoal.engine.objectives import Objective
-from shoal.engine.sim import Simulation
+from shoal.engine.core.objectives import Objective
+from shoal.engine.kinds.swarm import Simulation
+from shoal.engine.pso.coeffs import Constant, Physical, Segment
+from shoal.engine.pso.laws import Law
 from shoal.presets.build import build_simulation
 from shoal.presets.io import load
 
@@ -39,7 +39,7 @@ def test_swarm_reaches_the_source_and_bests_are_monotone():
     history = []
     for _ in range(400):
         sim.step()
-        history.append(sim.state.f_yg[0])
+        history.append(sim.state.best_fitness[0])
     assert np.all(np.diff(history) <= 0)  # the global best never gets worse
     assert history[-1] < 0.5  # the swarm found the source (distance in m)
     assert np.all(sim.state.f_y <= sim.objective(sim.state.y) + 1e-12)
@@ -93,7 +93,7 @@ def test_live_changes_apply_without_restart():
     sim.step()
     sim.set_robots(5)
     assert sim.state.y.shape == (1, 5, 2)
-    assert sim.state.f_yg[0] == pytest.approx(sim.state.f_y[0].min())
+    assert sim.state.best_fitness[0] == pytest.approx(sim.state.f_y[0].min())
 
 
 def test_law_switch_keeps_state():

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.slo_localisation import Flag, candidates
-from shoal.engine.slo_selection import Kind, css
+from shoal.engine.slo.candidates import Flag, candidates
+from shoal.engine.slo.selection import Kind, css
 
 coord = st.floats(-1e3, 1e3, allow_nan=False, allow_infinity=False)
 vec = st.tuples(coord, coord).map(np.array)
@@ -127,7 +127,7 @@ def test_css_blends_with_prediction_weight():
 
 def test_dead_reckoning_increments_cancel_around_a_triangle():
     """Acceptance 3: (v*_b − v*_a) + (v*_c − v*_b) + (v*_a − v*_c) = 0 whatever the errors."""
-    from shoal.engine.slo_sensors import ERROR_PRESETS, draw_permanent, measure_odometry
+    from shoal.engine.slo.sensors import ERROR_PRESETS, draw_permanent, measure_odometry
 
     rngs = [np.random.default_rng(5)]
     model = ERROR_PRESETS["high"]

@@ -6,12 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shoal.engine.fleet import Fleet
-from shoal.engine.slo_fleet import SLOFleet
-from shoal.engine.slo_host import BelievedBests
-from shoal.engine.slo_sonar import SLOAcousticSwarm, frame_draws
-from shoal.engine.slo_source import SLOPositionSource
-from shoal.engine.sonar import AcousticSwarm
+from shoal.engine.acoustics.frames import frame_draws
+from shoal.engine.kinds.fleet import Fleet
+from shoal.engine.kinds.sonar import AcousticSwarm
+from shoal.engine.slo.positions import Estimated, Oracle
 from shoal.presets.build import build
 from shoal.presets.io import PresetError, load
 
@@ -35,7 +33,7 @@ def positions(sim, steps: int) -> np.ndarray:
 def test_fleet_oracle_positions_are_the_plain_fleet_bit_for_bit(name):
     plain = build(load(name), runs=2, seed=4)
     oracle = build(host(name, "oracle"), runs=2, seed=4)
-    assert type(plain) is Fleet and type(oracle) is Fleet
+    assert type(plain) is Fleet and type(oracle) is Fleet and isinstance(oracle.positions, Oracle)
     assert np.array_equal(positions(plain, 40), positions(oracle, 40))
 
 
@@ -43,7 +41,7 @@ def test_fleet_oracle_positions_are_the_plain_fleet_bit_for_bit(name):
 def test_error_free_slo_fleet_follows_the_oracle_run(name):
     oracle = positions(build(host(name, "oracle"), runs=2, seed=4), 40)
     slo = build(host(name, "slo"), runs=2, seed=4)
-    assert isinstance(slo, SLOFleet)
+    assert type(slo) is Fleet and isinstance(slo.positions, Estimated)
     np.testing.assert_allclose(positions(slo, 40), oracle, rtol=0, atol=1e-8)
 
 
@@ -52,12 +50,12 @@ def test_high_error_fleet_differs_stays_finite_and_keeps_collided_robots():
     oracle = positions(build(host("course-rpso", "oracle"), runs=2, seed=1), 60)
     fleet = build(scenario, runs=2, seed=1)
     noisy = positions(fleet, 60)
-    assert np.isfinite(noisy).all() and np.isfinite(fleet.bests.pbest).all()
+    assert np.isfinite(noisy).all() and np.isfinite(fleet.positions.pbest).all()
     assert np.abs(noisy - oracle).max() > 1.0
     hit = fleet.state.status != 0
     assert hit.any(), "course-rpso should collide within 60 steps"
     assert np.array_equal(noisy[-1][hit], noisy[-10][hit])  # collided robots stand still ...
-    est = fleet.slo_source.beliefs
+    est = fleet.positions.beliefs
     assert est.valid[hit].any()  # ... and still localise the others
     again = positions(build(scenario, runs=2, seed=1), 60)
     assert np.array_equal(noisy, again)
@@ -65,10 +63,10 @@ def test_high_error_fleet_differs_stays_finite_and_keeps_collided_robots():
 
 def test_slo_unit_scales_with_the_world():
     fleet = build(host("course-dvc", "slo", "low"))
-    assert fleet.slo_params["unit"] == pytest.approx(0.62)  # the course is 62 m long
+    assert fleet.positions.unit == pytest.approx(0.62)  # the course is 62 m long
     sonar = build(host("sonar-xb-pso", "slo", "low"))
-    assert sonar.slo_params["unit"] == pytest.approx(1.0)  # deployed in a disc 100 m across
-    assert build(host("sonar-xb-pso", "slo", "low", "slo.unit=2.5")).slo_params["unit"] == 2.5
+    assert sonar.positions.unit == pytest.approx(1.0)  # deployed in a disc 100 m across
+    assert build(host("sonar-xb-pso", "slo", "low", "slo.unit=2.5")).positions.unit == 2.5
 
 
 # ---------------------------------------------------------------------- sonar
@@ -87,7 +85,7 @@ def test_error_free_slo_sonar_follows_the_oracle_run(more, steps):
     plain = build(load("sonar-xb-pso", list(more)), runs=2, seed=3)
     oracle = build(host("sonar-xb-pso", "oracle", "none", *more), runs=2, seed=3)
     slo = build(host("sonar-xb-pso", "slo", "none", *more), runs=2, seed=3)
-    assert type(oracle) is AcousticSwarm and isinstance(slo, SLOAcousticSwarm)
+    assert type(oracle) is type(slo) is AcousticSwarm and oracle.positions.exact and not slo.positions.exact
     truth = positions(plain, steps)
     assert np.array_equal(positions(oracle, steps), truth)
     np.testing.assert_allclose(positions(slo, steps), truth, rtol=0, atol=1e-8)
@@ -109,19 +107,28 @@ def test_high_error_sonar_differs_but_keeps_the_oracle_partners():
 
 
 # ---------------------------------------------------------------------- pieces
-def test_believed_bests_with_exact_beliefs_are_the_oracle_vectors():
+def test_estimated_positions_with_exact_beliefs_are_the_oracle_vectors():
     rng = np.random.default_rng(2)
     x = rng.uniform(-10, 10, (2, 5, 2))
     y = x + rng.uniform(-1, 1, x.shape)
-    bests = BelievedBests(SLOPositionSource(x, errors="none"), y - x)
+    oracle, est = Oracle(), Estimated(errors="none")
+    est.start(x, y, 0, seed=0, first_run=0)
     owner = np.array([3, 1])
-    np.testing.assert_allclose(bests.to_owner(owner), y[np.arange(2), owner][:, None] - x, atol=1e-12)
-    np.testing.assert_allclose(bests.to_centroid(), y.mean(axis=1)[:, None] - x, atol=1e-12)
+    for pos in (oracle, est):
+        np.testing.assert_allclose(pos.to_personal(x, y), y - x, atol=1e-12)
+        np.testing.assert_allclose(pos.to_owner(x, y, owner), y[np.arange(2), owner][:, None] - x, atol=1e-12)
+        np.testing.assert_allclose(pos.to_centroid(x, y), y.mean(axis=1)[:, None] - x, atol=1e-12)
+        np.testing.assert_allclose(pos.placed(x), np.broadcast_to(x[:, None], (2, 5, 5, 2)), atol=1e-12)
     move = rng.uniform(-1, 1, x.shape)
-    assert bests.sense(x + move, 1) and not bests.sense(x + move, 1)  # once per tick
-    np.testing.assert_allclose(bests.pbest, y - x - move, atol=1e-12)
-    bests.keep(np.array([[True, False, False, False, False]] * 2))
-    assert np.all(bests.pbest[:, 0] == 0) and np.all(bests.pbest[:, 1] != 0)
+    assert est.observe(x + move, 1) and not est.observe(x + move, 1)  # once per tick
+    assert not oracle.observe(x + move, 1)
+    np.testing.assert_allclose(est.pbest, y - x - move, atol=1e-12)
+    est.keep(np.array([[True, False, False, False, False]] * 2))
+    assert np.all(est.pbest[:, 0] == 0) and np.all(est.pbest[:, 1] != 0)
+    with pytest.raises(ValueError, match="^slo: this swarm acts on true positions"):
+        oracle.retune(errors="high")
+    with pytest.raises(ValueError, match="d = 2"):
+        Estimated().start(np.zeros((1, 4, 3)), np.zeros((1, 4, 3)), 0, 0, 0)
 
 
 def test_frames_of_one_run_share_its_draws():
@@ -135,16 +142,16 @@ def test_frames_of_one_run_share_its_draws():
 
 
 # ---------------------------------------------------------------------- presets
-@pytest.mark.parametrize(("name", "plain", "engine"), [("course-dvc-slo", "course-dvc", SLOFleet),
-                                                       ("sonar-xb-pso-slo", "sonar-xb-pso", SLOAcousticSwarm)])
+@pytest.mark.parametrize(("name", "plain", "engine"), [("course-dvc-slo", "course-dvc", Fleet),
+                                                       ("sonar-xb-pso-slo", "sonar-xb-pso", AcousticSwarm)])
 def test_shipped_presets_run_on_slo_and_switch_to_the_plain_scene(name, plain, engine):
     scenario = load(name)
     assert scenario.slo.errors == "low" and scenario.slo.swarm == "host"
     sim = build(scenario)
-    assert type(sim) is engine
+    assert type(sim) is engine and isinstance(sim.positions, Estimated)
     assert np.isfinite(positions(sim, 10)).all()
     oracle = build(load(name, ["slo.positions=oracle"]))
-    assert type(oracle) is type(build(load(plain)))
+    assert type(oracle) is type(build(load(plain))) and oracle.positions.exact
     assert np.array_equal(positions(oracle, 20), positions(build(load(plain)), 20))
 
 

@@ -7,8 +7,7 @@ import pytest
 
 from shoal.app.session import Session
 from shoal.app.slo_session import SLOSession
-from shoal.engine.slo import SLOSwarm
-from shoal.engine.slo_source import SLOSimulation
+from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.presets import io as presets_io
 
 
@@ -84,12 +83,12 @@ def test_the_session_retunes_live_and_rebuilds_only_when_it_must():
 
 def test_the_chapter3_swarm_on_slo_positions_retunes_its_source():
     s = Session(presets_io.load("slo-adapted"))  # the Chapter 3 scene runs it (Positions folder)
-    assert isinstance(s.sim, SLOSimulation)
+    assert not s.sim.positions.exact
     s.step(4)
     engine, x = s.sim, s.sim.state.x.copy()
     s.apply({"slo.errors": "none", "slo.selection": "rts"})
-    assert s.sim is engine and engine.source.params.selection == "rts"
-    assert engine.source.errors.range.sigma_m == 0.0
+    assert s.sim is engine and engine.positions.tracker.params.selection == "rts"
+    assert engine.positions.tracker.errors.range.sigma_m == 0.0
     np.testing.assert_array_equal(engine.state.x, x)
     s.apply({"slo.positions": "oracle"})  # the switch: same seed from the start
-    assert not isinstance(s.sim, SLOSimulation) and s.sim.state.k == 0
+    assert s.sim.positions.exact and s.sim.state.k == 0

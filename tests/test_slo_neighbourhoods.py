@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shoal.engine.neighbourhoods import Neighbourhood, distances
+from shoal.engine.slo.neighbourhoods import Neighbourhood, distances
 
 R, N = 3, 20
 
@@ -72,7 +72,7 @@ def test_default_parameters():
 
 
 def test_only_a_radius_scales_with_the_arena():
-    from shoal.engine.neighbourhoods import Neighbourhood
+    from shoal.engine.slo.neighbourhoods import Neighbourhood
 
     assert Neighbourhood("radius", 25.0).scaled(2.0) == Neighbourhood("radius", 50.0)
     assert Neighbourhood("radius").scaled(0.5).value == Neighbourhood("radius").value * 0.5

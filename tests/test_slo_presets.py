@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 from shoal.app.cli import main
-from shoal.engine.sim import Simulation
-from shoal.engine.slo import SLOSwarm
-from shoal.engine.slo_source import SLOSimulation
+from shoal.engine.kinds.slo_swarm import SLOSwarm
+from shoal.engine.kinds.swarm import Simulation
 from shoal.presets.build import build
 from shoal.presets.io import PresetError, list_presets, load
 
@@ -22,8 +21,8 @@ def test_shipped_slo_presets_validate_and_build(name):
     assert name in list_presets()
     scenario = load(name)
     sim = build(scenario, runs=1)
-    expected = SLOSimulation if name == "slo-adapted" else SLOSwarm
-    assert isinstance(sim, expected)
+    expected = Simulation if name == "slo-adapted" else SLOSwarm
+    assert type(sim) is expected and (expected is SLOSwarm or not sim.positions.exact)
     sim.step()
     assert np.isfinite(sim.state.x).all()
 
@@ -33,7 +32,8 @@ def test_slo_fields_reach_the_engine():
                                  "slo.neighbourhood=ring", "slo.neighbourhood_param=3", "slo.prediction_weight=0.25",
                                  "slo.entry_policy=geometric_random"]))
     cfg = sw.config
-    assert (cfg.selection, cfg.neighbourhood, cfg.neighbourhood_param, cfg.prediction_weight) == ("rts", "ring", 3, 0.25)
+    chosen = (cfg.selection, cfg.neighbourhood, cfg.neighbourhood_param, cfg.prediction_weight)
+    assert chosen == ("rts", "ring", 3, 0.25)
     assert cfg.entry_policy == "geometric_random" and build(load("slo-walk")).config.entry_policy == "dead_reckoning"
     assert build(load("slo-walk", ["slo.entry_policy=stale"])).config.entry_policy == "stale"  # the old reading
     assert cfg.motion == "random_walk" and sw.errors.range.sigma_m == 0.4
@@ -68,7 +68,7 @@ def test_oracle_switch_same_seed():
     oracle = build(load("slo-adapted", ["slo.positions=oracle"]))
     exact = build(load("slo-adapted", ["slo.errors=none"]))
     noisy = build(load("slo-adapted", ["slo.errors=high"]))
-    assert type(oracle) is Simulation and isinstance(exact, SLOSimulation)
+    assert type(oracle) is type(exact) is Simulation and oracle.positions.exact and not exact.positions.exact
     for _ in range(15):
         oracle.step(), exact.step(), noisy.step()
     np.testing.assert_allclose(exact.state.x, oracle.state.x, atol=1e-9)

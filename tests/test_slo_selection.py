@@ -8,8 +8,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.slo_localisation import Candidates, candidates
-from shoal.engine.slo_selection import Kind, akcan, css, rts
+from shoal.engine.slo.candidates import Candidates, candidates
+from shoal.engine.slo.selection import Kind, akcan, css, rts
 
 
 def random_candidates(seed: int, R: int, n: int, p_geo: float = 0.7) -> tuple[Candidates, np.ndarray, np.ndarray]:
@@ -147,5 +147,5 @@ def test_failed_range_edges_resolve_to_x3():
     d1 = np.linalg.norm(c.points[..., 0, :], axis=-1)
     d1[0, 0, 1] = 0.0
     cc = candidates(d1, d1, np.ones(d1.shape + (2,)), c.x3 - 1.0)
-    for est, kind in (css(cc, 0.5), akcan(cc, adj, ranges, css(cc, 0.5)), (rts(cc, adj, css(cc, 0.5)).est, None)):
+    for est, _kind in (css(cc, 0.5), akcan(cc, adj, ranges, css(cc, 0.5)), (rts(cc, adj, css(cc, 0.5)).est, None)):
         assert np.array_equal(est[0, 0, 1], cc.x3[0, 0, 1])

@@ -5,8 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shoal.engine.slo_sensors import (
-    ERROR_PRESETS, ErrorModel, OdometryErrors, RangeErrors, draw_permanent, error_model, measure_odometry,
+from shoal.engine.slo.sensors import (
+    ERROR_PRESETS,
+    ErrorModel,
+    OdometryErrors,
+    RangeErrors,
+    draw_permanent,
+    error_model,
+    measure_odometry,
     measure_ranges,
 )
 

@@ -1,15 +1,17 @@
-"""SLO-estimated positions for the Chapter 3 swarm: oracle vs SLO on the same seed."""
+"""SLO-estimated positions for the Chapter 3 swarm: oracle vs SLO on the same seed, and the
+belief tracker they are made of."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from shoal.engine.coeffs import Constant
-from shoal.engine.laws import Law
-from shoal.engine.objectives import Objective
-from shoal.engine.sim import Simulation
-from shoal.engine.slo_source import SLOPositionSource, SLOSimulation
+from shoal.engine.core.objectives import Objective
+from shoal.engine.kinds.swarm import Simulation
+from shoal.engine.pso.coeffs import Constant
+from shoal.engine.pso.laws import Law
+from shoal.engine.slo.positions import Estimated
+from shoal.engine.slo.tracker import BeliefTracker
 from shoal.presets.build import build_simulation
 from shoal.presets.io import load
 
@@ -23,6 +25,11 @@ def ch3_kwargs(**over) -> dict:
     return kw
 
 
+def on_slo(**slo) -> dict:
+    """Keywords of a Chapter 3 swarm on SLO positions."""
+    return {"positions": Estimated(**slo)}
+
+
 def trajectories(sim: Simulation, steps: int) -> np.ndarray:
     out = []
     for _ in range(steps):
@@ -34,7 +41,7 @@ def trajectories(sim: Simulation, steps: int) -> np.ndarray:
 @pytest.mark.parametrize("order", ["before_velocity", "after_velocity"])
 def test_error_free_slo_reproduces_the_oracle_run(order):
     oracle = trajectories(Simulation(**ch3_kwargs(pbest_order=order)), 150)
-    slo = trajectories(SLOSimulation(slo=dict(errors="none", unit=0.4), **ch3_kwargs(pbest_order=order)), 150)
+    slo = trajectories(Simulation(**ch3_kwargs(pbest_order=order), **on_slo(errors="none", unit=0.4)), 150)
     assert np.allclose(slo, oracle, rtol=0, atol=1e-9)
 
 
@@ -42,22 +49,22 @@ def test_error_free_slo_matches_standard_pso_up_to_rounding():
     kw = ch3_kwargs(law=Law("standard"), policy=Constant(0.6, (0.8, 0.8)), objective=Objective("sphere"),
                     init_spread=20.0)
     oracle = trajectories(Simulation(**kw), 80)
-    slo = trajectories(SLOSimulation(slo=dict(errors="none", selection="css"), **kw), 80)
+    slo = trajectories(Simulation(**kw, **on_slo(errors="none", selection="css")), 80)
     assert np.allclose(slo, oracle, rtol=1e-7, atol=1e-9)
 
 
 def test_high_error_changes_the_run():
     oracle = trajectories(Simulation(**ch3_kwargs()), 100)
-    slo = trajectories(SLOSimulation(slo=dict(errors="high", unit=0.4), **ch3_kwargs()), 100)
+    slo = trajectories(Simulation(**ch3_kwargs(), **on_slo(errors="high", unit=0.4)), 100)
     assert np.abs(slo - oracle).max() > 1.0
-    again = trajectories(SLOSimulation(slo=dict(errors="high", unit=0.4), **ch3_kwargs()), 100)
+    again = trajectories(Simulation(**ch3_kwargs(), **on_slo(errors="high", unit=0.4)), 100)
     assert np.array_equal(slo, again)
 
 
 def test_source_beliefs_follow_the_swarm():
     rng = np.random.default_rng(0)
     x = rng.uniform(0, 10, (2, 5, 2))
-    src = SLOPositionSource(x, seed=1, errors="none")
+    src = BeliefTracker(x, seed=1, errors="none")
     for k in range(6):
         move = rng.uniform(-1, 1, x.shape)
         x = x + move
@@ -71,7 +78,7 @@ def test_source_beliefs_follow_the_swarm():
     assert np.all(rel[0, 3] == 0) and np.all(rel[1, 0] == 0)
     assert np.allclose(src.believed_positions()[:, 1], x, atol=1e-9)
     with pytest.raises(ValueError, match="2-D"):
-        SLOPositionSource(np.zeros((1, 4, 3)))
+        BeliefTracker(np.zeros((1, 4, 3)))
 
 
 def test_a_resized_swarm_keeps_its_beliefs_and_the_error_free_run_the_oracle_one():
@@ -79,21 +86,22 @@ def test_a_resized_swarm_keeps_its_beliefs_and_the_error_free_run_the_oracle_one
     other, their calibration offsets and their believed personal bests; a new robot starts
     believing the truth (a calibrated deployment) with its best where it stands; an
     error-free run still follows the oracle run through a grow and a shrink."""
-    oracle, exact = Simulation(**ch3_kwargs()), SLOSimulation(slo=dict(errors="none", unit=0.4), **ch3_kwargs())
+    oracle, exact = Simulation(**ch3_kwargs()), Simulation(**ch3_kwargs(), **on_slo(errors="none", unit=0.4))
     for n in (12, 16, 7):
         oracle.set_robots(n), exact.set_robots(n)
         assert np.allclose(trajectories(exact, 25), trajectories(oracle, 25), rtol=0, atol=1e-9)
 
-    noisy = SLOSimulation(slo=dict(errors="high", unit=0.4), **ch3_kwargs())
+    noisy = Simulation(**ch3_kwargs(), **on_slo(errors="high", unit=0.4))
     trajectories(noisy, 10)
-    src = noisy.slo_source
-    est, z, pbest = src.beliefs.est.copy(), src.localiser._z.copy(), noisy.bests.pbest.copy()
+    pos = noisy.positions
+    src = pos.tracker
+    est, z, pbest = src.beliefs.est.copy(), src.localiser._z.copy(), pos.pbest.copy()
     noisy.set_robots(15)
-    b, x = noisy.slo_source.beliefs, noisy.state.x
-    assert noisy.slo_source is src and b.est.shape == (2, 15, 15, 2) and noisy.bests.sensed_k == 10
-    assert np.array_equal(b.est[:, :12, :12], est) and np.array_equal(noisy.bests.pbest[:, :12], pbest)
+    b, x = pos.beliefs, noisy.state.x
+    assert pos.tracker is src and b.est.shape == (2, 15, 15, 2) and pos.sensed_k == 10
+    assert np.array_equal(b.est[:, :12, :12], est) and np.array_equal(pos.pbest[:, :12], pbest)
     np.testing.assert_allclose(b.est[:, 12:, :12], x[:, None, :12] - x[:, 12:, None], atol=1e-12)
-    assert not np.any(noisy.bests.pbest[:, 12:])
+    assert not np.any(pos.pbest[:, 12:])
     assert np.array_equal(src.localiser._z[:, :, :12], z) and np.array_equal(src.x, x)
     trajectories(noisy, 5)
     noisy.set_robots(5)

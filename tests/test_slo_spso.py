@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, SPSODraws, draw, sample_hypersphere
+from shoal.engine.pso.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, SPSODraws, draw, sample_hypersphere
 
 
 def test_defaults():

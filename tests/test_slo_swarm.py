@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shoal.engine.slo import SLOSwarm
-from shoal.engine.slo_localisation import Flag
-from shoal.engine.slo_objectives import QUALITY_THRESHOLDS, SLO_OBJECTIVES, slo_objective
-from shoal.engine.slo_selection import Kind
+from shoal.engine.kinds.slo_swarm import SLOSwarm
+from shoal.engine.slo.candidates import Flag
+from shoal.engine.slo.objectives import QUALITY_THRESHOLDS, SLO_OBJECTIVES, slo_objective
+from shoal.engine.slo.selection import Kind
 
 
 def run(sw: SLOSwarm, steps: int) -> list:
@@ -88,10 +88,14 @@ def test_state_exposes_beliefs_for_the_app():
     assert np.all(s.kind[~s.valid] == Kind.NONE)
     assert np.array_equal(s.valid, s.adjacency) and np.all(s.adjacency.sum(axis=2) == 5)
     assert s.beliefs.triangle.shape == (2, 7, 7) and s.flag.dtype == np.int8
-    cols = sw.info().columns()
+    series = sw.info().series()
     for name in ("best_fitness", "e_abs_mean", "e_abs_sem", "e_rel_median", "e_ang_std", "distance_median",
                  "dead_reckoning", "round_trip", "quality_met_at"):
-        assert cols[name].shape == (2,)
+        assert series[name].shape == (2,)
+    cols = sw.info().columns()  # the metric table's names: best_fitness there is the best so far
+    assert list(cols)[0] == "generation_best" and "best_fitness" not in cols
+    assert np.array_equal(cols["generation_best"], series["best_fitness"])
+    assert cols.keys() - {"generation_best"} < series.keys()
 
 
 def test_perfect_localisation_has_no_error():
@@ -110,7 +114,7 @@ def test_every_method_stays_finite_under_high_error(selection, neighbourhood):
 
 
 def test_range_failures_fall_back_to_dead_reckoning():
-    from shoal.engine.slo_sensors import ErrorModel, RangeErrors
+    from shoal.engine.slo.sensors import ErrorModel, RangeErrors
 
     sw = SLOSwarm(runs=1, seed=0, particles=6, errors=ErrorModel(RangeErrors(p_fail=1.0)), motion="random_walk")
     info = run(sw, 3)[-1]

@@ -1,15 +1,15 @@
-"""The acoustic swarm of Chapters 7–8 (engine/sonar.py) and open-sea sensing."""
+"""The acoustic swarm of Chapters 7–8 (engine/kinds/sonar.py) and open-sea sensing."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from shoal.engine.localisation import STRATEGIES
-from shoal.engine.sensing import sense
-from shoal.engine.sonar import AcousticSwarm, SonarParams, straight_line_steps
-from shoal.engine.swarm_sensing import sense_robots
-from shoal.engine.world import RunSpace, WorldSpec
+from shoal.engine.acoustics.strategies import STRATEGIES
+from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams, straight_line_steps
+from shoal.engine.robots.sensing import sense
+from shoal.engine.robots.swarm_sensing import sense_robots
+from shoal.engine.robots.world import RunSpace, WorldSpec
 
 ARRAYS = ("x", "heading", "u", "cmd", "y", "f_hat", "y_g", "source", "snr_db", "steps", "first_converged")
 
@@ -148,7 +148,7 @@ def test_open_sea_sensing_matches_pymunk_sensing():
 
 @pytest.mark.parametrize("preset", ["sonar-xb-pso", "sonar-gt-pso", "escort-stationary", "escort-moving"])
 def test_shipped_acoustic_presets_build_and_record(preset, tmp_path):
-    from shoal.engine.runs import run_to_dir
+    from shoal.engine.core.runs import run_to_dir
     from shoal.presets.build import build
     from shoal.presets.io import load
 

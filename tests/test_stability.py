@@ -5,8 +5,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from shoal.engine import stability as sb
-from shoal.engine.laws import Law
+from shoal.engine.pso import stability as sb
+from shoal.engine.pso.laws import Law
 
 
 def test_order2_region_inside_order1():

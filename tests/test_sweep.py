@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shoal.engine.recorder import metric_table
-from shoal.engine.sweep import SweepError, run_sweep, simulate_cell
-from shoal.engine.sweep.grid import parse_axis, parse_values
+from shoal.engine.core.recorder import metric_table
+from shoal.engine.studies.sweep import SweepError, run_sweep, simulate_cell
+from shoal.engine.studies.sweep.grid import parse_axis, parse_values
 from shoal.presets.build import build
 from shoal.presets.io import load
 
@@ -57,7 +57,8 @@ def test_grid_values_are_toml_literals_or_bare_words():
     assert parse_values("true,false") == [True, False]
     axis = parse_axis("acoustics.Q = 1, 10")
     assert axis.key == "acoustics.Q" and axis.labels == ("1", "10")
-    for bad, words in (("acoustics.Q", "expected"), ("acoustics.Q=1,,2", "empty value"), ("acoustics.Q=1,1", "repeated")):
+    bad_grids = (("acoustics.Q", "expected"), ("acoustics.Q=1,,2", "empty value"), ("acoustics.Q=1,1", "repeated"))
+    for bad, words in bad_grids:
         with pytest.raises(SweepError, match=words):
             parse_axis(bad)
 

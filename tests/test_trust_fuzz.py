@@ -17,7 +17,15 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from shoal.presets.io import (
-    MAX_DEPTH, PresetError, apply_overrides, list_presets, load, parse_text, read_raw, to_toml, validate,
+    MAX_DEPTH,
+    PresetError,
+    apply_overrides,
+    list_presets,
+    load,
+    parse_text,
+    read_raw,
+    to_toml,
+    validate,
 )
 from shoal.presets.models import Scenario
 

@@ -16,13 +16,14 @@ import threading
 import time
 
 import pytest
-from app_helpers import hand_tab
 
 from shoal.app.base_session import MAX_UPLOAD_BYTES
 from shoal.app.cli import build_parser
 from shoal.app.server import is_loopback, start_server
 from shoal.presets import io as presets_io
 from shoal.presets.io import file_stem
+
+from app_helpers import hand_tab
 
 EVIL_NAMES = ["../../x.toml", "/etc/passwd.toml", "..\\..\\x.json", "a\x00b.toml", "x.toml\x00.png",
               "~/.bashrc.toml", "C:\\Windows\\x.toml", "." * 300 + ".toml"]
@@ -33,7 +34,7 @@ CLI = [sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(m
 def _listening_addresses(port: int) -> list[str]:
     """Local IPv4/IPv6 addresses with a listening TCP socket on ``port`` (from /proc/net)."""
     found = []
-    for table, width in (("/proc/net/tcp", 8), ("/proc/net/tcp6", 32)):
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
         try:
             lines = open(table).read().splitlines()[1:]
         except OSError:

@@ -12,12 +12,13 @@ import json
 
 import numpy as np
 import pytest
-from app_helpers import hand_tab
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from shoal.app.base_session import MAX_UPLOAD_BYTES
 from shoal.presets import io as presets_io
+
+from app_helpers import hand_tab
 
 
 @pytest.fixture

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from shoal.engine import tuning
+from shoal.engine.pso import tuning
 
 
 def test_figure_3_3_worked_example():
@@ -16,7 +16,8 @@ def test_figure_3_3_worked_example():
 
 @pytest.mark.parametrize(
     "dt, U, A_plus, beta, omega, c_hat",
-    [(1.0, 20.0, 20.0, 1.0, 0.0, 20.0), (1.0, 20.0, 4.0, 0.2, 0.8, 4.0), (0.2, 20.0, 20.0, 0.2, 0.8, 4.0), (0.2, 20.0, 100.0, 1.0, 0.0, 20.0)],
+    [(1.0, 20.0, 20.0, 1.0, 0.0, 20.0), (1.0, 20.0, 4.0, 0.2, 0.8, 4.0), (0.2, 20.0, 20.0, 0.2, 0.8, 4.0),
+     (0.2, 20.0, 100.0, 1.0, 0.0, 20.0)],
 )
 def test_section_3_5_cases(dt, U, A_plus, beta, omega, c_hat):
     t = tuning.from_limits(dt, U, A_plus=A_plus, d=1)

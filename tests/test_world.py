@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shoal.engine.world import (
+from shoal.engine.robots.world import (
     CAT_ROBOT,
     OBSTACLE,
     ROBOT,
@@ -193,7 +193,10 @@ def test_spec_is_frozen_and_edits_return_new_specs():
         spec.moved_obstacle(3, 0.0, 0.0)
 
 
-def _nearest(rs: RunSpace, pt, mask=pymunk.ShapeFilter.ALL_MASKS()):
+ALL_MASKS = pymunk.ShapeFilter.ALL_MASKS()
+
+
+def _nearest(rs: RunSpace, pt, mask=ALL_MASKS):
     return rs.space.point_query_nearest(pt, 0.05, pymunk.ShapeFilter(mask=mask))
 
 

@@ -23,11 +23,9 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import (  # noqa: E402
-    ARGS, VIEWPORT, canvas_box, choose, dismiss_toasts, number_box, upload_input, wait_until,
-)
-
 from shoal.app.scene import ROBOT, ROBOT_SIZE, VIEW_HALF  # noqa: E402
+
+from browser_helpers import ARGS, VIEWPORT, canvas_box, choose, dismiss_toasts, number_box, upload_input, wait_until  # noqa: E402
 
 
 @pytest.fixture(scope="module")

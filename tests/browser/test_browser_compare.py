@@ -24,14 +24,22 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import (  # noqa: E402
-    ARGS, VIEWPORT, canvas_box, dismiss_toasts, number_box, root_for, to_pixel, upload_input, wait_until,
-)
-
 from shoal.app import replay  # noqa: E402
 from shoal.app.scene import ROBOT_SIZE  # noqa: E402
 from shoal.app.server import start_server  # noqa: E402
 from shoal.app.session import Session  # noqa: E402
+
+from browser_helpers import (  # noqa: E402
+    ARGS,
+    VIEWPORT,
+    canvas_box,
+    dismiss_toasts,
+    number_box,
+    root_for,
+    to_pixel,
+    upload_input,
+    wait_until,
+)
 
 
 @pytest.fixture(scope="module")

@@ -24,9 +24,9 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import choose, dismiss_toasts, root_for, to_pixel, wait_until  # noqa: E402
-
 from shoal.app.fleet_session import FleetSession  # noqa: E402
+
+from browser_helpers import choose, dismiss_toasts, root_for, to_pixel, wait_until  # noqa: E402
 
 
 def screenshot(page) -> np.ndarray:
@@ -71,7 +71,7 @@ def test_the_preset_dropdown_switches_to_the_obstacle_course(server, page, cid):
     # ...and the picture has an obstacle where each one is
     dismiss_toasts(page)
     centres = np.round(to_pixel(server, cid, page, circles[:, :2])).astype(int)
-    for attempt in range(5):  # a loaded machine may need a few seconds for the first frames
+    for _attempt in range(5):  # a loaded machine may need a few seconds for the first frames
         time.sleep(1.0)
         img = screenshot(page)
         dark = 0

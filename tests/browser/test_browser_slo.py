@@ -19,16 +19,13 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import choose, dismiss_toasts, number_box, wait_until  # noqa: E402
-
 from shoal.app.fleet_session import FleetSession  # noqa: E402
 from shoal.app.session import Session  # noqa: E402
 from shoal.app.slo_session import SLOSession  # noqa: E402
-from shoal.engine.fleet import Fleet  # noqa: E402
-from shoal.engine.sim import Simulation  # noqa: E402
-from shoal.engine.slo import SLOSwarm  # noqa: E402
-from shoal.engine.slo_fleet import SLOFleet  # noqa: E402
-from shoal.engine.slo_source import SLOSimulation  # noqa: E402
+from shoal.engine.kinds.fleet import Fleet  # noqa: E402
+from shoal.engine.kinds.slo_swarm import SLOSwarm  # noqa: E402
+
+from browser_helpers import choose, dismiss_toasts, number_box, wait_until  # noqa: E402
 
 
 def test_the_dropdown_switches_to_slo_walk_and_the_ghosts_are_drawn(server, page, cid):
@@ -55,7 +52,7 @@ def test_the_chapter3_positions_switch_and_controller_in_the_gui(server, page, c
     choose(page, "preset", "slo-adapted")
     wait_until(lambda: isinstance(server.tabs[cid].session, Session), what="the Chapter 3 scene")
     session = server.tabs[cid].session
-    assert type(session.sim) is SLOSimulation
+    assert not session.sim.positions.exact
     page.get_by_role("tab", name="Controller", exact=True).click()
     sim = session.sim
     box = number_box(page, "U [m/s]")  # physical mode: A+ = 30, Δt = 0.1, so ω = 1 − 3/U
@@ -64,10 +61,10 @@ def test_the_chapter3_positions_switch_and_controller_in_the_gui(server, page, c
     wait_until(lambda: session.scenario.controller.U == 4.0, what="U = 4")
     assert session.sim is sim and session.coefficients()[0] == pytest.approx(0.25)  # no rebuild
     choose(page, "positions", "oracle (true)")  # the Positions folder starts open on SLO positions
-    wait_until(lambda: type(session.sim) is Simulation, what="the oracle swarm")
+    wait_until(lambda: session.sim.positions.exact, what="the oracle swarm")
     assert server.tabs[cid].session is session and session.scenario.controller.U == 4.0
     choose(page, "positions", "SLO (estimated)")
-    wait_until(lambda: type(session.sim) is SLOSimulation, what="SLO positions again")
+    wait_until(lambda: not session.sim.positions.exact, what="SLO positions again")
     page.get_by_role("button", name="Step", exact=True).click()
     wait_until(lambda: session.sim.state.k >= 1 and server.tabs[cid].arena.drawn_revision == session.revision,
                what="a step drawn")
@@ -79,14 +76,15 @@ def test_the_positions_switch_of_a_fleet_scene_changes_the_engine(server, page, 
     choose(page, "preset", "course-dvc")
     wait_until(lambda: isinstance(server.tabs[cid].session, FleetSession), what="a fleet session")
     session = server.tabs[cid].session
-    assert type(session.sim) is Fleet
+    assert type(session.sim) is Fleet and session.sim.positions.exact
     page.get_by_text("Positions", exact=True).click()  # the folder starts closed on true positions
     choose(page, "positions", "SLO (estimated)")
-    wait_until(lambda: type(session.sim) is SLOFleet, what="the fleet on SLO positions")
+    wait_until(lambda: isinstance(session.sim, Fleet) and not session.sim.positions.exact,
+               what="the fleet on SLO positions")
     assert server.tabs[cid].session is session  # the fleet view stays
     page.get_by_role("button", name="Step", exact=True).click()
     wait_until(lambda: session.sim.state.k >= 1 and server.tabs[cid].arena.drawn_revision == session.revision,
                what="a step drawn")
     assert server.tabs[cid].arena.nodes["ghosts"].visible
     choose(page, "positions", "oracle (true)")
-    wait_until(lambda: type(session.sim) is Fleet, what="the fleet on true positions")
+    wait_until(lambda: session.sim.positions.exact, what="the fleet on true positions")

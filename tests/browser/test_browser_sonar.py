@@ -22,9 +22,9 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import choose, dismiss_toasts, root_for, to_pixel, wait_until  # noqa: E402
-
 from shoal.app.sonar_session import SonarSession  # noqa: E402
+
+from browser_helpers import choose, dismiss_toasts, root_for, to_pixel, wait_until  # noqa: E402
 
 
 def _plot_matches(tab, robot: int) -> bool:

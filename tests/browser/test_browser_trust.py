@@ -21,9 +21,9 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import ARGS, VIEWPORT, number_box, wait_until  # noqa: E402
-
 from shoal.app.server import FULL_TITLE  # noqa: E402
+
+from browser_helpers import ARGS, VIEWPORT, number_box, wait_until  # noqa: E402
 
 CAP = 3
 READY = "label:has-text('robots')"

@@ -1,0 +1,62 @@
+"""``shoal export-replay``: a seeded run of a preset as one HTML page, written atomically."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Iterable
+
+SUFFIXES = (".html", ".htm")
+
+
+class ExportError(ValueError):
+    """A bad preset, a bad ``--out`` or a scene the app cannot show, in one line."""
+
+
+def check_out(out: Path) -> None:
+    """Refuse an ``--out`` that cannot become the page, before anything is run."""
+    if out.is_dir():
+        raise ExportError(f"--out {out}: is a folder; name the .html file to write")
+    if out.suffix.lower() not in SUFFIXES:
+        raise ExportError(f"--out {out}: the page needs a name ending in .html")
+    parent = out.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise ExportError(f"--out {out}: {parent} is not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise ExportError(f"--out {out}: cannot write in {parent}")
+
+
+def export_replay(preset: str, out: str | Path, *, seed: int | None = None, steps: int | None = None,
+                  sets: Iterable[str] = ()) -> str:
+    """Run ``preset`` (``--set`` overrides, seed, steps) and write its page to ``out``; returns
+    what was written, in words. Raises :class:`ExportError`; ``out`` is then untouched."""
+    from tqdm import tqdm
+
+    from shoal.presets.io import PresetError, load
+
+    from .export import preset_html, write_html
+
+    out = Path(out)
+    overrides = list(sets)
+    for value, key in ((seed, "sim.seed"), (steps, "sim.steps")):
+        if value is not None:
+            overrides.append(f"{key}={value}")
+    try:
+        scenario = load(preset, overrides)
+    except PresetError as err:
+        raise ExportError("bad preset: " + "; ".join(err.messages)) from None
+    check_out(out)
+    n = scenario.sim.steps
+    try:
+        with tqdm(total=n, desc=f"export {scenario.name}", unit="step", disable=n < 200 or None) as bar:
+            page = preset_html(scenario, on_steps=bar.update)
+    except PresetError as err:
+        raise ExportError(f"{preset}: " + "; ".join(err.messages)) from None
+    try:
+        write_html(out, page)
+    except OSError as err:
+        raise ExportError(f"--out {out}: {err.strerror or err}") from None
+    return (f"wrote {out} ({out.stat().st_size / 2**20:.1f} MiB: {scenario.name}, seed {scenario.sim.seed}, "
+            f"steps 0–{n}; open it in any browser)")

@@ -1,0 +1,84 @@
+"""Exported pages of a run: from a preset and seed (headless), from recordings, or from a
+session's recorded history (the app's *Share*)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+import shoal
+from shoal.engine.core.atomic import atomic_write_text
+from shoal.presets import io as presets_io
+from shoal.presets.models import Scenario
+
+from ..limits import scene_kind
+from ..replay import Recording
+from . import draw, page
+from .frames import MAX_FRAMES, FramePlan, frame_budget, plan, run_plan
+
+
+def _page(scenario: Scenario, frames: Iterable[draw.Drawn], info: page.PageInfo) -> str:
+    stem = presets_io.file_stem(scenario.name)
+    with page.recording_scene() as (scene, serializer):
+        view = draw.new_view(scenario, scene)
+        label = page.step_label(scene)
+        for frame in frames:
+            draw.draw_frame(view, frame)
+            label.text = page.step_text(frame[0].k, frame[0].t)
+            serializer.insert_sleep(info.seconds_per_frame)
+        return page.to_html(serializer, info, stem)
+
+
+def _info(scenario: Scenario, fp: FramePlan, *, origin: str, shoal_version: str, max_frames: int, robots: int,
+          live_edits: int = 0, twin: Scenario | None = None, overrides: dict[str, Any] | None = None) -> page.PageInfo:
+    return page.PageInfo(
+        name=scenario.name, seed=int(scenario.sim.seed), shoal=shoal_version, exported_by=shoal.__version__,
+        kind=scene_kind(scenario), origin=origin, first=fp.first, last=fp.last, stride=fp.stride, frames=fp.frames,
+        max_frames=max_frames, robots=robots, seconds_per_frame=1.0 / scenario.view.steps_per_second,
+        preset=scenario.model_dump(mode="json"), preset_toml=presets_io.to_toml(scenario), live_edits=live_edits,
+        twin_overrides=dict(overrides or {}), twin_toml=None if twin is None else presets_io.to_toml(twin))
+
+
+def preset_html(scenario: Scenario, *, overrides: dict[str, Any] | None = None, max_frames: int = MAX_FRAMES,
+                on_steps: Callable[[int], None] | None = None) -> str:
+    """The page of a seeded run of ``scenario`` (its ``sim.seed``, ``sim.steps`` steps), drawn
+    live as the app draws it; with ``overrides`` also swarm B (Compare). Raises
+    :class:`~shoal.presets.io.PresetError` for a scene the app cannot show."""
+    session = draw.new_session(scenario)
+    if overrides:
+        session.enable_compare(overrides)
+    twin = session.twin.scenario if session.twin is not None else None
+    robots = scenario.sim.robots + (twin.sim.robots if twin is not None else 0)
+    limit = frame_budget(robots, max_frames)
+    fp = run_plan(scenario.sim.steps, limit)
+    info = _info(scenario, fp, origin="seeded run", shoal_version=shoal.__version__, max_frames=limit,
+                 robots=robots, twin=twin, overrides=overrides)
+    return _page(scenario, draw.run_frames(session, fp, on_steps), info)
+
+
+def recording_html(rec: Recording, twin: Recording | None = None, overrides: dict[str, Any] | None = None,
+                   max_frames: int = MAX_FRAMES) -> str:
+    """The page of a recorded history (and swarm B's), as the app's timeline shows it. Raises
+    :class:`~shoal.presets.io.PresetError` or :class:`~shoal.app.replay.ReplayError` for a
+    recording the app could not show."""
+    a = draw.replay_session(rec)
+    b = draw.replay_session(twin) if twin is not None else None
+    robots = int(rec.n.max()) + (int(twin.n.max()) if twin is not None else 0)
+    limit = frame_budget(robots, max_frames)
+    fp = plan(rec.k, limit)
+    info = _info(a.scenario, fp, origin="recorded history", shoal_version=str(rec.meta["shoal"]),
+                 max_frames=limit, robots=robots, live_edits=int(rec.meta["live_edits"]),
+                 twin=b.scenario if b is not None else None, overrides=overrides)
+    return _page(a.scenario, draw.recorded_frames(a, b, fp), info)
+
+
+def session_html(session: Any, max_frames: int = MAX_FRAMES) -> bytes:
+    """The page of a session's recorded history (swarm B's too when Compare is on), as UTF-8."""
+    rec, twin, overrides = draw.session_recordings(session)
+    return recording_html(rec, twin, overrides if twin is not None else None, max_frames).encode("utf-8")
+
+
+def write_html(path: Path | str, text: str) -> Path:
+    """Write a page completely or not at all."""
+    atomic_write_text(path, text)
+    return Path(path)

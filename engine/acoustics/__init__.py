@@ -1,0 +1,3 @@
+"""Acoustic source localisation (Chapters 6–8): signals, propagation, the two-hydrophone receiver
+and the best-location strategies.
+"""

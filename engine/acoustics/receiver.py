@@ -1,0 +1,138 @@
+"""Two-hydrophone receiver: cross-correlation, lag, ρ, angle of arrival and rays (spec §6).
+
+Sign convention (spec §6.1, A5): hydrophone 0 is the bow (s1), hydrophone 1 the stern
+(s2). R(τ) = mean_t s1(t)·s2(t+τ) peaks at τ = +D cos α/c, so a source dead ahead gives
+τ > 0 and α = 0.
+
+From band spectra (``signals``) the correlation is exact at any lag τ:
+
+    R(τ) = Re Σ_k X_k e^{j2π f_k τ},   X_k = conj(S1_k)·S2_k            [6.9]
+
+the mean (÷ n) of the discrete circular xcorr of the two windows (spec §6.1 step 1, A6),
+so R(0) of a window with itself is its mean-square value and ρ estimates the received
+signal intensity (Pa², or (R_ref/r)² in normalised units), comparable with f_A.
+
+Estimators: τ_lag = argmax R on the lag grid [6.10]/[7.4], refined by a 3-point parabola
+(or, with ``refine=False``, the grid lag itself, as Alg. 5 lines 28–31 take τ[I_lag]);
+ρ = R(τ_lag) evaluated exactly at that lag [6.11]/[7.5];
+α = arccos(clip(c·τ_lag/D, −1, 1)) [7.6]; rays r_± = (cos(o ± α), sin(o ± α)) [7.7].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .band import Band
+
+PLUS, MINUS = 0, 1  # index of r_+ (CCW, left) and r_- (CW, right) in Bearing.rays
+
+
+@dataclass
+class Bearing:
+    """Receiver output for every robot of every run."""
+
+    tau: np.ndarray  # (R, N) τ_lag in s, > 0 when the bow hears first
+    rho: np.ndarray  # (R, N) ρ = R(τ_lag), intensity units
+    alpha: np.ndarray  # (R, N) angle of arrival from the bow, 0..π (theta_aoa)
+    rays: np.ndarray  # (R, N, 2, 2) world unit vectors [r_+, r_-], last axis (x, y)
+    lags: np.ndarray  # (L,) lag grid in s, increasing
+    corr: np.ndarray  # (R, N, L) R(τ) on that grid
+
+
+def lag_samples(band: Band, D: float, full_lag: bool = False) -> np.ndarray:
+    """Integer lags of the search grid: |ℓ| ≤ ceil(D·fs/c) + 1 (spec §6.1), or with
+    ``full_lag`` the whole circular window, −n/2 ≤ ℓ < n/2."""
+    if full_lag:
+        n = _fft_size(band)
+        return np.arange(-(n // 2), n - n // 2)
+    L = int(np.ceil(D * band.fs / band.c)) + 1
+    return np.arange(-L, L + 1)
+
+
+def _fft_size(band: Band) -> int:
+    """Window length for the full-lag inverse FFT (≥ n, and every band bin below Nyquist)."""
+    return max(band.n, 2 * int(band.bins[-1]) + 2)
+
+
+def cross_spectrum(spectra: np.ndarray) -> np.ndarray:
+    """X_k = conj(S1_k)·S2_k (…, K) from bow/stern spectra (…, 2, K)."""
+    return np.conj(spectra[..., 0, :]) * spectra[..., 1, :]
+
+
+def correlate(X: np.ndarray, band: Band, tau: np.ndarray) -> np.ndarray:
+    """R(τ) = Re Σ_k X_k e^{j2π f_k τ} at lags ``tau`` (L,) in s: a small inverse DFT over the
+    K band bins as one real matrix product, shape (…, L). [6.9]"""
+    arg = 2.0 * np.pi * np.outer(band.freqs, tau)  # (K, L)
+    return X.real @ np.cos(arg) - X.imag @ np.sin(arg)
+
+
+def _correlate_full(X: np.ndarray, band: Band) -> tuple[np.ndarray, np.ndarray]:
+    """R on the whole circular window by one zero-padded inverse real FFT: lags (L,) in s,
+    increasing, spacing T/n (≈ 1/fs), and R (…, L)."""
+    n = _fft_size(band)
+    full = np.zeros(X.shape[:-1] + (n // 2 + 1,), dtype=complex)
+    full[..., band.bins] = X
+    r = np.fft.irfft(full, n, axis=-1) * (n / 2.0)  # Re Σ_k X_k e^{j2πkℓ/n}
+    ell = lag_samples(band, 0.0, full_lag=True)
+    return ell * (band.T / n), r[..., ell % n]
+
+
+def _refine(corr: np.ndarray, lags: np.ndarray) -> np.ndarray:
+    """τ at the grid maximum, refined by a 3-point parabola (offset clipped to ±½ step);
+    a flat R (no signal) gives τ = 0."""
+    L = lags.size
+    i = np.argmax(corr, axis=-1)
+    j = np.clip(i, 1, L - 2) if L >= 3 else i
+    y0, y1, y2 = (np.take_along_axis(corr, np.clip(j + d, 0, L - 1)[..., None], -1)[..., 0] for d in (-1, 0, 1))
+    denom = y0 - 2.0 * y1 + y2
+    inside = (i == j) & (denom < 0)
+    delta = np.clip(0.5 * (y0 - y2) / np.where(inside, denom, -1.0), -0.5, 0.5)
+    step = lags[1] - lags[0] if L > 1 else 0.0
+    tau = lags[i] + np.where(inside, delta, 0.0) * step
+    flat = np.max(corr, axis=-1) <= np.min(corr, axis=-1)
+    return np.where(flat, 0.0, tau)
+
+
+def _sample_peak(corr: np.ndarray, lags: np.ndarray) -> np.ndarray:
+    """τ at the grid maximum, not refined (Alg. 5 lines 28–31); a flat R gives τ = 0."""
+    tau = lags[np.argmax(corr, axis=-1)]
+    flat = np.max(corr, axis=-1) <= np.min(corr, axis=-1)
+    return np.where(flat, 0.0, tau)
+
+
+def angle_of_arrival(tau: np.ndarray, D: float, c: float) -> np.ndarray:
+    """α = arccos(clip(c·τ/D, −1, 1)) in 0..π from the bow. [7.6], spec A8"""
+    return np.arccos(np.clip(c * np.asarray(tau) / D, -1.0, 1.0))
+
+
+def rays(alpha: np.ndarray, heading: np.ndarray) -> np.ndarray:
+    """World-frame unit rays (…, 2, 2): r_+ = (cos(o+α), sin(o+α)) (CCW, left) and
+    r_- = (cos(o−α), sin(o−α)) (CW, right), mirror images across the bow axis. [7.7]"""
+    ang = np.stack([heading + alpha, heading - alpha], axis=-1)
+    return np.stack([np.cos(ang), np.sin(ang)], axis=-1)
+
+
+def bearing(spectra: np.ndarray, band: Band, D: float, heading: np.ndarray, full_lag: bool = False,
+            refine: bool = True) -> Bearing:
+    """Bearing estimate of every robot from its bow/stern spectra (R, N, 2, K).
+
+    ``D``: hydrophone separation (m); ``heading`` (R, N): robot heading o (rad);
+    ``full_lag``: search the whole window as MATLAB ``xcorr`` would, so a peak outside
+    ±D/c is clipped to α = 0 or π; ``refine``: refine the peak lag by a parabola, else keep
+    the sample lag (docs/readings.md, "The lag estimate and the sample rate").
+    """
+    if not D > 0:
+        raise ValueError(f"D: hydrophone separation must be > 0, got {D}")
+    X = cross_spectrum(np.asarray(spectra))
+    if full_lag:
+        lags, corr = _correlate_full(X, band)
+    else:
+        lags = lag_samples(band, D) / band.fs
+        corr = correlate(X, band, lags)
+    tau = _refine(corr, lags) if refine else _sample_peak(corr, lags)
+    rho = np.sum((X * band.phasor(tau)).real, axis=-1)  # ρ = R(τ_lag) [7.5]
+    alpha = angle_of_arrival(tau, D, band.c)
+    return Bearing(tau=tau, rho=rho, alpha=alpha, rays=rays(alpha, np.asarray(heading, dtype=float)), lags=lags,
+                   corr=corr)

@@ -1,0 +1,3 @@
+"""The engine's base: the contract every scene kind implements, the variant registries, seeding,
+objectives and the run records.
+"""

@@ -1,0 +1,395 @@
+"""Simultaneous Localisation and Optimisation (Mai §3, synchronous Alg. 1, spec §5):
+a swarm whose members act only on relative positions they estimate from noisy ranges and
+odometry. Motion is SPSO 2011 in each robot's own frame [3.10]–[3.13] or a random walk (§4.5).
+
+One :meth:`SLOSwarm.step` = one generation t → t+1 for every run:
+PSO or random-walk command from the beliefs at t, perfect move, then at t+1 neighbourhoods
+from truth, ranges, odometry, candidates and selection, and the metrics of §11.
+Arrays are (runs R, particles N, 2); run i draws from the children of
+``SeedSequence(seed, spawn_key=(i,))`` (:mod:`~shoal.engine.core.rng`), one per component.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, replace
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+
+from ..core.contract import check_live
+from ..core.rng import component_generators
+from ..pso.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
+from ..slo.beliefs import Beliefs, EntryPolicy, Localiser, LocaliserParams, Selection, random_estimates, relative_truth
+from ..slo.candidates import Candidates
+from ..slo.formation import AttractionRepulsion
+from ..slo.metrics import dead_reckoning_share, pair_distances, pair_errors, round_trip_errors, stats
+from ..slo.neighbourhoods import Neighbourhood, NeighbourhoodKind
+from ..slo.objectives import QUALITY_THRESHOLDS, Fitness, slo_objective
+from ..slo.selection import RTSTriangle
+from ..slo.sensors import ErrorModel, error_model
+
+Motion = Literal["pso", "random_walk", "formation"]
+LocalBest = Literal["current", "pbest"]
+PbestShift = Literal["commanded", "measured"]
+InitialEstimates = Literal["random", "truth"]
+
+GENERATIONS = {"pso": 1000, "random_walk": 100, "formation": 100}  # gap A28; Figs. 4.2, 4.4
+REPETITIONS = 31  # runs per parameter set [§4.2]
+
+
+@dataclass(frozen=True)
+class SLOConfig:
+    """Every SLO parameter with the spec's names and defaults (§9, §14).
+
+    Distance-type values (additive errors, radius r, walk speed, init area, c4, RTS
+    tolerance) are in thesis units and multiplied by ``unit`` = arena width / 100 (§15.1)."""
+
+    particles: int = 20  # gap A1
+    objective: str | Fitness = "sphere"
+    motion: Motion = "pso"
+    selection: Selection = "css"  # gap A27
+    prediction_weight: float = 0.5
+    delta_cos: float = 0.03
+    delta_v: float = 0.03
+    literal_eq_3_1: bool = False  # FIX A18
+    neighbourhood: NeighbourhoodKind = "knn"
+    neighbourhood_param: float | None = None  # k, r, n or p; None = default (knn 5, r 25, ring 2, p 0.5)
+    errors: str | ErrorModel = "low"
+    inertia: float = OMEGA_SPSO  # ω, gap A4
+    c1: float = C_SPSO
+    c2: float = C_SPSO
+    c3: float = 1.0
+    c4: float = 0.0
+    radial: Radial = "uniform_radius"  # the SPSO 2011 reference code; docs/readings.md
+    spso_self_best_halving: bool = False  # gap A5
+    local_best: LocalBest = "current"  # gap A36
+    pbest_shift: PbestShift = "commanded"  # gap A35 (thesis mode)
+    init_area: tuple[float, float] | None = None  # S = [lo, hi]²; None: [−50, 50]² PSO (A29), [0, 100]² walk
+    walk_speed: float = 5.0
+    entry_policy: EntryPolicy = "dead_reckoning"  # docs/readings.md
+    initial_estimates: InitialEstimates = "random"  # gap A9
+    measure_all_ranges: bool = True
+    max_range: float = np.inf
+    rts_triangle: RTSTriangle = "first"  # gap A22
+    rts_prefer_geometric: bool = False
+    rts_tolerance: float = 1.0
+    fitness_noise: float = 0.0  # σ_f, gap A15
+    quality_threshold: float | None = None  # T; None: the §12 table (gap A33)
+    ar_gain: float = 0.0  # gap A6: Gazi–Passino attraction–repulsion (external to the thesis); 0 = off
+    ar_a: float = 0.01
+    ar_b: float = 0.2
+    ar_c: float = 25.0  # a squared length: scaled by unit²
+    ar_v_max: float = np.inf
+    unit: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.particles < 2:
+            raise ValueError(f"particles: need at least 2, got {self.particles}")
+        if self.motion not in ("pso", "random_walk", "formation"):
+            raise ValueError(f"motion: unknown {self.motion!r}")
+        if self.local_best not in ("current", "pbest"):
+            raise ValueError(f"local_best: unknown {self.local_best!r}")
+        if self.pbest_shift not in ("commanded", "measured"):
+            raise ValueError(f"pbest_shift: unknown {self.pbest_shift!r}")
+        if self.initial_estimates not in ("random", "truth"):
+            raise ValueError(f"initial_estimates: unknown {self.initial_estimates!r}")
+        if self.unit <= 0:
+            raise ValueError(f"unit: must be > 0, got {self.unit}")
+        if self.fitness_noise < 0:
+            raise ValueError(f"fitness_noise: must be >= 0, got {self.fitness_noise}")
+        error_model(self.errors)
+        slo_objective(self.objective)
+
+    def localiser_params(self) -> LocaliserParams:
+        return LocaliserParams(
+            selection=self.selection, prediction_weight=self.prediction_weight, delta_cos=self.delta_cos,
+            delta_v=self.delta_v, literal_eq_3_1=self.literal_eq_3_1, entry_policy=self.entry_policy,
+            measure_all_ranges=self.measure_all_ranges, max_range=self.max_range * self.unit,
+            rts_triangle=self.rts_triangle, rts_prefer_geometric=self.rts_prefer_geometric,
+            rts_tolerance=self.rts_tolerance * self.unit,
+        )
+
+    def spso(self) -> SPSO2011:
+        return SPSO2011(self.inertia, self.c1, self.c2, self.c3, self.c4 * self.unit, self.radial,
+                        self.spso_self_best_halving)
+
+    def neighbourhood_rule(self) -> Neighbourhood:
+        return Neighbourhood(self.neighbourhood, self.neighbourhood_param).scaled(self.unit)
+
+    def formation(self) -> AttractionRepulsion:
+        return AttractionRepulsion(self.ar_gain, self.ar_a, self.ar_b, self.ar_c * self.unit**2,
+                                   self.ar_v_max * self.unit)
+
+    def area(self) -> tuple[float, float]:
+        lo, hi = self.init_area or ((-50.0, 50.0) if self.motion == "pso" else (0.0, 100.0))
+        return lo * self.unit, hi * self.unit
+
+    def threshold(self) -> float:
+        if self.quality_threshold is not None:
+            return float(self.quality_threshold)
+        return QUALITY_THRESHOLDS.get(self.objective, -np.inf) if isinstance(self.objective, str) else -np.inf
+
+
+def _differs(a: object, b: object) -> bool:
+    if isinstance(a, (str, ErrorModel)) and isinstance(b, (str, ErrorModel)):
+        return error_model(a) != error_model(b) if not (isinstance(a, str) and isinstance(b, str)) else a != b
+    return a != b
+
+
+@dataclass
+class SLOState:
+    """Truth, PSO memory and beliefs of every run at generation ``k``."""
+
+    x: np.ndarray  # (R, N, 2) true positions
+    u: np.ndarray  # (R, N, 2) last command V_i (a displacement per generation)
+    P: np.ndarray  # (R, N, 2) personal best relative to the particle [3.13]
+    fP: np.ndarray  # (R, N) fitness at the personal best (as sensed)
+    f: np.ndarray  # (R, N) true fitness at x
+    heading: np.ndarray  # (R, N) direction of the last command
+    status: np.ndarray  # (R, N) int8, 0 = active (recorder convention)
+    beliefs: Beliefs
+    best_fitness: np.ndarray  # (R,) best true fitness of the run so far
+    k: int = 0
+
+    @property
+    def est(self) -> np.ndarray:
+        """(R, N, N, 2): i's estimate of the vector to j; ghost of j at x_i + est[i, j]."""
+        return self.beliefs.est
+
+    @property
+    def valid(self) -> np.ndarray:
+        """(R, N, N): the estimate was refreshed this generation (j ∈ N_i)."""
+        return self.beliefs.valid
+
+    @property
+    def adjacency(self) -> np.ndarray:
+        return self.beliefs.adjacency
+
+    @property
+    def kind(self) -> np.ndarray:
+        """(R, N, N) int8 :class:`~shoal.engine.slo.selection.Kind` of each estimate."""
+        return self.beliefs.kind
+
+    @property
+    def flag(self) -> np.ndarray:
+        """(R, N, N) int8 :class:`~shoal.engine.slo.candidates.Flag` of each candidate set."""
+        return self.beliefs.flag
+
+    @property
+    def candidates(self) -> Candidates | None:
+        return self.beliefs.candidates
+
+
+@dataclass
+class SLOInfo:
+    """Per-run metrics of one generation (spec §11), each (R,)."""
+
+    k: int
+    best_fitness: np.ndarray  # min_i f(x_i(t)), the best of this generation
+    best_so_far: np.ndarray
+    quality_met_at: np.ndarray  # first generation with best ≤ T, inf if not yet
+    e_abs: dict[str, np.ndarray] = field(default_factory=dict)  # mean, std, sem, median, count
+    e_rel: dict[str, np.ndarray] = field(default_factory=dict)
+    e_ang: dict[str, np.ndarray] = field(default_factory=dict)
+    distance: dict[str, np.ndarray] = field(default_factory=dict)  # all unordered pairs
+    dead_reckoning: np.ndarray | None = None  # share of x3 estimates
+    round_trip: np.ndarray | None = None  # mean e_r over first triangles
+
+    @property
+    def t(self) -> float:
+        return float(self.k)
+
+    def series(self) -> dict[str, np.ndarray]:
+        """Flat per-run values under Mai's names, e.g. ``best_fitness`` (of this generation),
+        ``e_abs_mean``, ``distance_median`` (:meth:`SLOSwarm.run`)."""
+        out: dict[str, np.ndarray] = {}
+        for name, value in asdict(self).items():
+            if isinstance(value, dict):
+                out.update({f"{name}_{k}": np.asarray(v, dtype=float) for k, v in value.items()})
+            elif name != "k":
+                out[name] = np.asarray(value, dtype=float)
+        return out
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The metric columns: :meth:`series` with this generation's best as ``generation_best``
+        (in the metric table ``best_fitness`` is the best so far, as for every kind)."""
+        out = self.series()
+        return {"generation_best": out.pop("best_fitness"), **out}
+
+
+class SLOSwarm:
+    """Seeded SLO swarms of ``runs`` runs (``first_run`` … ``first_run + runs − 1``).
+
+    Keyword parameters are the fields of :class:`SLOConfig`. Implements
+    :class:`~shoal.engine.core.contract.Engine` (one tick is one generation); :meth:`retune` takes the
+    localisation choices, the errors, the neighbourhood, the objective, the walk speed and the
+    quality threshold."""
+
+    LIVE: ClassVar[frozenset[str]] = frozenset(
+        {"selection", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1", "entry_policy", "neighbourhood",
+         "neighbourhood_param", "errors", "objective", "walk_speed", "quality_threshold"})
+
+    def __init__(self, *, runs: int = 1, seed: int = 0, first_run: int = 0, **params) -> None:
+        if runs < 1:
+            raise ValueError(f"runs: must be >= 1, got {runs}")
+        self.config = SLOConfig(**params)
+        self.runs, self.first_run = int(runs), int(first_run)
+        self.fitness = slo_objective(self.config.objective)
+        self.errors: ErrorModel = error_model(self.config.errors).scaled(self.config.unit)
+        self.spso = self.config.spso()
+        self.rule = self.config.neighbourhood_rule()
+        self.formation = self.config.formation()
+        self.reset(seed)
+
+    def retune(self, **changes: Any) -> list[str]:
+        """Change :data:`LIVE` settings mid-run and return the names that changed.
+
+        Positions, commands and beliefs are kept, so a learner sees the same swarm react.
+        A new objective restarts the bests (personal bests, best so far, threshold
+        generation) at the current positions; new errors keep each robot's calibration
+        offsets, rescaled. Refused (``ValueError``, nothing changed) for other fields."""
+        check_live(self.LIVE, changes)
+        cfg = replace(self.config, **changes)  # validates
+        changed = [k for k in changes if _differs(getattr(self.config, k), getattr(cfg, k))]
+        if not changed:
+            return []
+        params = cfg.localiser_params()  # these validate before anything changes
+        errors = error_model(cfg.errors).scaled(cfg.unit) if "errors" in changed else None
+        rule = cfg.neighbourhood_rule()
+        fitness = slo_objective(cfg.objective)
+        self.config, self.rule = cfg, rule
+        if errors is not None:
+            self.errors = errors
+        self.localiser.retune(params, errors)
+        if "objective" in changed:
+            s = self.state
+            self.fitness = fitness
+            s.f, s.P, s.fP = self.fitness(s.x), np.zeros_like(s.P), np.full_like(s.fP, np.inf)
+            s.best_fitness = np.full(self.runs, np.inf)
+        if {"objective", "quality_threshold"} & set(changed):
+            self._met = np.full(self.runs, np.inf)
+            self._last = self._record()
+        return changed
+
+    @property
+    def t(self) -> float:
+        return float(self.state.k)
+
+    @property
+    def dt(self) -> float:
+        """One generation."""
+        return 1.0
+
+    @property
+    def robots(self) -> int:
+        return self.config.particles
+
+    def reset(self, seed: int | None = None) -> None:
+        """Generation 0 with ``seed`` (or the current one): new positions, commands, beliefs."""
+        if seed is not None:
+            self.seed = int(seed)
+        cfg, n = self.config, self.config.particles
+        self.streams = component_generators(self.seed, self.first_run, self.runs)
+        lo, hi = cfg.area()
+        init = self.streams["init"]
+        x = np.stack([g.uniform(lo, hi, (n, 2)) for g in init])
+        u = np.stack([g.uniform(lo, hi, (n, 2)) - g.uniform(lo, hi, (n, 2)) for g in init])  # RandomMovement()
+        est = random_estimates(init, n, lo, hi) if cfg.initial_estimates == "random" else relative_truth(x)
+        self.localiser = Localiser(cfg.localiser_params(), self.errors, self.streams, n)
+        adjacency = self.rule.adjacency(x, self.streams["topology"])
+        beliefs = self.localiser.start(x, adjacency, est)
+        shape = (self.runs, n)
+        self.state = SLOState(
+            x=x, u=u, P=np.zeros_like(x), fP=np.full(shape, np.inf), f=self.fitness(x),
+            heading=np.arctan2(u[..., 1], u[..., 0]), status=np.zeros(shape, dtype=np.int8), beliefs=beliefs,
+            best_fitness=np.full(self.runs, np.inf),
+        )
+        self._met = np.full(self.runs, np.inf)
+        self._last = self._record()
+
+    def info(self) -> SLOInfo:
+        """Metrics of the current generation."""
+        return self._last
+
+    def run(self, generations: int) -> dict[str, np.ndarray]:
+        """Advance ``generations`` steps; per-generation values of :meth:`SLOInfo.series`
+        stacked to (generations + 1, R), the current generation first."""
+        rows = [self._last.series()] + [self.step().series() for _ in range(generations)]
+        return {k: np.stack([r[k] for r in rows]) for k in rows[0]}
+
+    # ------------------------------------------------------------------ behaviour
+    def _sensed_fitness(self) -> np.ndarray:
+        f = self.state.f
+        if self.config.fitness_noise > 0:
+            z = np.stack([g.standard_normal(f.shape[1]) for g in self.streams["fitness"]])
+            f = f + self.config.fitness_noise * z
+        return f
+
+    def _pso_command(self) -> np.ndarray:
+        """§2.6 steps 1–7 for every particle: pbest update, local best, [3.10]–[3.11]."""
+        s, cfg = self.state, self.config
+        f = self._sensed_fitness()
+        better = f < s.fP  # step 2: the pbest moves to the particle itself
+        s.P = np.where(better[..., None], 0.0, s.P)
+        s.fP = np.where(better, f, s.fP)
+        n = f.shape[1]
+        eye = np.eye(n, dtype=bool)
+        informants = s.adjacency | eye
+        score = f if cfg.local_best == "current" else s.fP
+        ranked = np.where(informants, score[:, None, :], np.inf)
+        self_best = score <= ranked.min(axis=-1)  # ties go to the particle itself
+        j = np.where(self_best, np.arange(n), np.argmin(ranked, axis=-1))  # step 3
+        to_j = np.take_along_axis(s.est, j[..., None, None], axis=2)[:, :, 0, :]
+        L = np.where(self_best[..., None], 0.0, to_j)  # step 4
+        if cfg.local_best == "pbest":  # gap A36: best neighbour pbest, x̂_ij* + P_j*
+            L = np.where(self_best[..., None], s.P, to_j + np.take_along_axis(s.P, j[..., None], axis=1))
+        return self.spso.local_velocity(s.u, s.P, L, draw(self.streams["pso"], n), self_best)  # steps 5–7
+
+    def _walk_command(self) -> np.ndarray:
+        """§8: speed ~ U(0, walk_speed), direction ~ U(0, 2π)."""
+        n = self.config.particles
+        top = self.config.walk_speed * self.config.unit
+        sv = np.stack([g.random((2, n)) for g in self.streams["motion"]])
+        speed, theta = top * sv[:, 0], 2.0 * np.pi * sv[:, 1]
+        return speed[..., None] * np.stack([np.cos(theta), np.sin(theta)], axis=-1)
+
+    # ------------------------------------------------------------------ tick
+    def step(self) -> SLOInfo:
+        """Advance every run by one generation and return its metrics."""
+        s, cfg = self.state, self.config
+        if cfg.motion == "pso":
+            v_new = self._pso_command()
+        elif cfg.motion == "random_walk":
+            v_new = self._walk_command()
+        else:
+            v_new = self.formation.velocity(s.est, s.valid)
+        if cfg.motion != "formation" and cfg.ar_gain > 0:  # collision-avoidance term (§3)
+            v_new = v_new + self.formation.velocity(s.est, s.valid)
+        x_prev = s.x
+        s.x = s.x + v_new  # [3.12], perfect movement (§1)
+        s.u = v_new
+        moving = np.any(v_new != 0, axis=-1)
+        s.heading = np.where(moving, np.arctan2(v_new[..., 1], v_new[..., 0]), s.heading)
+        if cfg.pbest_shift == "commanded":
+            s.P = s.P - v_new  # [3.13]
+        adjacency = self.rule.adjacency(s.x, self.streams["topology"])
+        s.beliefs = self.localiser.update(s.beliefs, x_prev, s.x, adjacency)
+        if cfg.pbest_shift == "measured":
+            s.P = s.P - s.beliefs.odometry  # gap A35, physical mode
+        s.f = self.fitness(s.x)
+        s.k += 1
+        self._last = self._record()
+        return self._last
+
+    def _record(self) -> SLOInfo:
+        s = self.state
+        best = s.f.min(axis=1)
+        s.best_fitness = np.minimum(s.best_fitness, best)
+        self._met = np.where(np.isinf(self._met) & (best <= self.config.threshold()), float(s.k), self._met)
+        err = pair_errors(s.x, s.est, s.valid)
+        return SLOInfo(
+            k=s.k, best_fitness=best, best_so_far=s.best_fitness.copy(), quality_met_at=self._met.copy(),
+            e_abs=stats(err["abs"]), e_rel=stats(err["rel"]), e_ang=stats(err["ang"]),
+            distance=stats(pair_distances(s.x)), dead_reckoning=dead_reckoning_share(s.kind, s.valid),
+            round_trip=stats(round_trip_errors(s.est, s.adjacency))["mean"],
+        )

@@ -1,0 +1,282 @@
+"""One control tick of a swarm, vectorised over runs × robots × dimensions.
+
+Stages (DESIGN.md): bests → coefficients → velocity → move → record. Run ``i`` draws
+from child ``i`` of one ``SeedSequence(seed)``, so it is the same whether it is simulated
+alone (``first_run=i, runs=1``) or inside a batch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar, Literal, get_args
+
+import numpy as np
+
+from ..core.contract import check_live
+from ..core.objectives import Objective
+from ..core.rng import run_generators
+from ..pso.bests import best_index, global_best, update_personal
+from ..pso.coeffs import CoefficientPolicy
+from ..pso.laws import Law
+from ..pso.laws import motion_heading as _heading
+from ..slo.positions import Oracle, PositionSource
+
+Attractors = Literal["literal", "ahead"]
+PbestOrder = Literal["before_velocity", "after_velocity"]
+
+ACTIVE = 0
+
+
+@dataclass
+class SwarmState:
+    """The whole swarm of every run at step ``k``."""
+
+    x: np.ndarray  # (R, N, d) position
+    u: np.ndarray  # (R, N, d) velocity
+    a: np.ndarray  # (R, N, d) acceleration (u[k] − u[k−1])/Δt [3.22]
+    y: np.ndarray  # (R, N, d) personal best
+    f_y: np.ndarray  # (R, N)
+    yg: np.ndarray  # (R, d) global best
+    best_fitness: np.ndarray  # (R,) f(y_g)
+    f: np.ndarray  # (R, N) fitness at x
+    heading: np.ndarray  # (R, N) direction of motion, kept when the robot stops
+    status: np.ndarray  # (R, N) int, 0 = active
+    k: int = 0
+
+    def copy(self) -> "SwarmState":
+        return SwarmState(**{k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in vars(self).items()})
+
+
+@dataclass
+class StepInfo:
+    """Per-run scalars of one tick, for metrics and plots."""
+
+    t: float
+    omega: np.ndarray | float  # in force during the last tick (NaN before the first)
+    c: np.ndarray  # (n,) or (n, R, N)
+    best_fitness: np.ndarray  # (R,)
+    max_speed: np.ndarray  # (R,) highest |u| in the swarm
+    max_component: np.ndarray  # (R,) highest |u_j|
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The largest velocity component and the coefficients in force (ω, ĉ = Σ c_n; means over
+        robots for per-robot coefficients)."""
+        R = self.max_speed.shape[0]
+        return {"max_component": self.max_component, "omega": _per_run(self.omega, R),
+                "c_hat": _per_run(np.sum(self.c, axis=0), R)}
+
+
+def _per_run(value: np.ndarray | float, R: int) -> np.ndarray:
+    """A scalar or per-robot ``(R, N)`` coefficient as one value per run (mean over robots)."""
+    v = np.asarray(value, dtype=float)
+    return np.full(R, float(v)) if v.ndim == 0 else v.reshape(R, -1).mean(axis=1)
+
+
+class Simulation:
+    """A seeded swarm: positions, velocities and bests of ``runs`` independent runs.
+
+    Implements :class:`~shoal.engine.core.contract.Engine`; :meth:`retune` takes the controller
+    (``policy``, ``law``, ``dt``), the swarm size (``robots``), the bests' bookkeeping
+    (``attractors``, ``pbest_order``), the ``objective`` and, on SLO positions, the localisation
+    keywords (``slo``).
+
+    ``positions`` says where the robots' positions come from: the truth (``Oracle``, the
+    default) or their SLO estimates (``Estimated``, :mod:`shoal.engine.slo.positions`). Only the
+    "literal" attractors read positions; fitness is always read at the true position."""
+
+    LIVE: ClassVar[frozenset[str]] = frozenset(
+        {"policy", "law", "dt", "slo", "robots", "attractors", "pbest_order", "objective"})
+
+    def __init__(
+        self,
+        *,
+        robots: int,
+        d: int = 2,
+        dt: float = 0.1,
+        law: Law | None = None,
+        policy: CoefficientPolicy,
+        objective: Objective | None = None,
+        runs: int = 1,
+        seed: int = 0,
+        first_run: int = 0,
+        attractors: Attractors = "literal",
+        pbest_order: PbestOrder = "before_velocity",
+        ahead_direction: np.ndarray | None = None,
+        init_center: np.ndarray | None = None,
+        init_spread: float = 1.0,
+        init_speed: float = 0.0,
+        positions: PositionSource | None = None,
+    ) -> None:
+        if robots < 1 or runs < 1 or d < 1:
+            raise ValueError("robots, runs and d must be >= 1")
+        if dt <= 0:
+            raise ValueError(f"dt must be > 0, got {dt}")
+        self.d, self.dt, self.runs, self.seed, self.first_run = d, float(dt), runs, seed, first_run
+        self.law = law or Law()
+        self.policy = policy
+        self.objective = objective or Objective()
+        self.attractors: Attractors = attractors
+        self.pbest_order: PbestOrder = pbest_order
+        direction = np.zeros(d) if ahead_direction is None else np.asarray(ahead_direction, float)[:d]
+        if ahead_direction is None:
+            direction[0] = 1.0
+        self.ahead_direction = direction
+        self.init_center = np.zeros(d) if init_center is None else np.asarray(init_center, float)[:d]
+        self.init_spread, self.init_speed = float(init_spread), float(init_speed)
+        self._robots = robots
+        self.positions: PositionSource = positions or Oracle()
+        self.reset(seed)
+
+    # ------------------------------------------------------------------ state
+    @property
+    def robots(self) -> int:
+        return self.state.x.shape[1]
+
+    @property
+    def t(self) -> float:
+        return self.state.k * self.dt
+
+    def reset(self, seed: int | None = None) -> None:
+        """Start again from step 0 with ``seed`` (or the current seed)."""
+        if seed is not None:
+            self.seed = int(seed)
+        self.rngs = run_generators(self.seed, self.first_run, self.runs)
+        x, u = self._spawn(self._robots)
+        self.state = self._fresh_state(x, u)
+        self._coefficients: tuple[np.ndarray | float, np.ndarray] = (np.nan, np.full(1, np.nan))
+        s = self.state
+        self.positions.start(s.x, s.y, s.k, self.seed, self.first_run)
+
+    def _spawn(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        shape = (n, self.d)
+        x = np.stack([self.init_center + self.init_spread * (g.random(shape) - 0.5) for g in self.rngs])
+        u = np.stack([self.init_speed * (2.0 * g.random(shape) - 1.0) for g in self.rngs])
+        return x, u
+
+    def _fresh_state(self, x: np.ndarray, u: np.ndarray) -> SwarmState:
+        f = self.objective(x)
+        yg, f_yg = global_best(x, f, self.objective)
+        return SwarmState(
+            x=x, u=u, a=np.zeros_like(u), y=x.copy(), f_y=f.copy(), yg=yg, best_fitness=f_yg, f=f,
+            heading=_heading(u, np.zeros(x.shape[:2])), status=np.full(x.shape[:2], ACTIVE, dtype=np.int8),
+        )
+
+    def set_robots(self, n: int) -> None:
+        """Grow or shrink the swarm in place: new robots spawn in the start region. On SLO
+        positions kept robots keep their beliefs and believed bests."""
+        if n < 1:
+            raise ValueError(f"need at least one robot, got {n}")
+        s, cur = self.state, self.robots
+        self._robots = n
+        if n == cur:
+            return
+        if n < cur:
+            for name in ("x", "u", "a", "y", "f_y", "f", "heading", "status"):
+                setattr(s, name, getattr(s, name)[:, :n].copy())
+        else:
+            x, u = self._spawn(n - cur)
+            new = self._fresh_state(x, u)
+            for name in ("x", "u", "a", "y", "f_y", "f", "heading", "status"):
+                setattr(s, name, np.concatenate([getattr(s, name), getattr(new, name)], axis=1))
+        s.yg, s.best_fitness = global_best(s.y, s.f_y, self.objective)
+        self.positions.resize(s.x, s.k)
+
+    def set_objective(self, objective: Objective) -> None:
+        """Swap the objective and re-score the bests at the current positions."""
+        self.objective = objective
+        s = self.state
+        s.f = objective(s.x)
+        s.y, s.f_y = s.x.copy(), s.f.copy()
+        s.yg, s.best_fitness = global_best(s.y, s.f_y, objective)
+        self.positions.keep(np.ones(s.f.shape, bool))  # every best is where its robot stands
+
+    def retune(self, **changes: Any) -> list[str]:
+        """Change :data:`LIVE` settings from the next tick on, keeping the swarm; returns the names
+        that changed. A new ``objective`` re-scores the bests at the current positions, new
+        ``robots`` spawn in the start region. Refused (``ValueError``, nothing changed) for
+        other keywords or bad values."""
+        check_live(self.LIVE, changes)
+        if "dt" in changes and not changes["dt"] > 0:
+            raise ValueError(f"dt: must be > 0, got {changes['dt']}")
+        if "robots" in changes and changes["robots"] < 1:
+            raise ValueError(f"robots: need at least one robot, got {changes['robots']}")
+        for name, kind in (("attractors", Attractors), ("pbest_order", PbestOrder)):
+            if name in changes and changes[name] not in get_args(kind):
+                raise ValueError(f"{name}: unknown {changes[name]!r}, choose from {get_args(kind)}")
+        slo = changes.pop("slo", None)
+        now = {"policy": self.policy, "law": self.law, "dt": self.dt, "robots": self.robots,
+               "attractors": self.attractors, "pbest_order": self.pbest_order, "objective": self.objective}
+        changed = [k for k, v in changes.items() if now[k] != v]
+        if slo:
+            self.positions.retune(**slo)
+            changed.append("slo")
+        for name in ("policy", "law", "attractors", "pbest_order"):
+            if name in changed:
+                setattr(self, name, changes[name])
+        if "dt" in changed:
+            self.dt = float(changes["dt"])
+        if "robots" in changed:
+            self.set_robots(int(changes["robots"]))
+        if "objective" in changed:
+            self.set_objective(changes["objective"])
+        return changed
+
+    # ------------------------------------------------------------------ tick
+    def _update_bests(self) -> None:
+        s = self.state
+        self.positions.observe(s.x, s.k)
+        before = s.f_y.copy()
+        s.f = self.objective(s.x)
+        s.y, s.f_y = update_personal(s.x, s.f, s.y, s.f_y, self.objective)
+        s.yg, s.best_fitness = global_best(s.y, s.f_y, self.objective)
+        self.positions.keep(s.f_y != before)  # a new best is where the robot stands
+
+    def _directions(self) -> np.ndarray:
+        """Direction inputs g_n of the accelerating terms, (2, R, N, d): the vectors to the
+        personal and the global best, as the robots know them."""
+        s = self.state
+        if self.attractors == "ahead":  # spec §22: both attractors always ahead
+            g = np.broadcast_to(self.ahead_direction, s.x.shape)
+            return np.stack([g, g])
+        self.positions.observe(s.x, s.k)
+        return np.stack([self.positions.to_personal(s.x, s.y), self._to_global()])
+
+    def _to_global(self) -> np.ndarray:
+        s = self.state
+        return self.positions.to_owner(s.x, s.y, best_index(s.f_y, self.objective))
+
+    def believed_gbest(self) -> np.ndarray:
+        """(R, N, d) where each robot believes the global best is (y_g itself on true positions)."""
+        return self.state.x + self._to_global()
+
+    def _draw(self, n_terms: int) -> np.ndarray:
+        """Fresh U(0,1) draws per term, robot and component [3.1]/[3.37], (n, R, N, d)."""
+        shape = (n_terms, self.robots, self.d)
+        return np.stack([g.random(shape) for g in self.rngs], axis=1)
+
+    def step(self) -> StepInfo:
+        """Advance every run by one control tick Δt."""
+        s = self.state
+        if self.pbest_order == "before_velocity":  # Algorithm 1 phase A first
+            self._update_bests()
+        omega, c = self.policy.coefficients(self.t, self.dt, self.d)
+        self._coefficients = (omega, np.asarray(c))
+        g = self._directions()
+        u_new = self.law.velocity(s.u, g, c, omega, self._draw(g.shape[0]))
+        if self.pbest_order == "after_velocity":  # the velocity saw last tick's bests
+            self._update_bests()
+        s.a = (u_new - s.u) / self.dt  # [3.22]
+        s.x = self.law.position(s.x, u_new, self.dt)
+        s.u = u_new
+        s.heading = _heading(u_new, s.heading)
+        s.k += 1
+        self.positions.observe(s.x, s.k)  # where the moves ended: current beliefs for drawing
+        return self.info()
+
+    def info(self) -> StepInfo:
+        """The metrics of the current step, with the coefficients of the last tick."""
+        s = self.state
+        omega, c = self._coefficients
+        return StepInfo(t=self.t, omega=omega, c=c, best_fitness=s.best_fitness.copy(),
+                        max_speed=np.linalg.norm(s.u, axis=-1).max(axis=1),
+                        max_component=np.abs(s.u).max(axis=(1, 2)))

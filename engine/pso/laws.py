@@ -1,0 +1,146 @@
+"""Velocity laws of the PSO family (Rossides Ch. 2 and 3) and their registry :data:`LAWS`.
+
+Arrays follow one convention: positions and velocities are ``(runs, robots, d)``;
+the ``n`` accelerating terms are stacked on a leading axis, so direction inputs and
+random draws are ``(n, runs, robots, d)`` and coefficients ``c`` are ``(n,)`` or
+``(n, runs, robots)``; ``omega`` is a scalar or ``(runs, robots)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Literal
+
+import numpy as np
+from scipy.special import expit
+
+from ..core.registry import Registry
+
+Squash = Literal["sgn", "tanh", "logistic"]
+
+
+def squash(z: np.ndarray, kind: Squash = "sgn", width: float = 1.0) -> np.ndarray:
+    """Bounded per-component direction of ``z``.
+
+    ``sgn`` is [3.12] with sgn(0) = 0; ``tanh`` and ``logistic`` (squashed to (-1, 1))
+    are the smooth options of §3.2.1 against chattering: sgn-like when the attractor is
+    far compared with ``width`` (metres), proportional like standard PSO when close.
+    """
+    if kind == "sgn":
+        return np.sign(z)
+    if width <= 0:
+        raise ValueError(f"smooth width must be > 0, got {width}")
+    with np.errstate(over="ignore"):  # z/width = ±inf saturates to ±1, as intended
+        if kind == "tanh":
+            return np.tanh(z / width)
+        if kind == "logistic":
+            return 2.0 * expit(z / width) - 1.0
+    raise ValueError(f"unknown squash {kind!r}")
+
+
+def _coeffs(c: np.ndarray | float, ndim: int) -> np.ndarray:
+    """Shape ``c`` of ``(n,)`` or ``(n, runs, robots)`` to broadcast against ``(n, runs, robots, d)``."""
+    c = np.asarray(c, dtype=float)
+    return c.reshape(c.shape + (1,) * (ndim - c.ndim))
+
+
+def _omega(omega: np.ndarray | float) -> np.ndarray:
+    omega = np.asarray(omega, dtype=float)
+    return omega[..., None] if omega.ndim else omega
+
+
+def standard_velocity(
+    u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | float, r: np.ndarray
+) -> np.ndarray:
+    """Standard PSO [2.1]: ``u' = ω u + Σ c_n r_n ∘ g_n`` with ``g_n = y_n − x`` (unbounded)."""
+    terms = _coeffs(c, g.ndim) * r * g
+    return _omega(omega) * u + terms.sum(axis=0)
+
+
+def adapted_velocity(
+    u: np.ndarray,
+    g: np.ndarray,
+    c: np.ndarray,
+    omega: np.ndarray | float,
+    r: np.ndarray,
+    kind: Squash = "sgn",
+    width: float = 1.0,
+) -> np.ndarray:
+    """Generalised Adapted PSO [3.36]: ``u' = ω u + Σ c_n r_n ∘ sgn(g_n)``.
+
+    With two terms g = (y − x, y_g − x) this is Adapted PSO [3.11]. Each term adds at most
+    c_n per component, so |u_j| ≤ ĉ/(1 − ω) [3.26] once it holds, for 0 ≤ ω < 1.
+    """
+    terms = _coeffs(c, g.ndim) * r * squash(g, kind, width)
+    return _omega(omega) * u + terms.sum(axis=0)
+
+
+# (u, g, c, omega, r, smooth width) → u[k+1]
+Velocity = Callable[[np.ndarray, np.ndarray, np.ndarray, "np.ndarray | float", np.ndarray, float], np.ndarray]
+
+
+@dataclass(frozen=True)
+class VelocityLaw:
+    """One Chapter 3 velocity law and what the rest of Shoal needs to know about it."""
+
+    name: str
+    label: str
+    adapted: bool  # bounded per-component terms [3.11] with the position update x + Δt u [3.10]
+    velocity: Velocity
+
+
+def _standard(u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | float, r: np.ndarray,
+              width: float) -> np.ndarray:
+    return standard_velocity(u, g, c, omega, r)
+
+
+def _adapted(kind: Squash) -> Velocity:
+    def velocity(u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | float, r: np.ndarray,
+                 width: float) -> np.ndarray:
+        return adapted_velocity(u, g, c, omega, r, kind, width)
+
+    return velocity
+
+
+LAWS: Registry[VelocityLaw] = Registry(
+    "law",
+    VelocityLaw("standard", "Standard PSO", False, _standard),  # [2.1], [2.2]
+    VelocityLaw("adapted-sgn", "Adapted PSO (sgn)", True, _adapted("sgn")),  # [3.11]
+    VelocityLaw("adapted-tanh", "Adapted PSO (tanh)", True, _adapted("tanh")),  # §3.2.1 smooth option
+    VelocityLaw("adapted-logistic", "Adapted PSO (logistic)", True, _adapted("logistic")),
+)
+
+
+@dataclass(frozen=True)
+class Law:
+    """A velocity law of :data:`LAWS` (by name) plus its position update."""
+
+    name: str = "adapted-sgn"
+    smooth_width: float = 1.0
+
+    def __post_init__(self) -> None:
+        LAWS.pick(self.name)
+
+    @property
+    def adapted(self) -> bool:
+        return LAWS[self.name].adapted
+
+    def velocity(
+        self, u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | float, r: np.ndarray
+    ) -> np.ndarray:
+        return LAWS[self.name].velocity(u, g, c, omega, r, self.smooth_width)
+
+    def position(self, x: np.ndarray, u_new: np.ndarray, dt: float) -> np.ndarray:
+        """[3.10] ``x + Δt u[k+1]`` for Adapted laws; [2.2] ``x + u[k+1]`` for standard PSO."""
+        return x + (dt * u_new if self.adapted else u_new)
+
+
+def motion_heading(u: np.ndarray, previous: np.ndarray) -> np.ndarray:
+    """Direction of motion atan2(u_2, u_1) (spec §1.1 heading default); kept from before
+    while the robot is at rest. In 1-D: 0 or π by the sign of u."""
+    if u.shape[-1] < 2:
+        h = np.where(u[..., 0] < 0, np.pi, 0.0)
+    else:
+        h = np.arctan2(u[..., 1], u[..., 0])
+    moving = np.any(u != 0, axis=-1)
+    return np.where(moving, h, previous)

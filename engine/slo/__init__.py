@@ -1,0 +1,3 @@
+"""Simultaneous Localisation and Optimisation (Mai): sensors, candidates, selections, beliefs,
+neighbourhoods and positions.
+"""

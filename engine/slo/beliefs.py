@@ -1,0 +1,153 @@
+"""The SLO belief store and its per-step update (Mai §3.4–3.5, spec §5.3 steps 2–5):
+measure ranges and odometry, build candidates, select an estimate for every neighbour pair.
+
+Shapes: positions (R, N, 2); per ordered pair (observer i, neighbour j) arrays (R, N, N, …),
+``est[r, i, j]`` being i's estimate of the vector from i to j in i's (compass-aligned) frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from ..core.rng import Streams
+from .candidates import Candidates, Flag, candidates
+from .neighbourhoods import distances
+from .selection import SELECTIONS, Kind, RTSTriangle, css
+from .sensors import ErrorModel, measure_odometry, measure_ranges, permanent_errors, permanent_normals
+
+PERFECT = "perfect"  # the oracle baseline: every estimate is the truth
+Selection = str  # a key of selection.SELECTIONS, or PERFECT
+# How a robot's estimate of a non-neighbour is kept, and so where a neighbour that arrives
+# starts (docs/readings.md, "Estimates of robots outside the neighbourhood"):
+# "dead_reckoning" carries it by odometry, x̂ + v*_j − v*_i [3.4]; "stale" freezes it;
+# "geometric_random" freezes it and starts an arriving neighbour on x1 or x2 at random.
+EntryPolicy = Literal["dead_reckoning", "stale", "geometric_random"]
+ENTRY_POLICIES = ("dead_reckoning", "stale", "geometric_random")
+
+
+@dataclass(frozen=True)
+class LocaliserParams:
+    """Localisation choices (spec §7, §9). ``selection`` :data:`PERFECT` is the oracle baseline."""
+
+    selection: Selection = "css"  # gap A27
+    prediction_weight: float = 0.5  # w of [3.7]
+    delta_cos: float = 0.03  # [3.5]; −inf = clip only
+    delta_v: float = 0.03  # [3.6]
+    literal_eq_3_1: bool = False  # FIX A18 off: the printed denominator d_{t−1}
+    entry_policy: EntryPolicy = "dead_reckoning"
+    measure_all_ranges: bool = True  # gap A9/A25: range to every particle, not only neighbours
+    max_range: float = np.inf  # ranging sensor reach (0 beyond)
+    rts_triangle: RTSTriangle = "first"  # gap A22
+    rts_prefer_geometric: bool = False  # optional runaway remedy (§7.5)
+    rts_tolerance: float = 1.0  # e_r below which a geometric loop excludes x3
+
+    def __post_init__(self) -> None:
+        if self.selection != PERFECT:
+            SELECTIONS.pick(self.selection)
+        if not 0.0 <= self.prediction_weight <= 1.0:
+            raise ValueError(f"prediction_weight: must be in [0, 1], got {self.prediction_weight}")
+        if self.entry_policy not in ENTRY_POLICIES:
+            raise ValueError(f"entry_policy: unknown {self.entry_policy!r}")
+        if self.rts_triangle not in ("first", "best"):
+            raise ValueError(f"rts_triangle: unknown {self.rts_triangle!r}")
+
+
+@dataclass
+class Beliefs:
+    """What every robot believes about its neighbours after one step."""
+
+    est: np.ndarray  # (R, N, N, 2) x̂_ij; for non-neighbours dead-reckoned or frozen (entry policy)
+    valid: np.ndarray  # (R, N, N) estimate refreshed this step (j ∈ N_i)
+    adjacency: np.ndarray  # (R, N, N) neighbourhood of this step
+    ranges: np.ndarray  # (R, N, N) d*_ij(t), the d*(t−1) of the next step
+    kind: np.ndarray  # (R, N, N) int8 :class:`Kind`
+    flag: np.ndarray  # (R, N, N) int8 :class:`Flag` (FALLBACK before any localisation)
+    odometry: np.ndarray  # (R, N, 2) v*_i(t)
+    candidates: Candidates | None = None  # (R, N, N, 3, 2) of this step
+    triangle: np.ndarray | None = None  # (R, N, N) RTS closing vertex, −1 if none
+    round_trip: np.ndarray | None = None  # (R, N, N) RTS e_r of the chosen loop
+
+
+def relative_truth(x: np.ndarray) -> np.ndarray:
+    """r_ij = x_j − x_i for every ordered pair, (R, N, N, 2)."""
+    return x[:, None, :, :] - x[:, :, None, :]
+
+
+def random_estimates(rngs: list[np.random.Generator], n: int, low: float, high: float) -> np.ndarray:
+    """x̂_ij(−1) = a_ij − b_ij with a, b ~ U(S), S = [low, high]² (gap A9), (R, N, N, 2)."""
+    est = np.stack([g.uniform(low, high, (n, n, 2)) - g.uniform(low, high, (n, n, 2)) for g in rngs])
+    idx = np.arange(n)
+    est[:, idx, idx] = 0.0
+    return est
+
+
+class Localiser:
+    """Sensors plus estimator for ``n`` robots in every run; keeps the permanent errors."""
+
+    def __init__(self, params: LocaliserParams, errors: ErrorModel, streams: Streams, n: int) -> None:
+        self.params, self.errors, self.streams, self.n = params, errors, streams, n
+        self._z = permanent_normals(streams["permanent"], n)
+        self.permanent = permanent_errors(errors, self._z)
+
+    def retune(self, params: LocaliserParams | None = None, errors: ErrorModel | None = None) -> None:
+        """Change the localisation choices or the sensor errors mid-run; beliefs are kept and
+        each robot keeps its calibration offsets (rescaled to the new σ̂)."""
+        if params is not None:
+            self.params = params
+        if errors is not None:
+            self.errors = errors
+            self.permanent = permanent_errors(errors, self._z)
+
+    def resize(self, n: int) -> None:
+        """The swarm now has ``n`` robots, the first ones kept: they keep their calibration
+        offsets; robots beyond the old count get fresh ones from the permanent stream."""
+        m = min(n, self.n)
+        z = self._z[:, :, :m]
+        if n > m:
+            z = np.concatenate([z, permanent_normals(self.streams["permanent"], n - m)], axis=2)
+        self._z, self.n = z, n
+        self.permanent = permanent_errors(self.errors, z)
+
+    def _ranges(self, x: np.ndarray, adjacency: np.ndarray) -> np.ndarray:
+        d = measure_ranges(distances(x), self.errors.range, self.permanent, self.streams["range"],
+                           self.params.max_range)
+        return d if self.params.measure_all_ranges else np.where(adjacency, d, 0.0)
+
+    def start(self, x: np.ndarray, adjacency: np.ndarray, initial: np.ndarray) -> Beliefs:
+        """t = 0: measure ranges, no localisation yet (gap A10); ``initial`` = x̂(−1)."""
+        shape = adjacency.shape
+        return Beliefs(
+            est=initial.copy(), valid=adjacency.copy(), adjacency=adjacency.copy(),
+            ranges=self._ranges(x, adjacency),
+            kind=np.where(adjacency, Kind.INITIAL, Kind.NONE).astype(np.int8),
+            flag=np.full(shape, Flag.FALLBACK, dtype=np.int8), odometry=np.zeros(x.shape),
+        )
+
+    def update(self, b: Beliefs, x_prev: np.ndarray, x: np.ndarray, adjacency: np.ndarray) -> Beliefs:
+        """One localisation step at true positions ``x`` after the moves from ``x_prev``."""
+        p = self.params
+        ranges = self._ranges(x, adjacency)
+        v_meas = measure_odometry(x - x_prev, self.errors.odometry, self.permanent, self.streams["odometry"])
+        v_rel = v_meas[:, None, :, :] - v_meas[:, :, None, :]  # v*_j − v*_i
+        cand = candidates(b.ranges, ranges, v_rel, b.est, p.delta_cos, p.delta_v, p.literal_eq_3_1)
+        entry = coin = None
+        if p.entry_policy == "geometric_random":
+            entry = adjacency & ~b.adjacency
+            coin = np.stack([g.random(adjacency.shape[1:]) < 0.5 for g in self.streams["entry"]])
+        if p.selection == PERFECT:
+            new, kind = relative_truth(x), np.full(adjacency.shape, Kind.PERFECT, dtype=np.int8)
+            triangle = round_trip = None
+        else:  # CSS, and the others fall back on it
+            base = css(cand, p.prediction_weight, entry, coin)
+            new, kind, triangle, round_trip = SELECTIONS[p.selection].select(cand, adjacency, ranges, base, p)
+        carried = cand.x3 if p.entry_policy == "dead_reckoning" else b.est  # non-neighbours
+        est = np.where(adjacency[..., None], new, carried)
+        return Beliefs(
+            est=est, valid=adjacency.copy(), adjacency=adjacency.copy(), ranges=ranges,
+            kind=np.where(adjacency, kind, Kind.NONE).astype(np.int8), flag=cand.flag, odometry=v_meas,
+            candidates=cand, triangle=triangle, round_trip=round_trip,
+        )
+

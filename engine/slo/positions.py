@@ -1,0 +1,185 @@
+"""The positions a host swarm acts on (spec §15): a collaborator each scene kind with robots in
+the plane (the Chapter 3 swarm, the fleet, the acoustic swarm) asks wherever its controller
+reads a position.
+
+* :class:`Oracle`: every robot knows every true position, as in the theses (the default).
+* :class:`Estimated`: each robot localises the others with SLO (a :class:`~.tracker.BeliefTracker`)
+  and knows only its own displacement (odometry) and its estimates x̂_ij of the vectors to the
+  others, never a position. So it keeps its personal best *relative to itself*, P_i ≈ y_i − x_i,
+  shifted by the measured odometry every tick (gap A35) and reset to the offset of a new best;
+  and it places another robot's best at x̂_ij + P_j, P_j being communicated (gap A36).
+
+The vectors a kind asks for are the two attractors of the theses: to a robot's own best, to the
+best robot's best (Chapters 3–5, A-/X-PSO) or to the centroid of all personal bests
+(B-/XB-/GT-PSO [7.11]). With the None error set and true initial beliefs :class:`Estimated`
+gives :class:`Oracle`'s vectors up to floating-point error.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol
+
+import numpy as np
+
+from .beliefs import Beliefs
+from .tracker import BeliefTracker
+
+
+class PositionSource(Protocol):
+    """What a scene kind asks about positions. Shapes: x, y (R, N, 2); owner (R,)."""
+
+    exact: bool  # every robot knows the true positions (the kind may decide once for the swarm)
+
+    def start(self, x: np.ndarray, y: np.ndarray, k: int, seed: int, first_run: int) -> None:
+        """A fresh swarm at true positions ``x`` with personal bests ``y`` at tick ``k``."""
+        ...
+
+    def observe(self, x: np.ndarray, k: int) -> bool:
+        """Localise at the true positions ``x`` once per tick ``k`` (False: done already)."""
+        ...
+
+    def keep(self, improved: np.ndarray, offset: np.ndarray | float = 0.0) -> None:
+        """Where ``improved`` (R, N), the personal best is now at ``offset`` from the robot."""
+        ...
+
+    def to_personal(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Each robot's vector to its own personal best, (R, N, 2)."""
+        ...
+
+    def to_owner(self, x: np.ndarray, y: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        """Each robot's vector to the personal best of robot ``owner`` (one per run), (R, N, 2)."""
+        ...
+
+    def to_centroid(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Each robot's vector to the centroid of all personal bests [7.11], (R, N, 2)."""
+        ...
+
+    def placed(self, x: np.ndarray) -> np.ndarray:
+        """(R, N, N, 2): where robot i places robot j, itself at its true position."""
+        ...
+
+    def resize(self, x: np.ndarray, k: int) -> None:
+        """The swarm grew or shrank to the robots at ``x`` at tick ``k``, the first ones kept."""
+        ...
+
+    def retune(self, **slo: Any) -> None:
+        """New localisation settings (errors, selection, …), beliefs kept."""
+        ...
+
+
+class Oracle:
+    """Every robot knows every true position."""
+
+    exact = True
+
+    def start(self, x: np.ndarray, y: np.ndarray, k: int, seed: int, first_run: int) -> None:
+        pass
+
+    def observe(self, x: np.ndarray, k: int) -> bool:
+        return False
+
+    def keep(self, improved: np.ndarray, offset: np.ndarray | float = 0.0) -> None:
+        pass
+
+    def to_personal(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return y - x
+
+    def to_owner(self, x: np.ndarray, y: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        return y[np.arange(y.shape[0]), owner][:, None, :] - x
+
+    def to_centroid(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return y.mean(axis=1)[:, None, :] - x
+
+    def placed(self, x: np.ndarray) -> np.ndarray:
+        return np.broadcast_to(x[:, None, :, :], x.shape[:2] + x.shape[1:])
+
+    def resize(self, x: np.ndarray, k: int) -> None:
+        pass
+
+    def retune(self, **slo: Any) -> None:
+        raise ValueError("slo: this swarm acts on true positions; switch it to SLO positions first")
+
+
+class Estimated:
+    """Positions each robot estimates with SLO. The keywords are the :class:`~.tracker.BeliefTracker`
+    ones (errors, selection, neighbourhood, …) with lengths in thesis units, ``unit`` metres each."""
+
+    exact = False
+
+    def __init__(self, *, unit: float = 1.0, **slo: Any) -> None:
+        self.params: dict[str, Any] = {**slo, "unit": float(unit)}
+        self.tracker: BeliefTracker
+        self.pbest: np.ndarray  # (R, N, 2) P: each personal best relative to its robot
+        self.sensed_k = 0  # the tick the tracker last localised at
+
+    @property
+    def unit(self) -> float:
+        """Metres per thesis length unit."""
+        return self.params["unit"]
+
+    @property
+    def beliefs(self) -> Beliefs:
+        return self.tracker.beliefs
+
+    def start(self, x: np.ndarray, y: np.ndarray, k: int, seed: int, first_run: int) -> None:
+        """Fresh beliefs (and sensor streams, from ``seed``) at the true positions ``x``."""
+        if x.shape[-1] != 2:
+            raise ValueError(f"SLO positions need d = 2, got {x.shape[-1]}")
+        self.tracker = BeliefTracker(x, seed=seed, first_run=first_run, **self.params)
+        self.pbest = np.array(y - x, dtype=float)
+        self.sensed_k = k
+
+    def observe(self, x: np.ndarray, k: int) -> bool:
+        """Localise at ``x`` and carry every personal best along by the measured odometry:
+        P_i ← P_i − v*_i ([3.13], measured, gap A35)."""
+        if k == self.sensed_k:
+            return False
+        self.tracker.observe(x)
+        self.pbest = self.pbest - self.tracker.odometry
+        self.sensed_k = k
+        return True
+
+    def keep(self, improved: np.ndarray, offset: np.ndarray | float = 0.0) -> None:
+        """The new best is the robot's own position (``offset`` 0) or a remote candidate at
+        ``offset`` (R, N, 2) from it."""
+        self.pbest = np.where(np.asarray(improved, bool)[..., None], offset, self.pbest)
+
+    def estimates(self) -> np.ndarray:
+        """x̂_ij of every ordered pair, (R, N, N, 2), exactly 0 for i = j."""
+        est = self.tracker.beliefs.est
+        n = est.shape[1]
+        return np.where(np.eye(n, dtype=bool)[None, :, :, None], 0.0, est)
+
+    def to_personal(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return self.pbest
+
+    def to_owner(self, x: np.ndarray, y: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        """x̂_i,owner + P_owner (gap A36)."""
+        own = np.take_along_axis(self.pbest, np.asarray(owner)[:, None, None], axis=1)  # (R, 1, 2)
+        return self.tracker.relative(owner) + own
+
+    def to_centroid(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """mean_j (x̂_ij + P_j): the centroid of the personal bests as robot i places them."""
+        return (self.estimates() + self.pbest[:, None, :, :]).mean(axis=2)
+
+    def placed(self, x: np.ndarray) -> np.ndarray:
+        """x_i + x̂_ij."""
+        return x[:, :, None, :] + self.estimates()
+
+    def resize(self, x: np.ndarray, k: int) -> None:
+        """Kept robots keep their beliefs, calibration and relative bests; a new robot's best is
+        where it stands (:meth:`~.tracker.BeliefTracker.resize`)."""
+        m = min(x.shape[1], self.pbest.shape[1])
+        self.tracker.resize(x)
+        fresh = np.zeros_like(x, dtype=float)
+        fresh[:, :m] = self.pbest[:, :m]
+        self.pbest, self.sensed_k = fresh, k
+
+    def retune(self, **slo: Any) -> None:
+        """New SLO keywords mid-run, beliefs kept (:meth:`~.tracker.BeliefTracker.retune`); a new
+        neighbourhood without its parameter keeps the one set before."""
+        merged = {**self.params, **slo}
+        keep_param = "neighbourhood" in slo and "neighbourhood_param" not in slo
+        self.tracker.retune(**{k: merged[k] for k in slo if k != "unit"}, unit=merged["unit"],
+                            **({"neighbourhood_param": merged.get("neighbourhood_param")} if keep_param else {}))
+        self.params = merged

@@ -1,0 +1,1 @@
+"""Thesis reproductions and parameter sweeps: the only engine code that reads presets."""

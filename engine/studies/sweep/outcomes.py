@@ -1,0 +1,102 @@
+"""Per-run outcome of one sweep cell: the final row of the metric table plus a few
+whole-run summaries, for every scene kind (Chapter 3 swarm, fleet, acoustic swarm, SLO).
+
+A :class:`CellJob` carries its fully resolved scenario (JSON), so a worker on another
+machine needs neither the preset file nor the ``--grid`` arguments. Only (runs,) arrays
+leave the worker: a cell never holds trajectories.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from shoal.presets.build import build
+from shoal.presets.models import Scenario
+
+from ...core.recorder import metric_table
+
+# first-passage times: a run that never got there has none (NaN/inf), and a median counts it as +inf
+FIRST_PASSAGE = frozenset({"steps_to_converge", "time_to_converge_s", "quality_met_at"})
+INTEGER = frozenset({"step", "collided", "stalled", "operational", "layers_passed", "converged", "steps_to_converge",
+                     "contacts"})
+
+
+@dataclass(frozen=True)
+class CellJob:
+    """``runs`` seeded runs (run i = child i of ``SeedSequence(seed)``) of one cell. Picklable."""
+
+    key: int  # the cell's index in the grid
+    scenario: str  # resolved Scenario as JSON
+    seed: int
+    runs: int
+    steps: int
+
+
+@dataclass
+class CellBatch:
+    """Outcome columns, each (runs,), of runs ``first_run …`` of one cell."""
+
+    first_run: int
+    columns: dict[str, np.ndarray]
+
+    @property
+    def runs(self) -> int:
+        return len(next(iter(self.columns.values())))
+
+
+def simulate_cell(job: CellJob, first_run: int, runs: int) -> CellBatch:
+    """Advance runs ``first_run … first_run + runs − 1`` of a cell for ``job.steps`` ticks
+    (an acoustic swarm whose runs all stopped at convergence ends early) and keep, per
+    run: the last metric row, the highest speed of any robot over the run (``peak_speed``)
+    and, for an acoustic swarm, the time to convergence in seconds (``time_to_converge_s``,
+    empty if none)."""
+    scenario = Scenario.model_validate_json(job.scenario)
+    sim = build(scenario, runs=runs, seed=job.seed, first_run=first_run)
+
+    def speed() -> np.ndarray:
+        return np.linalg.norm(sim.state.u, axis=-1).max(axis=1)
+
+    peak = speed()
+    info = sim.info()
+    running = getattr(sim, "running", None)
+    for _ in range(job.steps):
+        if running is not None and not np.any(sim.running):
+            break
+        info = sim.step()
+        peak = np.maximum(peak, speed())
+    table = metric_table(sim.state, info, sim.t)
+    table.pop("run")
+    cols = {"step": table.pop("step"), "t": table.pop("t"), "peak_speed": peak, **table}
+    if "steps_to_converge" in cols:
+        first = np.asarray(cols["steps_to_converge"], dtype=float)
+        first[first < 0] = np.nan
+        cols["steps_to_converge"] = first
+        cols["time_to_converge_s"] = first * sim.dt
+    return CellBatch(first_run, {k: np.asarray(v, dtype=float).copy() for k, v in cols.items()})
+
+
+def merge(parts: Sequence[CellBatch]) -> CellBatch:
+    """Glue chunks of consecutive runs (in any order) into one batch."""
+    parts = sorted(parts, key=lambda b: b.first_run)
+    expected = parts[0].first_run
+    for b in parts:
+        if b.first_run != expected or list(b.columns) != list(parts[0].columns):
+            raise ValueError("chunks must be consecutive runs of one cell")
+        expected += b.runs
+    names = list(parts[0].columns)
+    return CellBatch(parts[0].first_run, {k: np.concatenate([b.columns[k] for b in parts]) for k in names})
+
+
+def median(name: str, values: np.ndarray) -> float:
+    """Median over runs: a first-passage time counts a missing one as +inf (``inf`` when
+    fewer than half got there); any other metric ignores missing values."""
+    v = np.asarray(values, dtype=float)
+    if v.size == 0:
+        return float("nan")
+    if name in FIRST_PASSAGE:
+        return float(np.median(np.where(np.isnan(v), np.inf, v)))
+    finite = v[~np.isnan(v)]
+    return float(np.median(finite)) if finite.size else float("nan")
