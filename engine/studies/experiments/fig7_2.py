@@ -98,8 +98,8 @@ def run(
     checks = _checks(*by_share[own], snrs, algorithms, steps, r_ref, dc, U)
     information = [info(f"[c1:c2 = {split_label(sh)}] {c['name']}", c["thesis"], c["measured"], c["pass"])
                    for sh in shares[1:] for c in _checks(*by_share[sh], snrs, algorithms, steps, r_ref, dc, U)]
-    information += [_nearer(by_share[sh][2], steps, sh) for sh in shares if 10.0 in snrs and
-                    all((a, 10.0) in by_share[sh][2] for a in ("a-pso", "x-pso"))]
+    information += [_nearer(by_share[sh][2], steps, sh) for sh in shares if 10.0 in snrs and all(
+        (a, 10.0) in by_share[sh][0] and not np.isfinite(by_share[sh][0][(a, 10.0)]) for a in ("a-pso", "x-pso"))]
     score = {sh: _within_two(by_share[sh][0], snrs, algorithms) for sh in shares}
     robot_steps = sum(b.robot_steps for b in res.values())
     summary = {

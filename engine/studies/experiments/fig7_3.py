@@ -120,8 +120,8 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
     d_s, dc, d0 = p.d_s / R, p.dc / R, p.d0 / R
     routes = {a: [route_of(data[f"com_{a}"][:, i] / R, int(data[f"first_{a}"][i]), every) for i in range(runs)]
               for a in ch.ALGORITHMS}
-    lo = np.array([-0.2, -0.3])  # the mapped window, spatial steps: x to d_s + 0.1, y ± 0.3
-    shape = (int(round((d_s + 0.3) / CELL)), int(round(0.6 / CELL)))
+    lo = np.array([-0.1, -0.15])  # the mapped window, spatial steps: x to d_s + 0.1, y ± 0.15
+    shape = (int(round((d_s + 0.2) / CELL)), int(round(0.3 / CELL)))
     xs = lo[0] + (np.arange(shape[0]) + 0.5) * CELL
     dens = {a: density(r, lo, shape) for a, r in routes.items()}
     stats = {a: np.array([route_stats(r) for r in rs]) for a, rs in routes.items()}  # (runs, 3)
