@@ -1,10 +1,10 @@
-"""Fig. 3-4: highest observed speed with constant U, A+ and Δt (spec §7.1, §22).
+"""Fig. 3-4: highest observed speed with constant U, A+ and Δt (Section 3.5.1, p. 75).
 
 Four cases at U = 20 m/s: a (β = 1, Δt = 1 s), b (β = 0.2, Δt = 1 s), c (β = 0.2,
 Δt = 0.2 s), d (β = 1, Δt = 0.2 s), each with swarms of 10, 100 and 1000 particles for
 100 s, and each under two readings of the attractors:
 
-- ``ahead``: both sgn terms point forward for ever (spec §22), the reading that gives the
+- ``ahead``: both sgn terms point forward for ever (docs/readings.md), the reading that gives the
   reported 19.9 m/s for β = 1;
 - ``literal``: Algorithm order, personal best refreshed before the velocity update, so a
   particle at its own best gets no cognitive push and the speed caps at U/2.
@@ -165,11 +165,11 @@ def _readme(runs: int, sizes: Sequence[int], summary: dict[str, Any]) -> str:
     return f"""# Fig. 3-4 reproduction: highest speed with constant parameters
 
 Adapted PSO in one dimension, f = x1 maximised, U = 20 m/s, 100 s, swarms of {sizes_txt}
-particles, {runs} seeded runs per case (spec §7.1). Presets `fig3-4a` … `fig3-4d`.
+particles, {runs} seeded runs per case (Section 3.5.1). Presets `fig3-4a` … `fig3-4d`.
 
 Cases (`case` column): `3-4a` … `3-4d`, each under two readings of the attractors:
 
-- `/ahead`: both accelerating terms always push forward (spec §22);
+- `/ahead`: both accelerating terms always push forward (docs/readings.md);
 - `/literal`: Algorithm order, the personal best is refreshed before the velocity update,
   so only the social term pushes a leading particle and the speed caps at U/2.
 
@@ -195,6 +195,6 @@ Cases (`case` column): `3-4a` … `3-4d`, each under two readings of the attract
 {rows}
 
 Numbers for 3-4b/3-4c differ from the thesis: no reading of the unstated details we tried
-(spec §22) gives 12.4 / 13.4 m/s; the qualitative claims are what is checked. With Δt = 0.2 s
+(docs/readings.md) gives 12.4 / 13.4 m/s; the qualitative claims are what is checked. With Δt = 0.2 s
 a case has 500 iterations in 100 s instead of 100, which is why its run peak is higher.
 """
