@@ -185,7 +185,8 @@ class BaseSession(CompareMixin, TimelineMixin):
             self.revision += 1
 
     def load_preset(self, name: str) -> Scenario:
-        scenario = presets_io.load(name)
+        """Load the shipped preset ``name`` (never a file)."""
+        scenario = presets_io.load_shipped(name)
         self.load_scenario(scenario)
         return scenario
 

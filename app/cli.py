@@ -5,16 +5,28 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from shoal import __version__
 
+EXIT_FAILED = 1
 EXIT_USAGE = 2
 DEFAULT_MAX_SESSIONS = 24  # as shoal.app.server.DEFAULT_MAX_SESSIONS (not imported: viser loads slowly)
 
 
-def _err(msg: str) -> int:
+def _err(msg: str, code: int = EXIT_USAGE) -> int:
     print(f"shoal: error: {msg}", file=sys.stderr)
-    return EXIT_USAGE
+    return code
+
+
+def _too_big(scenario: Any) -> int:
+    return _err(f"not enough memory for {scenario.name} with sim.robots = {scenario.sim.robots} and "
+                f"sim.runs = {scenario.sim.runs}; choose fewer", EXIT_FAILED)
+
+
+def _cannot_write(out: Path, err: OSError) -> int:
+    """One line naming the output folder and why it cannot be written (a full disk, say)."""
+    return _err(f"cannot write {out}: {err.strerror or err}", EXIT_FAILED)
 
 
 def _cmd_serve(args: argparse.Namespace) -> int:
@@ -24,12 +36,20 @@ def _cmd_serve(args: argparse.Namespace) -> int:
         load(args.preset)
     except PresetError as e:
         return _err("bad preset:\n  " + "\n  ".join(e.messages))
+    from shoal.app.origin_guard import check_origin_url
     from shoal.app.server import serve
 
     if args.max_sessions < 1:
         return _err("--max-sessions must be >= 1")
+    if args.experiment_workers < 1:
+        return _err("--experiment-workers must be >= 1")
     try:
-        serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions)
+        origins = tuple(check_origin_url(url) for url in args.allow_origin or ())
+    except ValueError as e:
+        return _err(str(e))
+    try:
+        serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions,
+              allow_origins=origins, scheduler=args.scheduler, experiment_workers=args.experiment_workers)
     except OSError as e:
         return _err(str(e))
     return 0
@@ -48,9 +68,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
             overrides.append(f"{key}={flag}")
     try:
         scenario = load(args.preset, overrides)
+        sim = build(scenario)  # (a world that cannot be laid out is refused here, by field)
     except PresetError as e:
         return _err("bad preset:\n  " + "\n  ".join(e.messages))
-    sim = build(scenario)
+    except MemoryError:
+        return _too_big(scenario)
     out = Path(args.out or f"out/{file_stem(scenario.name)}-seed{scenario.sim.seed}")  # a name is no path
     meta = {
         "shoal_version": __version__,
@@ -60,8 +82,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
         "steps": scenario.sim.steps,
     }
     steps = scenario.sim.steps
-    with tqdm(total=steps, desc=f"run {scenario.name}", unit="step", disable=steps < 200 or None) as bar:
-        run_to_dir(sim, steps, out, meta, on_step=lambda _k: bar.update())
+    try:
+        with tqdm(total=steps, desc=f"run {scenario.name}", unit="step", disable=steps < 200 or None) as bar:
+            run_to_dir(sim, steps, out, meta, on_step=lambda _k: bar.update())
+    except OSError as e:
+        return _cannot_write(out, e)
+    except MemoryError:  # (its partial folder is gone already)
+        return _too_big(scenario)
     print(f"wrote {out}/run.json, trajectories.csv, metrics.csv")
     return 0
 
@@ -86,6 +113,8 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
         summary = reproduce(args.target, out, runs=args.runs, workers=args.workers, progress=True, quick=args.quick)
     except OutputDirError as e:
         return _err(f"{e} (choose another --out)")
+    except OSError as e:
+        return _cannot_write(out, e)
     failed = [c["name"] for c in summary["checks"] if not c["pass"]]
     print(f"wrote {out}/summary.json ({len(summary['checks'])} checks, {len(failed)} not passed)")
     for name in failed:
@@ -121,6 +150,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         return _err("bad sweep:\n  " + "\n  ".join(e.messages))
     except SchedulerError as e:
         return _err(str(e))
+    except OSError as e:
+        return _cannot_write(out, e)
     except KeyboardInterrupt:
         print(f"interrupted: finished cells are kept in {out}/cells; rerun the same command to resume",
               file=sys.stderr)
@@ -159,7 +190,7 @@ def _reproduce_all(args: argparse.Namespace) -> int:
     try:
         report = run_all(out, runs=args.runs, workers=args.workers, resume=args.resume, quick=args.quick)
     except OSError as e:
-        return _err(str(e))
+        return _cannot_write(out, e)
     print(f"wrote {report}")
     return 0
 
@@ -207,6 +238,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--max-sessions", type=int, default=DEFAULT_MAX_SESSIONS, metavar="N",
                    help=f"browser tabs with a simulation at once; more are told the server is full "
                         f"(default {DEFAULT_MAX_SESSIONS})")
+    s.add_argument("--allow-origin", action="append", metavar="URL",
+                   help="also accept pages of this origin, e.g. http://192.168.1.10:8080 or a proxy's "
+                        "https://shoal.example.org (repeatable; by default only this server's own pages)")
+    s.add_argument("--scheduler", help="run the Experiment tab's sweeps on this Dask scheduler (tcp://HOST:PORT)")
+    s.add_argument("--experiment-workers", type=int, default=1, metavar="W",
+                   help="without --scheduler: local worker processes for the Experiment tab (default 1)")
     s.set_defaults(func=_cmd_serve)
 
     r = sub.add_parser("run", help="headless seeded runs")
@@ -261,9 +298,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from shoal.app.terminate import EXIT_TERMINATED, Terminated, terminate_as_interrupt
+
     args = build_parser().parse_args(argv)
-    try:
-        return args.func(args)
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+    with terminate_as_interrupt():  # SIGTERM cleans up as Ctrl-C does (serve: tabs told, run: no partial folder)
+        try:
+            return args.func(args)
+        except Terminated:
+            print("terminated", file=sys.stderr)
+            return EXIT_TERMINATED
+        except KeyboardInterrupt:
+            print("interrupted", file=sys.stderr)
+            return 130

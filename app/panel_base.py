@@ -1,5 +1,6 @@
 """What every tab's control panel shares: the header (preset, status, playback, speed, seed),
-the Export and Notes tabs, and the rule that every change goes through the scenario model.
+the Export, Notes and Lessons tabs, and the rule that every change goes through the scenario
+model.
 
 A slider is a preset field (a dotted path into :class:`Scenario`); its limits come from the
 pydantic model, narrowed to a range that is useful on screen. A change is validated by
@@ -24,14 +25,15 @@ from typing import Any, Callable, ClassVar, Iterator
 import annotated_types as at
 import numpy as np
 
-from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .base_session import BaseSession, parse_upload
 from .compare_panel import CompareGui
+from .lessons.panel import LessonProgress, LessonsPanel
+from .lessons.scenes import load_scene
+from .preset_menu import PresetMenu
 from .replay_panel import ReplayGui
-from .session import app_presets
 from .twin_view import twin_series
 
 Notify = Callable[[str, str, str], None]
@@ -130,9 +132,12 @@ class PanelsBase:
     EXPORT_NOTE: ClassVar[str] = ""  # more words for the Export tab
 
     def __init__(self, gui: Any, session: BaseSession, notify: Notify, send_file: SendFile,
-                 replace: Replace | None = None) -> None:
+                 replace: Replace | None = None, lessons: LessonProgress | None = None,
+                 menu: PresetMenu | None = None) -> None:
         self.gui, self.session, self.notify, self.send_file = gui, session, notify, send_file
         self.replace = replace
+        self.lesson_progress = lessons if lessons is not None else LessonProgress()  # the tab keeps it
+        self.menu = menu or PresetMenu()  # the tab's, so that uploads outlive a swap of panels
         self._local = threading.local()  # per thread: programmatic .value fires callbacks inline
         self.sliders: dict[str, Any] = {}
         self.top: list[Any] = []  # top-level handles: removing them removes the whole panel
@@ -143,19 +148,24 @@ class PanelsBase:
         self._build_above_tabs()
         self.tabs = gui.add_tab_group()
         self.top.append(self.tabs)
+        focus = self.lesson_progress.focus  # a lesson's Set up rebuilt this panel: keep its tab in view
+        if focus:
+            self._build_lessons()
         self._build_tabs()
         self.compare_gui = CompareGui(self)
         self._build_export_notes()
+        if not focus:
+            self._build_lessons()
         self._wire_common()
         self.sync_from_scenario()
 
     # ------------------------------------------------------------------ building
     def _build_header(self) -> None:
         gui, sc = self.gui, self.session.scenario
-        names = tuple(app_presets())
+        names = self.menu.options()
         self.preset = gui.add_dropdown(
-            "preset", names, initial_value=sc.name if sc.name in names else names[0],
-            hint="shipped scenes; switching replaces the whole scene")
+            "preset", names, initial_value=self.menu.label_for(sc) or names[0],
+            hint="shipped scenes and the presets uploaded in this tab; switching replaces the whole scene")
         self.status = gui.add_markdown("")
         self.playback = gui.add_button_group("playback", PLAYBACK)
         self.top += [self.preset, self.status, self.playback]
@@ -181,6 +191,10 @@ class PanelsBase:
             self.upload = gui.add_upload_button("Upload preset", hint=".toml or .json, at most 256 KiB")
         with self.tabs.add_tab("Notes"):
             self.notes = gui.add_markdown(notes_text(self.session.NOTES))
+
+    def _build_lessons(self) -> None:
+        with self.tabs.add_tab("Lessons"):
+            self.lessons = LessonsPanel(self.gui, self.set_up_lesson, self.notify, self.lesson_progress)
 
     def _slider(self, spec: SliderSpec) -> Any:
         value = get_path(self.session.scenario, spec.path)
@@ -234,6 +248,7 @@ class PanelsBase:
     def remove(self) -> None:
         """Take every handle of this panel off the page (the tab swaps in another kind)."""
         self.removed = True
+        self.lessons.close()
         for h in reversed(self.top):
             h.remove()
         self.top.clear()
@@ -272,8 +287,10 @@ class PanelsBase:
                     h.min, h.max = lo, hi
                 self._set(h, int(value) if spec.integer else float(value))
             self._set(self.seed, int(sc.sim.seed))
-            if sc.name in self.preset.options:
-                self._set(self.preset, sc.name)
+            if self.preset.options != self.menu.options():
+                self.preset.options = self.menu.options()
+            if (choice := self.menu.label_for(sc)) is not None:
+                self._set(self.preset, choice)
             self._sync_body(sc)
         self.compare_gui.sync()
         self._visibility()
@@ -348,26 +365,54 @@ class PanelsBase:
             self.session.load_scenario(scenario)
             self.sync_from_scenario()
 
-    def load_preset(self, name: str) -> bool:
+    def load_preset(self, choice: str) -> bool:
+        """Load a choice of the preset dropdown: a shipped preset or one uploaded in this tab
+        (never a file: anything else is refused)."""
+        menu, previous = self.menu, self.menu.current
         try:
-            scenario = presets_io.load(name)
+            scenario = menu.scenario(choice)
+            menu.current = choice
             self._load(scenario)
         except PresetError as err:
-            self._refuse(err, f"preset {name}")
+            menu.current = previous
+            self._refuse(err, "preset")
             self.sync_from_scenario()
             return False
-        self.notify("Preset loaded", scenario.description or name, "green")
+        self.notify("Preset loaded", scenario.description or choice, "green")
         return True
 
+    def set_up_lesson(self, preset: str, values: dict[str, Any]) -> list[str]:
+        """A lesson step's scene: the preset with the step's field values, validated as an upload
+        would be, loaded paused at step 0. Returns the refusal's messages (empty: loaded)."""
+        try:
+            scenario = load_scene(preset, values)
+            if self.replace is not None:
+                session = self.replace(scenario)  # may rebuild the panels (another kind of scene)
+            else:
+                self.session.load_scenario(scenario)
+                self.sync_from_scenario()
+                session = self.session
+        except PresetError as err:
+            return list(err.messages)
+        session.pause()
+        return []
+
     def upload_preset(self, filename: str, content: bytes) -> bool:
-        """Validate an uploaded preset; a bad one is listed field by field and changes nothing."""
+        """Validate an uploaded preset and load it; it stays a choice of the preset dropdown
+        (in memory, this tab only). A bad one is listed field by field and changes nothing."""
+        menu, previous = self.menu, self.menu.current
+        label = None
         try:
             sc = parse_upload(filename, content)
+            label = menu.current = menu.add_upload(sc)
             self._load(sc)
         except PresetError as err:
+            if label is not None:
+                menu.forget(label)
+            menu.current = previous
             self._refuse(err, f"uploaded {filename}")
             return False
-        self.notify("Preset uploaded", f"{filename}: scene '{sc.name}' loaded", "green")
+        self.notify("Preset uploaded", f"{filename}: scene '{sc.name}' loaded (also in the preset list)", "green")
         return True
 
     # ------------------------------------------------------------------ readouts

@@ -189,6 +189,9 @@ def _check_values(rec: Recording, where: str) -> list[str]:
         errors.append("k: step numbers must increase")
     if not np.all(np.isfinite(rec.t)) or np.any(np.diff(rec.t) < 0):
         errors.append("t: times must be finite and never decrease")
+    for name in ("x", "heading"):  # (metrics may hold NaN: a value not defined at that step)
+        if not np.all(np.isfinite(getattr(rec, name))):
+            errors.append(f"{name}: {'positions' if name == 'x' else 'headings'} must be finite numbers")
     return [f"{where}: {e}" for e in errors]
 
 

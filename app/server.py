@@ -7,7 +7,6 @@ and meet the ticking thread only through each session's lock.
 
 from __future__ import annotations
 
-import ipaddress
 import socket
 import sys
 import threading
@@ -18,11 +17,16 @@ from typing import Any
 
 import viser
 
+from shoal.engine.studies.experiments.schedulers import DaskCluster, SchedulerError
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .base_session import MAX_UPLOAD_BYTES, BaseSession
+from .experiment import ExperimentService, Limits, experiment_pool
+from .input_guard import guard_inputs
+from .native_memory import keep_large_blocks_returnable
+from .origin_guard import OriginPolicy, guarded_viser, is_loopback
 from .replay import MAX_REPLAY_BYTES
 from .scene import CAMERA_FOV, CAMERA_HEIGHT, camera_height
 from .session import check_supported
@@ -31,8 +35,10 @@ from .upload_guard import guard_uploads
 
 TICK_HZ = 60.0
 PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round
-LOOPBACK_NAMES = ("localhost",)
 MAX_TRANSFER_BYTES = max(MAX_UPLOAD_BYTES, MAX_REPLAY_BYTES)  # any upload; bigger ones are dropped as they arrive
+MAX_PENDING_BYTES = 2 * MAX_TRANSFER_BYTES  # one tab's unfinished uploads together
+STOPPED_TITLE = "This Shoal server has stopped"
+STOP_NOTICE_SECONDS = 0.3
 DEFAULT_MAX_SESSIONS = 24  # browser tabs with a simulation at once (``shoal serve --max-sessions``)
 FULL_TITLE = "This Shoal server is full"
 FULL_MESSAGE = ("This server already runs {n} sessions (its maximum), so this tab has no simulation. "
@@ -41,15 +47,6 @@ FULL_MESSAGE = ("This server already runs {n} sessions (its maximum), so this ta
 
 class PortInUseError(OSError):
     """The requested port is taken (viser would silently move to the next free one)."""
-
-
-def is_loopback(host: str) -> bool:
-    if host in LOOPBACK_NAMES:
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 def _port_free(host: str, port: int) -> bool:
@@ -73,19 +70,26 @@ class ShoalServer:
 
     At most ``max_sessions`` browser tabs get a session; a tab beyond that is told so in the
     page (``turned_away``) and costs no simulation. A closed tab frees its session at once.
+    Requests from pages of other origins are refused (``allow_origins`` lets some in; see
+    :mod:`.origin_guard`).
     """
 
     def __init__(self, scenario: Scenario, host: str = "127.0.0.1", port: int = 8080,
-                 max_sessions: int = DEFAULT_MAX_SESSIONS) -> None:
+                 max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
+                 experiments: ExperimentService | None = None) -> None:
         if max_sessions < 1:
             raise ValueError(f"max_sessions must be >= 1 (got {max_sessions})")
         self.scenario = scenario
+        # the Experiment tab's sweeps: by default on one worker process beside the server
+        self.experiments = experiments or ExperimentService(experiment_pool(1))
         self.host = host
         self.max_sessions = max_sessions
         self.turned_away: set[int] = set()  # client ids shown the "server is full" message
         self._opening: set[int] = set()  # client ids whose session is being built
         self._errors: weakref.WeakKeyDictionary[TabApp, str] = weakref.WeakKeyDictionary()  # last error per tab
-        self.viser = viser.ViserServer(host=host, port=port, verbose=False)
+        keep_large_blocks_returnable()  # tabs that come and go give their memory back
+        self.policy = OriginPolicy(host, allow_origins)
+        self.viser = guarded_viser(host, port, self.policy)
         self.port = self.viser.get_port()
         self.tabs: dict[int, TabApp] = {}
         self._lock = threading.Lock()
@@ -139,14 +143,16 @@ class ShoalServer:
                 send_file=lambda name, data: client.send_file_download(name, data, save_immediately=True),
                 atomic=client.atomic,
             )
-        tab = TabApp(session, gui, scene, **kwargs)
+        tab = TabApp(session, gui, scene, experiments=self.experiments, owner=key, **kwargs)
         tab.auto_tick = auto_tick
         with self._lock:
             self.tabs[key] = tab
         return tab
 
     def close_tab(self, key: int, *, gone: bool = False) -> None:
-        """Forget a tab; unless its client is ``gone``, also stop listening to its scene."""
+        """Forget a tab and cancel its experiment; unless its client is ``gone``, also stop
+        listening to its scene."""
+        self.experiments.close_owner(key)
         with self._lock:
             tab = self.tabs.pop(key, None)
         if tab is not None and not gone:
@@ -191,9 +197,12 @@ class ShoalServer:
             fitted.set()  # once: the first report tells the canvas' aspect; later moves are the user's
             camera.position = (0.0, 0.0, camera_height(camera.aspect))
 
-        guard_uploads(client.gui, MAX_TRANSFER_BYTES, lambda name, size: client.add_notification(
-            f"Refused: uploaded {name}", f"{size / 2**20:.1f} MiB is more than the {MAX_TRANSFER_BYTES // 2**20} MiB "
-            "an upload may have", color="red", auto_close_seconds=10.0))
+        def refuse(title: str, body: str) -> None:
+            client.add_notification(title, body, color="red", auto_close_seconds=10.0)
+
+        guard_inputs(client.gui, refuse)
+        guard_uploads(client.gui, MAX_TRANSFER_BYTES, MAX_PENDING_BYTES,
+                      lambda name, why: refuse(f"Refused: uploaded {name}", why))
         tab = self.open_tab(client.client_id, client.gui, client.scene, client)
         tab.session.play()
 
@@ -225,27 +234,46 @@ class ShoalServer:
                         where = traceback.extract_tb(err.__traceback__)[-3:]
                         at = " < ".join(f"{f.filename.rsplit('/', 1)[-1]}:{f.lineno} {f.name}" for f in reversed(where))
                         print(f"shoal: tab update failed: {err!r} at {at}", file=sys.stderr)
+            tabs = tab = None  # a closed tab must not stay referenced from here until a later round
             self._stopping.wait(max(0.0, period - (time.monotonic() - start)))
 
     def stop(self) -> None:
-        """Stop ticking, then the viser server (in that order: no updates on closed connections)."""
+        """Stop the experiments and the ticking, tell the open tabs, then stop the viser server
+        (in that order: no updates on closed connections)."""
         self._stopping.set()
+        self.experiments.stop()
         if self._thread.is_alive() and threading.current_thread() is not self._thread:
             self._thread.join(timeout=5.0)
+        clients = list(self.viser.get_clients().values())
+        for client in clients:
+            client.add_notification(STOPPED_TITLE, "Its simulations have ended; reload this page once it runs again.",
+                                    color="yellow")
+            client.flush()
+        if clients:
+            time.sleep(STOP_NOTICE_SECONDS)  # the notices leave before the connections close
         self.viser.stop()
 
 
 def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
-                 max_sessions: int = DEFAULT_MAX_SESSIONS) -> ShoalServer:
+                 max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
+                 scheduler: str | None = None, experiment_workers: int = 1,
+                 limits: Limits | None = None) -> ShoalServer:
     """Start the app without blocking. ``port=0`` picks a free port (see ``.port``).
 
-    Raises :class:`PresetError` for an unknown or invalid preset and :class:`PortInUseError`
-    when ``port`` is taken.
+    The Experiment tab's sweeps run on the Dask cluster at ``scheduler`` (``tcp://HOST:PORT``)
+    or on a local pool of ``experiment_workers`` processes, within ``limits``.
+
+    Raises :class:`PresetError` for an unknown or invalid preset, :class:`PortInUseError`
+    when ``port`` is taken and :class:`SchedulerError` when the cluster cannot be reached.
     """
     scenario = check_supported(presets_io.load(preset))
     if port and not _port_free(host, port):
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
-    server = ShoalServer(scenario, host=host, port=port, max_sessions=max_sessions)
+    if experiment_workers < 1:
+        raise ValueError(f"experiment_workers must be >= 1 (got {experiment_workers})")
+    pool = DaskCluster(scheduler) if scheduler else experiment_pool(experiment_workers)
+    server = ShoalServer(scenario, host=host, port=port, max_sessions=max_sessions, allow_origins=allow_origins,
+                         experiments=ExperimentService(pool, limits, owns_scheduler=True))
     if port and server.port != port:  # viser moved to the next free port: refuse instead
         server.stop()
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
@@ -253,18 +281,21 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
 
 
 def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
-          max_sessions: int = DEFAULT_MAX_SESSIONS) -> None:
-    """Run the browser app until Ctrl-C (``shoal serve``). Exits with a message if the port is taken."""
+          max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
+          scheduler: str | None = None, experiment_workers: int = 1) -> None:
+    """Run the browser app until Ctrl-C (``shoal serve``). Exits with a message if the port is
+    taken or the Dask scheduler cannot be reached."""
     try:
-        server = start_server(preset, host, port, max_sessions)
-    except PortInUseError as err:
+        server = start_server(preset, host, port, max_sessions, allow_origins, scheduler, experiment_workers)
+    except (PortInUseError, SchedulerError) as err:
         raise SystemExit(f"shoal serve: {err}") from None
     except PresetError as err:
         raise SystemExit("shoal serve: bad preset:\n" + "\n".join(err.messages)) from None
     if not is_loopback(host):
         print(f"warning: serving on {host}: anyone who can reach this machine on port {server.port} "
               "can open and drive the app", file=sys.stderr)
-    print(f"Shoal is running at {server.url}  (Ctrl-C to stop)", flush=True)
+    print(f"Shoal is running at {server.url}  (Ctrl-C to stop); experiments run on "
+          f"{server.experiments.scheduler.describe()}", flush=True)
     try:
         while True:
             time.sleep(0.5)

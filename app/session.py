@@ -53,7 +53,7 @@ def app_presets() -> dict[str, str]:
     out = {}
     for name, description in presets_io.list_presets().items():
         try:
-            check_supported(presets_io.load(name))
+            check_supported(presets_io.load_shipped(name))
         except PresetError:
             continue
         out[name] = description

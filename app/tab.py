@@ -18,17 +18,21 @@ import threading
 import time
 from collections import deque
 from dataclasses import dataclass
-from typing import Any, Callable, ContextManager
+from typing import Any, Callable, ContextManager, Hashable
 
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .base_session import BaseSession
+from .experiment.panel import ExperimentPanel
+from .experiment.service import ExperimentService
 from .fleet_panels import FleetPanels
 from .fleet_scene import FleetView
 from .fleet_session import FleetSession
+from .lessons.panel import LessonProgress
 from .panel_base import PanelsBase
 from .panels import Panels
+from .preset_menu import PresetMenu
 from .scene import ArenaView
 from .session import Session
 from .slo_panels import SLOPanels
@@ -82,8 +86,12 @@ class TabApp:
         notify: Callable[[str, str, str], None] | None = None,
         send_file: Callable[[str, bytes], None] | None = None,
         atomic: Callable[[], ContextManager[None]] | None = None,
+        experiments: ExperimentService | None = None,
+        owner: Hashable = None,
     ) -> None:
         self.session = session
+        self.experiments, self.owner = experiments, owner  # the server's experiments; this tab's key there
+        self.experiment_panel: ExperimentPanel | None = None
         self.gui, self.scene = gui, scene
         self.messages: deque[tuple[str, str, str]] = deque(maxlen=50)  # (title, body, colour), newest last
         self.downloads: deque[tuple[str, bytes]] = deque(maxlen=5)
@@ -93,12 +101,20 @@ class TabApp:
         self._ticking = threading.Lock()
         self._clicks: list[Callable[[Any], None]] = []
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
+        self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
+        self.menu = PresetMenu()  # the preset dropdown's choices, uploads included, across swaps
         self._build_kind()
 
     def _build_kind(self) -> None:
         kind = next(k for k in KINDS if isinstance(self.session, k.session))
-        self.panels = kind.panels(self.gui, self.session, self.notify, self.send_file, replace=self.replace)
+        self.panels = kind.panels(self.gui, self.session, self.notify, self.send_file, replace=self.replace,
+                                  lessons=self.lesson_progress, menu=self.menu)
         self.arena = kind.view(self.scene)
+        if self.experiments is not None:
+            with self.panels.tabs.add_tab("Experiment"):
+                self.experiment_panel = ExperimentPanel(
+                    self.gui, self.experiments, self.owner, scenario=lambda: self.session.scenario,
+                    open_cell=self.replace, notify=self.notify, send_file=self.send_file)
         if hasattr(self.panels, "drag_obstacle"):
             self.arena.on_obstacle_drag = self.panels.drag_obstacle  # type: ignore[attr-defined]
         if hasattr(self.panels, "drag_source"):
@@ -117,6 +133,8 @@ class TabApp:
         for cb in self._clicks:
             self.scene.remove_click_callback(cb)
         self._clicks.clear()
+        if self.experiment_panel is not None:
+            self.experiment_panel.remove()
         self.panels.remove()
         self.arena.clear()
 
@@ -139,7 +157,9 @@ class TabApp:
             return new
 
     def close(self) -> None:
-        """The browser tab went away: stop listening to its scene."""
+        """The browser tab went away: stop listening to its scene and its experiment."""
+        if self.experiment_panel is not None:
+            self.experiment_panel.detach()
         for cb in self._clicks:
             with contextlib.suppress(Exception):
                 self.scene.remove_click_callback(cb)
@@ -217,5 +237,7 @@ class TabApp:
                     self.panels.refresh_readout()
                     self.panels.refresh_plots()
                     self.panels.refresh_timeline()
+                    if self.experiment_panel is not None:
+                        self.experiment_panel.sync()  # the fields worth varying follow the scene
                 self._plot_key = key
             self._next_plot = now + 1.0 / self.PLOT_HZ

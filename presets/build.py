@@ -3,6 +3,7 @@ function per scene kind, each returning a :class:`~shoal.engine.core.contract.En
 
 from __future__ import annotations
 
+import functools
 from typing import Any, Protocol
 
 import numpy as np
@@ -19,6 +20,7 @@ from shoal.engine.robots.world import WorldSpec, empty_arena, forest, obstacle_c
 from shoal.engine.slo.positions import Estimated, Oracle, PositionSource
 from shoal.engine.slo.sensors import ErrorModel, error_model
 
+from .io import PresetError
 from .models import SLO, Acoustics, Controller, ObjectiveModel, Scenario, WorldModel
 
 
@@ -71,13 +73,38 @@ def _simulation_kwargs(scenario: Scenario, *, runs: int | None, seed: int | None
     )
 
 
+def world_error(msg: str) -> str:
+    """A world generator's message ("length: ...") named by its preset field ("world.length: ...")."""
+    field, sep, rest = msg.partition(":")
+    if not sep or " " in field:
+        return f"world: {msg}"
+    return f"world.{ {'size': 'width'}.get(field, field)}:{rest}"
+
+
 def world_for(w: WorldModel) -> WorldSpec:
-    """The obstacle world of a ``[world]`` section."""
-    if w.kind == "obstacle-course":
-        return obstacle_course(seed=w.seed, layers=w.layers, length=w.length, width=w.width, start_size=w.start_size)
-    if w.kind == "forest":
-        return forest(seed=w.seed, size=w.width, density=w.density, start_size=w.start_size)
-    return empty_arena(size=w.width, start_size=w.start_size)
+    """The obstacle world of a ``[world]`` section; :class:`PresetError` naming the field when
+    the generator cannot lay it out (the model allows some sizes that do not fit together)."""
+    try:
+        if w.kind == "obstacle-course":
+            return obstacle_course(seed=w.seed, layers=w.layers, length=w.length, width=w.width,
+                                   start_size=w.start_size)
+        if w.kind == "forest":
+            return forest(seed=w.seed, size=w.width, density=w.density, start_size=w.start_size)
+        return empty_arena(size=w.width, start_size=w.start_size)
+    except ValueError as err:
+        raise PresetError([world_error(str(err))]) from None
+
+
+def check_world(scenario: Scenario) -> Scenario:
+    """``scenario`` if its ``[world]`` (if any) can be laid out, else :class:`PresetError`."""
+    if scenario.world is not None:
+        _world_fits(scenario.world.model_dump_json())
+    return scenario
+
+
+@functools.lru_cache(maxsize=256)
+def _world_fits(section: str) -> None:
+    world_for(WorldModel.model_validate_json(section))
 
 
 def fleet_params_for(s: Scenario) -> FleetParams:

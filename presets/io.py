@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import functools
 import json
 import reprlib
 import tomllib
@@ -28,6 +29,11 @@ _SHORT = reprlib.Repr()  # a bad value is shown short: a few items, a few levels
 _SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxtuple, _SHORT.maxdict = 2, 4, 4, 4
 _SHORT.maxstring = _SHORT.maxother = _SHORT.maxlong = 40
 MAX_NAME = 60  # characters of a field name shown in a message
+
+
+def short(value: Any) -> str:
+    """A value as a message shows it: a few characters, a few items, a few levels."""
+    return _SHORT.repr(value)
 
 
 def _short_name(part: object) -> str:
@@ -60,12 +66,7 @@ def _files() -> Any:
 
 def list_presets() -> dict[str, str]:
     """Shipped preset names with their one-line descriptions."""
-    out = {}
-    for f in sorted(_files().iterdir(), key=lambda p: p.name):
-        if f.name.endswith(".toml"):
-            data = tomllib.loads(f.read_text(encoding="utf-8"))
-            out[f.name.removesuffix(".toml")] = str(data.get("description", "")).split("\n")[0]
-    return out
+    return {name: str(read_shipped(name).get("description", "")).split("\n")[0] for name in shipped_names()}
 
 
 def parse_text(text: str, fmt: str = "toml") -> dict[str, Any]:
@@ -98,20 +99,51 @@ def _depth(data: Any) -> int:
     return deepest
 
 
+MAX_PRESET_NAME = 4096  # characters of a preset name or file path (PATH_MAX): longer ones are refused unread
+
+
+@functools.lru_cache(maxsize=1)
+def shipped_names() -> tuple[str, ...]:
+    """The names of the presets shipped with Shoal (the files of ``shoal.presets``), sorted."""
+    return tuple(sorted(f.name.removesuffix(".toml") for f in _files().iterdir() if f.name.endswith(".toml")))
+
+
+def read_shipped(name: str) -> dict[str, Any]:
+    """The unvalidated dict of the shipped preset ``name``. Only a name from
+    :func:`shipped_names` is read; anything else (a path, a long or odd string) is refused
+    without touching the file system."""
+    if not isinstance(name, str) or name not in shipped_names():
+        raise PresetError([f"no shipped preset named {short(name)} "
+                           f"(shipped presets: {', '.join(shipped_names())})"])
+    return parse_text(_files().joinpath(f"{name}.toml").read_text(encoding="utf-8"))
+
+
+def load_shipped(name: str, overrides: list[str] | None = None) -> Scenario:
+    """Load a shipped preset by name (never a file path: see :func:`read_shipped`)."""
+    return validate(apply_overrides(read_shipped(name), overrides or []))
+
+
 def read_raw(name_or_path: str | Path) -> dict[str, Any]:
-    """The unvalidated dict of a shipped preset name or a TOML/JSON file path."""
+    """The unvalidated dict of a shipped preset name or a TOML/JSON file path (what a
+    command-line user names; a value from the browser goes through :func:`read_shipped`)."""
+    if len(str(name_or_path)) > MAX_PRESET_NAME:
+        raise PresetError([f"preset name or file {short(str(name_or_path))}: longer than "
+                           f"{MAX_PRESET_NAME} characters"])
     path = Path(name_or_path)
-    if path.suffix in (".toml", ".json") and path.exists():
+    try:
+        is_file = path.suffix in (".toml", ".json") and path.is_file()
+    except (OSError, ValueError):  # a name the file system cannot hold (NUL, too long a part)
+        is_file = False
+    if is_file:
         try:
             text = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as err:
             raise PresetError([f"cannot read {path.name}: {err}"]) from None
         return parse_text(text, "json" if path.suffix == ".json" else "toml")
-    shipped = _files().joinpath(f"{name_or_path}.toml")
-    if shipped.is_file():
-        return parse_text(shipped.read_text(encoding="utf-8"))
-    names = ", ".join(list_presets())
-    raise PresetError([f"no preset or file named {str(name_or_path)!r} (shipped presets: {names})"])
+    if str(name_or_path) in shipped_names():
+        return read_shipped(str(name_or_path))
+    names = ", ".join(shipped_names())
+    raise PresetError([f"no preset or file named {short(str(name_or_path))} (shipped presets: {names})"])
 
 
 def parse_value(text: str) -> Any:

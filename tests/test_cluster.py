@@ -105,3 +105,32 @@ def test_without_dask_the_scheduler_option_says_what_to_install(tmp_path):
             "'--scheduler', 'tcp://127.0.0.1:8786']))")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert res.returncode == 2 and "shoal[cluster]" in res.stderr
+
+
+def test_shoal_serve_with_a_scheduler_runs_experiments_on_the_cluster(cluster):
+    """``shoal serve --scheduler``: the Experiment tab's cells go to the cluster, and they are
+    those of the local pool, byte for byte."""
+    from shoal.app.experiment import AxisRequest, ExperimentRequest, ExperimentService, experiment_pool
+    from shoal.app.server import start_server
+    from shoal.presets.io import load
+
+    from browser.browser_helpers import wait_until
+
+    ask = ExperimentRequest((AxisRequest("controller.U", values="6, 9"), AxisRequest("controller.A_plus",
+                                                                                    values="10, 20")), 3, 20)
+    srv = start_server("default", port=0, scheduler=cluster.address)
+    try:
+        assert "Dask cluster" in srv.experiments.scheduler.describe()
+        on_cluster = srv.experiments.submit("tab", load("default"), ask)
+        wait_until(lambda: on_cluster.over, timeout=120, what="the experiment on the cluster")
+    finally:
+        srv.stop()
+    local = ExperimentService(experiment_pool(1))
+    try:
+        here = local.submit("tab", load("default"), ask)
+        wait_until(lambda: here.over, timeout=120, what="the experiment on the local pool")
+    finally:
+        local.stop()
+    assert on_cluster.phase == here.phase == "finished"
+    assert on_cluster.table.csv() == here.table.csv()
+    assert cluster.client.status == "running"  # the fixture's own client: not the server's to close

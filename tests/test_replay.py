@@ -111,6 +111,9 @@ def test_another_format_name_and_missing_meta_fields_are_named():
     (dict(n=np.full(6, 2)), "n"),
     (dict(k=np.array([0, 1, 2, 2, 3, 4])), "k"),
     (dict(t=np.array([0.0, 0.1, 0.2, np.nan, 0.4, 0.5])), "t"),
+    (dict(x=np.where(np.arange(36).reshape(18, 2) == 7, np.nan, 1.0)), "x"),
+    (dict(x=np.full((18, 2), np.inf)), "x"),
+    (dict(heading=np.array([0.0] * 17 + [-np.inf])), "heading"),
 ])
 def test_wrong_shapes_and_values_are_named(change, name):
     msg = refused(npz(**arrays_of(recording(), **change)))

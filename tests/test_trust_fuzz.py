@@ -113,9 +113,14 @@ def test_random_toml_documents_are_accepted_or_named(doc):
 def test_random_text_is_refused_or_accepted_never_crashes(text):
     for fmt in ("toml", "json"):
         try:
-            sc = validate(parse_text(text, fmt))
+            data = parse_text(text, fmt)
         except PresetError as err:
             check_refusal(err)
+            continue
+        try:
+            sc = validate(data)
+        except PresetError as err:
+            check_refusal(err, data)  # e.g. text "0=0": the message names the key "0"
         else:
             check_accepted(sc)
 

@@ -101,3 +101,19 @@ def test_random_uploads_never_break_the_tab(tab, name, content):
         tab.tick(1.0)
     else:
         assert tab.messages[-1][2] == "red" and tab.session.sim is sim and sim.state.k == k
+
+
+def test_a_replay_whose_positions_are_not_finite_is_refused(tab):
+    import dataclasses
+
+    from shoal.app import replay
+
+    rec = replay.from_bytes(tab.session.export_replay())
+    x = rec.x.copy()
+    x[len(x) // 2, 0] = np.nan
+    s = tab.session
+    sim, scenario = s.sim, s.scenario
+    assert not tab.panels.replay_gui.load("nan.npz", replay.to_bytes(dataclasses.replace(rec, x=x)))
+    title, body, color = tab.messages[-1]
+    assert color == "red" and title == "Refused: replay nan.npz" and "x: positions must be finite" in body, body
+    assert tab.session is s and s.sim is sim and s.scenario is scenario and s.replaying is None

@@ -12,6 +12,7 @@ msgpack ``{"messages": [...]}``, then raw binary buffers.
 
 from __future__ import annotations
 
+import socket
 import threading
 from typing import Any
 
@@ -43,19 +44,26 @@ def _texts(value: Any) -> list[str]:
 
 class WireClient:
     """One tab on ``ws://127.0.0.1:port``: ``frames``/``nbytes`` received, ``texts`` seen
-    (with ``decode=True``: every string in the GUI messages, e.g. markdown and modal titles)."""
+    (with ``decode=True``: every string in the GUI messages, e.g. markdown and modal titles).
 
-    def __init__(self, port: int, *, decode: bool = False, width: int = 1280, height: int = 800) -> None:
+    ``origin`` sends an ``Origin`` header as a browser page would; ``host`` connects to
+    127.0.0.1 all the same but names ``host`` in the ``Host`` header (a DNS name pointed at
+    this machine). A refused upgrade raises ``websockets.exceptions.InvalidStatus``."""
+
+    def __init__(self, port: int, *, decode: bool = False, width: int = 1280, height: int = 800,
+                 origin: str | None = None, host: str | None = None) -> None:
         self.decode = decode
         self.frames = 0
         self.nbytes = 0
         self.robot_updates = 0
         self.texts: list[str] = []
         self.gui: list[dict[str, Any]] = []  # (decode=True) every GUI message received
+        self.downloads: list[str] = []  # (decode=True) names of the files the server sent
         self.closed = threading.Event()
         self._lock = threading.Lock()
-        self.ws = connect(f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"],
-                          max_size=None, open_timeout=30)
+        sock = socket.create_connection(("127.0.0.1", port)) if host else None
+        self.ws = connect(f"ws://{host or f'127.0.0.1:{port}'}", subprotocols=[f"viser-v{viser.__version__}"],
+                          max_size=None, open_timeout=30, origin=origin, sock=sock)  # type: ignore[arg-type]
         camera = _messages.ViewerCameraMessage(
             wxyz=(1.0, 0.0, 0.0, 0.0), position=(0.0, 0.0, 40.0), fov=0.6, near=0.01, far=1000.0,
             image_height=height, image_width=width, look_at=(0.0, 0.0, 0.0), up_direction=(0.0, 1.0, 0.0))
@@ -70,6 +78,7 @@ class WireClient:
                     payload = payload.encode()
                 texts: list[str] = []
                 gui: list[dict[str, Any]] = []
+                files: list[str] = []
                 robots = 0
                 if self.decode:
                     for m in decode_frame(payload):
@@ -77,6 +86,8 @@ class WireClient:
                         if kind.startswith(("Gui", "Notification")):
                             texts += _texts(m)
                             gui.append(m)
+                        elif kind == "FileTransferStartDownload":
+                            files.append(str(m.get("filename")))
                         elif (kind == "SceneNodeUpdateMessage" and str(m.get("name", "")).endswith("/robots")
                               and "points" in (m.get("updates") or {})):
                             robots += 1
@@ -85,6 +96,7 @@ class WireClient:
                     self.nbytes += len(payload)
                     self.texts += texts
                     self.gui += gui
+                    self.downloads += files
                     self.robot_updates += robots
         except ConnectionClosed:
             pass
@@ -104,6 +116,47 @@ class WireClient:
         """The id of the GUI element labelled ``label`` (decode=True), if it arrived."""
         with self._lock:
             return next((m["uuid"] for m in self.gui if (m.get("props") or {}).get("label") == label), None)
+
+    def notifications(self) -> list[tuple[str, str, Any]]:
+        """(title, body, colour) of every notification shown so far (decode=True)."""
+        with self._lock:
+            return [(m["props"]["title"], m["props"]["body"], m["props"]["color"]) for m in self.gui
+                    if m.get("type") == "NotificationShowMessage"]
+
+    def value_of(self, uuid: str) -> Any:
+        """The value the server last gave the GUI element ``uuid`` (decode=True)."""
+        with self._lock:
+            for m in reversed(self.gui):
+                if m.get("uuid") == uuid and "value" in (m.get("updates") or {}):
+                    return m["updates"]["value"]
+                if m.get("uuid") == uuid and "value" in m:
+                    return m["value"]
+        raise KeyError(uuid)
+
+    def set_value(self, label: str, value: Any) -> None:
+        """Send ``value`` for the control labelled ``label``, as the page does when it changes."""
+        uuid = self.uuid_of(label)
+        assert uuid is not None, f"no control labelled {label!r} arrived"
+        self.send(_messages.GuiUpdateMessage(uuid, {"value": value}))
+
+    def upload(self, label: str, name: str, data: bytes, *, parts: int = 1, declared: int | None = None,
+               send: int | None = None) -> str:
+        """Upload ``data`` as file ``name`` through the upload button ``label`` in ``parts`` parts,
+        declaring ``declared`` bytes (default: its size) and sending only the first ``send``
+        parts (default: all). Returns the transfer's id."""
+        import uuid as _uuid
+
+        button = self.uuid_of(label)
+        assert button is not None, f"no upload button {label!r} arrived"
+        tid = str(_uuid.uuid4())
+        self.send(_messages.FileTransferStartUpload(
+            source_component_uuid=button, transfer_uuid=tid, filename=name, mime_type="application/octet-stream",
+            part_count=parts, size_bytes=len(data) if declared is None else declared))
+        step = -(-len(data) // parts) if data else 0
+        for i in range(parts if send is None else send):
+            self.send(_messages.FileTransferPart(source_component_uuid=button, transfer_uuid=tid, part_index=i,
+                                                 content=data[i * step:(i + 1) * step]))
+        return tid
 
     def send(self, message: Any) -> None:
         """Send one viser message as a page would."""

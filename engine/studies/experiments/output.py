@@ -6,6 +6,7 @@ Used by every target (Chapter 3 and Chapters 4–5) so that their files look ali
 from __future__ import annotations
 
 import csv
+import io
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -81,3 +82,10 @@ def new_figure(nrows: int, ncols: int, width: float, height: float) -> tuple[Any
 
 def save(fig: Any, path: Path, dpi: int = 120) -> None:
     fig.savefig(path, dpi=dpi, metadata={"Software": None})  # no version stamp: same inputs, same bytes
+
+
+def png_bytes(fig: Any, dpi: int = 120) -> bytes:
+    """The figure as PNG bytes, as :func:`save` would write them (nothing touches the disk)."""
+    buf = io.BytesIO()
+    fig.savefig(buf, dpi=dpi, format="png", metadata={"Software": None})
+    return buf.getvalue()

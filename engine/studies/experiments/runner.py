@@ -9,6 +9,7 @@ is the same, bit for bit.
 from __future__ import annotations
 
 import math
+from contextlib import closing
 from dataclasses import dataclass, field
 from typing import Any, Callable, Hashable, Iterable, Iterator, Sequence
 
@@ -233,13 +234,14 @@ class _Progress:
 def iter_jobs(
     jobs: Sequence[Any], *, workers: int = 1, scheduler: Scheduler | None = None,
     progress: bool | Callable[[int], None] = False, chunk: int = 25, desc: str = "runs",
-    simulate: Simulate = simulate_job, merge: Merge = concat,
+    simulate: Simulate = simulate_job, merge: Merge = concat, cancelled: Callable[[], bool] | None = None,
 ) -> Iterator[tuple[Hashable, Any]]:
     """Yield ``(key, result)`` of every job as soon as all its chunks are in (earlier jobs
     tend to finish first). The chunks run on ``scheduler``; by default the one of the
     enclosing :func:`~.schedulers.using` block, else this process (``workers == 1``) or a
     local pool of ``workers`` processes. ``progress`` shows a bar, or is called with the
-    number of runs each finished chunk adds."""
+    number of runs each finished chunk adds. Once ``cancelled()`` is true (asked after every
+    chunk) the iteration ends: chunks still running finish, the rest never start."""
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     if len({j.key for j in jobs}) != len(jobs):
@@ -255,12 +257,15 @@ def iter_jobs(
     expected = {j.key: 0 for j in jobs}
     for c in chunks:
         expected[c.job.key] += 1
-    with _Progress(sum(j.runs for j in jobs), progress, desc) as bar:
-        for i, (key, res) in sched.map_unordered(_simulate_chunk, chunks):
+    with _Progress(sum(j.runs for j in jobs), progress, desc) as bar, \
+            closing(sched.map_unordered(_simulate_chunk, chunks)) as results:
+        for i, (key, res) in results:
             parts[key].append(res)
             bar.update(chunks[i].runs)
             if len(parts[key]) == expected[key]:
                 yield key, merge(parts.pop(key))
+            if cancelled is not None and cancelled():
+                return
 
 
 def run_jobs(

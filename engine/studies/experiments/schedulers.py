@@ -14,6 +14,7 @@ target sends its chunks to a cluster without knowing about it.
 
 from __future__ import annotations
 
+import multiprocessing
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
@@ -53,12 +54,17 @@ class InProcess:
 
 class LocalPool:
     """A local process pool of ``workers`` processes. If a worker process dies (the pool
-    breaks), the unfinished items go to a fresh pool, at most ``restarts`` times."""
+    breaks), the unfinished items go to a fresh pool, at most ``restarts`` times.
 
-    def __init__(self, workers: int, restarts: int = 3) -> None:
+    ``start`` is the multiprocessing start method (default: the platform's). A process with
+    threads of its own (the app server) uses ``"forkserver"``: its workers are forked from a
+    clean single-threaded server process, never from itself."""
+
+    def __init__(self, workers: int, restarts: int = 3, start: str | None = None) -> None:
         if workers < 1:
             raise ValueError(f"workers must be >= 1, got {workers}")
         self.workers, self.restarts = int(workers), int(restarts)
+        self.context = multiprocessing.get_context(start) if start else None
         self.broken = 0  # pools that lost a worker process, over every call
 
     def map_unordered(self, fn: Callable[[Item], Any], items: Sequence[Item]) -> Results:
@@ -70,7 +76,7 @@ class LocalPool:
                 raise SchedulerError(f"the local process pool broke {attempt} times in one batch; giving up")
             if attempt > 0:
                 self.broken += 1
-            pool = ProcessPoolExecutor(max_workers=self.workers)
+            pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=self.context)
             try:
                 futures = {pool.submit(fn, item): i for i, item in pending.items()}
                 for fut in as_completed(futures):

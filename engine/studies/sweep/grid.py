@@ -14,6 +14,7 @@ import tomllib
 from dataclasses import dataclass
 from typing import Any, Sequence
 
+from shoal.presets.build import check_world
 from shoal.presets.io import PresetError, parse_value, set_dotted, validate
 from shoal.presets.models import Scenario
 
@@ -119,16 +120,17 @@ def cells(axes: Sequence[Axis]) -> list[tuple[Any, ...]]:
 
 
 def cell_scenario(base: dict[str, Any], axes: Sequence[Axis], values: Sequence[Any]) -> Scenario:
-    """``base`` (a raw preset dict) with one cell's values, validated by the preset model."""
+    """``base`` (a raw preset dict) with one cell's values, validated by the preset model (and
+    its world laid out, if it has one)."""
     data = copy.deepcopy(base)
     for a, v in zip(axes, values):
         set_dotted(data, a.key, copy.deepcopy(v))
-    return validate(data)
+    return check_world(validate(data))
 
 
-def resolve_cells(base: dict[str, Any], axes: Sequence[Axis]) -> list[Scenario]:
+def resolve_cells(base: dict[str, Any], axes: Sequence[Axis], where: str = "--grid cell") -> list[Scenario]:
     """Validate every cell; all problems in one :class:`SweepError`, each distinct message
-    once, naming the first cell it occurs in and the field, e.g. ``--grid cell
+    once, naming the first cell it occurs in (after ``where``) and the field, e.g. ``--grid cell
     acoustics.Q=-1, acoustics.U=2: acoustics.Q: Input should be greater than 0 (got -1)``."""
     out: list[Scenario] = []
     first: dict[str, str] = {}
@@ -137,11 +139,11 @@ def resolve_cells(base: dict[str, Any], axes: Sequence[Axis]) -> list[Scenario]:
         try:
             out.append(cell_scenario(base, axes, values))
         except PresetError as err:
-            where = ", ".join(f"{a.key}={label(v)}" for a, v in zip(axes, values))
+            cell = ", ".join(f"{a.key}={label(v)}" for a, v in zip(axes, values))
             for m in err.messages:
-                first.setdefault(m, where)
+                first.setdefault(m, cell)
                 count[m] = count.get(m, 0) + 1
     if first:
-        raise SweepError([f"--grid cell {where}: {m}" + (f" (and {count[m] - 1} more cells)" if count[m] > 1 else "")
-                          for m, where in first.items()])
+        raise SweepError([f"{where} {cell}: {m}" + (f" (and {count[m] - 1} more cells)" if count[m] > 1 else "")
+                          for m, cell in first.items()])
     return out

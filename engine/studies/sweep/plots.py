@@ -13,7 +13,7 @@ from __future__ import annotations
 import itertools
 import math
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -38,10 +38,17 @@ def varies(z: np.ndarray) -> bool:
     return known.size > 0 and not np.all(known == known[0])
 
 
-def _line(path: Path, axis: Axis, name: str, z: np.ndarray, runs: int) -> None:
+def line_figure(axis: Axis, name: str, z: np.ndarray, runs: int, *,
+                band: tuple[np.ndarray, np.ndarray] | None = None, title: str | None = None) -> Any:
+    """The median ``z`` of outcome ``name`` along one axis (a grey "n.c." where it is +inf);
+    ``band = (lo, hi)`` shades an interval round it where both ends are finite."""
     fig, (ax,) = new_figure(1, 1, 5.0, 3.4)
     x = np.asarray(axis.values, dtype=float) if _numeric(axis) else np.arange(len(axis.values), dtype=float)
     finite = np.isfinite(z)
+    if band is not None:
+        lo, hi = (np.asarray(b, dtype=float) for b in band)
+        ok = np.isfinite(lo) & np.isfinite(hi)
+        ax.fill_between(x[ok], lo[ok], hi[ok], color="tab:blue", alpha=0.2, linewidth=0, label="95 % interval")
     ax.plot(x[finite], z[finite], marker="o", color="tab:blue")
     for xi in x[np.isinf(z)]:
         ax.annotate("n.c.", (xi, 1.0), xycoords=("data", "axes fraction"), ha="center", va="top", color="grey")
@@ -49,12 +56,14 @@ def _line(path: Path, axis: Axis, name: str, z: np.ndarray, runs: int) -> None:
         ax.set_xticks(x, axis.labels)
     ax.set_xlabel(axis.key)
     ax.set_ylabel(f"median {name}")
-    ax.set_title(f"median {name} over {_runs(runs)} per cell", fontsize=10)
+    ax.set_title(title or f"median {name} over {_runs(runs)} per cell", fontsize=10)
     ax.grid(alpha=0.3)
-    save(fig, path)
+    return fig
 
 
-def _heat(path: Path, axes: Sequence[Axis], name: str, z: np.ndarray, runs: int) -> None:
+def heat_figure(axes: Sequence[Axis], name: str, z: np.ndarray, runs: int, *, title: str | None = None) -> Any:
+    """The median ``z`` of outcome ``name`` over the first two axes, one panel per
+    combination of the others; a cell of +inf is a grey "n.c.", a NaN cell is left blank."""
     ax_x, ax_y, rest = axes[0], axes[1], list(axes[2:])
     facets = list(itertools.product(*(range(len(a.values)) for a in rest)))
     ncols = min(len(facets), 4)
@@ -85,8 +94,8 @@ def _heat(path: Path, axes: Sequence[Axis], name: str, z: np.ndarray, runs: int)
         ax.set_visible(False)
     if im is not None:
         fig.colorbar(im, ax=list(panels[: len(facets)]), shrink=0.8, label=f"median {name}")
-    fig.suptitle(f"median {name} over {_runs(runs)} per cell", fontsize=10)
-    save(fig, path)
+    fig.suptitle(title or f"median {name} over {_runs(runs)} per cell", fontsize=10)
+    return fig
 
 
 def plot_medians(out: Path, axes: Sequence[Axis], medians: dict[str, np.ndarray], runs: int) -> tuple[list[str], str]:
@@ -102,10 +111,8 @@ def plot_medians(out: Path, axes: Sequence[Axis], medians: dict[str, np.ndarray]
             flat.append(name)
             continue
         fname = f"median_{name}.png"
-        if len(axes) == 1:
-            _line(out / fname, axes[0], name, z, runs)
-        else:
-            _heat(out / fname, axes, name, z, runs)
+        fig = line_figure(axes[0], name, z, runs) if len(axes) == 1 else heat_figure(axes, name, z, runs)
+        save(fig, out / fname)
         written.append(fname)
     note = "not drawn (same median in every cell): " + ", ".join(flat) if flat else ""
     return written, note

@@ -22,7 +22,8 @@ from shoal.presets.io import PresetError, apply_overrides, read_raw, validate
 from ..experiments.runner import Simulate, iter_jobs
 from ..experiments.schedulers import Scheduler
 from . import outcomes
-from .grid import Axis, SweepError, cells, label, parse_axes, resolve_cells
+from .grid import Axis, SweepError, parse_axes
+from .plan import SweepPlan
 from .plots import plot_medians
 from .store import MEDIANS, RESULTS, SweepDir, cell_id, fmt
 
@@ -95,14 +96,14 @@ def run_sweep(
     fixed = _fixed(sets, runs, seed, steps)
     try:
         base_raw = apply_overrides(read_raw(preset), fixed)
-        base = validate(base_raw)
+        validate(base_raw)  # a bad preset is named before the grid
     except PresetError as err:
         raise SweepError(err.messages) from None
     axes = parse_axes(grid, [_key(f) for f in fixed])
-    scenarios = resolve_cells(base_raw, axes)
-    runs = base.sim.runs
+    plan = SweepPlan.resolve(base_raw, axes)
+    base, scenarios, runs = plan.base, plan.scenarios, plan.runs
     store = SweepDir(out)
-    values = [[label(v) for v in vs] for vs in cells(axes)]
+    values = plan.labels
     identity = {
         "preset": base.model_dump(mode="json"),
         "grid": [[a.key, list(a.labels)] for a in axes],
@@ -117,29 +118,28 @@ def run_sweep(
         "cells": [{"id": cell_id(i), **dict(zip((a.key for a in axes), vs))} for i, vs in enumerate(values)],
         "status": "running",
     }
-    store.open(identity, meta)
-    pending = [i for i in range(len(scenarios)) if not store.finished(i)]
-    jobs = [outcomes.CellJob(i, scenarios[i].model_dump_json(), scenarios[i].sim.seed, runs, scenarios[i].sim.steps)
-            for i in pending]
-    from tqdm import tqdm
+    with store.locked():  # a second sweep into ``out`` meanwhile is refused
+        store.open(identity, meta)
+        pending = [i for i in range(len(scenarios)) if not store.finished(i)]
+        jobs = [plan.job(i) for i in pending]
+        from tqdm import tqdm
 
-    with tqdm(total=len(scenarios) * runs, initial=(len(scenarios) - len(pending)) * runs, desc="sweep",
-              unit="run", disable=not progress) as bar:
-        for key, batch in iter_jobs(jobs, workers=workers, scheduler=scheduler, progress=bar.update,
-                                    simulate=simulate, merge=outcomes.merge, desc="sweep"):
-            prefix = dict(zip((a.key for a in axes), values[key]))
-            store.write_cell(key, prefix, batch.first_run, scenarios[key].sim.seed, batch.columns)
-    indices = list(range(len(scenarios)))
-    columns = store.assemble(indices)
-    names, medians = _medians(store, axes, len(scenarios))
-    store.write_table(MEDIANS, [*(a.key for a in axes), "runs", *names],
-                      ([*values[i], str(runs), *(fmt(n, medians[n][np.unravel_index(i, medians[n].shape)])
-                                                 for n in names)] for i in indices))
-    plots, note = plot_medians(store.out, axes, medians, runs)
-    elapsed = time.perf_counter() - t0
-    store.write_manifest({
-        **store.manifest(), "status": "finished", "files": [RESULTS, MEDIANS, *plots], "plots_note": note,
-        "last_call": {"cells_computed": len(pending), "elapsed_s": round(elapsed, 3),
-                      "scheduler": scheduler.describe() if scheduler is not None else f"local, {workers} worker(s)"},
-    })
-    return SweepReport(store.out, len(scenarios), len(pending), runs, columns, plots)
+        with tqdm(total=len(scenarios) * runs, initial=(len(scenarios) - len(pending)) * runs, desc="sweep",
+                  unit="run", disable=not progress) as bar:
+            for key, batch in iter_jobs(jobs, workers=workers, scheduler=scheduler, progress=bar.update,
+                                        simulate=simulate, merge=outcomes.merge, desc="sweep"):
+                store.write_cell(key, plan.prefix(key), batch.first_run, scenarios[key].sim.seed, batch.columns)
+        indices = list(range(len(scenarios)))
+        columns = store.assemble(indices)
+        names, medians = _medians(store, axes, len(scenarios))
+        store.write_table(MEDIANS, [*(a.key for a in axes), "runs", *names],
+                          ([*values[i], str(runs), *(fmt(n, medians[n][np.unravel_index(i, medians[n].shape)])
+                                                     for n in names)] for i in indices))
+        plots, note = plot_medians(store.out, axes, medians, runs)
+        elapsed = time.perf_counter() - t0
+        store.write_manifest({
+            **store.manifest(), "status": "finished", "files": [RESULTS, MEDIANS, *plots], "plots_note": note,
+            "last_call": {"cells_computed": len(pending), "elapsed_s": round(elapsed, 3), "scheduler":
+                          scheduler.describe() if scheduler is not None else f"local, {workers} worker(s)"},
+        })
+        return SweepReport(store.out, len(scenarios), len(pending), runs, columns, plots)

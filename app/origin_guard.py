@@ -1,0 +1,162 @@
+"""Only pages of this server may open a session: the ``Origin`` and ``Host`` check.
+
+A browser lets any web page open a websocket to any address, ``127.0.0.1`` included, and
+says which page asks in the ``Origin`` header. Without a check, a page the user happens to
+visit could open a session on a running ``shoal serve`` and drive it; with a DNS name that
+the attacker points at 127.0.0.1 (DNS rebinding) it could even load the app as its own.
+So every HTTP request and websocket upgrade is refused (403) unless
+
+- its ``Host`` names this server: a loopback name or address, the address it is bound to,
+  the address the request arrived on, or the host of an allowed origin; and
+- its ``Origin``, if it has one (browsers always send one on a websocket), is an allowed
+  origin (``shoal serve --allow-origin URL``), the page's own (``http://`` + that ``Host``,
+  as through an SSH tunnel) or ``http://`` + a name above + the port the request arrived on.
+
+Clients that are not browsers send no ``Origin``; they are held to the ``Host`` check only.
+
+Viser 1.1.1 passes its own HTTP handler to ``websockets``' ``serve(process_request=...)`` and
+offers no hook of its own, so :func:`guarded_viser` wraps that handler with the check while
+(and only while) it builds the server: no copy of viser, no change to any other server.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import http
+import ipaddress
+import sys
+import threading
+from typing import Any, Callable, Iterator, Sequence
+from urllib.parse import urlsplit
+
+import viser
+import websockets.asyncio.server as ws_server
+
+LOOPBACK_NAMES = ("localhost",)
+WILDCARDS = ("", "0.0.0.0", "::")
+MAX_REPORTED = 32  # distinct refused origins/hosts said on stderr (then silence)
+
+
+def is_loopback(host: str) -> bool:
+    host = host.strip("[]").lower()
+    if host in LOOPBACK_NAMES:
+        return True
+    try:
+        address = ipaddress.ip_address(host)
+    except ValueError:
+        return False
+    mapped = getattr(address, "ipv4_mapped", None)
+    return address.is_loopback or (mapped is not None and mapped.is_loopback)
+
+
+def _origin(url: str) -> tuple[str, str, int] | None:
+    """(scheme, host, port) of an origin or URL, with the default port filled in; None if malformed."""
+    try:
+        parts = urlsplit(url.strip())
+        port = parts.port
+    except ValueError:
+        return None
+    scheme, host = parts.scheme.lower(), (parts.hostname or "").lower()
+    if scheme not in ("http", "https") or not host:
+        return None
+    return scheme, host, port or (443 if scheme == "https" else 80)
+
+
+def check_origin_url(url: str) -> str:
+    """``url`` if it is an origin ``--allow-origin`` takes (``http[s]://host[:port]``), else ValueError."""
+    if _origin(url) is None or urlsplit(url.strip()).path not in ("", "/"):
+        raise ValueError(f"--allow-origin {url!r}: expected an origin such as http://192.168.1.10:8080")
+    return url
+
+
+def _address(host: str) -> str:
+    try:
+        return str(ipaddress.ip_address(host.strip("[]")))
+    except ValueError:
+        return host.strip("[]").lower()
+
+
+class OriginPolicy:
+    """Which ``Host`` and ``Origin`` headers a server bound to ``host`` accepts."""
+
+    def __init__(self, host: str, allow_origins: Sequence[str] = ()) -> None:
+        self.bound = "" if host in WILDCARDS else _address(host)
+        self.allowed = {o for o in (_origin(url) for url in allow_origins) if o is not None}
+        self._reported: set[str] = set()
+        self._lock = threading.Lock()
+
+    def _own_host(self, name: str, local: str) -> bool:
+        name = _address(name)
+        return (is_loopback(name) or name == self.bound or name == _address(local)
+                or any(name == host for _, host, _ in self.allowed))
+
+    def refusal(self, host_header: str | None, origin_header: str | None, local: tuple[str, int]) -> str | None:
+        """Why a request with these headers, arriving on the address and port ``local``, is
+        refused (None: it is not)."""
+        host = _origin(f"http://{host_header}") if host_header else None
+        if host is None or not self._own_host(host[1], local[0]):
+            return f"Host {host_header!r} is not this server"
+        if origin_header is None:
+            return None  # not a browser
+        origin = _origin(origin_header)
+        if origin is not None and (origin in self.allowed or origin == host or (
+                origin[0] == "http" and origin[2] == local[1] and self._own_host(origin[1], local[0]))):
+            return None
+        return f"Origin {origin_header!r} is not this server's page (shoal serve --allow-origin URL allows one)"
+
+    def report(self, why: str) -> None:
+        """Say a refusal once on stderr (a server bound beyond loopback is told who knocks)."""
+        with self._lock:
+            if why in self._reported or len(self._reported) >= MAX_REPORTED:
+                return
+            self._reported.add(why)
+        print(f"shoal: refused a connection: {why}", file=sys.stderr, flush=True)
+
+
+ProcessRequest = Callable[[Any, Any], Any]
+
+
+def _guard(policy: OriginPolicy, inner: ProcessRequest | None) -> ProcessRequest:
+    def process_request(connection: Any, request: Any) -> Any:
+        address, port = (connection.local_address or ("", 0))[:2]
+        why = policy.refusal(request.headers.get("Host"), request.headers.get("Origin"), (str(address), int(port)))
+        if why is not None:
+            policy.report(why)
+            return connection.respond(http.HTTPStatus.FORBIDDEN, f"Forbidden: {why}\n")
+        return inner(connection, request) if inner is not None else None
+
+    return process_request
+
+
+_building = threading.Lock()  # one guarded server built at a time: the wrapper is in place only then
+
+
+@contextlib.contextmanager
+def _guarding(policy: OriginPolicy) -> Iterator[threading.Event]:
+    """While active, a websockets server started (by viser) checks ``policy`` first; the
+    event yielded is set once one did."""
+    real, installed = ws_server.serve, threading.Event()
+
+    class GuardedServe(real):  # type: ignore[misc, valid-type]
+        def __init__(self, *args: Any, process_request: ProcessRequest | None = None, **kwargs: Any) -> None:
+            super().__init__(*args, process_request=_guard(policy, process_request), **kwargs)
+            installed.set()
+
+    with _building:
+        ws_server.serve = GuardedServe  # type: ignore[misc]
+        try:
+            yield installed
+        finally:
+            ws_server.serve = real  # type: ignore[misc]
+
+
+def guarded_viser(host: str, port: int, policy: OriginPolicy) -> viser.ViserServer:
+    """A started ``viser.ViserServer`` whose every request passes ``policy`` first. Raises
+    RuntimeError (and serves nothing) if this viser starts its server some other way."""
+    with _guarding(policy) as installed:
+        server = viser.ViserServer(host=host, port=port, verbose=False)  # listening when it returns
+    if not installed.is_set():
+        server.stop()
+        raise RuntimeError(f"viser {viser.__version__} starts its server in a way the origin check cannot "
+                           "wrap; refusing to serve without it")
+    return server

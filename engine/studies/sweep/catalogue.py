@@ -1,0 +1,307 @@
+"""What a sweep of a scene can vary and what it measures, for the app's Experiment tab.
+
+:func:`fields` lists the preset fields of a scenario that make sense to vary: the ones its
+scene kind's build function reads (:data:`READS`, only the controller fields of its mode),
+with their range or choices from the preset model. Names, seeds, ``sim.runs`` (the runs per
+cell), the view and the arena are never offered, nor anything that is not a number, a choice
+or a flag (vectors, schedules). A choice is offered only with the values the model accepts in
+this scene.
+
+:func:`outcomes` lists the per-run outcomes a sweep of the scenario records (the kind's
+:meth:`~shoal.engine.core.contract.Info.columns` and the sweep's whole-run summaries, exactly
+the columns of :func:`~.outcomes.simulate_cell`), each with a label and a unit; positions,
+per-run spreads and pair counts are left out.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import math
+import types
+import typing
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import annotated_types as at
+from pydantic import BaseModel
+
+from shoal.presets.build import kind_of
+from shoal.presets.io import PresetError, set_dotted, validate
+from shoal.presets.models import Scenario
+
+from .grid import label
+from .outcomes import FIRST_PASSAGE, CellJob, simulate_cell
+
+# The fields each scene kind's build function reads (presets/build.py), by section; None = all.
+# Listed in the order offered, the kind's own controls first (the first is the default axis).
+READS: dict[str, dict[str, tuple[str, ...] | None]] = {
+    "swarm": {"controller": ("U", "A_plus", "omega", "c1", "c2", "c1_share", "dt", "law", "mode", "smooth_width"),
+              "objective": None, "bests": None, "init": None, "sim": ("robots", "d", "steps")},
+    "fleet": {"controller": ("beta", "alpha", "omega", "c1", "c2", "c3", "gamma", "c1_share", "dt", "law", "mode",
+                             "r_min", "s_min", "update", "guard", "rotational_energy"),
+              "robot": None, "sensing": None, "world": ("kind", "layers", "length", "width", "density", "start_size"),
+              "sim": ("robots", "steps")},
+    "sonar": {"acoustics": None, "sim": ("robots", "steps")},
+    "slo_swarm": {"slo": ("errors", "error_values", "selection", "neighbourhood", "neighbourhood_param", "motion",
+                          "objective", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1", "entry_policy",
+                          "walk_speed", "quality_threshold"),
+                  "sim": ("robots", "steps")},
+}
+# A swarm, fleet or acoustic swarm with an [slo] section (slo.swarm = "host") also reads these.
+SLO_HOST = ("positions", "selection", "errors", "error_values", "prediction_weight", "delta_cos", "delta_v",
+            "literal_eq_3_1", "entry_policy", "neighbourhood", "neighbourhood_param", "unit")
+# Controller fields that only some modes read.
+MODE_ONLY = {"omega": ("raw",), "c1": ("raw",), "c2": ("raw",), "c3": ("raw",), "U": ("physical",),
+             "A_plus": ("physical",), "c1_share": ("physical", "dvc"), "alpha": ("dvc",), "beta": ("dvc",),
+             "guard": ("dvc",)}
+
+
+@dataclass(frozen=True)
+class Field:
+    """A preset field that can be an axis: a number in ``[lo, hi]`` (``lo_open``/``hi_open``:
+    the end itself excluded), a whole number, or one of ``choices``."""
+
+    key: str  # dotted path, as for --set and --grid
+    description: str
+    kind: Literal["number", "integer", "choice"]
+    value: Any  # in the scenario now (None: unset)
+    lo: float = -math.inf
+    hi: float = math.inf
+    lo_open: bool = False
+    hi_open: bool = False
+    choices: tuple[Any, ...] = ()
+
+    @property
+    def numeric(self) -> bool:
+        return self.kind != "choice"
+
+    def range_text(self) -> str:
+        """``0 < U ≤ 1000``, or the choices."""
+        if not self.numeric:
+            return " | ".join(label(c) for c in self.choices)
+        name = self.key.rsplit(".", 1)[-1]
+        left = f"{self.lo:g} {'<' if self.lo_open else '≤'} " if math.isfinite(self.lo) else ""
+        right = f" {'<' if self.hi_open else '≤'} {self.hi:g}" if math.isfinite(self.hi) else ""
+        return f"{left}{name}{right}"
+
+    def problem(self, value: Any) -> str | None:
+        """Why ``value`` cannot be on this axis (None: it can, as far as this field alone goes)."""
+        if not self.numeric:
+            return None if any(value == c and type(value) is type(c) for c in self.choices) else (
+                f"{self.key}: {label(value)} is not one of {self.range_text()}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return f"{self.key}: {label(value)} is not a number"
+        if self.kind == "integer" and value != int(value):
+            return f"{self.key}: {value:g} is not a whole number"
+        if not math.isfinite(value):
+            return f"{self.key}: {value} is not a finite number"
+        below = value < self.lo or (self.lo_open and value == self.lo)
+        above = value > self.hi or (self.hi_open and value == self.hi)
+        return f"{self.key}: {value:g} is outside {self.range_text()}" if below or above else None
+
+    def suggest(self, count: int = 5) -> tuple[Any, ...]:
+        """A first guess at the values: every choice, or ``count`` values from half to twice
+        the current one (within the range)."""
+        if not self.numeric:
+            return self.choices
+        lo, hi = span(self)
+        values = [lo + (hi - lo) * k / (count - 1) for k in range(count)]
+        if self.kind == "integer":
+            return tuple(dict.fromkeys(int(round(v)) for v in values))
+        return tuple(dict.fromkeys(float(f"{v:.3g}") for v in values))
+
+
+def span(f: Field) -> tuple[float, float]:
+    """A useful default range of a numeric field: half to twice its value, inside the model's
+    range (an open end is kept a little way off)."""
+    v = f.value if isinstance(f.value, (int, float)) and not isinstance(f.value, bool) else None
+    lo = max(f.lo, v / 2 if v and v > 0 else (2 * v if v else 0.0))
+    hi = min(f.hi, 2 * v if v and v > 0 else (v / 2 if v else 1.0))
+    if not hi > lo:
+        lo, hi = (f.lo, min(f.hi, f.lo + 1.0)) if math.isfinite(f.lo) else (max(f.lo, f.hi - 1.0), f.hi)
+    inset = 1e-3 * (hi - lo)
+    if f.lo_open and lo <= f.lo:
+        lo = f.lo + inset
+    if f.hi_open and hi >= f.hi:
+        hi = f.hi - inset
+    if f.kind == "integer":
+        lo, hi = math.ceil(lo), math.floor(hi)
+    return lo, hi
+
+
+def _model_of(annotation: Any) -> type[BaseModel] | None:
+    for a in typing.get_args(annotation) or (annotation,):
+        if isinstance(a, type) and issubclass(a, BaseModel):
+            return a
+    return None
+
+
+def _scalar(annotation: Any) -> Any:
+    """``float | None`` → float; anything else as it is."""
+    if isinstance(annotation, types.UnionType) or typing.get_origin(annotation) is typing.Union:
+        args = [a for a in typing.get_args(annotation) if a is not type(None)]
+        return args[0] if len(args) == 1 else annotation
+    return annotation
+
+
+def _bounds(metadata: list[Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {"lo": -math.inf, "hi": math.inf, "lo_open": False, "hi_open": False}
+    for m in metadata:
+        if isinstance(m, at.Ge):
+            out.update(lo=float(m.ge), lo_open=False)
+        elif isinstance(m, at.Gt):
+            out.update(lo=float(m.gt), lo_open=True)
+        elif isinstance(m, at.Le):
+            out.update(hi=float(m.le), hi_open=False)
+        elif isinstance(m, at.Lt):
+            out.update(hi=float(m.lt), hi_open=True)
+    return out
+
+
+def _valid_choices(raw: dict[str, Any], key: str, options: tuple[Any, ...]) -> tuple[Any, ...]:
+    """The options the model accepts for ``key`` with everything else as in ``raw``."""
+    ok = []
+    for option in options:
+        data = copy.deepcopy(raw)
+        try:
+            set_dotted(data, key, option)
+            validate(data)
+        except PresetError:
+            continue
+        ok.append(option)
+    return tuple(ok)
+
+
+def _leaves(model: type[BaseModel], obj: Any, prefix: str, names: tuple[str, ...] | None,
+            raw: dict[str, Any]) -> list[Field]:
+    out: list[Field] = []
+    for name in names if names is not None else tuple(model.model_fields):
+        info = model.model_fields[name]
+        key, value = f"{prefix}.{name}", getattr(obj, name)
+        nested = _model_of(info.annotation)
+        if nested is not None:
+            out += _leaves(nested, value, key, None, raw)
+            continue
+        kind = _scalar(info.annotation)
+        text = info.description or name
+        if kind is bool or typing.get_origin(kind) is Literal:
+            options = (False, True) if kind is bool else typing.get_args(kind)
+            choices = _valid_choices(raw, key, options)
+            if len(choices) > 1:
+                out.append(Field(key, text, "choice", value, choices=choices))
+        elif kind in (int, float):
+            out.append(Field(key, text, "integer" if kind is int else "number", value, **_bounds(info.metadata)))
+    return out
+
+
+def reads(scenario: Scenario) -> dict[str, tuple[str, ...] | None]:
+    """The section → field names that the scenario's kind reads (its mode's controller fields)."""
+    sections = dict(READS[kind_of(scenario)])
+    if scenario.slo is not None and "slo" not in sections:
+        sections = {"slo": SLO_HOST, **sections}
+    names = sections.get("controller")
+    if names is not None:
+        mode = scenario.controller.mode
+        sections["controller"] = tuple(n for n in names if mode in MODE_ONLY.get(n, (mode,)))
+    return sections
+
+
+def fields(scenario: Scenario) -> list[Field]:
+    """The fields of ``scenario`` worth an axis, the kind's own controls first."""
+    return list(_fields(scenario.model_dump_json()))
+
+
+@functools.lru_cache(maxsize=16)
+def _fields(scenario_json: str) -> tuple[Field, ...]:
+    scenario = Scenario.model_validate_json(scenario_json)
+    raw = scenario.model_dump(mode="json")
+    out: list[Field] = []
+    for section, names in reads(scenario).items():
+        model = _model_of(Scenario.model_fields[section].annotation)
+        out += _leaves(model, getattr(scenario, section), section, names, raw)
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """A per-run outcome: its column name, what it is, its unit."""
+
+    name: str
+    label: str
+    unit: str = ""
+
+    @property
+    def first_passage(self) -> bool:
+        """A time to reach something; a run that never got there counts as +inf in medians."""
+        return self.name in FIRST_PASSAGE
+
+    @property
+    def title(self) -> str:
+        return f"{self.label} [{self.unit}]" if self.unit else self.label
+
+
+LABELS: dict[str, tuple[str, str]] = {
+    # every kind
+    "t": ("time the run ended", "s"),
+    "peak_speed": ("highest robot speed over the run", "m/s"),
+    "best_fitness": ("final best f", ""),
+    "max_speed": ("highest robot speed at the end", "m/s"),
+    "mean_speed": ("mean robot speed at the end", "m/s"),
+    # Chapter 3 swarm
+    "max_component": ("largest velocity component at the end", "m/s"),
+    "omega": ("inertia weight ω at the end", ""),
+    "c_hat": ("ĉ = c1 + c2 at the end", ""),
+    # fleet (Ch. 4–5)
+    "com_fitness": ("CoM fitness (mean x1) at the end", "m"),
+    "collided": ("collided robots", "robots"),
+    "stalled": ("stalled robots", "robots"),
+    "operational": ("operational robots", "robots"),
+    "layers_passed": ("obstacle layers passed", "layers"),
+    # acoustic swarm (Ch. 7–8)
+    "com_dist": ("CoM distance to the source at the end", "m"),
+    "converged": ("converged (1) or not (0)", ""),
+    "steps_to_converge": ("steps to converge", "steps"),
+    "time_to_converge_s": ("time to converge", "s"),
+    "frac_inside_ring": ("share of robots inside the escort ring", ""),
+    "mean_dist_to_source": ("mean robot–source distance", "m"),
+    "contacts": ("robot contacts", "contacts"),
+    # Mai's SLO swarm (lengths in thesis units of a 100-wide area)
+    "generation_best": ("best f of the last generation", ""),
+    "quality_met_at": ("first generation with best f ≤ T", "generations"),
+    "e_abs_mean": ("absolute localisation error, mean over pairs", "units"),
+    "e_abs_median": ("absolute localisation error, median over pairs", "units"),
+    "e_rel_mean": ("relative localisation error, mean over pairs", ""),
+    "e_rel_median": ("relative localisation error, median over pairs", ""),
+    "e_ang_mean": ("angular localisation error, mean over pairs", "rad"),
+    "e_ang_median": ("angular localisation error, median over pairs", "rad"),
+    "distance_mean": ("distance between particles, mean over pairs", "units"),
+    "distance_median": ("distance between particles, median over pairs", "units"),
+    "dead_reckoning": ("share of estimates by dead reckoning", ""),
+    "round_trip": ("round-trip error", "units"),
+}
+# Not offered: where the run ended (step), positions, the SLO swarm's copy of best_fitness,
+# and the per-run spread and pair counts behind the SLO error statistics.
+HIDDEN = frozenset({"step", "com_x", "com_y", "source_x", "source_y", "best_so_far"})
+HIDDEN_SUFFIXES = ("_std", "_sem", "_count")
+
+
+# The outcome shown first: the first of these a scene records (its kind's headline measure).
+FIRST = ("com_dist", "com_fitness", "e_abs_mean", "best_fitness")
+
+
+def first_outcome(outcomes: list[Outcome]) -> Outcome:
+    names = [o.name for o in outcomes]
+    return outcomes[next((names.index(n) for n in FIRST if n in names), 0)]
+
+
+def outcomes(scenario: Scenario) -> list[Outcome]:
+    """The outcomes a sweep of ``scenario`` records, labelled, in the order of its columns."""
+    return list(_outcomes(scenario.model_dump_json()))
+
+
+@functools.lru_cache(maxsize=16)
+def _outcomes(scenario_json: str) -> tuple[Outcome, ...]:
+    columns = simulate_cell(CellJob(0, scenario_json, 0, 1, 0), 0, 1).columns  # built, not stepped
+    names = [n for n in columns if n not in HIDDEN and not n.endswith(HIDDEN_SUFFIXES)]
+    return tuple(Outcome(n, *LABELS.get(n, (n.replace("_", " "), ""))) for n in names)

@@ -1,0 +1,260 @@
+"""Lesson files: the format, the loader's messages for bad files, and that every shipped lesson
+reads, names only scenes the preset model and the app accept, and passes its checks."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from shoal.app.lessons import LessonError, library, parse_lesson
+from shoal.app.lessons.library import read_lesson, shipped
+from shoal.app.lessons.scenes import load_scene, overrides, scene_errors, toml_literal
+from shoal.app.lessons.verify import check_failures, lesson_check_failures, run_metrics
+from shoal.app.tab import kind_for
+from shoal.presets.io import PresetError, parse_value
+
+GOOD = '''+++
+title = "A small lesson"
+chapter = "3"
+summary = "Two steps."
++++
+
+An introduction.
+
+## First
+
+```setup
+preset = "standard-pso"
+controller.omega = 0.6
+sim = { robots = 12 }
+
+[check]
+steps = 20
+final.omega = [0.6, 0.6]
+```
+
+Some sentences.
+
+**Do:** press Play.
+
+**Question:** what happens?
+
+**Answer:** it settles.
+
+Over two paragraphs.
+
+## Second
+
+```setup
+controller.c2 = 1.3
+```
+
+More sentences.
+
+**Do:** look.
+
+**Question:** and now?
+
+**Answer:** the same.
+
+## Third, on the scene as it is
+
+Text.
+
+**Do:** drag ω.
+
+**Question:** why?
+
+**Answer:** because.
+
+## Try it yourself
+
+- one idea
+  over two lines
+- another idea
+'''
+
+
+def _messages(text: str, lesson_id: str = "bad") -> list[str]:
+    with pytest.raises(LessonError) as err:
+        parse_lesson(text, lesson_id)
+    return err.value.messages
+
+
+# ---------------------------------------------------------------------------- the format
+def test_a_lesson_file_reads_into_steps_scenes_and_ideas():
+    lesson = parse_lesson(GOOD, "small")
+    assert (lesson.id, lesson.title, lesson.chapter, lesson.intro) == ("small", "A small lesson", "3",
+                                                                      "An introduction.")
+    assert [s.title for s in lesson.steps] == ["First", "Second", "Third, on the scene as it is"]
+    first = lesson.steps[0]
+    assert first.text == "Some sentences."
+    assert (first.instruction, first.question) == ("press Play.", "what happens?")
+    assert first.answer == "it settles.\n\nOver two paragraphs."
+    assert first.setup.values == {"controller.omega": 0.6, "sim.robots": 12}  # dotted keys and tables
+    assert first.setup.check.steps == 20 and first.setup.check.final == {"omega": (0.6, 0.6)}
+    assert lesson.try_it == ["one idea over two lines", "another idea"]
+    assert lesson.label == "Ch. 3 · A small lesson"
+
+
+def test_a_step_builds_on_the_scene_of_the_step_before():
+    lesson = parse_lesson(GOOD, "small")
+    assert lesson.scene(0) == ("standard-pso", {"controller.omega": 0.6, "sim.robots": 12})
+    assert lesson.scene(1) == ("standard-pso", {"controller.omega": 0.6, "sim.robots": 12, "controller.c2": 1.3})
+    assert lesson.scene(2) is None  # no setup: the step works on the scene as it is
+    fresh = parse_lesson(GOOD.replace("controller.c2 = 1.3", 'preset = "default"\ncontroller.c2 = 1.3'), "small")
+    assert fresh.scene(1) == ("default", {"controller.c2": 1.3})  # naming a preset starts afresh
+
+
+@pytest.mark.parametrize(
+    "change, expected",
+    [
+        (("+++\ntitle", "title"), "bad.md: must start with a +++ line"),
+        (('summary = "Two steps."\n+++', 'summary = "Two steps."'), "bad.md: the header has no closing +++ line"),
+        (('chapter = "3"', 'chapter = 3'), "bad.md, chapter: Input should be a valid string"),
+        (('title = "A small lesson"\n', ''), "bad.md, title: Field required"),
+        (("**Question:** what happens?", ""),
+         "bad.md, step 1 'First', question: missing (a paragraph that starts with **Question:**)"),
+        (("**Answer:** the same.", "**Answer:** the same.\n\n**Answer:** twice"),
+         "bad.md, step 2 'Second': answer: given twice"),
+        (("controller.omega = 0.6", "controller.omega = = 0.6"), "bad.md, step 1 'First': setup: TOML syntax"),
+        (("controller.c2 = 1.3", "Controller.C2 = 1.3"), "bad.md, step 2 'Second', setup.values.Controller.C2"),
+        (('preset = "standard-pso"', 'preset = "../etc/passwd"'),
+         "bad.md, step 1 'First', setup.preset: String should match pattern"),
+        (("final.omega = [0.6, 0.6]", "final.omega = [0.7, 0.6]"), "final.omega: bounds [0.7, 0.6] are empty"),
+        (("final.omega = [0.6, 0.6]", ""), "step 1 'First', setup.check: names no metric"),
+        (("steps = 20", "steps = 20\nafter = 30"), "after = 30 is beyond steps = 20"),
+        (("## Try it yourself\n\n- one idea\n  over two lines\n- another idea\n", ""),
+         "bad.md, try_it: missing (end the lesson with a '## Try it yourself' list)"),
+        (('preset = "standard-pso"\n', ''), "step 1 'First': setup names no preset, and no earlier step does"),
+    ],
+)
+def test_a_bad_lesson_file_names_the_lesson_step_and_field(change, expected):
+    old, new = change
+    assert old in GOOD
+    messages = _messages(GOOD.replace(old, new, 1))
+    assert any(expected in m for m in messages), messages
+
+
+def test_two_setup_blocks_in_one_step_are_refused():
+    block = '```setup\ncontroller.c2 = 1.3\n```'
+    messages = _messages(GOOD.replace(block, block + "\n\n" + block))
+    assert messages == ["bad.md, step 2 'Second': has 2 setup blocks; a step sets up one scene"]
+
+
+def test_a_huge_file_is_refused_before_it_is_parsed():
+    assert "characters; a lesson has at most" in _messages(GOOD + "x" * 50_000)[0]
+
+
+def test_a_bad_shipped_file_is_left_out_and_reported(tmp_path, monkeypatch):
+    (tmp_path / "01-good.md").write_text(GOOD, encoding="utf-8")
+    (tmp_path / "02-bad.md").write_text(GOOD.replace("+++\n", "", 1), encoding="utf-8")
+    (tmp_path / "03-binary.md").write_bytes(b"\xff\xfe+++")
+    monkeypatch.setattr(library, "_folder", lambda: tmp_path)
+    library.shipped.cache_clear()
+    try:
+        lessons, problems = library.shipped()
+    finally:
+        library.shipped.cache_clear()
+    assert list(lessons) == ["01-good"]
+    assert problems[0].startswith("02-bad.md: must start with a +++ line")
+    assert problems[1].startswith("03-binary.md: cannot read")
+
+
+def test_read_lesson_names_an_unreadable_file(tmp_path):
+    with pytest.raises(LessonError, match="missing.md: cannot read"):
+        read_lesson(tmp_path / "missing.md")
+    path = tmp_path / "mine.md"
+    path.write_text(GOOD, encoding="utf-8")
+    assert read_lesson(path).id == "mine"
+
+
+# ---------------------------------------------------------------------------- scenes
+@given(st.recursive(
+    st.one_of(st.booleans(), st.integers(-10**6, 10**6), st.floats(allow_nan=False),
+              st.text(max_size=12)),
+    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=5), inner, max_size=2),
+    max_leaves=6))
+def test_a_field_value_survives_the_override_string(value):
+    back = parse_value(toml_literal(value))
+    assert back == value or (isinstance(value, float) and math.isclose(back, value))
+
+
+def test_a_scene_goes_through_the_preset_model():
+    sc = load_scene("standard-pso", {"controller.omega": 1.1, "controller.law": "standard"})
+    assert sc.controller.omega == 1.1
+    assert overrides({"controller.law": "adapted-sgn", "sim.robots": 5}) == [
+        'controller.law="adapted-sgn"', "sim.robots=5"]
+    with pytest.raises(PresetError) as err:
+        load_scene("standard-pso", {"controller.law": "adapted-sgn", "controller.omega": 1.1})
+    assert any(m.startswith("controller:") and "[3.14]" in m for m in err.value.messages)
+
+
+def test_scene_errors_name_the_lesson_step_and_field():
+    bad = GOOD.replace("controller.c2 = 1.3", "controller.c2 = 1000.0\nsim.robots = 100000")
+    errors = scene_errors(parse_lesson(bad, "bad"))
+    assert any(e.startswith("bad.md, step 2 'Second': standard-pso with") and "controller.c2: Input should be "
+               "less than or equal to 100" in e for e in errors), errors
+
+
+def test_the_app_limits_count_as_refusals():
+    bad = GOOD.replace("controller.c2 = 1.3", "sim.robots = 5000")
+    errors = scene_errors(parse_lesson(bad, "bad"))
+    assert len(errors) == 1 and "sim.robots = 5000: the browser app runs at most" in errors[0]
+
+
+def test_a_check_reports_what_does_not_hold():
+    lesson = parse_lesson(GOOD.replace("final.omega = [0.6, 0.6]", "final.omega = [0.9, 1.0]\n"
+                                       "max.max_speed = [0, 1e-9]\nmean.no_such = [0, 1]"), "bad")
+    failures = lesson_check_failures(lesson)
+    where = "bad.md, step 1 'First' (standard-pso with controller.omega = 0.6, sim.robots = 12)"
+    assert any(f.startswith(f"{where}: final.omega should lie in [0.9, 1] at step 20; run 0: 0.6") for f in failures)
+    assert any("max.max_speed should lie in [0, 1e-09] over steps 1-20; run 0:" in f for f in failures)
+    assert any("mean.no_such: no such metric (this scene has: " in f and "max_speed" in f for f in failures)
+
+
+def test_run_metrics_counts_robots_outside_the_arena():
+    m = run_metrics("standard-pso", {"controller.omega": 1.1}, 60)
+    assert m["outside"].shape == (60, 1) and m["outside"][0, 0] == 0 and m["outside"][-1, 0] == 20
+
+
+# ---------------------------------------------------------------------------- shipped lessons
+LESSONS, PROBLEMS = shipped()
+
+
+def test_every_shipped_lesson_reads():
+    assert PROBLEMS == ()
+    chapters = {lesson.chapter for lesson in LESSONS.values()}
+    assert {"3", "4", "5", "6", "7", "8", "Mai SLO"} <= chapters
+
+
+@pytest.mark.parametrize("lesson_id", sorted(LESSONS))
+def test_every_scene_of_a_shipped_lesson_validates(lesson_id):
+    lesson = LESSONS[lesson_id]
+    assert scene_errors(lesson) == []
+    for i in range(len(lesson.steps)):
+        scene = lesson.scene(i)
+        if scene is not None:
+            kind_for(load_scene(*scene))  # the app has a view for it
+
+
+@pytest.mark.parametrize("lesson_id", sorted(LESSONS))
+def test_every_check_of_a_shipped_lesson_holds(lesson_id):
+    """What each step says the student will see, run headless on the step's scene."""
+    assert lesson_check_failures(LESSONS[lesson_id]) == []
+
+
+def test_every_step_with_numbers_in_its_answer_is_checked():
+    """A step whose scene the student sets up carries a check (the text's numbers stay true)."""
+    unchecked = [f"{lid}: {s.title}" for lid, lesson in LESSONS.items() for s in lesson.steps
+                 if s.setup is not None and s.setup.check is None]
+    assert unchecked == []
+
+
+def test_check_failures_uses_run_zero_as_the_app_shows_it():
+    lesson = LESSONS["03a-stability"]
+    scene = lesson.scene(0)
+    assert check_failures(*scene, lesson.steps[0].setup.check) == []
