@@ -1,4 +1,4 @@
-"""The SLO loop (Mai §3, Alg. 1; spec §15.4): determinism, localisation without error,
+"""The SLO loop (Mai §3, p. 21; Alg. 1, p. 22): determinism, localisation without error,
 PSO on Sphere, metrics and state for the app."""
 
 from __future__ import annotations
