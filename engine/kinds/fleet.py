@@ -38,7 +38,7 @@ class FleetParams:
     law: str = "adapted-rpso"  # a key of robots.laws.ROBOT_LAWS
     dvc: bool = True
     dt: float = 1.0
-    omega: float = 0.1  # constant mode; ω = 1 − β ("Table 4.1: ω and the tuned speed")
+    omega: float = 0.1  # constant mode; ω = 1 − β: docs/readings.md, "Table 4.1: ω and the tuned speed"
     c: tuple[float, ...] = (0.4296, 0.4296, 0.8591)  # constant c1, c2, c3
     alpha: float = 0.9
     beta: float = 0.9
@@ -304,7 +304,7 @@ class Fleet:
         before = s.f_y.copy()
         active = s.status == ACTIVE
         s.f = self.cost(s.x)
-        better = active & (s.f < s.f_y)  # disabled robots keep their last best ("Disabled robots")
+        better = active & (s.f < s.f_y)  # disabled robots keep their last best: docs/readings.md, "Disabled robots"
         s.y = np.where(better[..., None], s.x, s.y)
         s.f_y = np.where(better, s.f, s.f_y)
         idx = np.argmin(s.f_y, axis=1)

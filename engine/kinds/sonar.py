@@ -251,7 +251,7 @@ class AcousticSwarm:
         tune = from_beta(p.dt, p.U, p.beta, d=2)  # ω = 1 − β, ĉ = βU/√2 [4.15]
         self.omega = tune.omega
         self.c = np.array(split(tune.c_hat, p.c1_share))  # c1, c2
-        self.w_max = w_max(p.U, p.dt)  # min(√(4 e_max/π), π/(2Δt)); "Scaling v and w to the energy budget"
+        self.w_max = w_max(p.U, p.dt)  # min(√(4 e_max/π), π/(2Δt)) [5.12], Rossides §5.2, p. 114
 
     def retune(self, **changes: Any) -> list[str]:
         """Change :data:`LIVE` settings from the next tick on, keeping the swarm and its memory;
@@ -303,7 +303,7 @@ class AcousticSwarm:
         x = np.empty((self.runs, N, 2))
         heading = np.empty((self.runs, N))
         bearing0 = np.empty(self.runs)
-        for r, g in enumerate(self.rngs):  # fixed draw order per run ("Initial state and partners")
+        for r, g in enumerate(self.rngs):  # fixed draw order per run: docs/readings.md, "Initial state and partners"
             rad = p.d0 * np.sqrt(g.random(N))
             ang = 2.0 * np.pi * g.random(N)
             x[r] = np.stack([rad * np.cos(ang), rad * np.sin(ang)], axis=-1)
@@ -333,7 +333,7 @@ class AcousticSwarm:
         p, strat = self.params, self.strategy
         two = strat.hydrophones == 2
         pos = hydrophone_positions(x, heading, p.D if two else None)  # bow and stern
-        if p.mode == "surrogate":  # APPROXIMATE: "The fast surrogate receiver (ours)"
+        if p.mode == "surrogate":  # APPROXIMATE: docs/readings.md, "The fast surrogate receiver (ours)"
             sr = surrogate(rngs, pos, src, self.band, p.r_ref, heading=heading if two else None, D=p.D if two else None,
                            refine=p.lag_peak == "parabolic")
             power, b = sr.intensity, sr.bearing

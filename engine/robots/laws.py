@@ -77,7 +77,8 @@ def adapted_rpso_velocity(
 
 
 def to_body(vec: np.ndarray, heading: np.ndarray | float) -> np.ndarray:
-    """Rot(−o)·vec: a world-frame vector (R, N, 2) in the robot frame ([5.4]; "Body frame and turn direction")."""
+    """Rot(−o)·vec: a world-frame vector (R, N, 2) in the robot frame ([5.4]; docs/readings.md, "Body frame and turn
+    direction")."""
     cos, sin = np.cos(heading), np.sin(heading)
     x, y = vec[..., 0], vec[..., 1]
     return np.stack([cos * x + sin * y, -sin * x + cos * y], axis=-1)
@@ -281,7 +282,7 @@ class RobotLaw:
 
 def _rpso(cmd: np.ndarray, g_p: np.ndarray, g_g: np.ndarray, force: np.ndarray, heading: np.ndarray, c: np.ndarray,
           omega: np.ndarray, r: np.ndarray, lim: Limits) -> np.ndarray:
-    return rpso_velocity(cmd, g_p, g_g, force, c, omega, r, v_max=lim.v_max)  # clipped: "Speed limit of Original RPSO"
+    return rpso_velocity(cmd, g_p, g_g, force, c, omega, r, v_max=lim.v_max)  # clipped (see rpso_velocity)
 
 
 def _adapted_rpso(cmd: np.ndarray, g_p: np.ndarray, g_g: np.ndarray, force: np.ndarray, heading: np.ndarray,
