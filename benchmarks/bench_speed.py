@@ -18,7 +18,8 @@ Times are this thread's CPU time (robust while other jobs share the machine), me
 - standard PSO [2.1]/[2.2] with a global best, D = 10, 30 particles, Sphere
   (``bench_pso_compare.py`` part b): one seed per call, and 20 seeds in one call;
 - SLO-PSO on Sphere, Low errors, CSS, knn 5, 20 particles × 31 runs: one generation, and one
-  generation plus the six series a reproduction keeps (before: every metric, always).
+  generation plus the six series a reproduction keeps (before: every metric, always); the same
+  with the RTS and the Akcan selections.
 """
 
 from __future__ import annotations
@@ -87,9 +88,9 @@ def _pso(runs: int):
                       init_center=np.zeros(10), init_spread=10.24, init_speed=0.0)
 
 
-def _slo():
+def _slo(selection: str = "css"):
     SLOSwarm = _first("shoal.engine.kinds.slo_swarm:SLOSwarm", "shoal.engine.slo:SLOSwarm")
-    return SLOSwarm(runs=31, seed=0, particles=20, selection="css", errors="low")
+    return SLOSwarm(runs=31, seed=0, particles=20, selection=selection, errors="low")
 
 
 KEPT = ("e_abs_mean", "e_rel_median", "distance_median", "best_fitness", "quality_met_at", "dead_reckoning")
@@ -122,6 +123,15 @@ def measure(quick: bool, before: bool) -> dict[str, float]:
         def kept() -> object:
             return sw.step().columns()
     note("slo_kept", _median_ms(kept, 30 if quick else 100, warmup=3))
+    for selection in ("rts", "akcan"):  # two thirds of slo-pso's cases
+        sw = _slo(selection)
+        if hasattr(sw.step(), "series"):
+            def kept() -> object:
+                return sw.step().series(KEPT)
+        else:
+            def kept() -> object:
+                return sw.step().columns()
+        note(f"slo_{selection}_kept", _median_ms(kept, 10 if quick else 40, warmup=3))
     iters = 200 if quick else 1000
     for runs, name in ((1, "pso_one"), (20, "pso_20")):
         sim = _pso(runs)
@@ -193,6 +203,8 @@ def main() -> None:
         row("fleet tick, 200 robots, pymunk physics (mecanum)", "physics_200", " ms", 1, "20 updates/s in the app"),
         row("SLO generation, 20 particles × 31 runs", "slo", " ms", 1, "≥ 4× faster"),
         row("SLO generation + the six kept series", "slo_kept", " ms", 1, "≥ 4× faster"),
+        row("SLO generation + kept series, RTS selection", "slo_rts_kept", " ms", 1, "(slo-pso)"),
+        row("SLO generation + kept series, Akcan selection", "slo_akcan_kept", " ms", 1, "(slo-pso)"),
         row("standard PSO, D = 10, 30 particles, one seed, per iteration (step)", "pso_one", " µs", 1e3,
             "≥ 3× pyswarms"),
         row("standard PSO, one seed, per iteration (`run`; before: step)", "pso_one_run", " µs", 1e3,

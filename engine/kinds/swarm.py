@@ -7,6 +7,7 @@ alone (``first_run=i, runs=1``) or inside a batch.
 
 from __future__ import annotations
 
+import operator
 from dataclasses import dataclass, fields
 from typing import Any, ClassVar, Literal, get_args
 
@@ -207,6 +208,7 @@ class Simulation:
         if seed is not None:
             self.seed = int(seed)
         self._rngs, self._block = run_generators(self.seed, self.first_run, self.runs), None
+        self._setup: tuple | None = None
         x, u = self._spawn(self._robots)
         self.state = self._fresh_state(x, u)
         self._coefficients: tuple[np.ndarray | float, np.ndarray] = (np.nan, np.full(1, np.nan))
@@ -377,8 +379,8 @@ class Simulation:
         obj, d = self.objective, self.d
         key = (obj, obj.name, obj.scale, obj.source, self.law, self.attractors, self.pbest_order,
                self.ahead_direction, d)
-        cached = getattr(self, "_setup", None)
-        if cached is not None and all(a is b for a, b in zip(cached[0], key)):
+        cached = self._setup
+        if cached is not None and all(map(operator.is_, cached[0], key)):
             return cached[1]
         source = np.ascontiguousarray(obj.source[:d], dtype=float)
         code = kernels.OBJECTIVES.index(obj.name) if obj.name in kernels.OBJECTIVES else kernels.GIVEN

@@ -222,15 +222,24 @@ def _css(c: Candidates, adjacency: np.ndarray, ranges: np.ndarray, base: tuple[n
     return base[0], base[1], None, None
 
 
+# RTS and Akcan run compiled (select_kernels, imported when first used: it builds on this module);
+# rts() and akcan() above are their numpy references
+
+
 def _rts(c: Candidates, adjacency: np.ndarray, ranges: np.ndarray, base: tuple[np.ndarray, np.ndarray],
          options: RTSOptions) -> Chosen:
-    res = rts(c, adjacency, base, options.rts_triangle, options.rts_prefer_geometric, options.rts_tolerance)
+    from . import select_kernels
+
+    res = select_kernels.rts(c.points, c.mask, adjacency, base, options.rts_triangle, options.rts_prefer_geometric,
+                             options.rts_tolerance)
     return res.est, res.kind, res.triangle, res.round_trip
 
 
 def _akcan(c: Candidates, adjacency: np.ndarray, ranges: np.ndarray, base: tuple[np.ndarray, np.ndarray],
            options: RTSOptions) -> Chosen:
-    est, kind = akcan(c, adjacency, ranges, base)
+    from . import select_kernels
+
+    est, kind = select_kernels.akcan(c.points, c.mask, adjacency, ranges, base)
     return est, kind, None, None
 
 
