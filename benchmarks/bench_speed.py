@@ -125,13 +125,11 @@ def measure(quick: bool, before: bool) -> dict[str, float]:
     note("slo_kept", _median_ms(kept, 30 if quick else 100, warmup=3))
     for selection in ("rts", "akcan"):  # two thirds of slo-pso's cases
         sw = _slo(selection)
-        if hasattr(sw.step(), "series"):
-            def kept() -> object:
-                return sw.step().series(KEPT)
-        else:
-            def kept() -> object:
-                return sw.step().columns()
-        note(f"slo_{selection}_kept", _median_ms(kept, 10 if quick else 40, warmup=3))
+        series = hasattr(sw.step(), "series")
+
+        def kept_of(sw: Any = sw, series: bool = series) -> object:
+            return sw.step().series(KEPT) if series else sw.step().columns()
+        note(f"slo_{selection}_kept", _median_ms(kept_of, 10 if quick else 40, warmup=3))
     iters = 200 if quick else 1000
     for runs, name in ((1, "pso_one"), (20, "pso_20")):
         sim = _pso(runs)

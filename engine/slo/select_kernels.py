@@ -82,8 +82,9 @@ def _rts(points: np.ndarray, mask: np.ndarray, adj: np.ndarray, best_loop: bool,
             for b in range(n):
                 resolved[a, b] = adj[r, a, b] and (int(mask[r, a, b, 0]) + int(mask[r, a, b, 1])
                                                    + int(mask[r, a, b, 2])) == 1
-                if resolved[a, b]:
-                    est[r, a, b, 0], est[r, a, b, 1], kind[r, a, b] = points[r, a, b, 2, 0], points[r, a, b, 2, 1], Kind.X3
+                if resolved[a, b]:  # x3 alone
+                    est[r, a, b, 0], est[r, a, b, 1] = points[r, a, b, 2, 0], points[r, a, b, 2, 1]
+                    kind[r, a, b] = Kind.X3
         for a in range(n):
             for b in range(n):
                 if not adj[r, a, b] or resolved[a, b]:
