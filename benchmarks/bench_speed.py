@@ -19,7 +19,9 @@ Times are this thread's CPU time (robust while other jobs share the machine), me
   (``bench_pso_compare.py`` part b): one seed per call, and 20 seeds in one call;
 - SLO-PSO on Sphere, Low errors, CSS, knn 5, 20 particles × 31 runs: one generation, and one
   generation plus the six series a reproduction keeps (before: every metric, always); the same
-  with the RTS and the Akcan selections.
+  with the RTS and the Akcan selections;
+- the acoustic swarm (``sonar-xb-pso``, waveform mode, each release's own preset): one run (the
+  interactive case), and 5, 20 and 100 runs batched.
 """
 
 from __future__ import annotations
@@ -130,6 +132,12 @@ def measure(quick: bool, before: bool) -> dict[str, float]:
         def kept_of(sw: Any = sw, series: bool = series) -> object:
             return sw.step().series(KEPT) if series else sw.step().columns()
         note(f"slo_{selection}_kept", _median_ms(kept_of, 10 if quick else 40, warmup=3))
+    build_sonar, load = _first("shoal.presets.build:build_sonar"), _first("shoal.presets.io:load")
+    for runs in (1, 5, 20, 100):  # the acoustic swarm: one interactive run, and batches of runs
+        sw = build_sonar(load("sonar-xb-pso"), runs=runs, seed=0)
+        note(f"sonar_{runs}", _median_ms(sw.step, 20 if quick else (60 if runs < 100 else 20), warmup=2))
+    sw = build_sonar(load("sonar-xb-pso", ["acoustics.fs=48000"]), runs=1, seed=0)  # a longer lag grid
+    note("sonar_1_48k", _median_ms(sw.step, 50 if quick else 300, warmup=2))
     iters = 200 if quick else 1000
     for runs, name in ((1, "pso_one"), (20, "pso_20")):
         sim = _pso(runs)
@@ -211,6 +219,14 @@ def main() -> None:
             "≥ 10× pyswarms"),
         row("standard PSO, 20 seeds, per iteration and seed (`run`; before: step)", "pso_20_run", " µs", 1e3 / 20,
             "≥ 10× pyswarms", was="pso_20"),
+        row("acoustic swarm (`sonar-xb-pso`, 10 robots, waveform), one run, per tick", "sonar_1", " ms", 1,
+            "lag table cached"),
+        row("acoustic swarm, one run, fs = 48 kHz (51 lags, not 7), per tick", "sonar_1_48k", " ms", 1,
+            "lag table cached"),
+        row("acoustic swarm, 5 runs batched, per robot-step", "sonar_5", " µs", 1e3 / 50, "(5 runs a batch)"),
+        row("acoustic swarm, 20 runs batched, per robot-step", "sonar_20", " µs", 1e3 / 200, "(20 runs a batch)"),
+        row("acoustic swarm, 100 runs batched, per robot-step", "sonar_100", " µs", 1e3 / 1000,
+            "(fig7-2's batches now)"),
     ]
     print(table(["measure (CPU, median)", "before", "first pass", "after", "after/before", "after/first", "target"],
                 rows, "lrrrrrl"))
