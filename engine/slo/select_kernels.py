@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from ..core.compiled import kernel
-from .selection import Kind, RTSResult
+from .candidates import Kind
 
 KINDS = np.array([Kind.X1, Kind.X2, Kind.X3], dtype=np.int8)
 INF = np.inf
@@ -123,7 +123,8 @@ def _rts(points: np.ndarray, mask: np.ndarray, adj: np.ndarray, best_loop: bool,
 
 
 def rts(points: np.ndarray, mask: np.ndarray, adjacency: np.ndarray, fallback: tuple[np.ndarray, np.ndarray],
-        triangle: str = "first", prefer_geometric: bool = False, tolerance: float = 0.0) -> RTSResult:
+        triangle: str = "first", prefer_geometric: bool = False, tolerance: float = 0.0,
+        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`~.selection.rts` compiled: the same estimates, kinds, closing vertices and e_r."""
     R, n = adjacency.shape[:2]
     est, kind = fallback[0].astype(float, copy=True), fallback[1].astype(np.int8, copy=True)
@@ -131,7 +132,7 @@ def rts(points: np.ndarray, mask: np.ndarray, adjacency: np.ndarray, fallback: t
     _rts(np.ascontiguousarray(points, dtype=float), np.ascontiguousarray(mask, dtype=bool),
          np.ascontiguousarray(adjacency, dtype=bool), triangle == "best", bool(prefer_geometric), float(tolerance),
          est, kind, used, e_used)
-    return RTSResult(est=est, kind=kind, triangle=used, round_trip=e_used)
+    return est, kind, used, e_used
 
 
 @kernel
