@@ -408,9 +408,7 @@ class Simulation:
         f = np.empty((R, N)) if code != kernels.GIVEN else self.objective(s.x)
         new, speeds = np.empty((3,) + s.x.shape), np.empty((2, R))
         y, f_y, yg, best = s.y.copy(), s.f_y.copy(), s.yg.copy(), s.best_fitness.copy()
-        if isinstance(omega, float) and c.shape == (2,):  # the same for every robot
-            w_robots, c_robots, w, c_terms = kernels.NONE2, kernels.NONE3, omega, c
-        elif not isinstance(omega, float) and np.ndim(omega) or c.ndim > 1:  # coefficients per robot
+        if not isinstance(omega, float) and np.ndim(omega) or c.ndim > 1:  # coefficients per robot
             w_robots = np.ascontiguousarray(np.broadcast_to(omega, (R, N)), dtype=float)
             c_robots = np.ascontiguousarray(np.broadcast_to(c.reshape(c.shape + (1,) * (3 - c.ndim)), (2, R, N)))
             w, c_terms = 0.0, c_robots[:, 0, 0].copy()

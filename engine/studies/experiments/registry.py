@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import os
-import resource
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -197,7 +196,12 @@ def _umask() -> int:
 
 def _cpu_seconds() -> float:
     """CPU seconds of this process and of its worker processes that have ended (a local pool's
-    workers end with each batch of jobs; a Dask cluster's are not counted)."""
+    workers end with each batch of jobs; a Dask cluster's are not counted; without the
+    ``resource`` module, as on Windows, this process only)."""
+    try:
+        import resource
+    except ImportError:
+        return time.process_time()
     me, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return me.ru_utime + me.ru_stime + children.ru_utime + children.ru_stime
 
