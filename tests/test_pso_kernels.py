@@ -143,3 +143,17 @@ def test_draws_taken_ahead_leave_the_stream_as_one_call_a_tick_would():
     for name in STATE:
         assert _bytes(getattr(a.state, name)) == _bytes(getattr(b.state, name)), name
     assert a.state.copy().heading is not a.state.heading
+
+
+def test_a_batch_without_a_callback_runs_headless_to_the_same_series():
+    """run_batch without on_step goes through Simulation.run; with a callback, tick by tick:
+    the same series to the byte (a physical schedule changes the coefficients mid-run)."""
+    from shoal.engine.studies.experiments.runner import run_batch
+    from shoal.presets.io import load
+
+    scenario = load("fig3-5a", ["sim.robots=12"])  # U steps at 34 s and 67 s, Δt = 1 s
+    a = run_batch(scenario, runs=3, seed=2, steps=100, track=4)
+    b = run_batch(scenario, runs=3, seed=2, steps=100, track=4, on_step=lambda k, sim, info: None)
+    assert len(set(a.omega)) == 2  # ω steps with U and back
+    for name in ("t", "max_speed", "tracked", "omega", "c_hat"):
+        assert _bytes(getattr(a, name)) == _bytes(getattr(b, name)), name
