@@ -1,11 +1,13 @@
 """The speed targets of the compiled kernels, before and after, side by side in one run.
 
-Run: python benchmarks/bench_speed.py --before PYTHON [--quick]
+Run: python benchmarks/bench_speed.py --before PYTHON [--first PYTHON] [--quick]
 
 PYTHON is the interpreter of an environment where the previous release of Shoal is installed
 (e.g. a checkout of the release before the kernels, ``pip install -e .`` into its own venv).
-Every measure runs in this interpreter ("after") and, in a subprocess, in that one ("before"),
-with the same code (this file), so both sides do the same work; the anchors run here:
+Every measure runs in this interpreter ("after") and, in a subprocess each, in those ones
+("before", "first" pass), with the same code (this file), so every side does the same work;
+measure by measure, the releases take turns (``--reps`` rounds, median), so a load that
+drifts while the script runs touches them alike; the anchors run here, between rounds:
 pyswarms 1.3 (``pip install -e '.[bench]'``) for standard PSO. VMAS needs PyTorch, which is
 not installed on these machines: its batched cost is quoted from issue 13 (20–31 µs a
 robot-step on the same machine kind).
@@ -18,7 +20,10 @@ Times are this thread's CPU time (robust while other jobs share the machine), me
 - standard PSO [2.1]/[2.2] with a global best, D = 10, 30 particles, Sphere
   (``bench_pso_compare.py`` part b): one seed per call, and 20 seeds in one call;
 - SLO-PSO on Sphere, Low errors, CSS, knn 5, 20 particles × 31 runs: one generation, and one
-  generation plus the six series a reproduction keeps (before: every metric, always).
+  generation plus the six series a reproduction keeps (before: every metric, always); the same
+  with the RTS and the Akcan selections;
+- the acoustic swarm (``sonar-xb-pso``, waveform mode, each release's own preset): one run (the
+  interactive case), and 5, 20 and 100 runs batched.
 """
 
 from __future__ import annotations
@@ -87,50 +92,99 @@ def _pso(runs: int):
                       init_center=np.zeros(10), init_spread=10.24, init_speed=0.0)
 
 
-def _slo():
+def _slo(selection: str = "css"):
     SLOSwarm = _first("shoal.engine.kinds.slo_swarm:SLOSwarm", "shoal.engine.slo:SLOSwarm")
-    return SLOSwarm(runs=31, seed=0, particles=20, selection="css", errors="low")
+    return SLOSwarm(runs=31, seed=0, particles=20, selection=selection, errors="low")
 
 
 KEPT = ("e_abs_mean", "e_rel_median", "distance_median", "best_fitness", "quality_met_at", "dead_reckoning")
 
 
-def measure(quick: bool, before: bool) -> dict[str, float]:
-    """Every measure (ms per tick) in this interpreter; ``before`` spends fewer ticks on the slow ones."""
-    few = 3 if quick else (5 if before else 30)
-    out: dict[str, float] = {}
+def _kept(sw: Any) -> Callable[[], object]:
+    """A generation plus the kept series (the previous release worked out every metric in each
+    step, and columns() flattened them)."""
+    if hasattr(sw.step(), "series"):
+        return lambda: sw.step().series(KEPT)
+    return lambda: sw.step().columns()
 
-    def note(name: str, value: float) -> None:
-        out[name] = value
-        print(f"  {'before' if before else 'after'}: {name} {value:.4g} ms", file=sys.stderr, flush=True)
 
-    f = _fleet(100, 1, packed=True)
-    note("fleet_100", _median_ms(f.step, 10 if before else 200))
-    f = _fleet(10, 100, packed=False)
-    note("fleet_batched", _median_ms(f.step, few))
-    f = _fleet(200, 1, packed=False, motion="physics", drive="mecanum")
-    note("physics_200", _median_ms(f.step, few))
-    f = _fleet(1000, 1, packed=False)
-    note("fleet_1000", _median_ms(f.step, few))
-    sw = _slo()
-    note("slo", _median_ms(sw.step, 30 if quick else 100, warmup=3))
-    sw = _slo()
-    if hasattr(sw.step(), "series"):  # since the kernels: only the series asked for are worked out
-        def kept() -> object:
-            return sw.step().series(KEPT)
-    else:  # the previous release worked out every metric in each step, columns() flattened them
-        def kept() -> object:
-            return sw.step().columns()
-    note("slo_kept", _median_ms(kept, 30 if quick else 100, warmup=3))
-    iters = 200 if quick else 1000
-    for runs, name in ((1, "pso_one"), (20, "pso_20")):
-        sim = _pso(runs)
-        sim.step()
+def _pso_ms(runs: int, iters: int, headless: bool) -> float:
+    sim = _pso(runs)
+    sim.step()
+    if headless:  # since the second pass: a headless run loop
+        if not hasattr(sim, "run"):
+            return math.nan
+        sim.run(10)
+        t0 = time.thread_time()
+        sim.run(iters)
+    else:
         t0 = time.thread_time()
         for _ in range(iters):
             sim.step()
-        note(name, (time.thread_time() - t0) * 1e3 / iters)
-    return out
+    return (time.thread_time() - t0) * 1e3 / iters
+
+
+def _sonar(runs: int, *overrides: str):
+    build_sonar, load = _first("shoal.presets.build:build_sonar"), _first("shoal.presets.io:load")
+    return build_sonar(load("sonar-xb-pso", list(overrides)), runs=runs, seed=0)
+
+
+def measures(quick: bool, slow: bool) -> dict[str, Callable[[], float]]:
+    """Every measure (ms per tick) by name; ``slow`` (a release without the kernels) spends
+    fewer ticks on the fleets."""
+    few = 3 if quick else (5 if slow else 30)
+    iters = 200 if quick else 1000
+    return {
+        "fleet_100": lambda: _median_ms(_fleet(100, 1, packed=True).step, 10 if slow else 200),
+        "fleet_batched": lambda: _median_ms(_fleet(10, 100, packed=False).step, few),
+        "physics_200": lambda: _median_ms(_fleet(200, 1, packed=False, motion="physics", drive="mecanum").step, few),
+        "fleet_1000": lambda: _median_ms(_fleet(1000, 1, packed=False).step, few),
+        "slo": lambda: _median_ms(_slo().step, 30 if quick else 100, warmup=3),
+        "slo_kept": lambda: _median_ms(_kept(_slo()), 30 if quick else 100, warmup=3),
+        "slo_rts_kept": lambda: _median_ms(_kept(_slo("rts")), 10 if quick else 40, warmup=3),
+        "slo_akcan_kept": lambda: _median_ms(_kept(_slo("akcan")), 10 if quick else 40, warmup=3),
+        **{f"sonar_{runs}": (lambda runs=runs: _median_ms(_sonar(runs).step, 20 if quick or runs == 100 else 60,
+                                                          warmup=2)) for runs in (1, 5, 20, 100)},
+        "sonar_1_48k": lambda: _median_ms(_sonar(1, "acoustics.fs=48000").step, 50 if quick else 300, warmup=2),
+        "pso_one": lambda: _pso_ms(1, iters, False),
+        "pso_one_run": lambda: _pso_ms(1, iters, True),
+        "pso_20": lambda: _pso_ms(20, iters, False),
+        "pso_20_run": lambda: _pso_ms(20, iters, True),
+    }
+
+
+def serve(quick: bool) -> None:
+    """Measure the names read from stdin, one a line, answering each with a JSON number."""
+    try:
+        _first("shoal.engine.core.compiled:kernel")
+        slow = False
+    except ImportError:  # a release without the kernels
+        slow = True
+    table_ = measures(quick, slow)
+    for line in sys.stdin:
+        print(json.dumps(table_[line.strip()]()), flush=True)
+
+
+class Side:
+    """Another release measuring in its own interpreter, a measure at a time (``--serve``)."""
+
+    def __init__(self, python: str, quick: bool) -> None:
+        cmd = [python, str(Path(__file__).resolve()), "--serve"] + (["--quick"] if quick else [])
+        self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+
+    def __call__(self, name: str) -> float:
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        self.proc.stdin.write(name + "\n")
+        self.proc.stdin.flush()
+        line = self.proc.stdout.readline()
+        if not line:
+            raise SystemExit(f"the {name} measure failed in another release")
+        return float(json.loads(line))
+
+    def close(self) -> None:
+        if self.proc.stdin is not None:
+            self.proc.stdin.close()
+        self.proc.wait()
 
 
 def pyswarms_ms(quick: bool) -> float | None:
@@ -148,32 +202,46 @@ def pyswarms_ms(quick: bool) -> float | None:
     return pyswarms_standard("sphere", 10, x0, iters, 0)[1] * 1e3 / iters
 
 
-def run_before(python: str, quick: bool) -> dict[str, float]:
-    cmd = [python, str(Path(__file__).resolve()), "--child"] + (["--quick"] if quick else [])
-    done = subprocess.run(cmd, capture_output=True, text=True)
-    sys.stderr.write(done.stderr)
-    if done.returncode:
-        raise SystemExit(f"the previous release failed to measure (exit {done.returncode})")
-    return json.loads(done.stdout.strip().splitlines()[-1])
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--before", help="python of an environment with the previous release installed")
+    ap.add_argument("--first", help="python of an environment with the first pass of the kernels installed")
     ap.add_argument("--quick", action="store_true", help="fewer ticks")
-    ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--reps", type=int, default=3, help="rounds of each measure in every release (median)")
+    ap.add_argument("--only", nargs="*", help="measure only these names (default: all)")
+    ap.add_argument("--serve", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
-    if args.child:  # measuring for the parent, in the other release
-        print(json.dumps(measure(args.quick, before=True)))
+    if args.serve:  # measuring for the parent, in another release
+        serve(args.quick)
         return
     print(f"{load_note()}\n", flush=True)
-    after = measure(args.quick, before=False)
-    before = run_before(args.before, args.quick) if args.before else {}
-    anchor = pyswarms_ms(args.quick)
+    here = measures(args.quick, slow=False)
+    sides: dict[str, Callable[[str], float]] = {"after": lambda name: here[name]()}
+    for label, python in (("first", args.first), ("before", args.before)):
+        if python:
+            sides[label] = Side(python, args.quick)
+    anchor: list[float] = []
+    results: dict[str, dict[str, list[float]]] = {label: {} for label in sides}
+    for name in args.only or here:  # measure by measure, the releases in turn, so they share the load
+        for rep in range(args.reps):
+            order = list(sides)[rep % len(sides):] + list(sides)[:rep % len(sides)]
+            for label in order:
+                value = sides[label](name)
+                results[label].setdefault(name, []).append(value)
+                print(f"  {label}: {name} {value:.4g} ms ({load_note()})", file=sys.stderr, flush=True)
+            if name.startswith("pso_one") and (ms := pyswarms_ms(args.quick)) is not None:
+                anchor.append(ms)
+    for side in sides.values():
+        if isinstance(side, Side):
+            side.close()
+    med = {label: {k: sorted(v)[len(v) // 2] for k, v in r.items()} for label, r in results.items()}
+    after, first, before = med["after"], med.get("first", {}), med.get("before", {})
+    print(f"\n{load_note()}\n", flush=True)
 
-    def row(label: str, key: str, unit: str, scale: float, target: str) -> list[str]:
-        b, a = before.get(key, math.nan), after[key]
-        return [label, fmt(b * scale) + unit, fmt(a * scale) + unit, f"{b / a:.1f}×" if b == b else "–", target]
+    def row(label: str, key: str, unit: str, scale: float, target: str, was: str | None = None) -> list[str]:
+        b, f, a = before.get(was or key, math.nan), first.get(was or key, math.nan), after.get(key, math.nan)
+        return [label, fmt(b * scale) + unit, fmt(f * scale) + unit, fmt(a * scale) + unit,
+                f"{b / a:.1f}×" if b == b else "–", f"{f / a:.1f}×" if f == f else "–", target]
 
     rows = [
         row("fleet tick, 100 robots, omni DVC, sequential, kinematic", "fleet_100", " ms", 1, "≤ 1 ms"),
@@ -183,16 +251,36 @@ def main() -> None:
         row("fleet tick, 200 robots, pymunk physics (mecanum)", "physics_200", " ms", 1, "20 updates/s in the app"),
         row("SLO generation, 20 particles × 31 runs", "slo", " ms", 1, "≥ 4× faster"),
         row("SLO generation + the six kept series", "slo_kept", " ms", 1, "≥ 4× faster"),
-        row("standard PSO, D = 10, 30 particles, one seed, per iteration", "pso_one", " µs", 1e3,
+        row("SLO generation + kept series, RTS selection", "slo_rts_kept", " ms", 1, "(slo-pso)"),
+        row("SLO generation + kept series, Akcan selection", "slo_akcan_kept", " ms", 1, "(slo-pso)"),
+        row("standard PSO, D = 10, 30 particles, one seed, per iteration (step)", "pso_one", " µs", 1e3,
             "≥ 3× pyswarms"),
-        row("standard PSO, 20 seeds in one call, per iteration and seed", "pso_20", " µs", 1e3 / 20,
+        row("standard PSO, one seed, per iteration (`run`; before: step)", "pso_one_run", " µs", 1e3,
+            "≥ 3× pyswarms", was="pso_one"),
+        row("standard PSO, 20 seeds in one call, per iteration and seed (step)", "pso_20", " µs", 1e3 / 20,
             "≥ 10× pyswarms"),
+        row("standard PSO, 20 seeds, per iteration and seed (`run`; before: step)", "pso_20_run", " µs", 1e3 / 20,
+            "≥ 10× pyswarms", was="pso_20"),
+        row("acoustic swarm (`sonar-xb-pso`, 10 robots, waveform), one run, per tick", "sonar_1", " ms", 1,
+            "lag table cached"),
+        row("acoustic swarm, one run, fs = 48 kHz (51 lags, not 7), per tick", "sonar_1_48k", " ms", 1,
+            "lag table cached"),
+        row("acoustic swarm, 5 runs batched, per robot-step", "sonar_5", " µs", 1e3 / 50, "(5 runs a batch)"),
+        row("acoustic swarm, 20 runs batched, per robot-step", "sonar_20", " µs", 1e3 / 200, "(20 runs a batch)"),
+        row("acoustic swarm, 100 runs batched, per robot-step", "sonar_100", " µs", 1e3 / 1000,
+            "(fig7-2's batches now)"),
     ]
-    print(table(["measure (CPU, median)", "before", "after", "ratio", "target"], rows, "lrrrl"))
-    if anchor is not None:
-        print(f"\npyswarms GlobalBestPSO, same problem: {fmt(anchor * 1e3)} µs per iteration; after/pyswarms: "
-              f"one seed {anchor / after['pso_one']:.1f}× faster, 20 seeds batched "
-              f"{anchor / (after['pso_20'] / 20):.1f}× faster per seed")
+    rows = [r for r in rows if r[3] != "– ms" and r[3] != "– µs"]  # measured in this run
+    print(table(["measure (CPU, median)", "before", "first pass", "after", "after/before", "after/first", "target"],
+                rows, "lrrrrrl"))
+    if anchor and all(k in after for k in ("pso_one", "pso_one_run", "pso_20", "pso_20_run")):
+        p = sorted(anchor)[len(anchor) // 2]
+        print(f"\npyswarms GlobalBestPSO, same problem, measured between Shoal's PSO measures: {fmt(p * 1e3)} µs "
+              f"per iteration (median of {len(anchor)}); Shoal is faster by: one seed {p / after['pso_one']:.1f}× "
+              f"(step), {p / after['pso_one_run']:.1f}× (run); 20 seeds batched, per seed "
+              f"{p / (after['pso_20'] / 20):.1f}× (step), {p / (after['pso_20_run'] / 20):.1f}× (run)"
+              + (f"; first pass: one seed {p / first['pso_one']:.1f}×, 20 seeds {p / (first['pso_20'] / 20):.1f}×"
+                 if first else ""))
     else:
         print("\npyswarms is not installed (pip install -e '.[bench]'): no anchor for standard PSO")
 

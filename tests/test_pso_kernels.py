@@ -97,3 +97,63 @@ def test_the_swarm_falls_back_to_numpy_where_the_kernel_does_not_apply():
     assert not Simulation(robots=3, d=2, policy=Constant(0.5, (0.5, 0.5)), law=Law("adapted-tanh"))._compiled_tick()
     assert not Simulation(robots=3, d=200, policy=Constant(0.5, (0.5, 0.5)),
                           objective=Objective("sphere", source=np.zeros(200)))._compiled_tick()
+
+
+def test_run_equals_step_by_step_with_headings_read_now_and_then():
+    """``run`` (whole blocks of ticks in one compiled call, draws taken many ticks ahead) gives
+    the numpy steps' numbers; headings worked out only when read are the ones of every tick."""
+    kw = dict(robots=13, d=3, law=Law("standard"), policy=Constant(0.7298, (1.49618, 1.49618)), runs=3, seed=5,
+              objective=Objective("rastrigin", source=np.arange(3) * 0.3, scale=1.7), init_spread=5.0,
+              init_speed=0.5)
+    a, b = Simulation(**kw), Simulation(**kw, compiled=False)
+    for steps in (1, 70, 3, 130):  # across blocks of draws
+        series = a.run(steps, track=2)
+        infos = [b.step() for _ in range(steps)]
+        for name in STATE:
+            assert _bytes(getattr(a.state, name)) == _bytes(getattr(b.state, name)), name
+        assert _bytes(series.best_fitness) == _bytes(np.stack([i.best_fitness for i in infos]))
+        assert _bytes(series.speeds[:, 0]) == _bytes(np.stack([i.max_speed for i in infos]))
+        assert _bytes(series.speeds[:, 1]) == _bytes(np.stack([i.max_component for i in infos]))
+        assert _bytes(series.t) == _bytes(np.array([i.t for i in infos]))
+        assert series.omega == [i.omega for i in infos]
+    for k in range(40):  # headings read every 7 ticks only
+        a.step(), b.step()
+        if k % 7 == 0:
+            assert _bytes(a.state.heading) == _bytes(b.state.heading), k
+
+
+def test_draws_taken_ahead_leave_the_stream_as_one_call_a_tick_would():
+    """Growing the swarm, switching to the numpy tick, or reading the generators between
+    compiled ticks sees each generator where one draw a tick would have left it."""
+    kw = dict(robots=8, d=2, law=Law("adapted-sgn"), policy=Constant(0.7, (1.4, 1.4)), runs=2, seed=7,
+              init_speed=0.3)
+    a, b = Simulation(**kw), Simulation(**kw, compiled=False)
+    for _ in range(3):
+        a.step(), b.step()
+    a.set_robots(11), b.set_robots(11)  # spawns from the generators
+    for _ in range(5):
+        a.step(), b.step()
+    a.retune(law=Law("adapted-tanh")), b.retune(law=Law("adapted-tanh"))  # the numpy tick draws next
+    for _ in range(4):
+        a.step(), b.step()
+    a.retune(law=Law("standard")), b.retune(law=Law("standard"))
+    a.step(), b.step()
+    assert [g.random() for g in a.rngs] == [g.random() for g in b.rngs]
+    a.step(), b.step()
+    for name in STATE:
+        assert _bytes(getattr(a.state, name)) == _bytes(getattr(b.state, name)), name
+    assert a.state.copy().heading is not a.state.heading
+
+
+def test_a_batch_without_a_callback_runs_headless_to_the_same_series():
+    """run_batch without on_step goes through Simulation.run; with a callback, tick by tick:
+    the same series to the byte (a physical schedule changes the coefficients mid-run)."""
+    from shoal.engine.studies.experiments.runner import run_batch
+    from shoal.presets.io import load
+
+    scenario = load("fig3-5a", ["sim.robots=12"])  # U steps at 34 s and 67 s, Δt = 1 s
+    a = run_batch(scenario, runs=3, seed=2, steps=100, track=4)
+    b = run_batch(scenario, runs=3, seed=2, steps=100, track=4, on_step=lambda k, sim, info: None)
+    assert len(set(a.omega)) == 2  # ω steps with U and back
+    for name in ("t", "max_speed", "tracked", "omega", "c_hat"):
+        assert _bytes(getattr(a, name)) == _bytes(getattr(b, name)), name

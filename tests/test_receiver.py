@@ -317,3 +317,20 @@ def test_sample_lag_stays_on_the_grid_and_resolves_bearings_only_that_finely():
     assert set(np.round(np.degrees(coarse.alpha[:, 0]))) <= {0.0, 60.0, 90.0, 120.0, 180.0}
     assert not np.allclose(fine.tau * b.fs, np.round(fine.tau * b.fs))  # refined lags fall between samples
     assert np.max(np.abs(fine.alpha[:, 0] - rel)) < np.max(np.abs(coarse.alpha[:, 0] - rel))
+
+
+def test_the_cached_lag_table_gives_the_bits_of_correlate():
+    """bearing() reads the lag grid's cos/sin table once per band and separation; its R(τ)
+    is correlate()'s to the byte, and another band or separation gets its own table."""
+    b = Band(Q=2.0, tbp=40, fs=4000.0)
+    D = 1.3
+    pos = hydrophone_positions(np.zeros((3, 4, 2)), np.zeros((3, 4)), D)
+    sp = synthesise(_rngs(3), pos, np.array([[40.0, 25.0], [-30.0, 5.0], [2.0, -60.0]]), b, 300.0)
+    first = bearing(sp, b, D, np.zeros((3, 4)))
+    again = bearing(sp, b, D, np.zeros((3, 4)))
+    want = correlate(cross_spectrum(sp), b, lag_samples(b, D) / b.fs)
+    assert first.corr.tobytes() == want.tobytes() == again.corr.tobytes()
+    assert again.lags is first.lags and not first.lags.flags.writeable
+    other = bearing(sp, Band(Q=2.0, tbp=40, fs=8000.0), D, np.zeros((3, 4)))
+    assert other.lags.size > first.lags.size
+    assert bearing(sp, b, 2 * D, np.zeros((3, 4))).lags.size > first.lags.size

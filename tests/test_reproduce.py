@@ -62,6 +62,7 @@ def test_outputs_exist_with_the_exact_runs_header(fixture, files, request):
     assert (out / "series.csv").read_text(encoding="utf-8").splitlines()[0] == ",".join(chapter3.SERIES_COLUMNS)
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     assert summary["target"] == out.name and summary["runs"] == 3 and summary["elapsed_s"] >= 0
+    assert summary["cpu_s"] > 0
     for c in summary["checks"]:
         assert set(c) == {"name", "thesis", "measured", "pass"} and isinstance(c["pass"], bool)
     assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]  # no partial folders left

@@ -98,8 +98,18 @@ def test_information_is_shown_beside_the_checks_but_not_counted() -> None:
     summary = {"runs": 3, "elapsed_s": 1.0, "checks": [check("median run collision-free", "none", "0", True)],
                "information": [info("every run collision-free", "none", "2 robots in 1 run", False)]}
     text = render([Outcome("fig4-6", summary=summary)])
-    assert "| [fig4-6](#fig4-6) | Rossides, Figs. 4-6 and 4-7 | 3 | 1/1 |" in text
+    assert "| [fig4-6](#fig4-6) | Rossides, Figs. 4-6 and 4-7 | 3 | 1/1 | 1.0 |" in text
     assert "In all: 1 of 1 checks pass" in text
     assert "information, not counted as checks" in text
     assert "| every run collision-free | none | 2 robots in 1 run | no |" in text
     assert "Every check holds." in text
+
+
+def test_the_report_gives_each_targets_wall_and_cpu_time_and_their_totals() -> None:
+    from shoal.engine.studies.experiments.report import Outcome, render
+
+    a = {"runs": 3, "elapsed_s": 12.5, "cpu_s": 20.25, "workers": 2, "checks": []}
+    b = {"runs": 31, "elapsed_s": 100.0, "cpu_s": 190.0, "workers": 2, "checks": []}
+    text = render([Outcome("fig4-6", summary=a), Outcome("slo-pso", summary=b), Outcome("fig3-4", error="boom")])
+    assert "| 3 | 0/0 | 12.5 | 20.25 | 2 |" in text and "| 31 | 0/0 | 100.0 | 190.0 | 2 |" in text
+    assert "| all | | | | 112 | 210 | |" in text

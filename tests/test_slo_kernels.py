@@ -10,8 +10,8 @@ import pytest
 import shoal.engine.slo.beliefs as beliefs_module
 import shoal.engine.slo.neighbourhoods as neighbourhoods_module
 from shoal.engine.kinds.slo_swarm import SLOSwarm
-from shoal.engine.slo import kernels
-from shoal.engine.slo.candidates import candidates
+from shoal.engine.slo import kernels, select_kernels, selection
+from shoal.engine.slo.candidates import Candidates, candidates
 from shoal.engine.slo.metrics import dead_reckoning_share, pair_distances, pair_errors, round_trip_errors, stats
 from shoal.engine.slo.selection import css
 
@@ -24,6 +24,22 @@ def numpy_localise(d0, d1, v, prev, *, delta_cos, delta_v, literal_eq_3_1, predi
     c = candidates(d0, d1, v[:, None, :, :] - v[:, :, None, :], prev, delta_cos, delta_v, literal_eq_3_1)
     est, kind = css(c, prediction_weight, entry, coin)
     return kernels.Localised(est, kind, c.flag, c if kw.get("candidates", candidates_) else None)
+
+
+def _candidates(points, mask):
+    shape = mask.shape[:-1]
+    return Candidates(points, mask, np.zeros(shape, np.int8), np.full(shape, np.nan), np.full(shape, np.nan))
+
+
+def numpy_rts(points, mask, adjacency, fallback, triangle="first", prefer_geometric=False, tolerance=0.0):
+    """The numpy reference of :func:`select_kernels.rts`."""
+    res = selection.rts(_candidates(points, mask), adjacency, fallback, triangle, prefer_geometric, tolerance)
+    return res.est, res.kind, res.triangle, res.round_trip
+
+
+def numpy_akcan(points, mask, adjacency, ranges, fallback):
+    """The numpy reference of :func:`select_kernels.akcan`."""
+    return selection.akcan(_candidates(points, mask), adjacency, ranges, fallback)
 
 
 def numpy_distances(x):
@@ -94,8 +110,10 @@ def test_compiled_distances_and_nearest_equal_numpy():
     dict(selection="css", errors="high", entry_policy="geometric_random", neighbourhood="radius"),
     dict(selection="rts", errors="high", neighbourhood="random"),
     dict(selection="akcan", errors="low", particles=9),
+    dict(selection="akcan", errors="high", neighbourhood="random"),
+    dict(selection="rts", errors="low", rts_triangle="best", rts_prefer_geometric=True),
     dict(selection="perfect", errors="none", motion="random_walk"),
-], ids=["css", "css-entry-radius", "rts", "akcan", "perfect-walk"])
+], ids=["css", "css-entry-radius", "rts", "akcan", "akcan-random", "rts-best-geometric", "perfect-walk"])
 def test_whole_runs_equal_the_numpy_localiser(kw, monkeypatch):
     kw = {"particles": 12, **kw}
     compiled = SLOSwarm(runs=3, seed=5, **kw)
@@ -105,6 +123,8 @@ def test_whole_runs_equal_the_numpy_localiser(kw, monkeypatch):
         *a[:4], delta_cos=a[4], delta_v=a[5], literal_eq_3_1=a[6]).candidates)
     monkeypatch.setattr(neighbourhoods_module.kernels, "distances", numpy_distances)
     monkeypatch.setattr(neighbourhoods_module.kernels, "nearest", numpy_nearest)
+    monkeypatch.setattr(select_kernels, "rts", numpy_rts)
+    monkeypatch.setattr(select_kernels, "akcan", numpy_akcan)
     reference = SLOSwarm(runs=3, seed=5, **kw)
     rows = [reference.info().series()] + [reference.step().series() for _ in range(12)]
     for got, want in zip(compiled_rows, rows):
@@ -154,3 +174,35 @@ def test_css_candidate_sets_worked_out_when_read_are_the_steps_own():
     for name in CANDIDATE_FIELDS:
         np.testing.assert_array_equal(getattr(b1.candidates, name), getattr(want, name), err_msg=name)
     np.testing.assert_array_equal(b1.flag, want.flag)
+
+
+def _bytes(a) -> bytes:
+    return np.ascontiguousarray(a).tobytes()
+
+
+@pytest.mark.parametrize("density", [0.15, 0.4, 0.9])
+def test_compiled_rts_and_akcan_equal_numpy(density):
+    """On random candidate sets (singular pairs included), random neighbourhoods (not symmetric)
+    and ranges with failures, to the byte: estimates, kinds, RTS closing vertices and e_r."""
+    rng = np.random.default_rng(int(density * 100))
+    for trial in range(4):
+        R, n = 3, int(rng.integers(3, 16))
+        d0, d1, v, prev = _pairs(rng, R, n)
+        loc = kernels.localise(d0, d1, v, prev, delta_cos=0.03, delta_v=0.03, literal_eq_3_1=False)
+        adjacency = rng.random((R, n, n)) < density
+        idx = np.arange(n)
+        adjacency[:, idx, idx] = False
+        ranges = np.abs(d1) * (rng.random((R, n, n)) > 0.1)
+        if trial == 3:  # ties and non-finite values in the sets
+            loc.candidates.points[..., :2, :] = np.round(loc.candidates.points[..., :2, :])
+            loc.candidates.points[rng.random((R, n, n)) < 0.03] = np.nan
+        c, base = loc.candidates, (loc.est, loc.kind)
+        got, want = select_kernels.akcan(c.points, c.mask, adjacency, ranges, base), selection.akcan(
+            c, adjacency, ranges, base)
+        assert _bytes(got[0]) == _bytes(want[0]) and _bytes(got[1]) == _bytes(want[1])
+        for triangle, prefer, tol in (("first", False, 0.0), ("best", False, 0.0), ("first", True, 5.0),
+                                      ("best", True, 1.0)):
+            got = select_kernels.rts(c.points, c.mask, adjacency, base, triangle, prefer, tol)
+            want = selection.rts(c, adjacency, base, triangle, prefer, tol)
+            for name, g in zip(("est", "kind", "triangle", "round_trip"), got):
+                assert _bytes(g) == _bytes(getattr(want, name)), (name, triangle, prefer, trial)

@@ -23,6 +23,7 @@ Estimators: τ_lag = argmax R on the lag grid [6.10]/[7.4], refined by a 3-point
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -67,8 +68,28 @@ def cross_spectrum(spectra: np.ndarray) -> np.ndarray:
 def correlate(X: np.ndarray, band: Band, tau: np.ndarray) -> np.ndarray:
     """R(τ) = Re Σ_k X_k e^{j2π f_k τ} at lags ``tau`` (L,) in s: a small inverse DFT over the
     K band bins as one real matrix product, shape (…, L). [6.9]"""
-    arg = 2.0 * np.pi * np.outer(band.freqs, tau)  # (K, L)
-    return X.real @ np.cos(arg) - X.imag @ np.sin(arg)
+    return _project(X, *_phases(band, tau))
+
+
+def _phases(band: Band, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """cos and sin of 2π f_k τ, (K, L)."""
+    arg = 2.0 * np.pi * np.outer(band.freqs, tau)
+    return np.cos(arg), np.sin(arg)
+
+
+def _project(X: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
+    return X.real @ cos - X.imag @ sin
+
+
+@lru_cache(maxsize=32)
+def lag_table(band: Band, D: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The search grid of a band and hydrophone separation: lags (L,) in s and the cos and sin
+    of 2π f_k τ (K, L) that :func:`correlate` needs, worked out once (read-only arrays)."""
+    lags = lag_samples(band, D) / band.fs
+    table = (lags, *_phases(band, lags))
+    for a in table:
+        a.setflags(write=False)
+    return table
 
 
 def _correlate_full(X: np.ndarray, band: Band) -> tuple[np.ndarray, np.ndarray]:
@@ -134,8 +155,8 @@ def bearing(spectra: np.ndarray, band: Band, D: float, heading: np.ndarray, full
     if full_lag:
         lags, corr = _correlate_full(X, band)
     else:
-        lags = lag_samples(band, D) / band.fs
-        corr = correlate(X, band, lags)
+        lags, cos, sin = lag_table(band, float(D))
+        corr = _project(X, cos, sin)  # correlate(X, band, lags)
     tau = _refine(corr, lags) if refine else _sample_peak(corr, lags)
     rho = np.sum((X * band.phasor(tau)).real, axis=-1)  # ρ = R(τ_lag) [7.5]
     alpha = angle_of_arrival(tau, D, band.c)

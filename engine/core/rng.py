@@ -33,3 +33,37 @@ def component_generators(seed: int, first_run: int, runs: int, offset: int = 0) 
             for i in range(first_run, first_run + runs)
         ]
     return out
+
+
+class BlockDraws:
+    """U(0,1) draws of ``ticks`` ticks of every run taken in one call a run: run r's block holds
+    what ``ticks`` calls of ``rngs[r].random(shape)`` would give one after another (a generator
+    fills doubles in stream order), so the stream is the same as one call a tick.
+
+    The generators run ahead of the draws used: :meth:`settle` puts each back where one call a
+    tick would have left it, before anything else draws from it. It steps PCG64 back by the
+    unused draws (one 64-bit output a double), so the generators must draw doubles only (a
+    32-bit draw's buffered half would be dropped)."""
+
+    def __init__(self, rngs: list[np.random.Generator], shape: tuple[int, ...], ticks: int) -> None:
+        self.rngs, self.shape, self.ticks, self.used = rngs, shape, ticks, 0
+        self.draws = np.empty((len(rngs), ticks) + shape)  # (R, ticks, *shape)
+        for g, out in zip(rngs, self.draws):
+            g.random(out=out)
+
+    def take(self) -> int:
+        """The index (into axis 1 of :attr:`draws`) of the next tick's draws."""
+        self.used += 1
+        return self.used - 1
+
+    @property
+    def spent(self) -> bool:
+        return self.used == self.ticks
+
+    def settle(self) -> None:
+        """Step every generator back over the unused draws (whoever draws next gets them)."""
+        unused = (self.ticks - self.used) * int(np.prod(self.shape))
+        if unused:
+            for g in self.rngs:
+                g.bit_generator.advance(-unused)
+        self.used = self.ticks

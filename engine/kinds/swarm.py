@@ -7,14 +7,15 @@ alone (``first_run=i, runs=1``) or inside a batch.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import operator
+from dataclasses import dataclass, fields
 from typing import Any, ClassVar, Literal, get_args
 
 import numpy as np
 
 from ..core.contract import check_live
 from ..core.objectives import Objective
-from ..core.rng import run_generators
+from ..core.rng import BlockDraws, run_generators
 from ..pso import kernels
 from ..pso.bests import best_index, global_best, update_personal
 from ..pso.coeffs import CoefficientPolicy
@@ -28,9 +29,32 @@ PbestOrder = Literal["before_velocity", "after_velocity"]
 ACTIVE = 0
 
 
+class Turns:
+    """Headings the compiled tick has not worked out yet: for each robot the first two components
+    of its last non-zero velocity (one in 1-D) and whether it moved since its heading was last
+    worked out. Reading :attr:`SwarmState.heading` works them out with the numpy tick's own
+    function, so the bits are the same as working them out every tick."""
+
+    def __init__(self, shape: tuple[int, int, int]) -> None:
+        R, N, d = shape
+        self.turn = np.zeros((R, N, min(d, 2)))
+        self.turned = np.zeros((R, N), bool)
+        self.pending = False
+
+    def fits(self, shape: tuple[int, ...]) -> bool:
+        return self.turn.shape == shape[:2] + (min(shape[2], 2),)
+
+    def settle(self, heading: np.ndarray) -> np.ndarray:
+        self.pending = False
+        out = _heading(self.turn, heading, self.turned)
+        self.turned[:] = False
+        return out
+
+
 @dataclass
 class SwarmState:
-    """The whole swarm of every run at step ``k``."""
+    """The whole swarm of every run at step ``k``. The heading after a compiled tick is worked
+    out when it is read (:class:`Turns`)."""
 
     x: np.ndarray  # (R, N, d) position
     u: np.ndarray  # (R, N, d) velocity
@@ -45,7 +69,34 @@ class SwarmState:
     k: int = 0
 
     def copy(self) -> "SwarmState":
-        return SwarmState(**{k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in vars(self).items()})
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        return SwarmState(**{k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in values.items()})
+
+    def turns(self) -> Turns:
+        """The pending headings of a compiled tick (new ones if the swarm's shape changed)."""
+        t = self.__dict__.get("_turns")
+        if t is None or not t.fits(self.x.shape):
+            self.heading = self.heading  # works out what is pending
+            t = self.__dict__["_turns"] = Turns(self.x.shape)
+        return t
+
+
+def _get_heading(s: SwarmState) -> np.ndarray:
+    t = s.__dict__.get("_turns")
+    if t is not None and t.pending:
+        s.__dict__["_heading"] = t.settle(s.__dict__["_heading"])
+    return s.__dict__["_heading"]
+
+
+def _set_heading(s: SwarmState, value: np.ndarray) -> None:
+    t = s.__dict__.get("_turns")
+    if t is not None and t.pending:
+        t.pending = False
+        t.turned[:] = False
+    s.__dict__["_heading"] = value
+
+
+SwarmState.heading = property(_get_heading, _set_heading)  # type: ignore[assignment]
 
 
 @dataclass
@@ -65,6 +116,18 @@ class StepInfo:
         R = self.max_speed.shape[0]
         return {"max_component": self.max_component, "omega": _per_run(self.omega, R),
                 "c_hat": _per_run(np.sum(self.c, axis=0), R)}
+
+
+@dataclass
+class RunSeries:
+    """Per-tick values of :meth:`Simulation.run`, tick j of ``steps`` (after it)."""
+
+    t: np.ndarray  # (steps,)
+    omega: list  # coefficients in force during each tick, as StepInfo gives them
+    c: list
+    best_fitness: np.ndarray  # (steps, R)
+    speeds: np.ndarray  # (steps, 2, R): highest |u| and highest |u_j| of each run
+    tracked: np.ndarray  # (steps, R, d): velocity of the tracked robot
 
 
 def _per_run(value: np.ndarray | float, R: int) -> np.ndarray:
@@ -144,12 +207,22 @@ class Simulation:
         """Start again from step 0 with ``seed`` (or the current seed)."""
         if seed is not None:
             self.seed = int(seed)
-        self.rngs = run_generators(self.seed, self.first_run, self.runs)
+        self._rngs, self._block = run_generators(self.seed, self.first_run, self.runs), None
+        self._setup: tuple | None = None
         x, u = self._spawn(self._robots)
         self.state = self._fresh_state(x, u)
         self._coefficients: tuple[np.ndarray | float, np.ndarray] = (np.nan, np.full(1, np.nan))
         s = self.state
         self.positions.start(s.x, s.y, s.k, self.seed, self.first_run)
+
+    @property
+    def rngs(self) -> list[np.random.Generator]:
+        """One generator per run, where one call a tick would have left it (the compiled tick
+        draws several ticks ahead: :class:`~shoal.engine.core.rng.BlockDraws`)."""
+        if self._block is not None:
+            self._block.settle()
+            self._block = None
+        return self._rngs
 
     def _spawn(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         shape = (n, self.d)
@@ -287,22 +360,53 @@ class Simulation:
         return (self.compiled and self.law.name in ("standard", "adapted-sgn") and self.d <= kernels.MAX_TERMS
                 and isinstance(self.positions, Oracle) and s.x.dtype == s.u.dtype == s.y.dtype == np.float64)
 
-    def _compiled_step(self) -> StepInfo:
-        """The tick of :meth:`step` in one compiled call; the same numbers."""
-        s, obj, d = self.state, self.objective, self.d
-        R, N = s.x.shape[:2]
-        omega, c = self.policy.coefficients(self.t, self.dt, d)
-        c = np.asarray(c, dtype=float)
-        self._coefficients = (omega, c)
-        draws = np.empty((R, 2, N, d))
-        for r, g in enumerate(self.rngs):  # each run's U(0,1) draws, as _draw takes them
-            g.random(out=draws[r])
+    # U(0,1) draws a block holds at most (R × ticks × 2N d), and its ticks at most
+    BLOCK_DRAWS, BLOCK_TICKS = 1 << 16, 64
+
+    def _draws(self, shape: tuple[int, ...]) -> BlockDraws:
+        """The block of draws the next compiled tick takes its own from."""
+        block = self._block
+        if block is None or block.spent or block.shape != shape:
+            rngs = self.rngs  # settles a block of another shape
+            per_tick = len(rngs) * int(np.prod(shape))
+            ticks = max(1, min(self.BLOCK_TICKS, self.BLOCK_DRAWS // per_tick))
+            block = self._block = BlockDraws(rngs, shape, ticks)
+        return block
+
+    def _kernel_setup(self) -> tuple:
+        """What the compiled tick needs from the objective, law, attractors and bests order,
+        worked out again only when one of them changed."""
+        obj, d = self.objective, self.d
+        key = (obj, obj.name, obj.scale, obj.source, self.law, self.attractors, self.pbest_order,
+               self.ahead_direction, d)
+        cached = self._setup
+        if cached is not None and all(map(operator.is_, cached[0], key)):
+            return cached[1]
         source = np.ascontiguousarray(obj.source[:d], dtype=float)
         code = kernels.OBJECTIVES.index(obj.name) if obj.name in kernels.OBJECTIVES else kernels.GIVEN
         if source.shape != (d,) and code != kernels.LINEAR:
             code = kernels.GIVEN  # numpy says what is wrong with it
-        f = np.empty((R, N)) if code != kernels.GIVEN else obj(s.x)
-        new, moving, speeds = np.empty((3,) + s.x.shape), np.empty((R, N), bool), np.empty((2, R))
+        ahead = self.ahead_direction
+        if ahead.shape != (d,):
+            ahead = np.ascontiguousarray(np.broadcast_to(ahead, (d,)), dtype=float)
+        setup = (ahead, self.attractors == "literal", self.law.adapted, self.pbest_order == "before_velocity",
+                 obj.maximise, code, source if code != kernels.LINEAR else np.zeros(d), float(obj.scale))
+        # kept while the same objects are in place (a source edited in place is seen through the view)
+        self._setup = (key, setup) if np.shares_memory(source, obj.source) else None
+        return setup
+
+    def _compiled_step(self) -> StepInfo:
+        """The tick of :meth:`step` in one compiled call; the same numbers."""
+        s, d = self.state, self.d
+        R, N = s.x.shape[:2]
+        omega, c = self.policy.coefficients(self.t, self.dt, d)
+        c = np.asarray(c, dtype=float)
+        self._coefficients = (omega, c)
+        block = self._draws((2, N, d))
+        setup = self._kernel_setup()
+        code = setup[5]
+        f = np.empty((R, N)) if code != kernels.GIVEN else self.objective(s.x)
+        new, speeds = np.empty((3,) + s.x.shape), np.empty((2, R))
         y, f_y, yg, best = s.y.copy(), s.f_y.copy(), s.yg.copy(), s.best_fitness.copy()
         if not isinstance(omega, float) and np.ndim(omega) or c.ndim > 1:  # coefficients per robot
             w_robots = np.ascontiguousarray(np.broadcast_to(omega, (R, N)), dtype=float)
@@ -311,20 +415,81 @@ class Simulation:
         else:
             w_robots, c_robots = kernels.NONE2, kernels.NONE3
             w, c_terms = float(omega), c if c.shape == (2,) else np.ascontiguousarray(np.broadcast_to(c, (2,)))
-        ahead = self.ahead_direction
-        if ahead.shape != (d,):
-            ahead = np.ascontiguousarray(np.broadcast_to(ahead, (d,)), dtype=float)
-        kernels.swarm_step(s.x, s.u, y, f_y, f, draws, w, w_robots, c_terms, c_robots, ahead,
-                           self.attractors == "literal", self.law.adapted, self.dt,
-                           self.pbest_order == "before_velocity", obj.maximise, code,
-                           source if code != kernels.LINEAR else np.zeros(d), float(obj.scale), new, yg, best, moving,
-                           speeds)
+        turns = s.turns()
+        ahead, literal, adapted, before, maximise, code, source, scale = setup
+        kernels.swarm_step(s.x, s.u, y, f_y, f, block.draws, block.take(), w, w_robots, c_terms, c_robots, ahead,
+                           literal, adapted, self.dt, before, maximise, code, source, scale, new, yg, best,
+                           turns.turn, turns.turned, speeds)
+        turns.pending = True
         s.f, s.y, s.f_y, s.yg, s.best_fitness = f, y, f_y, yg, best
-        s.heading = _heading(new[1], s.heading, moving)
         s.x, s.u, s.a = new
         s.k += 1
         return StepInfo(t=self.t, omega=omega, c=c, best_fitness=best.copy(), max_speed=speeds[0],
                         max_component=speeds[1])
+
+    def run(self, steps: int, track: int = 0) -> RunSeries:
+        """Advance ``steps`` ticks without a caller between them (headless use): the same
+        numbers as ``steps`` calls of :meth:`step`. Where the compiled tick applies and the
+        coefficients are the same for every robot, whole blocks of ticks run in one compiled
+        call (:func:`kernels.swarm_run`); other ticks go through :meth:`step`."""
+        if steps < 0 or not 0 <= track < self.robots:
+            raise ValueError(f"need steps >= 0 and 0 <= track < {self.robots}, got {steps}, {track}")
+        R, d = self.runs, self.d
+        out = RunSeries(t=np.empty(steps), omega=[], c=[], best_fitness=np.empty((steps, R)),
+                        speeds=np.empty((steps, 2, R)), tracked=np.empty((steps, R, d)))
+        k = 0
+        while k < steps:
+            k += self._run_compiled(k, steps, track, out) or self._run_step(k, track, out)
+        return out
+
+    def _run_step(self, k: int, track: int, out: RunSeries) -> int:
+        info = self.step()
+        out.t[k], out.best_fitness[k], out.tracked[k] = info.t, info.best_fitness, self.state.u[:, track]
+        out.speeds[k] = info.max_speed, info.max_component
+        out.omega.append(info.omega)
+        out.c.append(info.c)
+        return 1
+
+    def _run_compiled(self, k: int, steps: int, track: int, out: RunSeries) -> int:
+        """Ticks k … of :meth:`run` in one compiled call, as many as the block of draws holds
+        and while the coefficients are the same for every robot; 0 if none."""
+        if not self._compiled_tick():
+            return 0
+        s, d, dt = self.state, self.d, self.dt
+        R, N = s.x.shape[:2]
+        block = self._draws((2, N, d))
+        omegas, cs = [], []
+        for j in range(min(steps - k, block.ticks - block.used)):
+            omega, c = self.policy.coefficients((s.k + j) * dt, dt, d)  # self.t at that tick
+            c = np.asarray(c, dtype=float)
+            if not isinstance(omega, float) or c.shape != (2,):
+                break
+            omegas.append(omega)
+            cs.append(c)
+        n = len(omegas)
+        if not n:
+            return 0
+        ahead, literal, adapted, before, maximise, code, source, scale = self._kernel_setup()
+        if code == kernels.GIVEN:
+            return 0
+        new, f = np.empty((2, 3) + s.x.shape), np.empty((R, N))
+        y, f_y, yg, best = s.y.copy(), s.f_y.copy(), s.yg.copy(), s.best_fitness.copy()
+        turns = s.turns()
+        first = block.used
+        block.used += n
+        last = kernels.swarm_run(s.x, s.u, y, f_y, f, block.draws, first, np.array(omegas), np.array(cs), ahead,
+                                 literal, adapted, dt, before, maximise, code, source, scale, new, yg, best,
+                                 turns.turn, turns.turned, out.speeds[k:k + n], out.best_fitness[k:k + n], track,
+                                 out.tracked[k:k + n])
+        turns.pending = True
+        s.f, s.y, s.f_y, s.yg, s.best_fitness = f, y, f_y, yg, best
+        s.x, s.u, s.a = new[last]
+        out.t[k:k + n] = [(s.k + j + 1) * dt for j in range(n)]
+        out.omega += omegas
+        out.c += cs
+        s.k += n
+        self._coefficients = (omegas[-1], cs[-1])
+        return n
 
     def info(self) -> StepInfo:
         """The metrics of the current step, with the coefficients of the last tick."""

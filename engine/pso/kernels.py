@@ -155,20 +155,23 @@ NONE2, NONE3 = np.empty((0, 0)), np.empty((0, 0, 0))  # "the same for every robo
 
 @kernel
 def swarm_step(x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: np.ndarray, draws: np.ndarray,
-               omega: float, omega_robots: np.ndarray, c: np.ndarray, c_robots: np.ndarray, ahead: np.ndarray,
-               literal: bool, adapted: bool, dt: float, before: bool, maximise: bool, code: int, source: np.ndarray,
-               scale: float, new: np.ndarray, yg: np.ndarray, best: np.ndarray, moving: np.ndarray,
-               speeds: np.ndarray) -> None:
+               tick: int, omega: float, omega_robots: np.ndarray, c: np.ndarray, c_robots: np.ndarray,
+               ahead: np.ndarray, literal: bool, adapted: bool, dt: float, before: bool, maximise: bool, code: int,
+               source: np.ndarray, scale: float, new: np.ndarray, yg: np.ndarray, best: np.ndarray, turn: np.ndarray,
+               turned: np.ndarray, speeds: np.ndarray) -> None:
     """One tick of every run (:meth:`Simulation.step`) into ``new`` (3, R, N, d): positions,
     velocities, accelerations. ``y``, ``f_y``, ``yg``, ``best`` are updated in place (pass
     copies); ``f`` is filled with the objective at ``x`` unless ``code`` is :data:`GIVEN`;
     ``speeds`` (2, R) gets each run's top speed and top velocity component.
 
-    ``draws`` is (R, 2, N, d); ω, c_1 and c_2 are ``omega`` and ``c`` (2,) for every robot, or
-    ``omega_robots`` (R, N) and ``c_robots`` (2, R, N) where those are not empty; ``ahead`` (d,)
-    is both attractors' direction unless ``literal``."""
+    ``draws[:, tick]`` are the tick's U(0,1) draws, (R, 2, N, d). A robot that moves leaves its
+    velocity's first two components (one in 1-D) in ``turn`` (R, N, ≤ 2) and True in ``turned``
+    (R, N): its heading, worked out when read (:class:`~shoal.engine.kinds.swarm.Turns`).
+    ω, c_1 and c_2 are ``omega`` and ``c`` (2,) for every robot, or ``omega_robots`` (R, N) and
+    ``c_robots`` (2, R, N) where those are not empty; ``ahead`` (d,) is both attractors'
+    direction unless ``literal``."""
     R, N, d = x.shape
-    buf, ga, gb = np.empty(d), np.empty(d), np.empty(d)
+    buf = np.empty(d)
     per_robot = omega_robots.shape[0] > 0
     for r in range(R):
         if code != GIVEN:
@@ -178,23 +181,51 @@ def swarm_step(x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: 
         top = big = -np.inf
         for i in range(N):
             w, c1, c2 = (omega_robots[r, i], c_robots[0, r, i], c_robots[1, r, i]) if per_robot else (omega, c[0], c[1])
-            for k in range(d):  # the directions g_1, g_2
-                ga[k], gb[k] = (y[r, i, k] - x[r, i, k], yg[r, k] - x[r, i, k]) if literal else (ahead[k], ahead[k])
-            if adapted:
-                for k in range(d):
-                    ga[k], gb[k] = _sgn(ga[k]), _sgn(gb[k])
-            for k in range(d):
-                v = w * u[r, i, k] + (0.0 + (c1 * draws[r, 0, i, k]) * ga[k] + (c2 * draws[r, 1, i, k]) * gb[k])
-                new[1, r, i, k] = v  # [2.1] / [3.11]
-                new[2, r, i, k] = (v - u[r, i, k]) / dt if dt != 1.0 else v - u[r, i, k]  # [3.22] (/1: no bit)
-                new[0, r, i, k] = x[r, i, k] + (dt * v if adapted else v)  # [3.10] / [2.2]
-                buf[k] = v * v
             move = False
             for k in range(d):
-                move = move or new[1, r, i, k] != 0.0
-                big = _maximum(big, abs(new[1, r, i, k]))
-            moving[r, i] = move
+                if literal:  # the directions g_1, g_2
+                    g1, g2 = y[r, i, k] - x[r, i, k], yg[r, k] - x[r, i, k]
+                else:
+                    g1 = g2 = ahead[k]
+                if adapted:
+                    g1, g2 = _sgn(g1), _sgn(g2)
+                uk = u[r, i, k]
+                v = w * uk + (0.0 + (c1 * draws[r, tick, 0, i, k]) * g1 + (c2 * draws[r, tick, 1, i, k]) * g2)
+                new[1, r, i, k] = v  # [2.1] / [3.11]
+                new[2, r, i, k] = (v - uk) / dt if dt != 1.0 else v - uk  # [3.22] (/1: no bit)
+                new[0, r, i, k] = x[r, i, k] + (dt * v if adapted else v)  # [3.10] / [2.2]
+                buf[k] = v * v
+                move |= v != 0.0
+                big = _maximum(big, abs(v))
+            if move:
+                turned[r, i] = True
+                for k in range(turn.shape[2]):
+                    turn[r, i, k] = new[1, r, i, k]
             top = _maximum(top, math.sqrt(0.0 + _block(buf, 0, d)))
         speeds[0, r], speeds[1, r] = top, big
         if not before:  # the velocity saw last tick's bests
             _bests(r, x, f, y, f_y, yg, best, maximise)
+
+
+@kernel
+def swarm_run(x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: np.ndarray, draws: np.ndarray,
+              first: int, omegas: np.ndarray, cs: np.ndarray, ahead: np.ndarray, literal: bool, adapted: bool,
+              dt: float, before: bool, maximise: bool, code: int, source: np.ndarray, scale: float, new: np.ndarray,
+              yg: np.ndarray, best: np.ndarray, turn: np.ndarray, turned: np.ndarray, speeds: np.ndarray,
+              bests: np.ndarray, track: int, tracked: np.ndarray) -> int:
+    """``len(omegas)`` ticks of :func:`swarm_step` in one call, with the coefficients ``omegas[j]``
+    and ``cs[j]`` (the same for every robot) and the draws ``draws[:, first + j]`` at tick j. The
+    states alternate between ``new[0]`` and ``new[1]`` (each (3, R, N, d)); returns the index of
+    the last. Per tick j: ``speeds[j]`` as in :func:`swarm_step`, ``bests[j]`` the runs' best
+    fitness, ``tracked[j]`` the velocity of robot ``track`` of every run."""
+    none2, none3 = np.empty((0, 0)), np.empty((0, 0, 0))
+    last = 0
+    for j in range(omegas.shape[0]):
+        last = j % 2
+        out = new[last]
+        swarm_step(x, u, y, f_y, f, draws, first + j, omegas[j], none2, cs[j], none3, ahead, literal, adapted, dt,
+                   before, maximise, code, source, scale, out, yg, best, turn, turned, speeds[j])
+        bests[j] = best
+        tracked[j] = out[1, :, track]
+        x, u = out[0], out[1]
+    return last

@@ -3,7 +3,8 @@ the triangle (A, B_{t−1}, B_t) and dead reckoning x3, with the mitigation test
 
 Vectorised over any leading shape (typically runs × observers × neighbours). Every singular
 input (zero or failed range, |v| = 0, cos α outside [−1, 1], non-finite values) falls back to
-x3 and never yields NaN.
+x3 and never yields NaN. :class:`Flag` says why a set is what it is, :class:`Kind` which
+candidate an estimate took.
 """
 
 from __future__ import annotations
@@ -21,6 +22,17 @@ class Flag(IntEnum):
     FALLBACK = 1  # range failure, |v| = 0 or non-finite input: {x3}
     MITIGATED_V = 2  # thin triangle [3.6]: {x3}
     MITIGATED_COS = 3  # arccos singularity [3.5]: {x3}
+
+
+class Kind(IntEnum):
+    """Where an estimate came from (for the ghost overlay and the dead-reckoning share)."""
+
+    NONE = 0  # no estimate held this step (not a neighbour)
+    X1 = 1  # geometric candidate x1 (CSS: blended with x3 by w)
+    X2 = 2  # geometric candidate x2
+    X3 = 3  # dead reckoning
+    INITIAL = 4  # the initial estimate, before any localisation
+    PERFECT = 5  # oracle baseline
 
 
 @dataclass(frozen=True)

@@ -10,26 +10,15 @@ what was selected, ``(R, N, N)``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import IntEnum
 from typing import Callable, Literal, Protocol
 
 import numpy as np
 
 from ..core.registry import Registry
-from .candidates import Candidates
+from . import select_kernels
+from .candidates import Candidates, Kind
 
 RTSTriangle = Literal["first", "best"]
-
-
-class Kind(IntEnum):
-    """Where an estimate came from (for the ghost overlay and the dead-reckoning share)."""
-
-    NONE = 0  # no estimate held this step (not a neighbour)
-    X1 = 1  # geometric candidate x1 (CSS: blended with x3 by w)
-    X2 = 2  # geometric candidate x2
-    X3 = 3  # dead reckoning
-    INITIAL = 4  # the initial estimate, before any localisation
-    PERFECT = 5  # oracle baseline
 
 
 def css(
@@ -226,15 +215,18 @@ def _css(c: Candidates, adjacency: np.ndarray, ranges: np.ndarray, base: tuple[n
     return base[0], base[1], None, None
 
 
+# RTS and Akcan run compiled (select_kernels); rts() and akcan() above are their numpy references
+
+
 def _rts(c: Candidates, adjacency: np.ndarray, ranges: np.ndarray, base: tuple[np.ndarray, np.ndarray],
          options: RTSOptions) -> Chosen:
-    res = rts(c, adjacency, base, options.rts_triangle, options.rts_prefer_geometric, options.rts_tolerance)
-    return res.est, res.kind, res.triangle, res.round_trip
+    return select_kernels.rts(c.points, c.mask, adjacency, base, options.rts_triangle, options.rts_prefer_geometric,
+                              options.rts_tolerance)
 
 
 def _akcan(c: Candidates, adjacency: np.ndarray, ranges: np.ndarray, base: tuple[np.ndarray, np.ndarray],
            options: RTSOptions) -> Chosen:
-    est, kind = akcan(c, adjacency, ranges, base)
+    est, kind = select_kernels.akcan(c.points, c.mask, adjacency, ranges, base)
     return est, kind, None, None
 
 

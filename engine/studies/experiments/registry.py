@@ -194,6 +194,18 @@ def _umask() -> int:
     return mask
 
 
+def _cpu_seconds() -> float:
+    """CPU seconds of this process and of its worker processes that have ended (a local pool's
+    workers end with each batch of jobs; a Dask cluster's are not counted; without the
+    ``resource`` module, as on Windows, this process only)."""
+    try:
+        import resource
+    except ImportError:
+        return time.process_time()
+    me, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + children.ru_utime + children.ru_stime
+
+
 def reproduce(
     target: str,
     out_dir: Path,
@@ -231,12 +243,13 @@ def reproduce(
         raise ValueError(f"workers must be >= 1, got {workers}")
     out_dir = Path(out_dir)
     _check_replaceable(out_dir)
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), _cpu_seconds()
     with atomic_output_dir(out_dir) as tmp:
         tmp.chmod(0o777 & ~_umask())  # mkdtemp makes it private; the result is an ordinary folder
         with using(scheduler):
             fields = spec.run(tmp, runs, workers, progress, **options)
-        summary = {"target": target, "runs": runs, "elapsed_s": round(time.perf_counter() - start, 3), **fields}
+        summary = {"target": target, "runs": runs, "elapsed_s": round(time.perf_counter() - start, 3),
+                   "cpu_s": round(_cpu_seconds() - cpu, 3), **fields}
         summary["workers"] = workers
         summary["quick"] = quick
         if (used := scheduler or current()) is not None:

@@ -194,7 +194,8 @@ def run_all(
             log(f"  {name} failed: {type(e).__name__}: {e}")
             continue
         n_pass = sum(bool(c["pass"]) for c in summary["checks"])
-        log(f"  {n_pass}/{len(summary['checks'])} checks pass ({time.perf_counter() - start:.0f} s)")
+        log(f"  {n_pass}/{len(summary['checks'])} checks pass ({time.perf_counter() - start:.0f} s, "
+            f"{summary.get('cpu_s', 0):.0f} CPU s)")
     return write_report(out_dir, names)
 
 
@@ -244,22 +245,29 @@ def render(outcomes: Sequence[Outcome], *, image_prefix: str = "") -> str:
         "figures, each check with the thesis' claim beside Shoal's measured value, and where and why the two "
         "differ. A check that does not hold is reported as not passed, never hidden. Each target folder also "
         "holds `runs.csv` and `summary.json`; a fresh run also writes the series behind the figures. Times are "
-        "wall-clock seconds with the workers named in each section.", "",
+        "wall-clock seconds with the workers given in the table; CPU seconds add up the process and its "
+        "local workers (they depend far less on what else the machine is doing).", "",
     ]
     quick = [o.name for o in outcomes if (o.summary or {}).get("quick")]
     if quick:
         lines += [f"**Quick (classroom) size:** {'every target' if len(quick) == len(outcomes) else ', '.join(quick)} "
                   "ran with `--quick`: few runs per case (marked \"quick\" below), the same checks. The numbers are "
                   "noisier than at full size; `shoal reproduce --all` regenerates the full report.", ""]
-    lines += ["| target | thesis | runs | checks passed | time (s) |", "|---|---|---:|---:|---:|"]
+    lines += ["| target | thesis | runs | checks passed | time (s) | CPU (s) | workers |",
+              "|---|---|---:|---:|---:|---:|---:|"]
     for o in outcomes:
         if o.error is not None:
-            lines.append(f"| [{o.name}](#{o.name}) | {SOURCES.get(o.name, '')} | | failed to run | |")
+            lines.append(f"| [{o.name}](#{o.name}) | {SOURCES.get(o.name, '')} | | failed to run | | | |")
         else:
             s = o.summary or {}
             runs = f"{s.get('runs', '')}{' (quick)' if s.get('quick') else ''}"
             lines.append(f"| [{o.name}](#{o.name}) | {SOURCES.get(o.name, '')} | {runs} | "
-                         f"{o.passed}/{len(o.checks)} | {s.get('elapsed_s', '')} |")
+                         f"{o.passed}/{len(o.checks)} | {s.get('elapsed_s', '')} | {s.get('cpu_s', '')} | "
+                         f"{s.get('workers', '')} |")
+    ran = [o.summary or {} for o in outcomes if o.error is None]
+    if ran:
+        wall, cpu = sum(s.get("elapsed_s", 0.0) for s in ran), sum(s.get("cpu_s", 0.0) for s in ran)
+        lines.append(f"| all | | | | {wall:.0f} | {cpu:.0f} | |")
     total = sum(len(o.checks) for o in outcomes)
     lines += ["", f"In all: {sum(o.passed for o in outcomes)} of {total} checks pass over "
               f"{sum(o.error is None for o in outcomes)} targets.", ""]
