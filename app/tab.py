@@ -108,8 +108,8 @@ class TabApp:
                 self.panels.sync()
                 return self.session
             new = kind.session(scenario)  # may refuse: then the old scene stays
-            if self.session.playing:
-                new.play()
+            new.choose_at_end(self.session.at_end)  # the tab's choice outlives the scene
+            new.play()  # every scene opens playing
             self._drop_kind()
             self.session = new
             self._build_kind()
@@ -157,7 +157,7 @@ class TabApp:
         dropped, not queued). Tabs ticked by hand (tests) always take all ``n``."""
         end = time.monotonic() + self.STEP_BUDGET if self.auto_tick else float("inf")
         for _ in range(n):
-            if not self.session.step(1) or time.monotonic() >= end:
+            if not self.session.play_step() or time.monotonic() >= end:
                 return
 
     def _tick(self, now: float, plots: bool = True) -> None:

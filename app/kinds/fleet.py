@@ -637,7 +637,7 @@ def _readout(s: Session) -> str:
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc, edits = s.scenario, driver(s).edits
-    return (f"**{sc.name}** · {state} · t = {r['t']:.0f} s · step {int(r['k'])}/{sc.sim.steps} · "
+    return (f"**{sc.name}** · {state} · t = {r['t']:.0f} s · {s.progress()} · "
             f"CoM x = {r['com']:.1f} m"
             + (f" · layers passed {int(r['layers_passed'])}/{int(r['layers'])}" if r["layers"] else "")
             + f" · {int(r['operational'])}/{int(r['operational'] + r['collided'])} operational"

@@ -358,7 +358,7 @@ def _inspector(s: Session, snap: Snapshot) -> str:
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
-    return (f"**{sc.name}** · {state} · gen {int(r['k'])}/{sc.sim.steps} · "
+    return (f"**{sc.name}** · {state} · {s.progress('gen')} · "
             f"mean e_abs {fmt(r['e_abs_mean'])} · best f {fmt(r['generation_best'])}")
 
 

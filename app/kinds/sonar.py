@@ -520,7 +520,7 @@ def _status(s: Session, r: dict[str, float], state: str) -> str:
     conv = f" · reached d_c at step {int(r['converged_at'])}" if r["converged_at"] >= 0 else ""
     ring = f" · {100 * r['inside']:.0f}% inside r" if sc.acoustics.r > 0 else ""
     return (f"**{sc.name}** · {LABELS[sc.acoustics.algorithm]} · {state} · t = {r['t']:.0f} s · "
-            f"step {int(r['k'])}/{sc.sim.steps} · |CoM − source| = {r['com_dist']:.0f} m{conv}{ring}")
+            f"{s.progress()} · |CoM − source| = {r['com_dist']:.0f} m{conv}{ring}")
 
 
 def _compare(s: Session) -> dict[str, dict[str, Any]]:

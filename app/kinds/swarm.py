@@ -237,7 +237,7 @@ def _readout(s: Session) -> str:
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
-    return (f"**{sc.name}** · {state} · t = {r['t']:.1f} s · step {int(r['k'])}/{sc.sim.steps} · "
+    return (f"**{sc.name}** · {state} · t = {r['t']:.1f} s · {s.progress()} · "
             f"best f = {r['best']:.4g}" + (f" · {int(r['outside'])} outside the arena" if r["outside"] else ""))
 
 

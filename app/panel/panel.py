@@ -27,6 +27,7 @@ from ..experiment.service import ExperimentService
 from ..lessons.panel import LessonProgress, LessonsPanel
 from ..lessons.scenes import load_scene
 from ..preset_menu import PresetMenu
+from ..session.lifecycle import AT_END, at_end_choice, at_end_label
 from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
@@ -148,9 +149,13 @@ class Panel:
         self.status = gui.add_markdown("")
         self.playback = gui.add_button_group("playback", PLAYBACK)
         self.top += [self.preset, self.status, self.playback, self._build(SPEED_SLIDER)]
+        self.at_end = gui.add_dropdown(
+            "at the end", self._at_end_options(), initial_value=at_end_label(self.session.at_end, sc.sim.steps),
+            hint="at the preset's last step the run stops (Play, Step or a changed control start it again), "
+                 "starts again from step 0, or runs on")
         self.seed = gui.add_number("seed", initial_value=int(sc.sim.seed), min=0, step=1,
                                    hint="random seed; changing it restarts the run")
-        self.top.append(self.seed)
+        self.top += [self.at_end, self.seed]
 
         @self.preset.on_update
         def _(event: Any) -> None:
@@ -165,6 +170,27 @@ class Panel:
         def _(event: Any) -> None:
             if not self.syncing:
                 self._seed_changed()
+
+        @self.at_end.on_update
+        def _(event: Any) -> None:
+            if not self.syncing:
+                self.choose_at_end(self.at_end.value)
+
+    def _at_end_options(self) -> tuple[str, ...]:
+        steps = self.session.scenario.sim.steps
+        return tuple(at_end_label(c, steps) for c in AT_END)
+
+    def choose_at_end(self, label: str) -> bool:
+        """The header's *at the end* choice (a label of the dropdown); anything else is refused."""
+        choice = at_end_choice(str(label), self.session.scenario.sim.steps)
+        if choice is None:
+            self.notify("Refused: at the end", f"{label!r} is not one of: {', '.join(self._at_end_options())}",
+                        "red")
+            self.sync()
+            return False
+        self.session.choose_at_end(choice)
+        self.refresh_status()
+        return True
 
     def _build_tab(self, tab: Tab) -> None:
         with self.tabs.add_tab(tab.label):
@@ -332,6 +358,9 @@ class Panel:
             for item, h in self._controls:
                 self._sync_one(item, h, s, sc)
             self.set_quietly(self.seed, int(sc.sim.seed))
+            if tuple(self.at_end.options) != self._at_end_options():
+                self.at_end.options = self._at_end_options()
+            self.set_quietly(self.at_end, at_end_label(s.at_end, sc.sim.steps))
             menu = self.services.menu
             if tuple(self.preset.options) != menu.options():
                 self.preset.options = menu.options()
@@ -522,7 +551,7 @@ class Panel:
 
     def refresh_status(self) -> None:
         s = self.session
-        state = "▶ playing" if s.playing else ("■ finished" if s.finished else "paused")
+        state = "▶ playing" if s.playing else ("■ finished: Play runs it again" if s.finished else "paused")
         self.status.content = self.part.status(s, s.readout(), state)
 
     def refresh_readout(self) -> None:
