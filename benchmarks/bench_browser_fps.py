@@ -52,6 +52,12 @@ CASES = [
       "view.steps_per_second=20", LONG]),
     ("for comparison: Ch. 3 swarm, 100 robots, NO trails, playback 60 steps/s", "default",
      ["sim.robots=100", "view.steps_per_second=60", "view.trail_seconds=0", LONG]),
+    ("Ch. 4 fleet, 1000 robots + trails, obstacles, kinematic (compiled tick), 20 steps/s", "course-dvc",
+     ["sim.robots=1000", "world.length=160", "world.width=73.2", "world.start_size=63.2",
+      "view.steps_per_second=20", LONG]),
+    ("Ch. 4 fleet, 200 robots + trails, obstacles, pymunk physics, 20 steps/s", "course-physics",
+     ["sim.robots=200", "world.length=90", "world.width=38.3", "world.start_size=28.3",
+      "view.steps_per_second=20", LONG]),
 ]
 
 COUNT_RAF = """

@@ -37,6 +37,10 @@ CASES = [
     ("40 robots, GT-PSO escorting a still source, waveform (escort-stationary)", "escort-stationary", []),
     ("40 robots, GT-PSO escorting a moving source, waveform (escort-moving)", "escort-moving", []),
     ("100 robots, Adapted PSO, free space (default)", "default", ["sim.robots=100", "sim.steps=100000"]),
+    ("1000 robots, obstacle course, sensing + DVC, kinematic (compiled tick)", "course-dvc",
+     ["sim.robots=1000", "world.length=160", "world.width=73.2", "world.start_size=63.2", "sim.steps=100000"]),
+    ("200 robots, obstacle course, sensing + DVC, pymunk physics (mecanum)", "course-physics",
+     ["sim.robots=200", "world.length=90", "world.width=38.3", "world.start_size=28.3", "sim.steps=100000"]),
 ]
 
 
@@ -64,11 +68,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="40 ticks per case instead of --steps")
     ap.add_argument("--steps", type=int, default=300, help="timed ticks per case")
+    ap.add_argument("--cases", type=int, nargs="*", help="indices of the cases to run (0-based)")
     args = ap.parse_args()
     steps = 40 if args.quick else args.steps
     print(f"one core: {one_core()}; {steps} ticks per case after {WARMUP} warm-up ticks; {load_note()}\n")
     rows = []
-    for label, preset, overrides in CASES:
+    for label, preset, overrides in [CASES[i] for i in args.cases] if args.cases else CASES:
         m = measure(preset, overrides, steps)
         e, ec, a, ac = m["engine"], m["engine_cpu"], m["app"], m["app_cpu"]
         rows.append([label, fmt(ec["median"]), fmt(ec["p95"]), fmt(ac["median"]), fmt(ac["p95"]),

@@ -180,7 +180,8 @@ def _expected(circles: np.ndarray, robots: np.ndarray, rr: float, rng_: float) -
         gap = np.maximum(dist - bodies[:, 2] - rr, 0.0)
         deg = np.degrees(np.arctan2(d[:, 1], d[:, 0]))
         near_border = np.min(np.abs(((deg + 180.0) % 60.0 + 30.0) % 60.0 - 30.0)) if len(deg) else 99
-        if len(deg) and (dist.min() < 1e-6 or near_border < 1e-6 or np.min(np.abs(gap - rng_)) < 1e-6):
+        # centres closer than 1e-5 m: pymunk's gradient there is a fixed direction, not the bearing
+        if len(deg) and (dist.min() < 1e-5 or near_border < 1e-6 or np.min(np.abs(gap - rng_)) < 1e-6):
             ok = False
         k = (np.floor((deg + 180.0) / 60.0).astype(int)) % 6
         for g, s in zip(gap, k):

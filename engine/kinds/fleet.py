@@ -8,6 +8,7 @@ metrics. Arrays are (runs, robots, …); run ``i`` draws from child ``i`` of
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar, Literal
 
@@ -15,10 +16,11 @@ import numpy as np
 
 from ..core.contract import check_live
 from ..core.rng import run_generators
+from ..robots import kernels
 from ..robots.dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
-from ..robots.laws import ROBOT_LAWS, Inertia, Limits
+from ..robots.laws import ROBOT_LAWS, Inertia, Limits, rotational_energy_factor
 from ..robots.motion import Drive, Kinematic, Physics
-from ..robots.sensing import SectorReading, sense, virtual_force
+from ..robots.sensing import S_FLOOR, SECTORS, SectorReading, sense, virtual_force
 from ..robots.world import RunSpace, WorldSpec
 from ..slo.positions import Oracle, PositionSource
 
@@ -70,6 +72,29 @@ class FleetParams:
     def limits(self) -> Limits:
         return Limits(self.v_max, self.rotational_energy, self.robot_radius, self.r_min)
 
+    def tick_params(self) -> kernels.TickParams:
+        """These parameters as the compiled tick reads them (:func:`kernels.phase_b`)."""
+        law = ROBOT_LAWS[self.law]
+        coefficients = {None: kernels.CONSTANT, "omni": kernels.DVC_OMNI, "nonomni": kernels.DVC_NONOMNI}[
+            law.dvc if self.dvc else None]
+        c = (tuple(float(v) for v in self.c) + (0.0,) * 5)[: law.terms] + (0.0,) * (5 - law.terms)
+        wm = w_max(self.v_max, self.dt, self.rotational_energy, self.robot_radius) if coefficients else 0.0
+        return kernels.TickParams(
+            law=kernels.LAWS.index(self.law), coefficients=coefficients, drive=kernels.DRIVES.index(self.drive),
+            sequential=self.update == "sequential", guard=self.guard, body_frame=law.body_frame, terms=law.terms,
+            dt=float(self.dt), sensing_range=float(self.sensing_range), radius=float(self.robot_radius),
+            v_max=float(self.v_max), omega=float(self.omega), c=c, alpha=float(self.alpha), beta=float(self.beta),
+            gamma=float(self.gamma), c1_share=float(self.c1_share), s_min=float(self.s_min),
+            k_omni=self.alpha * self.beta / (self.dt * math.sqrt(2)), w_max=wm,
+            rot_factor=float(rotational_energy_factor(self.rotational_energy, self.robot_radius))
+            if law.body_frame else 0.0,
+            r_min=float(self.r_min), tolerance=float(self.contact_tolerance), s_floor=S_FLOOR, reach=self.reach)
+
+    @property
+    def reach(self) -> float:
+        """R_s + 2r + 2·v_max·Δt: robots farther apart can neither see nor reach each other in a tick."""
+        return self.sensing_range + 2.0 * self.robot_radius + 2.0 * self.v_max * self.dt
+
 
 @dataclass
 class FleetState:
@@ -113,21 +138,29 @@ class FleetInfo:
 def spawn_positions(
     rng: np.random.Generator, box: tuple[float, float, float, float], n: int, radius: float, spacing: float = 0.3
 ) -> np.ndarray:
-    """n robot centres uniformly in ``box``, at least ``spacing`` apart surface to surface
-    (rejection sampling; a grid when the box is too small for that)."""
+    """n robot centres uniformly in ``box``, at least ``spacing`` apart surface to surface:
+    up to 200·n uniform candidates, each kept if it is far enough from every one kept before
+    (a grid when the box is too small for that). Compiled (:func:`kernels.spaced`); the
+    generator is left exactly as after drawing the candidates used, one pair at a time."""
     xmin, ymin, xmax, ymax = box
-    pts: list[np.ndarray] = []
     gap = 2.0 * radius + spacing
-    for _ in range(200 * n):
-        if len(pts) == n:
-            break
-        p = rng.uniform([xmin + radius, ymin + radius], [xmax - radius, ymax - radius])
-        if all(np.hypot(*(p - q)) >= gap for q in pts):
-            pts.append(p)
-    if len(pts) < n:  # box too small for random placement: fill a grid, row by row
+    low, high = [xmin + radius, ymin + radius], [xmax - radius, ymax - radius]
+    pts = np.empty((n, 2))
+    cells = np.array([xmin, ymin, (xmax - xmin) // gap + 1, (ymax - ymin) // gap + 1], dtype=float)
+    head, nxt = np.full(int(cells[2] * cells[3]), -1, np.int64), np.empty(n, np.int64)
+    count, left = 0, 200 * n
+    while count < n and left > 0:
+        state = rng.bit_generator.state
+        block = rng.uniform(low, high, size=(min(left, 4 * n + 64), 2))
+        count, used = kernels.spaced(block, pts, count, gap, cells, head, nxt)
+        if used < len(block):  # give back the candidates not looked at
+            rng.bit_generator.state = state
+            rng.uniform(low, high, size=(used, 2))
+        left -= used
+    if count < n:  # box too small for random placement: fill a grid, row by row
         cols = max(1, int((xmax - xmin) // gap))
-        pts = [np.array([xmin + radius + (i % cols) * gap, ymin + radius + (i // cols) * gap]) for i in range(n)]
-    return np.array(pts)
+        return np.array([[xmin + radius + (i % cols) * gap, ymin + radius + (i // cols) * gap] for i in range(n)])
+    return pts
 
 
 class Fleet:
@@ -148,12 +181,16 @@ class Fleet:
          "rotational_energy", "update", "guard", "slo"})
 
     def __init__(self, *, world: WorldSpec, robots: int, params: FleetParams | None = None,
-                 runs: int = 1, seed: int = 0, first_run: int = 0, positions: PositionSource | None = None) -> None:
+                 runs: int = 1, seed: int = 0, first_run: int = 0, positions: PositionSource | None = None,
+                 compiled: bool = True) -> None:
+        """``compiled`` False keeps the numpy tick (the reference the compiled one is tested
+        against) in kinematic mode too."""
         if robots < 1 or runs < 1:
             raise ValueError("robots and runs must be >= 1")
         self.world, self.params = world, params or FleetParams()
         self.runs, self.first_run, self._robots = runs, first_run, robots
         self.positions: PositionSource = positions or Oracle()
+        self.compiled = compiled
         self.reset(seed)
 
     # ------------------------------------------------------------------ setup
@@ -180,8 +217,10 @@ class Fleet:
         p = self.params
         x = np.stack([spawn_positions(g, self.world.start_box, self._robots, p.robot_radius, p.spawn_gap)
                       for g in self.rngs])
-        body = "dynamic" if p.motion == "physics" else "kinematic"
-        self.spaces = [RunSpace(self.world, x[r], p.robot_radius, body_type=body) for r in range(self.runs)]
+        self._spaces: list[RunSpace] | None = None
+        self._stale = False
+        self._world_arrays: tuple[kernels.WorldArrays, kernels.Grid] | None = None
+        self._tick_params: tuple[FleetParams | None, kernels.TickParams | None] = (None, None)
         self.motion = self._motion()
         heading = np.zeros(x.shape[:2])
         f = self.cost(x)
@@ -193,6 +232,34 @@ class Fleet:
             slow=np.zeros((R, N), np.int64),
         )
         self.positions.start(x, self.state.y, self.state.k, self.seed, self.first_run)
+        if p.motion == "physics":
+            self._build_spaces()
+
+    @property
+    def spaces(self) -> list[RunSpace]:
+        """One pymunk space per run with every robot's body where the robot is. Physics mode
+        steps them; the numpy tick queries them; the compiled tick needs none, so they are
+        built, or brought up to date, only when read."""
+        if self._spaces is None:
+            self._build_spaces()
+        elif self._stale:
+            for sp, x in zip(self._spaces, self.state.x):
+                sp.set_positions(x)
+            self._stale = False
+        return self._spaces  # type: ignore[return-value]
+
+    def _build_spaces(self) -> None:
+        p, s = self.params, self.state
+        body = "dynamic" if p.motion == "physics" else "kinematic"
+        self._spaces = [RunSpace(self.world, s.x[r], p.robot_radius, body_type=body) for r in range(self.runs)]
+        self._stale = False
+        if p.motion == "physics":
+            self.motion = self._motion()
+            for r, sp in enumerate(self._spaces):
+                for i, b in enumerate(sp.robot_bodies):
+                    b.angle = float(s.heading[r, i])
+                    if s.status[r, i] != ACTIVE:
+                        Physics._disable(sp, i)
 
     def _motion(self) -> Kinematic | Physics:
         p = self.params
@@ -220,16 +287,10 @@ class Fleet:
     def set_world(self, world: WorldSpec) -> None:
         """Replace the static obstacles of every run at once (robots keep their state)."""
         self.world = world
-        p, s = self.params, self.state
-        body = "dynamic" if p.motion == "physics" else "kinematic"
-        self.spaces = [RunSpace(world, s.x[r], p.robot_radius, body_type=body) for r in range(self.runs)]
-        if p.motion == "physics":
-            self.motion = self._motion()
-            for r, sp in enumerate(self.spaces):
-                for i, b in enumerate(sp.robot_bodies):
-                    b.angle = float(s.heading[r, i])
-                    if s.status[r, i] != ACTIVE:
-                        Physics._disable(sp, i)
+        self._world_arrays = None
+        self._spaces = None
+        if self.params.motion == "physics":
+            self._build_spaces()
 
     # ------------------------------------------------------------------ tick
     def _draw(self, shape: tuple[int, ...]) -> np.ndarray:
@@ -319,9 +380,8 @@ class Fleet:
         p = self.params
         if p.update == "simultaneous" or p.motion == "physics":
             return [active]
-        reach = p.sensing_range + 2.0 * p.robot_radius + 2.0 * p.v_max * p.dt
         x = self.state.x
-        near = np.linalg.norm(x[:, :, None, :] - x[:, None, :, :], axis=-1) <= reach  # (R, N, N)
+        near = np.linalg.norm(x[:, :, None, :] - x[:, None, :, :], axis=-1) <= p.reach  # (R, N, N)
         R, N = active.shape
         colour = np.full((R, N), -1)
         rows = np.arange(R)
@@ -335,18 +395,34 @@ class Fleet:
     def step(self) -> FleetInfo:
         p, s = self.params, self.state
         self._update_bests()  # phase A, all robots
-        active = s.status == ACTIVE
         r = self._draws()
-        n = r.shape[0]
-        R, N = active.shape
-        omega_all, c_all = np.full((R, N), np.nan), np.zeros((n, R, N))
-        force_all = np.zeros_like(s.x)
-        gap_all = np.full((R, N, 6), p.sensing_range)
-        reading = None
-        for group in self._groups(active):  # phase B
+        R, N = s.status.shape
+        out = kernels.Outputs(
+            omega=np.full((R, N), np.nan), c=np.zeros((r.shape[0], R, N)), force=np.zeros_like(s.x),
+            gap=np.full((R, N, SECTORS), p.sensing_range), point=np.full((R, N, SECTORS, 2), np.nan),
+            centre=np.full((R, N, SECTORS, 2), np.nan), hit=np.zeros((R, N, SECTORS), bool))
+        sensed = self._compiled_phase_b(r, out) if self._compiled_tick() else self._phase_b(r, out)
+        s.cmd[s.status != ACTIVE] = 0.0
+        s.u[s.status != ACTIVE] = 0.0
+        slow = (s.status == ACTIVE) & (np.linalg.norm(s.u, axis=-1) < STALL_SPEED)
+        s.slow = np.where(slow, s.slow + 1, 0)
+        s.reading = SectorReading(out.gap, out.point, out.centre, out.hit) if sensed else None
+        s.force, s.omega, s.c = out.force, out.omega, out.c
+        s.k += 1
+        self.positions.observe(s.x, s.k)  # where the moves ended: current beliefs for drawing
+        return self.info()
+
+    def _phase_b(self, r: np.ndarray, out: kernels.Outputs) -> bool:
+        """Phase B in numpy, one group of robots at a time (:meth:`_groups`): the group senses
+        (pymunk queries), decides and moves; ``out`` gets each robot's decision. Whether any
+        robot sensed."""
+        p, s = self.params, self.state
+        sensed = False
+        for group in self._groups(s.status == ACTIVE):
             m = group & (s.status == ACTIVE)
             if not m.any():
                 continue
+            sensed = True
             reading = sense(self.spaces, s.x, s.heading, sensing_range=p.sensing_range,
                             robot_frame=p.body_frame, active=m)
             gap = reading.gap
@@ -364,20 +440,36 @@ class Fleet:
             s.u = np.where(m[..., None], moved.velocity, s.u)
             s.cmd = np.where(m[..., None], cmd, s.cmd)
             s.status = np.where(moved.hit | self._touching(m), COLLIDED, s.status).astype(np.int8)
-            omega_all = np.where(m, omega, omega_all)
-            c_all = np.where(m, c, c_all)
-            force_all = np.where(m[..., None], force, force_all)
-            gap_all = np.where(m[..., None], reading.gap, gap_all)
-        s.cmd[s.status != ACTIVE] = 0.0
-        s.u[s.status != ACTIVE] = 0.0
-        slow = (s.status == ACTIVE) & (np.linalg.norm(s.u, axis=-1) < STALL_SPEED)
-        s.slow = np.where(slow, s.slow + 1, 0)
-        if reading is not None:
-            reading.gap = gap_all
-        s.reading, s.force, s.omega, s.c = reading, force_all, omega_all, c_all
-        s.k += 1
-        self.positions.observe(s.x, s.k)  # where the moves ended: current beliefs for drawing
-        return self.info()
+            out.omega[m], out.c[:, m], out.force[m] = omega[m], c[:, m], force[m]
+            out.gap[m], out.point[m], out.centre[m], out.hit[m] = (
+                reading.gap[m], reading.point[m], reading.centre[m], reading.hit[m])
+        return sensed
+
+    def _compiled_tick(self) -> bool:
+        """Kinematic motion through :func:`kernels.phase_b` (unless the fleet was made with
+        ``compiled=False``): every law and drive of the kernel, in worlds of circles and walls."""
+        p = self.params
+        return (self.compiled and p.motion == "kinematic" and not self.world.polygons
+                and p.law in kernels.LAWS and p.drive in kernels.DRIVES)
+
+    def _compiled_phase_b(self, r: np.ndarray, out: kernels.Outputs) -> bool:
+        """Phase B by :func:`kernels.phase_b`, which updates the state's arrays in place."""
+        p, s = self.params, self.state
+        if self._world_arrays is None:
+            grid = kernels.make_grid(self.world.bounds, p.sensing_range + 2.0 * p.robot_radius)
+            w = self.world
+            self._world_arrays = (kernels.world_arrays(w.circles, w.walls, w.wall_radius, grid), grid)
+        world, grid = self._world_arrays
+        g_p, g_g = (np.ascontiguousarray(a, dtype=float) for a in self._attractors())
+        draws = np.ascontiguousarray(r if r.ndim == 4 else r[..., None])
+        s.x, s.heading, s.u, s.cmd = (np.array(a, dtype=float) for a in (s.x, s.heading, s.u, s.cmd))
+        s.status = np.array(s.status, dtype=np.int8)
+        if self._tick_params[0] != p:  # built again after a retune (or a change in place)
+            self._tick_params = (replace(p), p.tick_params())
+        sensed = kernels.phase_b(s.x, s.heading, s.u, s.cmd, s.status, g_p, g_g, draws, self._tick_params[1], world,
+                                 grid, out)
+        self._stale = True
+        return bool(sensed)
 
     def info(self) -> FleetInfo:
         s = self.state

@@ -11,18 +11,19 @@ Arrays are (runs R, particles N, 2); run i draws from the children of
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, replace
-from typing import Any, ClassVar, Literal
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from typing import Any, ClassVar, Iterable, Literal
 
 import numpy as np
 
 from ..core.contract import check_live
 from ..core.rng import component_generators
 from ..pso.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
+from ..slo import metrics
 from ..slo.beliefs import Beliefs, EntryPolicy, Localiser, LocaliserParams, Selection, random_estimates, relative_truth
 from ..slo.candidates import Candidates
 from ..slo.formation import AttractionRepulsion
-from ..slo.metrics import dead_reckoning_share, pair_distances, pair_errors, round_trip_errors, stats
 from ..slo.neighbourhoods import Neighbourhood, NeighbourhoodKind
 from ..slo.objectives import QUALITY_THRESHOLDS, Fitness, slo_objective
 from ..slo.selection import RTSTriangle
@@ -180,34 +181,90 @@ class SLOState:
         return self.beliefs.candidates
 
 
+METRICS = ("e_abs", "e_rel", "e_ang", "distance")  # statistics (metrics.STATS) of pair values
+STATS = metrics.STATS
+
+
 @dataclass
 class SLOInfo:
-    """Per-run metrics of one generation (spec §11), each (R,)."""
+    """Per-run metrics of one generation (spec §11), each (R,).
+
+    The localisation errors, distances, dead-reckoning share and round-trip error are worked
+    out when first read, from the generation's true positions ``x`` and ``beliefs`` (a step
+    replaces both, never changes them in place), so a run that keeps a few series pays for
+    those only; the values are the same whenever they are read."""
 
     k: int
     best_fitness: np.ndarray  # min_i f(x_i(t)), the best of this generation
     best_so_far: np.ndarray
     quality_met_at: np.ndarray  # first generation with best ≤ T, inf if not yet
-    e_abs: dict[str, np.ndarray] = field(default_factory=dict)  # mean, std, sem, median, count
-    e_rel: dict[str, np.ndarray] = field(default_factory=dict)
-    e_ang: dict[str, np.ndarray] = field(default_factory=dict)
-    distance: dict[str, np.ndarray] = field(default_factory=dict)  # all unordered pairs
-    dead_reckoning: np.ndarray | None = None  # share of x3 estimates
-    round_trip: np.ndarray | None = None  # mean e_r over first triangles
+    x: np.ndarray = field(repr=False)  # (R, N, 2)
+    beliefs: Beliefs = field(repr=False)
+    _pairs: dict[str, np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)  # pair values
+    _done: dict[tuple[str, str], np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def t(self) -> float:
         return float(self.k)
 
-    def series(self) -> dict[str, np.ndarray]:
+    def _values(self, name: str) -> np.ndarray:
+        if name not in self._pairs:
+            b = self.beliefs
+            if name in ("e_abs", "e_rel"):
+                self._pairs["e_abs"], self._pairs["e_rel"] = metrics.distance_errors(self.x, b.est, b.valid)
+            elif name == "e_ang":
+                self._pairs[name] = metrics.angular_errors(self.x, b.est, b.valid)
+            else:
+                self._pairs[name] = metrics.pair_distances(self.x)
+        return self._pairs[name]
+
+    def _stats(self, name: str, keys: Iterable[str] = STATS) -> dict[str, np.ndarray]:
+        """Statistics ``keys`` of metric ``name`` (one of :data:`METRICS`), each worked out once."""
+        todo = [k for k in keys if (name, k) not in self._done]
+        if todo:
+            self._done.update({(name, k): v for k, v in metrics.stats(self._values(name), todo).items()})
+        return {k: self._done[(name, k)] for k in keys}
+
+    @property
+    def e_abs(self) -> dict[str, np.ndarray]:
+        """Statistics of e_abs over the neighbour pairs."""
+        return self._stats("e_abs")
+
+    @property
+    def e_rel(self) -> dict[str, np.ndarray]:
+        return self._stats("e_rel")
+
+    @property
+    def e_ang(self) -> dict[str, np.ndarray]:
+        return self._stats("e_ang")
+
+    @property
+    def distance(self) -> dict[str, np.ndarray]:
+        """Statistics of the distances of all unordered pairs."""
+        return self._stats("distance")
+
+    @cached_property
+    def dead_reckoning(self) -> np.ndarray:
+        """Share of x3 estimates."""
+        return metrics.dead_reckoning_share(self.beliefs.kind, self.beliefs.valid)
+
+    @cached_property
+    def round_trip(self) -> np.ndarray:
+        """Mean e_r over the first triangles."""
+        return metrics.stats(metrics.round_trip_errors(self.beliefs.est, self.beliefs.adjacency), ["mean"])["mean"]
+
+    def series(self, names: Iterable[str] | None = None) -> dict[str, np.ndarray]:
         """Flat per-run values under Mai's names, e.g. ``best_fitness`` (of this generation),
-        ``e_abs_mean``, ``distance_median`` (:meth:`SLOSwarm.run`)."""
+        ``e_abs_mean``, ``distance_median`` (:meth:`SLOSwarm.run`): all, or only ``names``."""
+        want = None if names is None else set(names)
         out: dict[str, np.ndarray] = {}
-        for name, value in asdict(self).items():
-            if isinstance(value, dict):
-                out.update({f"{name}_{k}": np.asarray(v, dtype=float) for k, v in value.items()})
-            elif name != "k":
-                out[name] = np.asarray(value, dtype=float)
+        for name in ("best_fitness", "best_so_far", "quality_met_at", *METRICS, "dead_reckoning", "round_trip"):
+            if name in METRICS:
+                keys = [k for k in STATS if want is None or f"{name}_{k}" in want]
+                if keys:
+                    out.update({f"{name}_{k}": np.asarray(v, dtype=float) for k, v in self._stats(name, keys).items()})
+            elif want is None or name in want:
+                out[name] = np.asarray(getattr(self, name), dtype=float)
         return out
 
     def columns(self) -> dict[str, np.ndarray]:
@@ -311,10 +368,10 @@ class SLOSwarm:
         """Metrics of the current generation."""
         return self._last
 
-    def run(self, generations: int) -> dict[str, np.ndarray]:
-        """Advance ``generations`` steps; per-generation values of :meth:`SLOInfo.series`
-        stacked to (generations + 1, R), the current generation first."""
-        rows = [self._last.series()] + [self.step().series() for _ in range(generations)]
+    def run(self, generations: int, names: Iterable[str] | None = None) -> dict[str, np.ndarray]:
+        """Advance ``generations`` steps; per-generation values of :meth:`SLOInfo.series` (all,
+        or only ``names``) stacked to (generations + 1, R), the current generation first."""
+        rows = [self._last.series(names)] + [self.step().series(names) for _ in range(generations)]
         return {k: np.stack([r[k] for r in rows]) for k in rows[0]}
 
     # ------------------------------------------------------------------ behaviour
@@ -386,10 +443,5 @@ class SLOSwarm:
         best = s.f.min(axis=1)
         s.best_fitness = np.minimum(s.best_fitness, best)
         self._met = np.where(np.isinf(self._met) & (best <= self.config.threshold()), float(s.k), self._met)
-        err = pair_errors(s.x, s.est, s.valid)
-        return SLOInfo(
-            k=s.k, best_fitness=best, best_so_far=s.best_fitness.copy(), quality_met_at=self._met.copy(),
-            e_abs=stats(err["abs"]), e_rel=stats(err["rel"]), e_ang=stats(err["ang"]),
-            distance=stats(pair_distances(s.x)), dead_reckoning=dead_reckoning_share(s.kind, s.valid),
-            round_trip=stats(round_trip_errors(s.est, s.adjacency))["mean"],
-        )
+        return SLOInfo(k=s.k, best_fitness=best, best_so_far=s.best_fitness.copy(), quality_met_at=self._met.copy(),
+                       x=s.x, beliefs=s.beliefs)

@@ -15,6 +15,7 @@ import numpy as np
 from ..core.contract import check_live
 from ..core.objectives import Objective
 from ..core.rng import run_generators
+from ..pso import kernels
 from ..pso.bests import best_index, global_best, update_personal
 from ..pso.coeffs import CoefficientPolicy
 from ..pso.laws import Law
@@ -106,7 +107,9 @@ class Simulation:
         init_spread: float = 1.0,
         init_speed: float = 0.0,
         positions: PositionSource | None = None,
+        compiled: bool = True,
     ) -> None:
+        """``compiled`` False keeps the numpy tick, the reference of the compiled one."""
         if robots < 1 or runs < 1 or d < 1:
             raise ValueError("robots, runs and d must be >= 1")
         if dt <= 0:
@@ -125,6 +128,7 @@ class Simulation:
         self.init_spread, self.init_speed = float(init_spread), float(init_speed)
         self._robots = robots
         self.positions: PositionSource = positions or Oracle()
+        self.compiled = compiled
         self.reset(seed)
 
     # ------------------------------------------------------------------ state
@@ -256,6 +260,8 @@ class Simulation:
 
     def step(self) -> StepInfo:
         """Advance every run by one control tick Δt."""
+        if self._compiled_tick():
+            return self._compiled_step()
         s = self.state
         if self.pbest_order == "before_velocity":  # Algorithm 1 phase A first
             self._update_bests()
@@ -272,6 +278,53 @@ class Simulation:
         s.k += 1
         self.positions.observe(s.x, s.k)  # where the moves ended: current beliefs for drawing
         return self.info()
+
+    def _compiled_tick(self) -> bool:
+        """:func:`kernels.swarm_step` does the tick: the laws it knows (standard, Adapted with
+        sgn) in up to 128 dimensions, on true positions and float64 states, unless the swarm was
+        made with ``compiled=False``."""
+        s = self.state
+        return (self.compiled and self.law.name in ("standard", "adapted-sgn") and self.d <= kernels.MAX_TERMS
+                and isinstance(self.positions, Oracle) and s.x.dtype == s.u.dtype == s.y.dtype == np.float64)
+
+    def _compiled_step(self) -> StepInfo:
+        """The tick of :meth:`step` in one compiled call; the same numbers."""
+        s, obj, d = self.state, self.objective, self.d
+        R, N = s.x.shape[:2]
+        omega, c = self.policy.coefficients(self.t, self.dt, d)
+        c = np.asarray(c, dtype=float)
+        self._coefficients = (omega, c)
+        draws = np.empty((R, 2, N, d))
+        for r, g in enumerate(self.rngs):  # each run's U(0,1) draws, as _draw takes them
+            g.random(out=draws[r])
+        source = np.ascontiguousarray(obj.source[:d], dtype=float)
+        code = kernels.OBJECTIVES.index(obj.name) if obj.name in kernels.OBJECTIVES else kernels.GIVEN
+        if source.shape != (d,) and code != kernels.LINEAR:
+            code = kernels.GIVEN  # numpy says what is wrong with it
+        f = np.empty((R, N)) if code != kernels.GIVEN else obj(s.x)
+        new, moving, speeds = np.empty((3,) + s.x.shape), np.empty((R, N), bool), np.empty((2, R))
+        y, f_y, yg, best = s.y.copy(), s.f_y.copy(), s.yg.copy(), s.best_fitness.copy()
+        if not isinstance(omega, float) and np.ndim(omega) or c.ndim > 1:  # coefficients per robot
+            w_robots = np.ascontiguousarray(np.broadcast_to(omega, (R, N)), dtype=float)
+            c_robots = np.ascontiguousarray(np.broadcast_to(c.reshape(c.shape + (1,) * (3 - c.ndim)), (2, R, N)))
+            w, c_terms = 0.0, c_robots[:, 0, 0].copy()
+        else:
+            w_robots, c_robots = kernels.NONE2, kernels.NONE3
+            w, c_terms = float(omega), c if c.shape == (2,) else np.ascontiguousarray(np.broadcast_to(c, (2,)))
+        ahead = self.ahead_direction
+        if ahead.shape != (d,):
+            ahead = np.ascontiguousarray(np.broadcast_to(ahead, (d,)), dtype=float)
+        kernels.swarm_step(s.x, s.u, y, f_y, f, draws, w, w_robots, c_terms, c_robots, ahead,
+                           self.attractors == "literal", self.law.adapted, self.dt,
+                           self.pbest_order == "before_velocity", obj.maximise, code,
+                           source if code != kernels.LINEAR else np.zeros(d), float(obj.scale), new, yg, best, moving,
+                           speeds)
+        s.f, s.y, s.f_y, s.yg, s.best_fitness = f, y, f_y, yg, best
+        s.heading = _heading(new[1], s.heading, moving)
+        s.x, s.u, s.a = new
+        s.k += 1
+        return StepInfo(t=self.t, omega=omega, c=c, best_fitness=best.copy(), max_speed=speeds[0],
+                        max_component=speeds[1])
 
     def info(self) -> StepInfo:
         """The metrics of the current step, with the coefficients of the last tick."""

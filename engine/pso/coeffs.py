@@ -7,6 +7,7 @@ policies (DVC) return per-robot arrays ``(n, runs, robots)`` through the same ca
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Protocol
 
 import numpy as np
@@ -25,8 +26,14 @@ class Constant:
     omega: float
     c: tuple[float, ...]
 
+    @cached_property
+    def _c(self) -> np.ndarray:
+        c = np.asarray(self.c, dtype=float)
+        c.setflags(write=False)
+        return c
+
     def coefficients(self, t: float, dt: float, d: int) -> tuple[float, np.ndarray]:
-        return self.omega, np.asarray(self.c, dtype=float)
+        return self.omega, self._c
 
 
 @dataclass(frozen=True)

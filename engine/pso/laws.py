@@ -135,12 +135,14 @@ class Law:
         return x + (dt * u_new if self.adapted else u_new)
 
 
-def motion_heading(u: np.ndarray, previous: np.ndarray) -> np.ndarray:
+def motion_heading(u: np.ndarray, previous: np.ndarray, moving: np.ndarray | None = None) -> np.ndarray:
     """Direction of motion atan2(u_2, u_1) (spec §1.1 heading default); kept from before
-    while the robot is at rest. In 1-D: 0 or π by the sign of u."""
+    while the robot is at rest (``moving``: any component of u non-zero). In 1-D: 0 or π by
+    the sign of u."""
     if u.shape[-1] < 2:
         h = np.where(u[..., 0] < 0, np.pi, 0.0)
     else:
         h = np.arctan2(u[..., 1], u[..., 0])
-    moving = np.any(u != 0, axis=-1)
+    if moving is None:
+        moving = np.any(u != 0, axis=-1)
     return np.where(moving, h, previous)

@@ -31,8 +31,14 @@ class SPSODraws:
 
 def draw(rngs: Sequence[np.random.Generator], n: int) -> SPSODraws:
     """Fresh draws for ``n`` particles of every run (gap A37: per particle per step), (R, n, …)."""
-    parts = [(g.random((n, 2)), g.random((n, 2)), g.standard_normal((n, 2)), g.random(n)) for g in rngs]
-    return SPSODraws(*(np.stack(p) for p in zip(*parts)))
+    R = len(rngs)
+    d = SPSODraws(np.empty((R, n, 2)), np.empty((R, n, 2)), np.empty((R, n, 2)), np.empty((R, n)))
+    for r, g in enumerate(rngs):  # each run's stream, drawn in place
+        g.random(out=d.u1[r])
+        g.random(out=d.u2[r])
+        g.standard_normal(out=d.normal[r])
+        g.random(out=d.rho[r])
+    return d
 
 
 def sample_hypersphere(

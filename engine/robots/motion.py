@@ -147,42 +147,72 @@ class Physics:
         R, N = active.shape
         new_x, new_heading, velocity = np.empty_like(x), np.empty_like(heading), np.zeros_like(x)
         hit = np.zeros((R, N), dtype=bool)
-        for r, sp in enumerate(spaces):
+        live = [np.flatnonzero(active[r]).tolist() for r in range(R)]
+        for sp in spaces:
             self._hook(sp)
             sp.contacts.clear()  # type: ignore[attr-defined]
-            live = [i for i in np.flatnonzero(active[r])]
-            for _ in range(self.substeps):
-                angles = np.array([sp.robot_bodies[i].angle for i in live])
-                if live:
-                    want = command_velocity(self.drive, command[r, live], angles, self.v_max)
-                for j, i in enumerate(live):
-                    body = sp.robot_bodies[i]
-                    if body.body_type != pymunk.Body.DYNAMIC:
-                        continue
-                    vel = np.array(body.velocity)
-                    if self.drive == "differential":  # no skid: keep only the forward part
-                        fwd = np.array([np.cos(body.angle), np.sin(body.angle)])
-                        vel = fwd * float(vel @ fwd)
-                        w_err = float(command[r, i, 1]) - body.angular_velocity
-                        body.angular_velocity += float(np.clip(w_err, -self.a_max * h * 4, self.a_max * h * 4))
+        angles = np.zeros((R, N))
+        for _ in range(self.substeps):  # the runs are independent: every run's substep, then the next
+            if self.drive != "holonomic":
+                for r, sp in enumerate(spaces):
+                    bodies = sp.robot_bodies
+                    angles[r, live[r]] = [bodies[i].angle for i in live[r]]
+            want = command_velocity(self.drive, command, angles, self.v_max)  # elementwise: one call for all
+            for r, sp in enumerate(spaces):
+                if live[r]:
+                    if self.drive == "differential":
+                        self._track_differential(sp, live[r], want[r, live[r]], command[r], h, dv_max)
                     else:
-                        body.angular_velocity = 0.0
-                    dv = want[j] - vel
-                    norm = float(np.hypot(*dv))
-                    if norm > dv_max:
-                        dv *= dv_max / norm
-                    body.velocity = tuple(vel + dv)
+                        self._track(sp, live[r], want[r, live[r]].tolist(), dv_max)
                 sp.space.step(h)
                 if sp.contacts:  # type: ignore[attr-defined]
                     for i in list(sp.contacts):  # type: ignore[attr-defined]
                         self._disable(sp, i)
-                    live = [i for i in live if i not in sp.contacts]  # type: ignore[attr-defined]
+                    live[r] = [i for i in live[r] if i not in sp.contacts]  # type: ignore[attr-defined]
+        for r, sp in enumerate(spaces):
             hit[r, list(sp.contacts)] = True  # type: ignore[attr-defined]
             hit[r] &= active[r]
             new_x[r] = sp.positions()
             new_heading[r] = [b.angle for b in sp.robot_bodies]
             velocity[r] = [tuple(b.velocity) for b in sp.robot_bodies]
         return Moved(new_x, wrap_angle(new_heading), velocity, hit)
+
+    @staticmethod
+    def _track(sp: RunSpace, live: list[int], want: list[list[float]], dv_max: float) -> None:
+        """Each dynamic body's velocity one step of at most ``dv_max`` toward ``want`` (plain
+        floats: this runs for every body at every substep)."""
+        dynamic = pymunk.Body.DYNAMIC
+        for (wx, wy), i in zip(want, live):
+            body = sp.robot_bodies[i]
+            if body.body_type != dynamic:
+                continue
+            vx, vy = body.velocity
+            body.angular_velocity = 0.0
+            dx, dy = wx - vx, wy - vy
+            norm = float(np.hypot(dx, dy))
+            if norm > dv_max:
+                k = dv_max / norm
+                dx, dy = dx * k, dy * k
+            body.velocity = (vx + dx, vy + dy)
+
+    def _track_differential(self, sp: RunSpace, live: list[int], want: np.ndarray, command: np.ndarray, h: float,
+                            dv_max: float) -> None:
+        """:meth:`_track` for a differential drive: no skid (only the forward part of the
+        velocity is kept) and the turn rate tracks the commanded one."""
+        for j, i in enumerate(live):
+            body = sp.robot_bodies[i]
+            if body.body_type != pymunk.Body.DYNAMIC:
+                continue
+            vel = np.array(body.velocity)
+            fwd = np.array([np.cos(body.angle), np.sin(body.angle)])
+            vel = fwd * float(vel @ fwd)
+            w_err = float(command[i, 1]) - body.angular_velocity
+            body.angular_velocity += float(np.clip(w_err, -self.a_max * h * 4, self.a_max * h * 4))
+            dv = want[j] - vel
+            norm = float(np.hypot(*dv))
+            if norm > dv_max:
+                dv *= dv_max / norm
+            body.velocity = tuple(vel + dv)
 
     @staticmethod
     def _disable(sp: RunSpace, i: int) -> None:

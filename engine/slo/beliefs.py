@@ -7,15 +7,17 @@ Shapes: positions (R, N, 2); per ordered pair (observer i, neighbour j) arrays (
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Literal
+from dataclasses import dataclass, field
+from functools import cached_property, partial
+from typing import Callable, Literal
 
 import numpy as np
 
 from ..core.rng import Streams
-from .candidates import Candidates, Flag, candidates
+from .candidates import Candidates, Flag
+from .kernels import localise, pair_candidates
 from .neighbourhoods import distances
-from .selection import SELECTIONS, Kind, RTSTriangle, css
+from .selection import SELECTIONS, Kind, RTSTriangle
 from .sensors import ErrorModel, measure_odometry, measure_ranges, permanent_errors, permanent_normals
 
 PERFECT = "perfect"  # the oracle baseline: every estimate is the truth
@@ -61,9 +63,15 @@ class Beliefs:
     kind: np.ndarray  # (R, N, N) int8 :class:`Kind`
     flag: np.ndarray  # (R, N, N) int8 :class:`Flag` (FALLBACK before any localisation)
     odometry: np.ndarray  # (R, N, 2) v*_i(t)
-    candidates: Candidates | None = None  # (R, N, N, 3, 2) of this step
     triangle: np.ndarray | None = None  # (R, N, N) RTS closing vertex, −1 if none
     round_trip: np.ndarray | None = None  # (R, N, N) RTS e_r of the chosen loop
+    pairs: Candidates | Callable[[], Candidates] | None = field(default=None, repr=False)  # or how to make them
+
+    @cached_property
+    def candidates(self) -> Candidates | None:
+        """This step's candidate sets, (R, N, N, 3, 2) points; worked out when first read where
+        the selection did not need them (CSS reads only its choice)."""
+        return self.pairs() if callable(self.pairs) else self.pairs
 
 
 def relative_truth(x: np.ndarray) -> np.ndarray:
@@ -126,22 +134,28 @@ class Localiser:
         p = self.params
         ranges = self._ranges(x, adjacency)
         v_meas = measure_odometry(x - x_prev, self.errors.odometry, self.permanent, self.streams["odometry"])
-        v_rel = v_meas[:, None, :, :] - v_meas[:, :, None, :]  # v*_j − v*_i
-        cand = candidates(b.ranges, ranges, v_rel, b.est, p.delta_cos, p.delta_v, p.literal_eq_3_1)
         entry = coin = None
         if p.entry_policy == "geometric_random":
             entry = adjacency & ~b.adjacency
             coin = np.stack([g.random(adjacency.shape[1:]) < 0.5 for g in self.streams["entry"]])
+        # candidates [3.1]–[3.6] of every pair from v*_j − v*_i, and their CSS choice [3.7], compiled
+        reads = p.selection != PERFECT and SELECTIONS[p.selection].reads_candidates
+        loc = localise(b.ranges, ranges, v_meas, b.est, delta_cos=p.delta_cos, delta_v=p.delta_v,
+                       literal_eq_3_1=p.literal_eq_3_1, prediction_weight=p.prediction_weight, entry=entry, coin=coin,
+                       candidates=reads)
+        pairs = loc.candidates if reads else partial(pair_candidates, b.ranges, ranges, v_meas, b.est, p.delta_cos,
+                                                     p.delta_v, p.literal_eq_3_1)
         if p.selection == PERFECT:
             new, kind = relative_truth(x), np.full(adjacency.shape, Kind.PERFECT, dtype=np.int8)
             triangle = round_trip = None
         else:  # CSS, and the others fall back on it
-            base = css(cand, p.prediction_weight, entry, coin)
-            new, kind, triangle, round_trip = SELECTIONS[p.selection].select(cand, adjacency, ranges, base, p)
+            base = (loc.est, loc.kind)
+            new, kind, triangle, round_trip = SELECTIONS[p.selection].select(loc.candidates, adjacency, ranges, base,
+                                                                             p)
         est = np.where(adjacency[..., None], new, b.est)
         return Beliefs(
             est=est, valid=adjacency.copy(), adjacency=adjacency.copy(), ranges=ranges,
-            kind=np.where(adjacency, kind, Kind.NONE).astype(np.int8), flag=cand.flag, odometry=v_meas,
-            candidates=cand, triangle=triangle, round_trip=round_trip,
+            kind=np.where(adjacency, kind, Kind.NONE).astype(np.int8), flag=loc.flag, odometry=v_meas,
+            triangle=triangle, round_trip=round_trip, pairs=pairs,
         )
 

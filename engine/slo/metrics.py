@@ -8,8 +8,11 @@ NaN when a run has no pair.
 
 from __future__ import annotations
 
+from typing import Sequence
+
 import numpy as np
 
+from ..core.vectors import norm
 from .selection import Kind, first_triangle
 
 
@@ -18,42 +21,66 @@ def _wrap(angle: np.ndarray) -> np.ndarray:
     return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
 
 
+def _truth(x: np.ndarray) -> np.ndarray:
+    return x[:, None, :, :] - x[:, :, None, :]
+
+
+def distance_errors(x: np.ndarray, est: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """e_abs and e_rel of every ordered pair (R, N, N), NaN outside ``valid``; e_rel is also
+    NaN for coincident particles."""
+    truth = _truth(x)
+    e_abs = norm(est - truth)
+    dist = norm(truth)
+    e_rel = np.divide(e_abs, dist, out=np.full_like(e_abs, np.nan), where=dist > 0)
+    return np.where(valid, e_abs, np.nan), np.where(valid, e_rel, np.nan)
+
+
+def angular_errors(x: np.ndarray, est: np.ndarray, valid: np.ndarray) -> np.ndarray:
+    """e_ang of every ordered pair (R, N, N), NaN outside ``valid``."""
+    truth = _truth(x)
+    ang = np.arctan2(est[..., 1], est[..., 0]) - np.arctan2(truth[..., 1], truth[..., 0])
+    return np.where(valid, np.abs(_wrap(ang)), np.nan)
+
+
 def pair_errors(x: np.ndarray, est: np.ndarray, valid: np.ndarray) -> dict[str, np.ndarray]:
     """e_abs, e_rel and e_ang of every ordered pair (R, N, N), NaN outside ``valid``;
     e_rel is also NaN for coincident particles."""
-    truth = x[:, None, :, :] - x[:, :, None, :]
-    e_abs = np.linalg.norm(est - truth, axis=-1)
-    dist = np.linalg.norm(truth, axis=-1)
-    e_rel = np.divide(e_abs, dist, out=np.full_like(e_abs, np.nan), where=dist > 0)
-    ang = np.arctan2(est[..., 1], est[..., 0]) - np.arctan2(truth[..., 1], truth[..., 0])
-    e_ang = np.abs(_wrap(ang))
-    return {k: np.where(valid, v, np.nan) for k, v in (("abs", e_abs), ("rel", e_rel), ("ang", e_ang))}
+    e_abs, e_rel = distance_errors(x, est, valid)
+    return {"abs": e_abs, "rel": e_rel, "ang": angular_errors(x, est, valid)}
 
 
-def stats(values: np.ndarray) -> dict[str, np.ndarray]:
-    """Mean, std, SEM, median and count per run over all trailing axes, ignoring NaN."""
+STATS = ("mean", "std", "sem", "median", "count")
+
+
+def stats(values: np.ndarray, keys: Sequence[str] = STATS) -> dict[str, np.ndarray]:
+    """Mean, std, SEM, median and count per run over all trailing axes, ignoring NaN; only
+    the ``keys`` asked for are worked out."""
     flat = values.reshape(values.shape[0], -1)
     good = np.isfinite(flat)
     n = good.sum(axis=1)
-    safe = np.where(good, flat, 0.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean = safe.sum(axis=1) / n
-        var = np.where(good, (safe - mean[:, None]) ** 2, 0.0).sum(axis=1) / n
-        std = np.sqrt(var)
-        sem = std / np.sqrt(n)
-    ordered = np.sort(np.where(good, flat, np.inf), axis=1)
-    lo, hi = np.maximum((n - 1) // 2, 0), np.maximum(n // 2, 0)
-    rows = np.arange(flat.shape[0])
-    median = np.where(n > 0, 0.5 * (ordered[rows, lo] + ordered[rows, hi]), np.nan)
     empty = n == 0
-    return {"mean": np.where(empty, np.nan, mean), "std": np.where(empty, np.nan, std),
-            "sem": np.where(empty, np.nan, sem), "median": median, "count": n}
+    out: dict[str, np.ndarray] = {"count": n}
+    if {"mean", "std", "sem"} & set(keys):
+        safe = np.where(good, flat, 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean = safe.sum(axis=1) / n
+            var = np.where(good, (safe - mean[:, None]) ** 2, 0.0).sum(axis=1) / n
+            std = np.sqrt(var)
+            sem = std / np.sqrt(n)
+        out |= {"mean": np.where(empty, np.nan, mean), "std": np.where(empty, np.nan, std),
+                "sem": np.where(empty, np.nan, sem)}
+    if "median" in keys:
+        ordered = np.sort(np.where(good, flat, np.inf), axis=1)
+        lo, hi = np.maximum((n - 1) // 2, 0), np.maximum(n // 2, 0)
+        rows = np.arange(flat.shape[0])
+        out["median"] = np.where(n > 0, 0.5 * (ordered[rows, lo] + ordered[rows, hi]), np.nan)
+    return {k: out[k] for k in keys}
 
 
 def pair_distances(x: np.ndarray) -> np.ndarray:
     """‖x_j − x_i‖ over all unordered pairs i < j, (R, N(N−1)/2)."""
     i, j = np.triu_indices(x.shape[1], k=1)
-    return np.linalg.norm(x[:, j] - x[:, i], axis=-1)
+    return norm(x[:, j] - x[:, i])
 
 
 def dead_reckoning_share(kind: np.ndarray, valid: np.ndarray) -> np.ndarray:
@@ -73,7 +100,7 @@ def round_trip_errors(est: np.ndarray, adjacency: np.ndarray) -> np.ndarray:
     b = np.arange(n)[None, None, :]
     cc = np.maximum(c, 0)
     loop = est + est[r, b, cc] + est[r, cc, a]
-    return np.where(c >= 0, np.linalg.norm(loop, axis=-1), np.nan)
+    return np.where(c >= 0, norm(loop), np.nan)
 
 
 def first_met(best: np.ndarray, threshold: float) -> np.ndarray:

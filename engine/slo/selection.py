@@ -214,6 +214,7 @@ class SelectionRule:
     name: str
     label: str
     select: Callable[[Candidates, np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray], RTSOptions], Chosen]
+    reads_candidates: bool = True  # needs the candidate sets, not only the CSS choice
 
 
 def _css(c: Candidates, adjacency: np.ndarray, ranges: np.ndarray, base: tuple[np.ndarray, np.ndarray],
@@ -235,7 +236,7 @@ def _akcan(c: Candidates, adjacency: np.ndarray, ranges: np.ndarray, base: tuple
 
 SELECTIONS: Registry[SelectionRule] = Registry(
     "selection",
-    SelectionRule("css", "CSS (closest solution)", _css),  # [3.7]
+    SelectionRule("css", "CSS (closest solution)", _css, reads_candidates=False),  # [3.7]
     SelectionRule("rts", "RTS (round trip)", _rts),  # [3.8]
     SelectionRule("akcan", "Akcan (GDL)", _akcan),  # [3.9]
 )

@@ -140,8 +140,10 @@ def measure_ranges(
     Stochastic parts are drawn per measurement, so d*_ij and d*_ji are independent; negative
     readings are clamped to 0 (gap A13); 0 means failure; beyond ``max_range`` reads 0."""
     R, n, _ = dist.shape
-    fail = np.stack([g.random((n, n)) for g in rngs])
-    z = np.stack([g.standard_normal((2, n, n)) for g in rngs])
+    fail, z = np.empty((R, n, n)), np.empty((R, 2, n, n))
+    for r, g in enumerate(rngs):  # each run's stream, drawn in place
+        g.random(out=fail[r])
+        g.standard_normal(out=z[r])
     e_m = 1.0 + model.sigma_m * z[:, 0] + perm.range_m[:, :, None]  # [4.2]
     e_a = model.sigma_a * z[:, 1] + perm.range_a[:, :, None]  # [4.3]
     finite = np.isfinite(dist) & (dist <= max_range)
@@ -159,9 +161,11 @@ def measure_odometry(
 ) -> np.ndarray:
     """v*_i (R, N, 2) from true displacements: per-axis errors, then the rotation R(θ) [4.4];
     a failure gives (0, 0)."""
-    n = v.shape[1]
-    fail = np.stack([g.random(n) for g in rngs])
-    z = np.stack([g.standard_normal((5, n)) for g in rngs])
+    R, n = v.shape[:2]
+    fail, z = np.empty((R, n)), np.empty((R, 5, n))
+    for r, g in enumerate(rngs):
+        g.random(out=fail[r])
+        g.standard_normal(out=z[r])
     e_m = 1.0 + model.sigma_m * np.stack([z[:, 0], z[:, 1]], axis=-1) + perm.odo_m
     e_a = model.sigma_a * np.stack([z[:, 2], z[:, 3]], axis=-1) + perm.odo_a
     w = v * e_m + e_a

@@ -23,6 +23,7 @@ from shoal.presets.io import load
 from shoal.presets.models import Scenario
 
 from ...robots.dvc import TABLE_4_1
+from ..cost import run_cost
 from .output import num
 from .output import percentile_band as band
 
@@ -86,6 +87,11 @@ class FleetJob:
     runs: int
     steps: int
     positions: bool = False  # also keep every robot's position and status at every step
+
+    @property
+    def cost(self) -> float:
+        """Estimated CPU seconds of one run (:func:`~shoal.engine.studies.cost.run_cost`)."""
+        return run_cost(load(self.preset, list(self.overrides)), self.steps)
 
 
 def fleet_job(case: Case, mode: str, runs: int, duration: float, positions: bool = False) -> FleetJob:

@@ -27,6 +27,7 @@ from shoal.presets.io import load
 from shoal.presets.models import Scenario
 
 from ...acoustics.strategies import STRATEGIES
+from ..cost import run_cost
 from .output import num, percentile_band, write_csv
 from .runner import run_jobs
 
@@ -55,6 +56,11 @@ class SonarJob:
     window: int = 0
     cell: float = 0.0
     extent: float = 0.0
+
+    @property
+    def cost(self) -> float:
+        """Estimated CPU seconds of one run (:func:`~shoal.engine.studies.cost.run_cost`)."""
+        return run_cost(self.scenario(), self.steps)
 
     def scenario(self) -> Scenario:
         return load(self.preset, list(self.overrides))

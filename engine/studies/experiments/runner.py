@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from contextlib import closing
 from dataclasses import dataclass, field
-from typing import Any, Callable, Hashable, Iterable, Iterator, Sequence
+from typing import Any, Callable, Hashable, Iterator, Sequence
 
 import numpy as np
 
@@ -20,6 +20,7 @@ from shoal.presets.io import load
 from shoal.presets.models import Scenario
 
 from ...kinds.swarm import Simulation, StepInfo
+from ..cost import run_cost
 from . import schedulers
 from .schedulers import Scheduler
 
@@ -172,6 +173,11 @@ class Job:
     steps: int
     track: int = 0
 
+    @property
+    def cost(self) -> float:
+        """Estimated CPU seconds of one run (:func:`~shoal.engine.studies.cost.run_cost`)."""
+        return run_cost(load(self.preset, list(self.overrides)), self.steps)
+
 
 def simulate_job(job: Job, first_run: int, runs: int) -> BatchResult:
     """Runs ``first_run … first_run + runs − 1`` of a :class:`Job` (the default ``simulate``)."""
@@ -196,11 +202,30 @@ def _simulate_chunk(chunk: _Chunk) -> tuple[Hashable, Any]:
     return chunk.job.key, chunk.simulate(chunk.job, chunk.first_run, chunk.runs)
 
 
-def _chunks(jobs: Iterable[Any], size: int, simulate: Simulate) -> list[_Chunk]:
+CHUNKS_PER_WORKER = 4  # so that the last chunks of a batch finish close together
+
+
+def _chunks(jobs: Sequence[Any], cap: int, simulate: Simulate, workers: int) -> list[_Chunk]:
+    """Cut every job's runs into chunks of at most ``cap`` runs, sized by cost: a job's
+    ``cost`` (estimated seconds per run; 1 if it has none) decides how many of its runs make a
+    chunk, so that with several workers every chunk costs about the same, 1/4 of a worker's
+    share, whatever the job (a cheap job batches many runs into one vectorised tick, a costly
+    one is spread over the workers). Costliest chunks first, so no worker is left with a long
+    one at the end. One worker takes whole jobs (up to ``cap``), in order."""
+    cost = [float(getattr(j, "cost", 1.0)) or 1.0 for j in jobs]
+    target = sum(c * j.runs for c, j in zip(cost, jobs)) / (CHUNKS_PER_WORKER * workers)
     out = []
-    for job in jobs:
-        for start in range(0, job.runs, size):
-            out.append(_Chunk(job, start, min(size, job.runs - start), simulate))
+    for job, c in zip(jobs, cost):
+        size = job.runs if workers == 1 else max(1, round(target / c))
+        parts = math.ceil(job.runs / max(1, min(cap, size, job.runs)))
+        start = 0
+        for p in range(parts):  # as equal as can be
+            n = job.runs // parts + (p < job.runs % parts)
+            out.append(_Chunk(job, start, n, simulate))
+            start += n
+    if workers > 1:
+        rank = {id(j): c for j, c in zip(jobs, cost)}
+        out.sort(key=lambda ch: -rank[id(ch.job)] * ch.runs)  # stable: job order among equals
     return out
 
 
@@ -249,10 +274,7 @@ def iter_jobs(
     if not jobs:
         return
     sched = scheduler or schedulers.current() or schedulers.local(workers)
-    if sched.workers > 1:  # enough chunks to keep every worker busy
-        longest = max(j.runs for j in jobs)
-        chunk = max(1, min(chunk, math.ceil(longest * len(jobs) / (4 * sched.workers))))
-    chunks = _chunks(jobs, max(1, chunk), simulate)
+    chunks = _chunks(jobs, max(1, chunk), simulate, sched.workers)
     parts: dict[Hashable, list[Any]] = {j.key: [] for j in jobs}
     expected = {j.key: 0 for j in jobs}
     for c in chunks:
@@ -273,9 +295,10 @@ def run_jobs(
     progress: bool | Callable[[int], None] = False, chunk: int = 25, desc: str = "runs",
     simulate: Simulate = simulate_job, merge: Merge = concat,
 ) -> dict[Hashable, Any]:
-    """Simulate every job, split into chunks of at most ``chunk`` runs; with ``workers > 1``
-    the chunks go to a process pool, with a ``scheduler`` (or inside ``schedulers.using``)
-    wherever it sends them, e.g. a Dask cluster. The results do not depend on ``workers``,
+    """Simulate every job, split into chunks of at most ``chunk`` runs sized by the jobs'
+    estimated cost (:func:`_chunks`); with ``workers > 1`` the chunks go to a process pool,
+    with a ``scheduler`` (or inside ``schedulers.using``) wherever it sends them, e.g. a Dask
+    cluster. The results do not depend on ``workers``,
     ``chunk`` or the scheduler.
 
     By default a job is a :class:`Job` and its result a :class:`BatchResult`; other kinds

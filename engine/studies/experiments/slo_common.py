@@ -22,6 +22,7 @@ import numpy as np
 from shoal.presets.build import build_slo
 from shoal.presets.io import load
 
+from ..cost import run_cost
 from .output import num
 
 WALK = "slo-walk"
@@ -56,6 +57,11 @@ class SLOJob:
     seed: int
     runs: int
     generations: int
+
+    @property
+    def cost(self) -> float:
+        """Estimated CPU seconds of one run (:func:`~shoal.engine.studies.cost.run_cost`)."""
+        return run_cost(load(self.preset, list(self.overrides)), self.generations)
 
 
 def jobs_for(cases: Iterable[Case], runs: int, generations: int | dict[str, int]) -> list[SLOJob]:
@@ -104,7 +110,7 @@ class SLOBatch:
 def simulate_slo(job: SLOJob, first_run: int, runs: int) -> SLOBatch:
     """Runs ``first_run … first_run + runs − 1`` of ``job`` (``simulate`` for ``run_jobs``)."""
     swarm = build_slo(load(job.preset, list(job.overrides)), runs=runs, seed=job.seed, first_run=first_run)
-    hist = swarm.run(job.generations)
+    hist = swarm.run(job.generations, KEPT)  # only the kept series are worked out
     return SLOBatch(job.seed, first_run, {k: hist[k] for k in KEPT})
 
 

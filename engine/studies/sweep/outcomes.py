@@ -17,6 +17,7 @@ from shoal.presets.build import build
 from shoal.presets.models import Scenario
 
 from ...core.recorder import metric_table
+from ..cost import run_cost
 
 # first-passage times: a run that never got there has none (NaN/inf), and a median counts it as +inf
 FIRST_PASSAGE = frozenset({"steps_to_converge", "time_to_converge_s", "quality_met_at"})
@@ -33,6 +34,11 @@ class CellJob:
     seed: int
     runs: int
     steps: int
+
+    @property
+    def cost(self) -> float:
+        """Estimated CPU seconds of one run (:func:`~shoal.engine.studies.cost.run_cost`)."""
+        return run_cost(Scenario.model_validate_json(self.scenario), self.steps)
 
 
 @dataclass

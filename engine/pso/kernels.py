@@ -1,0 +1,200 @@
+"""The compiled Chapter 3 step for small swarms (numba): objective, bests [3.2]/[3.3], velocity
+(standard PSO [2.1] or Adapted PSO with sgn [3.11]), position ([2.2] or [3.10]) and
+acceleration [3.22] of every run in one call.
+
+A step of a swarm of 10–30 robots in numpy is some thirty calls on tiny arrays, nearly all
+overhead. :func:`swarm_step` repeats the numpy step's arithmetic in its order, including how
+``np.sum`` adds a row (:func:`numpy_sum`), so its bits are the numpy step's;
+``tests/test_pso_kernels.py`` runs both side by side. The objectives without transcendental
+functions that differ between numpy and the C library (all but Ackley, whose ``exp`` does)
+are evaluated here too; Ackley's values come from numpy.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..core.compiled import kernel
+
+# objectives evaluated in the kernel, by their Objective names; a code is the index
+OBJECTIVES = ("source-distance", "linear", "sphere", "rastrigin", "rosenbrock", "griewank")
+SOURCE_DISTANCE, LINEAR, SPHERE, RASTRIGIN, ROSENBROCK, GRIEWANK = range(6)
+GIVEN = -1  # the caller passes f (numpy)
+TWO_PI = 2 * np.pi
+
+
+MAX_TERMS = 128
+
+
+@kernel
+def _block(a: np.ndarray, lo: int, n: int) -> float:
+    """numpy's sum of up to 128 terms: one pass below 8, else 8 interleaved accumulators."""
+    if n < 8:
+        res = -0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    while i < n - n % 8:
+        r0, r1, r2, r3 = r0 + a[lo + i], r1 + a[lo + i + 1], r2 + a[lo + i + 2], r3 + a[lo + i + 3]
+        r4, r5, r6, r7 = r4 + a[lo + i + 4], r5 + a[lo + i + 5], r6 + a[lo + i + 6], r7 + a[lo + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@kernel
+def numpy_sum(a: np.ndarray, n: int) -> float:
+    """``np.sum`` of the first ``n`` ≤ :data:`MAX_TERMS` entries of a contiguous 1-D array, to the
+    bit: +0 plus numpy's pairwise sum, which up to 128 terms is one block of 8 accumulators
+    (longer rows are halved first; the compiled step leaves dimensions beyond 128 to numpy)."""
+    return 0.0 + _block(a, 0, n)
+
+
+@kernel
+def objective(code: int, x: np.ndarray, r: int, source: np.ndarray, scale: float, buf: np.ndarray,
+              f: np.ndarray) -> None:
+    """``f[r, i]``: objective ``code`` at every position ``x[r, i]`` of run r, as
+    :class:`~shoal.engine.core.objectives.Objective` computes it (``buf``: scratch of length d)."""
+    n, d = x.shape[1], x.shape[2]
+    shift = False
+    for k in range(d):
+        shift = shift or source[k] != 0.0
+    for i in range(n):
+        if code == LINEAR:
+            f[r, i] = x[r, i, 0]
+            continue
+        if code == SOURCE_DISTANCE:
+            for k in range(d):
+                t = x[r, i, k] - source[k]
+                buf[k] = t * t
+            f[r, i] = math.sqrt(0.0 + _block(buf, 0, d))
+            continue
+        for k in range(d):  # the benchmarks see (x − source)/scale (skipping − 0 and / 1 changes no bit they use)
+            z = x[r, i, k] - source[k] if shift else x[r, i, k]
+            buf[k] = z / scale if scale != 1.0 else z
+        if code == SPHERE:
+            for k in range(d):
+                buf[k] = buf[k] * buf[k]
+            f[r, i] = 0.0 + _block(buf, 0, d)
+        elif code == RASTRIGIN:
+            for k in range(d):
+                z = buf[k]
+                buf[k] = z * z - 10.0 * math.cos(TWO_PI * z)
+            f[r, i] = 10.0 * d + (0.0 + _block(buf, 0, d))
+        elif code == ROSENBROCK:
+            if d < 2:
+                t = 1.0 - buf[0]
+                f[r, i] = t * t
+                continue
+            for k in range(d - 1):
+                q, p = buf[k + 1] - buf[k] * buf[k], 1.0 - buf[k]
+                buf[k] = 100.0 * (q * q) + p * p
+            f[r, i] = 0.0 + _block(buf, 0, d - 1)
+        else:  # GRIEWANK
+            prod = 1.0
+            for k in range(d):
+                prod *= math.cos(buf[k] / math.sqrt(k + 1.0))
+            for k in range(d):
+                buf[k] = buf[k] * buf[k]
+            f[r, i] = 1.0 + (0.0 + _block(buf, 0, d)) / 4000.0 - prod
+
+
+@kernel
+def _sgn(v: float) -> float:
+    if v > 0.0:
+        return 1.0
+    if v < 0.0:
+        return -1.0
+    return v
+
+
+@kernel
+def _maximum(a: float, b: float) -> float:
+    """numpy's maximum: NaN wins."""
+    return a if (a >= b or a != a) else b
+
+
+@kernel
+def _better(a: float, b: float, maximise: bool) -> bool:
+    return a > b if maximise else a < b
+
+
+@kernel
+def _bests(r: int, x: np.ndarray, f: np.ndarray, y: np.ndarray, f_y: np.ndarray, yg: np.ndarray, best: np.ndarray,
+           maximise: bool) -> None:
+    """[3.2] keep each robot's best, [3.3] the run's best of them (the first on ties; the first
+    NaN if any, as numpy's argmin/argmax)."""
+    n, d = x.shape[1], x.shape[2]
+    for i in range(n):
+        if _better(f[r, i], f_y[r, i], maximise):
+            f_y[r, i] = f[r, i]
+            for k in range(d):
+                y[r, i, k] = x[r, i, k]
+    g = 0
+    for i in range(1, n):
+        v, w = f_y[r, i], f_y[r, g]
+        if w != w:
+            break
+        if v != v or (v > w if maximise else v < w):
+            g = i
+    for k in range(d):
+        yg[r, k] = y[r, g, k]
+    best[r] = f_y[r, g]
+
+
+NONE2, NONE3 = np.empty((0, 0)), np.empty((0, 0, 0))  # "the same for every robot"
+
+
+@kernel
+def swarm_step(x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: np.ndarray, draws: np.ndarray,
+               omega: float, omega_robots: np.ndarray, c: np.ndarray, c_robots: np.ndarray, ahead: np.ndarray,
+               literal: bool, adapted: bool, dt: float, before: bool, maximise: bool, code: int, source: np.ndarray,
+               scale: float, new: np.ndarray, yg: np.ndarray, best: np.ndarray, moving: np.ndarray,
+               speeds: np.ndarray) -> None:
+    """One tick of every run (:meth:`Simulation.step`) into ``new`` (3, R, N, d): positions,
+    velocities, accelerations. ``y``, ``f_y``, ``yg``, ``best`` are updated in place (pass
+    copies); ``f`` is filled with the objective at ``x`` unless ``code`` is :data:`GIVEN`;
+    ``speeds`` (2, R) gets each run's top speed and top velocity component.
+
+    ``draws`` is (R, 2, N, d); ω, c_1 and c_2 are ``omega`` and ``c`` (2,) for every robot, or
+    ``omega_robots`` (R, N) and ``c_robots`` (2, R, N) where those are not empty; ``ahead`` (d,)
+    is both attractors' direction unless ``literal``."""
+    R, N, d = x.shape
+    buf, ga, gb = np.empty(d), np.empty(d), np.empty(d)
+    per_robot = omega_robots.shape[0] > 0
+    for r in range(R):
+        if code != GIVEN:
+            objective(code, x, r, source, scale, buf, f)
+        if before:  # Algorithm 1 phase A first
+            _bests(r, x, f, y, f_y, yg, best, maximise)
+        top = big = -np.inf
+        for i in range(N):
+            w, c1, c2 = (omega_robots[r, i], c_robots[0, r, i], c_robots[1, r, i]) if per_robot else (omega, c[0], c[1])
+            for k in range(d):  # the directions g_1, g_2
+                ga[k], gb[k] = (y[r, i, k] - x[r, i, k], yg[r, k] - x[r, i, k]) if literal else (ahead[k], ahead[k])
+            if adapted:
+                for k in range(d):
+                    ga[k], gb[k] = _sgn(ga[k]), _sgn(gb[k])
+            for k in range(d):
+                v = w * u[r, i, k] + (0.0 + (c1 * draws[r, 0, i, k]) * ga[k] + (c2 * draws[r, 1, i, k]) * gb[k])
+                new[1, r, i, k] = v  # [2.1] / [3.11]
+                new[2, r, i, k] = (v - u[r, i, k]) / dt if dt != 1.0 else v - u[r, i, k]  # [3.22] (/1: no bit)
+                new[0, r, i, k] = x[r, i, k] + (dt * v if adapted else v)  # [3.10] / [2.2]
+                buf[k] = v * v
+            move = False
+            for k in range(d):
+                move = move or new[1, r, i, k] != 0.0
+                big = _maximum(big, abs(new[1, r, i, k]))
+            moving[r, i] = move
+            top = _maximum(top, math.sqrt(0.0 + _block(buf, 0, d)))
+        speeds[0, r], speeds[1, r] = top, big
+        if not before:  # the velocity saw last tick's bests
+            _bests(r, x, f, y, f_y, yg, best, maximise)

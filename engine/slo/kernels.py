@@ -1,0 +1,176 @@
+"""The compiled SLO pair step: candidates [3.1]–[3.6] and Closest Solution Selection [3.7] of
+every ordered pair of every run in one pass (numba).
+
+:func:`~.candidates.candidates` and :func:`~.selection.css` say the same in numpy, vectorised
+over pairs; for a swarm of 20 that is some sixty array operations on small arrays, mostly
+call overhead. :func:`localise` does the same arithmetic in the same order per pair, so its
+bits are theirs (``tests/test_slo_kernels.py`` compares them on random and singular pairs and
+on whole runs); the numpy pair stays the readable reference.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..core.compiled import kernel
+from .candidates import Candidates, Flag
+from .selection import Kind
+
+
+@kernel
+def _pairs(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, delta_cos: float, delta_v: float,
+           literal: bool, w: float, entry: np.ndarray, coin: np.ndarray, use_entry: bool, full: bool,
+           points: np.ndarray, mask: np.ndarray, flag: np.ndarray, cos_alpha: np.ndarray, thinness: np.ndarray,
+           est: np.ndarray, kind: np.ndarray) -> None:
+    R, n = d0.shape[0], d0.shape[1]
+    for r in range(R):
+        for i in range(n):
+            for j in range(n):
+                vx, vy = v[r, j, 0] - v[r, i, 0], v[r, j, 1] - v[r, i, 1]  # v*_j − v*_i
+                a, b = d0[r, i, j], d1[r, i, j]
+                x3x, x3y = prev[r, i, j, 0] + vx, prev[r, i, j, 1] + vy  # [3.4]
+                speed = math.sqrt(vx * vx + vy * vy)
+                ok = (a > 0.0 and b > 0.0 and speed > 0.0 and math.isfinite(a) and math.isfinite(b)
+                      and math.isfinite(speed) and math.isfinite(x3x) and math.isfinite(x3y))
+                s0, s1, sv = (a, b, speed) if ok else (1.0, 1.0, 1.0)
+                t0, t1 = sv / s0, sv / s1
+                thin = t0 if (t0 <= t1 or t0 != t0) else t1
+                thin_ok = not thin <= delta_v  # [3.6]
+                c = (s1 * s1 + sv * sv - s0 * s0) / (2.0 * sv * (s0 if literal else s1))  # [3.1]
+                if not math.isfinite(c):
+                    c = 2.0
+                cos_ok = not 1.0 - abs(c) <= delta_cos  # [3.5]
+                geometric = ok and thin_ok and cos_ok
+                cc = min(max(c, -1.0), 1.0)
+                sn = math.sqrt(1.0 - cc * cc)
+                ux, uy = vx / sv, vy / sv
+                ax, ay = (s1 * cc) * ux, (s1 * cc) * uy
+                bx, by = (s1 * sn) * uy, (s1 * sn) * -ux
+                if geometric:  # [3.2], [3.3]
+                    x1x, x1y, x2x, x2y = ax + bx, ay + by, ax - bx, ay - by
+                else:
+                    x1x, x1y, x2x, x2y = x3x, x3y, x3x, x3y
+                if full:
+                    p = points[r, i, j]
+                    p[0, 0], p[0, 1], p[1, 0], p[1, 1], p[2, 0], p[2, 1] = x1x, x1y, x2x, x2y, x3x, x3y
+                    mask[r, i, j, 0] = mask[r, i, j, 1] = geometric
+                    mask[r, i, j, 2] = True
+                    cos_alpha[r, i, j] = c if ok else np.nan
+                    thinness[r, i, j] = thin if ok else np.nan
+                if not ok:
+                    flag[r, i, j] = Flag.FALLBACK
+                elif not thin_ok:
+                    flag[r, i, j] = Flag.MITIGATED_V
+                elif geometric:
+                    flag[r, i, j] = Flag.GEOMETRIC
+                else:
+                    flag[r, i, j] = Flag.MITIGATED_COS
+                # [3.7]: the geometric candidate closest to x3, blended with it by w
+                e1x, e1y, e2x, e2y = x1x - x3x, x1y - x3y, x2x - x3x, x2y - x3y
+                pick1 = math.sqrt(e1x * e1x + e1y * e1y) <= math.sqrt(e2x * e2x + e2y * e2y)
+                new = use_entry and entry[r, i, j]
+                if new:
+                    pick1 = coin[r, i, j]
+                xcx, xcy = (x1x, x1y) if pick1 else (x2x, x2y)
+                if not geometric:
+                    est[r, i, j, 0], est[r, i, j, 1], kind[r, i, j] = x3x, x3y, Kind.X3
+                    continue
+                if new:
+                    est[r, i, j, 0], est[r, i, j, 1] = xcx, xcy
+                else:
+                    est[r, i, j, 0], est[r, i, j, 1] = w * x3x + (1.0 - w) * xcx, w * x3y + (1.0 - w) * xcy
+                kind[r, i, j] = Kind.X1 if pick1 else Kind.X2
+
+
+class Localised(NamedTuple):
+    """One localisation step of every ordered pair: the CSS choice, why the candidate set is
+    what it is, and (when asked for) the candidate sets themselves."""
+
+    est: np.ndarray  # (R, N, N, 2) [3.7]
+    kind: np.ndarray  # (R, N, N) int8 Kind
+    flag: np.ndarray  # (R, N, N) int8 Flag
+    candidates: Candidates | None
+
+
+def localise(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, *, delta_cos: float, delta_v: float,
+             literal_eq_3_1: bool, prediction_weight: float = 0.5, entry: np.ndarray | None = None,
+             coin: np.ndarray | None = None, candidates: bool = True) -> Localised:
+    """Candidates of every ordered pair (i, j) from the ranges d*(t−1) ``d0`` and d*(t) ``d1``
+    (R, N, N), the measured displacements ``v`` (R, N, 2) (the pair's relative one is
+    v*_j − v*_i) and the previous estimates ``prev`` (R, N, N, 2), and their CSS choice;
+    ``entry``/``coin`` as for :func:`~.selection.css`. The same as
+    ``candidates(d0, d1, v_rel, prev, …)`` and ``css(…)``; the candidate sets (a megabyte for
+    31 swarms of 20) only with ``candidates``."""
+    R, n = d0.shape[:2]
+    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
+    shape = (R, n, n) if candidates else (1, 1, 1)
+    points, mask = np.empty(shape + (3, 2)), np.empty(shape + (3,), bool)
+    cos_alpha, thinness = np.empty(shape), np.empty(shape)
+    flag, kind, est = np.empty((R, n, n), np.int8), np.empty((R, n, n), np.int8), np.empty((R, n, n, 2))
+    use_entry = entry is not None and coin is not None
+    e = np.ascontiguousarray(entry if use_entry else np.zeros((1, 1, 1)), dtype=bool)
+    k = np.ascontiguousarray(coin if use_entry else np.zeros((1, 1, 1)), dtype=bool)
+    _pairs(f64(d0), f64(d1), f64(v), f64(prev), float(delta_cos), float(delta_v), bool(literal_eq_3_1),
+           float(prediction_weight), e, k, use_entry, candidates, points, mask, flag, cos_alpha, thinness, est, kind)
+    return Localised(est, kind, flag, Candidates(points, mask, flag, cos_alpha, thinness) if candidates else None)
+
+
+def pair_candidates(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, delta_cos: float,
+                    delta_v: float, literal_eq_3_1: bool) -> Candidates:
+    """Only the candidate sets of :func:`localise` (for a step that did not keep them)."""
+    return localise(d0, d1, v, prev, delta_cos=delta_cos, delta_v=delta_v,  # type: ignore[return-value]
+                    literal_eq_3_1=literal_eq_3_1).candidates
+
+
+@kernel
+def distances(x: np.ndarray) -> np.ndarray:
+    """‖x_j − x_i‖ of every ordered pair of every run, (R, N, N), +inf on the diagonal
+    (the bits of ``np.linalg.norm`` of the differences)."""
+    R, n = x.shape[0], x.shape[1]
+    d = np.empty((R, n, n))
+    for r in range(R):
+        for i in range(n):
+            for j in range(n):
+                dx, dy = x[r, j, 0] - x[r, i, 0], x[r, j, 1] - x[r, i, 1]
+                d[r, i, j] = math.sqrt(dx * dx + dy * dy) if i != j else np.inf
+    return d
+
+
+@kernel
+def _before(a: float, ia: int, b: float, ib: int) -> bool:
+    """(a, ia) comes first in a stable ascending sort with NaN last."""
+    if a != a:
+        return b != b and ia < ib
+    if b != b:
+        return True
+    return a < b or (a == b and ia < ib)
+
+
+@kernel
+def nearest(dist: np.ndarray, k: int) -> np.ndarray:
+    """adj[r, i, j]: j is among the k first of row i of ``dist`` in a stable ascending order
+    (``np.argsort(dist, kind="stable")[..., :k]``), (R, N, N) bool."""
+    R, n = dist.shape[0], dist.shape[1]
+    adj = np.zeros((R, n, n), np.bool_)
+    if k <= 0:
+        return adj
+    best = np.empty(k, np.int64)
+    for r in range(R):
+        for i in range(n):
+            row = dist[r, i]
+            m = 0
+            for j in range(n):  # insertion into the k first so far
+                if m == k and not _before(row[j], j, row[best[k - 1]], best[k - 1]):
+                    continue
+                p = m if m < k else k - 1
+                while p > 0 and _before(row[j], j, row[best[p - 1]], best[p - 1]):
+                    best[p] = best[p - 1]
+                    p -= 1
+                best[p] = j
+                m = min(m + 1, k)
+            for q in range(m):
+                adj[r, i, best[q]] = True
+    return adj

@@ -1,0 +1,32 @@
+"""What one run costs, roughly, so batches of runs can be sized by cost rather than by count
+(:func:`~.experiments.runner.iter_jobs`).
+
+CPU seconds on one core for one run of a scenario over ``steps`` ticks, from the per-tick
+costs the benchmarks measure (``benchmarks/README.md``): a per-run share of each tick (the
+numpy calls and generator draws of a batched tick) plus a per-robot share. It only has to
+rank and split work sensibly; it is never a promise, and results never depend on it.
+"""
+
+from __future__ import annotations
+
+from shoal.presets.build import kind_of
+from shoal.presets.models import Scenario
+
+RUN_TICK = {"swarm": 2e-6, "fleet": 30e-6, "sonar": 30e-6, "slo_swarm": 40e-6}  # s per run and tick
+ROBOT_TICK = {"swarm": 0.1e-6, "fleet": 3e-6, "sonar": 10e-6}  # s per robot and tick
+PHYSICS_ROBOT_TICK = 150e-6  # a pymunk fleet: ten substeps of velocity tracking per tick
+SURROGATE_ROBOT_TICK = 1e-6  # the acoustic surrogate instead of waveforms
+PAIR_TICK = 0.1e-6  # SLO: every ordered pair is ranged and localised each tick
+
+
+def run_cost(scenario: Scenario, steps: int) -> float:
+    """Estimated CPU seconds of one run of ``scenario`` for ``steps`` ticks."""
+    kind = kind_of(scenario)
+    n = scenario.sim.robots
+    per_robot = ROBOT_TICK.get(kind, 0.0)
+    if kind == "fleet" and scenario.robot.motion == "physics":
+        per_robot = PHYSICS_ROBOT_TICK
+    if kind == "sonar" and scenario.acoustics is not None and scenario.acoustics.mode != "waveform":
+        per_robot = SURROGATE_ROBOT_TICK
+    pairs = n * n * PAIR_TICK if scenario.slo is not None else 0.0  # the SLO swarm, or a host on SLO positions
+    return max(steps, 1) * (RUN_TICK[kind] + n * per_robot + pairs)

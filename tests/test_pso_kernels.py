@@ -1,0 +1,99 @@
+"""The compiled Chapter 3 step against the numpy step, to the byte: numpy's row sum, every
+objective the kernel evaluates, and whole seeded runs (both laws it knows, both bests
+orders, literal and "ahead" attractors, constant, physical and per-robot coefficients, a
+diverging swarm)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from shoal.engine.core.objectives import Objective
+from shoal.engine.kinds.swarm import Simulation
+from shoal.engine.pso import kernels
+from shoal.engine.pso.coeffs import Constant, Physical, Segment
+from shoal.engine.pso.laws import Law
+
+
+def _bytes(a) -> bytes:
+    """Every bit of an array: −0 and +0, NaN payloads and all."""
+    return np.ascontiguousarray(a).tobytes()
+
+
+def test_numpy_sum_adds_a_row_as_numpy_does():
+    rng = np.random.default_rng(0)
+    for n in range(1, kernels.MAX_TERMS + 1):
+        for _ in range(20):
+            a = rng.normal(0.0, 1.0, n) * 10.0 ** rng.integers(-6, 6, n)
+            assert _bytes(kernels.numpy_sum(a, n)) == _bytes(np.sum(a))
+    assert _bytes(kernels.numpy_sum(np.array([-0.0, -0.0]), 2)) == _bytes(np.sum(np.array([-0.0, -0.0])))
+
+
+@pytest.mark.parametrize("name", kernels.OBJECTIVES)
+@pytest.mark.parametrize("d", [1, 2, 3, 10, 17, 64])
+def test_compiled_objectives_equal_numpy(name, d):
+    rng = np.random.default_rng(d)
+    x = rng.normal(0.0, 5.0, (3, 7, d)) * 10.0 ** rng.integers(-3, 3, (3, 7, d))
+    x[0, 0] = 0.0
+    for source, scale in ((np.zeros(d + 1), 1.0), (rng.normal(0.0, 2.0, d + 1), 1.7)):
+        obj = Objective(name, source=source, scale=scale)
+        want = obj(x)
+        got = np.empty((3, 7))
+        for r in range(3):
+            kernels.objective(kernels.OBJECTIVES.index(name), x, r, np.ascontiguousarray(source[:d]), scale,
+                              np.empty(d), got)
+        assert _bytes(got) == _bytes(want)
+
+
+@dataclass(frozen=True)
+class PerRobot:
+    """Coefficients that differ per robot and per tick (as a DVC-like policy would give)."""
+
+    def coefficients(self, t: float, dt: float, d: int):
+        phase = np.sin(t + np.arange(3 * 11).reshape(3, 11))
+        return 0.5 + 0.1 * phase, np.stack([0.4 + 0.1 * phase, 0.3 - 0.05 * phase])
+
+
+STATE = ("x", "u", "a", "y", "f_y", "yg", "best_fitness", "f", "heading", "status")
+INFO = ("max_speed", "max_component", "best_fitness")
+
+
+def _same_runs(steps: int, **kw) -> None:
+    a, b = Simulation(**kw), Simulation(**kw, compiled=False)
+    assert a._compiled_tick() and not b._compiled_tick()
+    for k in range(steps):
+        ia, ib = a.step(), b.step()
+        for name in STATE:
+            assert _bytes(getattr(a.state, name)) == _bytes(getattr(b.state, name)), f"{name}, tick {k}"
+        for name in INFO:
+            assert _bytes(getattr(ia, name)) == _bytes(getattr(ib, name)), f"info.{name}, tick {k}"
+        assert ia.columns().keys() == ib.columns().keys()
+
+
+@pytest.mark.parametrize("objective", [*kernels.OBJECTIVES, "ackley"])
+@pytest.mark.parametrize("law", ["standard", "adapted-sgn"])
+def test_compiled_step_equals_the_numpy_step(objective, law):
+    for d, order in ((2, "before_velocity"), (10, "after_velocity"), (3, "before_velocity")):
+        _same_runs(60, robots=13, d=d, dt=1.0 if law == "standard" else 0.1, law=Law(law),
+                   policy=Constant(0.7298, (1.49618, 1.49618)), runs=3, seed=4, pbest_order=order,
+                   objective=Objective(objective, source=np.arange(d) * 0.3, scale=1.7), init_spread=5.0,
+                   init_speed=0.5)
+
+
+def test_compiled_step_equals_the_numpy_step_for_other_policies_and_attractors():
+    _same_runs(80, robots=10, d=2, policy=Physical((Segment(0.0, 1.0, 2.0), Segment(3.0, 0.5, 2.0))),
+               attractors="ahead", runs=2, seed=1)
+    _same_runs(40, robots=11, d=2, law=Law("adapted-sgn"), policy=PerRobot(), runs=3, seed=2)
+    _same_runs(40, robots=5, d=1, law=Law("standard"), policy=Constant(0.7, (1.4, 1.4)), runs=2, seed=3)
+
+
+def test_a_diverging_swarm_stays_equal_through_inf_and_nan():
+    _same_runs(3000, robots=10, d=2, law=Law("standard"), policy=Constant(1.1, (1.49618, 1.49618)), runs=2, seed=1)
+
+
+def test_the_swarm_falls_back_to_numpy_where_the_kernel_does_not_apply():
+    assert not Simulation(robots=3, d=2, policy=Constant(0.5, (0.5, 0.5)), law=Law("adapted-tanh"))._compiled_tick()
+    assert not Simulation(robots=3, d=200, policy=Constant(0.5, (0.5, 0.5)),
+                          objective=Objective("sphere", source=np.zeros(200)))._compiled_tick()
