@@ -196,6 +196,7 @@ def test_an_oversized_upload_is_dropped_while_it_arrives(server):
     try:
         wait_until(lambda: c.uuid_of("Upload preset"), what="the upload button")
         button = c.uuid_of("Upload preset")
+        wait_until(lambda: server.tabs, what="the tab registered")  # (the button is built before it is)
         cid = max(server.tabs)
         states = server.viser.get_clients()[cid].gui._current_file_upload_states
 

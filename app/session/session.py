@@ -403,9 +403,11 @@ class Session:
         return self._t0 + (self.k - self._k0) * self.driver.dt()
 
     def _metrics(self, info: Any) -> dict[str, float]:
-        """Run 0's metric columns now, as ``shoal run`` writes them (``t`` the session's clock)."""
+        """Run 0's metric columns now, as ``shoal run`` writes them (``t`` the session's clock),
+        then the kind's own (``driver.metrics``)."""
         table = metric_table(self.sim.state, info, self.clock())
-        return {name: float(v[0]) for name, v in table.items() if name not in ("run", "step")}
+        row = {name: float(v[0]) for name, v in table.items() if name not in ("run", "step")}
+        return {**row, **self.driver.metrics()}
 
     def _record(self, info: Any) -> None:
         """Record the robots and the metrics (``info`` of the step just taken; None at a start)."""

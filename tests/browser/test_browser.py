@@ -26,7 +26,17 @@ sync_api = pytest.importorskip("playwright.sync_api")
 from shoal.app.kinds.swarm import ROBOT, ROBOT_SIZE  # noqa: E402
 from shoal.app.view.camera import VIEW_HALF  # noqa: E402
 
-from browser_helpers import ARGS, VIEWPORT, canvas_box, choose, dismiss_toasts, number_box, upload_input, wait_until  # noqa: E402
+from browser_helpers import (  # noqa: E402
+    ARGS,
+    VIEWPORT,
+    canvas_box,
+    choose,
+    dismiss_toasts,
+    number_box,
+    open_folder,
+    upload_input,
+    wait_until,
+)
 
 
 @pytest.fixture(scope="module")
@@ -57,8 +67,10 @@ def client_id(server, page):
 def test_page_loads_with_its_own_session(server, page, client_id):
     for text in ("law", "Δt [s]", "robots", "speed [steps/s]", "seed"):
         assert page.locator("label", has_text=text).count() >= 1, text
-    for tab in ("Controller", "Plots", "Export", "Notes"):
+    for tab in ("Controller", "Plots", "Lessons"):
         assert page.get_by_role("tab", name=tab).count() == 1
+    tops = {round(page.get_by_role("tab").nth(i).bounding_box()["y"]) for i in range(page.get_by_role("tab").count())}
+    assert len(tops) == 1, f"the tab row wraps: tabs at y = {sorted(tops)}"
     session = server.sessions[client_id]
     assert session.scenario.name == "default"
     k0 = session.sim.state.k
@@ -136,7 +148,7 @@ def test_export_csv_download_matches_the_engine(server, page, client_id):
     session = server.sessions[client_id]
     page.get_by_role("button", name="Pause", exact=True).click()
     wait_until(lambda: not session.playing, what="pause")
-    page.get_by_role("tab", name="Export").click()
+    open_folder(page, "Replay and files", "Export CSV")
     with page.expect_download(timeout=20000) as dl:
         page.get_by_role("button", name="Export CSV").click()
     download = dl.value
@@ -154,7 +166,7 @@ def test_export_csv_download_matches_the_engine(server, page, client_id):
 def test_bad_upload_shows_the_field_and_keeps_the_scene(server, page, client_id):
     session = server.sessions[client_id]
     sim, k = session.sim, session.sim.state.k
-    page.get_by_role("tab", name="Export").click()
+    open_folder(page, "Replay and files", "Export CSV")
     upload_input(page, "Upload preset").set_input_files(
         {"name": "bad.toml", "mimeType": "application/toml", "buffer": b"[controller]\nomega = 7\n"})
     page.wait_for_selector(".mantine-Notification-root:has-text('controller.omega')", timeout=10000)
@@ -177,3 +189,4 @@ def test_a_second_tab_gets_its_own_session(server, browser, page, client_id):
     finally:
         other.close()
     wait_until(lambda: len(server.sessions) == 1, what="the closed tab's session to go")
+
