@@ -6,6 +6,8 @@ shows a step beyond the last one over it. Driven through the real panels of a ha
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import pytest
 
@@ -184,6 +186,35 @@ def test_a_pause_between_the_steps_of_a_tick_stops_the_rest(tab):
     k0 = s.k
     tab.tick(10.1)  # 24 steps due
     assert s.k == k0 + 1 and not s.playing and len(calls) == 1
+
+
+def test_a_pause_from_another_thread_does_not_wait_for_the_step_in_hand(tab):
+    """The ticker holds the session's lock through a step; a Pause pressed meanwhile (viser's
+    thread) takes effect at once, and the tick takes no further step."""
+    s = tab.session
+    s.apply({"view.steps_per_second": 240.0})
+    s.play()
+    tab.tick(10.0)
+    in_step, paused = threading.Event(), threading.Event()
+    held: list[bool] = []
+    before = s.driver.before_step
+
+    def slow_step() -> None:
+        if not in_step.is_set():
+            in_step.set()
+            held.append(paused.wait(timeout=20.0))  # the step in hand waits for the Pause
+        before()
+
+    s.driver.before_step = slow_step
+    k0 = s.k
+    ticker = threading.Thread(target=tab.tick, args=(10.1,))  # 24 steps due
+    ticker.start()
+    assert in_step.wait(timeout=20.0)
+    s.pause()
+    paused.set()
+    ticker.join()
+    assert held == [True]  # the Pause went through while the step was in hand
+    assert s.k == k0 + 1 and not s.playing
 
 
 def test_swarm_b_runs_on_and_loops_with_a(tab):

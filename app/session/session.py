@@ -289,8 +289,9 @@ class Session:
             self.playing = True
 
     def pause(self) -> None:
-        with self.lock:
-            self.playing = False
+        """Stop playing. It takes no lock: a Pause never waits for the step the ticker has in hand,
+        and the steps left in the ticker's batch see it (:meth:`play_step`)."""
+        self.playing = False
 
     def reset(self, seed: int | None = None) -> None:
         """Back to step 0 with the current values; with ``seed`` also change the scenario's seed
