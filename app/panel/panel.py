@@ -33,6 +33,7 @@ from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
 from .compare import CompareFolder
+from .keys import PLAYING
 from .plots import PADDING, Chart, Frame, PlotSpec
 from .replay import ReplayFolder
 from .spec import (
@@ -554,7 +555,7 @@ class Panel:
 
     def refresh_status(self) -> None:
         s = self.session
-        state = "▶ playing" if s.playing else ("■ finished: Play runs it again" if s.finished else "paused")
+        state = PLAYING if s.playing else ("■ finished: Play runs it again" if s.finished else "paused")
         self.status.content = self.part.status(s, s.readout(), state)
 
     def refresh_readout(self) -> None:

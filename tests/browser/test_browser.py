@@ -190,3 +190,36 @@ def test_a_second_tab_gets_its_own_session(server, browser, page, client_id):
         other.close()
     wait_until(lambda: len(server.sessions) == 1, what="the closed tab's session to go")
 
+
+# ---------------------------------------------------------------------------- keys
+def test_space_arrow_and_r_drive_the_playback_but_not_inside_a_box(server, page, client_id):
+    """Real key presses: space toggles Play/Pause, → steps, r resets (a paused run stays paused);
+    a key typed into a number box is the box's. (The keys click the playback buttons, whose
+    hostile values are refused in tests/test_trust_inputs.py.)"""
+    session = server.sessions[client_id]
+    dismiss_toasts(page)
+    if not session.playing:
+        page.get_by_role("button", name="Play", exact=True).click()
+        wait_until(lambda: session.playing, what="playing")
+    page.evaluate("document.activeElement && document.activeElement.blur()")
+    page.keyboard.press(" ")
+    wait_until(lambda: not session.playing, what="space pauses")
+    with session.lock:  # (the step the ticker had in hand is done)
+        k = session.sim.state.k
+    page.keyboard.press("ArrowRight")
+    wait_until(lambda: session.sim.state.k == k + 1, what="→ steps once")
+    page.keyboard.press("r")
+    wait_until(lambda: session.sim.state.k == 0, what="r resets")
+    assert not session.playing
+    page.keyboard.press("ArrowRight")
+    wait_until(lambda: session.sim.state.k == 1, what="→ steps once more")
+    box = number_box(page, "seed")
+    box.click()
+    box.press("r")  # the box's, not a Reset...
+    box.press("ArrowRight")  # ...nor a Step
+    page.get_by_role("button", name="Step", exact=True).click()  # after the keys: the page keeps the order
+    wait_until(lambda: session.sim.state.k == 2, what="the Step click")
+    assert session.sim.state.k == 2 and not session.playing
+    page.evaluate("document.activeElement && document.activeElement.blur()")
+    page.keyboard.press(" ")
+    wait_until(lambda: session.playing, what="space plays")
