@@ -110,7 +110,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
         return _err(msg)
     out = Path(args.out or f"out/{args.target}")
     try:
-        summary = reproduce(args.target, out, runs=args.runs, workers=args.workers, progress=True)
+        summary = reproduce(args.target, out, runs=args.runs, workers=args.workers, progress=True, quick=args.quick)
     except OutputDirError as e:
         return _err(f"{e} (choose another --out)")
     except OSError as e:
@@ -188,7 +188,7 @@ def _reproduce_all(args: argparse.Namespace) -> int:
         return _err(msg)
     out = Path(args.out or "out/reproduction")
     try:
-        report = run_all(out, runs=args.runs, workers=args.workers, resume=args.resume)
+        report = run_all(out, runs=args.runs, workers=args.workers, resume=args.resume, quick=args.quick)
     except OSError as e:
         return _cannot_write(out, e)
     print(f"wrote {report}")
@@ -264,6 +264,8 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--scheduler", help="Dask scheduler address (tcp://HOST:PORT)")
     q.add_argument("--all", action="store_true", help="every target into --out, plus REPRODUCTION.md")
     q.add_argument("--resume", action="store_true", help="with --all: keep targets already finished in --out")
+    q.add_argument("--quick", action="store_true",
+                   help="classroom size: few runs per case, the same checks (every target in minutes)")
     q.add_argument("--report", metavar="DIR", help="rebuild DIR/REPRODUCTION.md from its target folders")
     q.set_defaults(func=_cmd_reproduce_on)
 

@@ -134,7 +134,8 @@ def sonar_params_for(a: Acoustics) -> SonarParams:
     return SonarParams(
         algorithm=a.algorithm, controller=a.controller, mode=a.mode, snr0_db=a.snr0_db, psd_s_db=a.psd_s,
         psd_n_db=a.psd_n, f_c=a.f_c, Q=a.Q, tbp=a.tbp, c=a.c, fs=a.fs, d_over_lambda=a.d_over_lambda,
-        full_lag=a.full_lag, a=a.a, d0=a.d_0, dc=a.d_c, U=a.U, dt=a.dt, beta=a.beta, c1_share=a.c1_share,
+        full_lag=a.full_lag, lag_peak=a.lag_peak, a=a.a, d0=a.d_0, dc=a.d_c, U=a.U, dt=a.dt, beta=a.beta,
+        c1_share=a.c1_share,
         alpha_dvc=a.alpha_dvc, sensing_range=a.sensing_range, robot_radius=a.robot_radius, r_trap=a.r, v_n=a.v_n,
         source_heading=np.deg2rad(a.source_heading_deg),
         source_bearing=None if a.source_bearing_deg is None else float(np.deg2rad(a.source_bearing_deg)),
@@ -231,7 +232,7 @@ def build_slo_swarm(scenario: Scenario, *, runs: int | None = None, seed: int | 
     return SLOSwarm(
         runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed, first_run=first_run,
         particles=scenario.sim.robots, objective=slo.objective, motion=slo.motion, walk_speed=slo.walk_speed,
-        quality_threshold=slo.quality_threshold, **slo_localiser_for(slo),
+        quality_threshold=slo.quality_threshold, radial=slo.radial, **slo_localiser_for(slo),
     )
 
 

@@ -183,6 +183,9 @@ class Acoustics(_Model):
     c: Annotated[float, Field(ge=1000.0, le=2000.0, description="sound speed [m/s]")] = 1500.0
     fs: Annotated[float, Field(ge=1000.0, le=1_000_000.0, description="sample rate of the lag grid [Hz]")] = 48_000.0
     full_lag: bool = Field(False, description="search the lag over the whole window instead of ±D/c (waveform mode)")
+    lag_peak: Literal["parabolic", "sample"] = Field(
+        "parabolic", description="τ_lag: the correlation peak refined by a parabola, or the sample lag itself as "
+        "Alg. 5 takes it (then fs sets how finely bearings are resolved)")
     a: Annotated[float, Field(ge=0.0, le=20.0, description="forgetting scale a [7.2]: memory × e^(−a) per step")] = 1.0
     d_0: Annotated[float, Field(ge=0.0, le=10_000.0, description="deployment radius d_0 [m]")] = 50.0
     d_c: Annotated[float, Field(gt=0.0, le=10_000.0, description="convergence radius d_c [m]")] = 50.0
@@ -277,14 +280,18 @@ class SLO(_Model):
     delta_v: Annotated[float, Field(ge=0.0, le=10.0, description="mitigation threshold δ_v [3.6]")] = 0.03
     literal_eq_3_1: bool = Field(
         False, description="use [3.1] as printed (known slip) instead of the corrected law of cosines")
-    entry_policy: Literal["stale", "geometric_random"] = Field(
-        "stale",
-        description="a neighbour that just arrived: reuse the last estimate, or a random mirror candidate (gap A25)")
+    entry_policy: Literal["dead_reckoning", "stale", "geometric_random"] = Field(
+        "dead_reckoning", description="estimates of robots outside the neighbourhood: carried by odometry (exact with "
+        "perfect sensors), frozen, or frozen with an arriving neighbour placed on a random mirror candidate")
     neighbourhood: Literal["knn", "radius", "full", "random", "ring"] = Field("knn", description="who localises whom")
     neighbourhood_param: Annotated[float | None, Field(
         ge=0.0, le=1e4, description="k (knn), r (radius), n (ring), p (random); unset = 5, 25, 2, 0.5")] = None
     walk_speed: Annotated[float, Field(gt=0.0, le=100.0,
                                        description="random walk: top step length (thesis units)")] = 5.0
+    radial: Literal["uniform_radius", "uniform_area"] = Field(
+        "uniform_radius", description="SLO swarm, SPSO 2011 [3.11]: the point in the hypersphere H(G, r) is r·ρ·g/|g| "
+        "with ρ ~ U(0, 1), as the SPSO 2011 reference code draws it (denser near G; Mai does not say), or √ρ, uniform "
+        "over the disc")
     unit: Annotated[float | None, Field(
         gt=0.0, le=1e4, description="host swarm: metres per thesis length unit (the thesis area is 100 wide); "
                                     "unset = the scene's size / 100")] = None

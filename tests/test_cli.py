@@ -89,6 +89,13 @@ def test_help_for_every_command():
         assert shoal(cmd, "--help").returncode == 0
 
 
+def test_reproduce_quick_runs_the_classroom_size(tmp_path):
+    out = shoal("reproduce", "fig3-5", "--quick", "--out", str(tmp_path / "q"))
+    assert out.returncode == 0, out.stderr
+    summary = json.loads((tmp_path / "q" / "summary.json").read_text(encoding="utf-8"))
+    assert summary["quick"] is True and summary["runs"] == 20
+
+
 def test_serve_refuses_bad_experiment_settings_in_one_line():
     res = shoal("serve", "--port", "0", "--experiment-workers", "0")
     assert res.returncode == 2 and res.stderr.strip() == "shoal: error: --experiment-workers must be >= 1"

@@ -298,3 +298,22 @@ def test_surrogate_is_finite_batch_independent_and_single_hydrophone_aware():
     assert np.all(np.isfinite(quiet.bearing.alpha)) and np.all(np.isfinite(quiet.intensity))
     single = surrogate(_rngs(2), hydrophone_positions(x, o), src, b, 1000.0)
     assert single.bearing is None and single.intensity.shape == (2, 2, 1)
+
+
+def test_sample_lag_stays_on_the_grid_and_resolves_bearings_only_that_finely():
+    """Alg. 5 lines 28–31 take the sample lag τ[I_lag]: with refine=False τ is a whole number
+    of samples, so at fs = 4 kHz and D = λ_c/2 (two samples across) α takes five values."""
+    b = Band(fs=4000.0)
+    D = b.lam_c / 2
+    degs = np.arange(5.0, 180.0, 7.0)
+    rel = np.radians(degs)
+    src = 1e4 * np.stack([np.cos(rel), np.sin(rel)], -1)
+    pos = hydrophone_positions(np.zeros((degs.size, 1, 2)), np.zeros((degs.size, 1)), D)
+    spectra = synthesise(_rngs(degs.size), pos, src, b, 1e4 * 10 ** 1.5)
+    o = np.zeros((degs.size, 1))
+    coarse = bearing(spectra, b, D, o, refine=False)
+    fine = bearing(spectra, b, D, o)
+    assert np.allclose(coarse.tau * b.fs, np.round(coarse.tau * b.fs))
+    assert set(np.round(np.degrees(coarse.alpha[:, 0]))) <= {0.0, 60.0, 90.0, 120.0, 180.0}
+    assert not np.allclose(fine.tau * b.fs, np.round(fine.tau * b.fs))  # refined lags fall between samples
+    assert np.max(np.abs(fine.alpha[:, 0] - rel)) < np.max(np.abs(coarse.alpha[:, 0] - rel))

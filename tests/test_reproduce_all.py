@@ -17,8 +17,20 @@ QUICK = ["fig3-5", "fig3-4"]
 @pytest.fixture(scope="module")
 def reproduced(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("all")
-    run_all(out, runs=1, targets=QUICK, progress=False, log=lambda _m: None)
+    run_all(out, targets=QUICK, progress=False, quick=True, log=lambda _m: None)  # the classroom size
     return out
+
+
+def test_quick_runs_every_target_at_its_classroom_size_and_says_so(reproduced: Path) -> None:
+    from shoal.engine.studies.experiments import TARGETS
+
+    assert all("runs" in t.quick and t.quick_runs <= t.default_runs for t in TARGETS.values())
+    text = (reproduced / REPORT).read_text(encoding="utf-8")
+    assert "Quick (classroom) size:" in text
+    for name in QUICK:
+        summary = json.loads((reproduced / name / "summary.json").read_text(encoding="utf-8"))
+        assert summary["quick"] is True and summary["runs"] == TARGETS[name].quick_runs
+        assert f"{TARGETS[name].quick_runs} (quick)" in text and f"`shoal reproduce {name} --quick" in text
 
 
 def test_every_target_gets_a_folder_and_a_section(reproduced: Path) -> None:
@@ -55,6 +67,9 @@ def test_resume_keeps_finished_targets_and_reruns_others(tmp_path: Path) -> None
     assert any("fig3-5: kept" in s for s in said) and (tmp_path / "fig3-4" / "summary.json").is_file()
     run_all(tmp_path, runs=2, targets=["fig3-5"], progress=False, resume=True, log=said.append)  # other runs
     assert json.loads((tmp_path / "fig3-5" / "summary.json").read_text())["runs"] == 2
+    run_all(tmp_path, runs=2, targets=["fig3-5"], progress=False, resume=True, quick=True,
+            log=said.append)  # the same runs at the other size
+    assert json.loads((tmp_path / "fig3-5" / "summary.json").read_text())["quick"] is True
 
 
 def test_report_is_rebuilt_from_folders_alone(reproduced: Path, tmp_path: Path) -> None:
@@ -74,3 +89,17 @@ def test_cli_report_and_all_refuse_bad_input(reproduced: Path, tmp_path: Path) -
     assert bad.returncode == 2 and "--runs must be >= 1" in bad.stderr
     none = subprocess.run([*run, "reproduce", "--report", str(tmp_path / "nothing")], capture_output=True, text=True)
     assert none.returncode == 2 and "no reproduced target" in none.stderr
+
+
+def test_information_is_shown_beside_the_checks_but_not_counted() -> None:
+    from shoal.engine.studies.experiments.output import check, info
+    from shoal.engine.studies.experiments.report import Outcome, render
+
+    summary = {"runs": 3, "elapsed_s": 1.0, "checks": [check("median run collision-free", "none", "0", True)],
+               "information": [info("every run collision-free", "none", "2 robots in 1 run", False)]}
+    text = render([Outcome("fig4-6", summary=summary)])
+    assert "| [fig4-6](#fig4-6) | Rossides, Figs. 4-6 and 4-7 | 3 | 1/1 |" in text
+    assert "In all: 1 of 1 checks pass" in text
+    assert "information, not counted as checks" in text
+    assert "| every run collision-free | none | 2 robots in 1 run | no |" in text
+    assert "Every check holds." in text

@@ -25,16 +25,19 @@ def test_targets_are_registered():
 
 
 def test_fig7_2_tiny_run_files_determinism_and_xb_pso_converges(tmp_path):
-    opts = dict(steps=700, snrs=(10.0,), algorithms=("b-pso", "xb-pso"))
+    opts = dict(steps=1500, snrs=(10.0,), algorithms=("b-pso", "xb-pso"))
     s1 = reproduce("fig7-2", tmp_path / "a", runs=3, workers=1, progress=False, **opts)
     got = rows(tmp_path / "a" / "runs.csv")
-    assert got[0] == ["case", "run", "seed", "snr0_db", "converged", "steps_to_converge"]
-    assert len(got) == 1 + 2 * 3
+    assert got[0] == ["case", "run", "seed", "snr0_db", "c1_share", "converged", "steps_to_converge"]
+    assert len(got) == 1 + 2 * 3 * 2  # both splits of ĉ run as cases
+    assert {r[4] for r in got[1:]} == {"0.25", "0.5"}
     xb = [r for r in got[1:] if r[0] == "xb-pso"]
-    assert all(r[4] == "1" and 133 <= int(r[5]) <= 700 for r in xb)  # converges at 10 dB, never faster than a line
-    assert {"fig7-2.png", "series.csv", "README.md", "summary.json"} <= {p.name for p in (tmp_path / "a").iterdir()}
+    assert all(r[5] == "1" and 133 <= int(r[6]) <= 1500 for r in xb)  # converges at 10 dB, never faster than a line
+    assert {"fig7-2.png", "series.csv", "README.md", "summary.json", "routes.npz"} <= {
+        p.name for p in (tmp_path / "a").iterdir()}
     summary = json.loads((tmp_path / "a" / "summary.json").read_text())
     assert summary["target"] == "fig7-2" and all({"name", "thesis", "measured", "pass"} <= set(c) for c in s1["checks"])
+    assert summary["c1_share"] == 0.25 and all(c["name"].startswith("[c1:c2 = 1:1]") for c in summary["information"])
     reproduce("fig7-2", tmp_path / "b", runs=3, workers=2, progress=False, **opts)
     for name in ("runs.csv", "series.csv"):
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
@@ -70,7 +73,27 @@ def test_escort_tiny_runs_write_the_escort_columns(target, cases, tmp_path):
 def test_sweep_tiny_runs_write_runs_and_grid(target, opts, tmp_path):
     reproduce(target, tmp_path / "a", runs=1, workers=1, progress=False, steps=20, mode="surrogate", **opts)
     got = rows(tmp_path / "a" / "runs.csv")
-    assert got[0] == ["case", "run", "seed", "Q", "d_over_lambda", "U", "converged", "steps_to_converge"]
+    assert got[0] == ["case", "run", "seed", "Q", "d_over_lambda", "U", "c1_share", "converged", "steps_to_converge"]
     grid = rows(tmp_path / "a" / "grid.csv")
-    assert grid[0][:4] == ["case", "Q", "d_over_lambda", "U"] and len(grid) == len(got)
+    assert grid[0][:5] == ["case", "Q", "d_over_lambda", "U", "c1_share"] and len(grid) == len(got)
     assert (tmp_path / "a" / f"{target}.png").is_file()
+    shares = {r[4] for r in grid[1:]}
+    assert shares == ({"0.25", "0.5"} if target == "fig7-5" else {"0.25"})  # fig7-5 runs both splits
+    if target == "fig7-5":
+        assert (tmp_path / "a" / "fig7-5-c1c2-1-1.png").is_file()
+
+
+def test_fig7_3_reads_the_fig7_2_routes_or_simulates_the_same_runs(tmp_path):
+    opts = dict(steps=300)
+    reproduce("fig7-2", tmp_path / "all" / "fig7-2", runs=2, workers=1, progress=False, snrs=(10.0,), **opts)
+    beside = reproduce("fig7-3", tmp_path / "all" / "fig7-3", runs=2, workers=1, progress=False, **opts)
+    alone = reproduce("fig7-3", tmp_path / "alone", runs=2, workers=2, progress=False, **opts)
+    assert beside["routes_from"].startswith("read from the fig7-2 run")
+    assert alone["routes_from"] == "simulated by this target" and (tmp_path / "alone" / "routes.npz").is_file()
+    for name in ("runs.csv", "density.csv"):  # the same runs either way
+        assert (tmp_path / "all" / "fig7-3" / name).read_bytes() == (tmp_path / "alone" / name).read_bytes(), name
+    got = rows(tmp_path / "alone" / "runs.csv")
+    assert got[0] == ["case", "run", "seed", "converged", "steps_to_converge", "path_length", "straightness", "spread"]
+    assert {r[0] for r in got[1:]} == {"a-pso", "x-pso", "b-pso", "xb-pso"} and len(got) == 1 + 4 * 2
+    assert all(-1.0 <= float(r[6]) <= 1.0 for r in got[1:])
+    assert (tmp_path / "alone" / "fig7-3.png").is_file() and len(alone["checks"]) == 3

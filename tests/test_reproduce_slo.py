@@ -50,14 +50,16 @@ def test_walk_targets_write_their_files_and_name_every_case(tmp_path):
         assert list((tmp_path / name).glob("*.png")) and s["checks"]
 
 
-def test_fig4_8_runs_both_entry_readings_and_they_differ(tmp_path):
+def test_fig4_8_runs_every_entry_reading_and_they_differ(tmp_path):
     reproduce("slo-neighbourhood", tmp_path, runs=2, workers=2, progress=False, generations=30)
     rows = _rows(tmp_path / "runs.csv")
     head = rows[0]
     err = {(r[0], r[1]): float(r[head.index("e_abs_avg")]) for r in rows[1:]}
-    stale, geo = "css/random=0.3/low", "css/random=0.3/low/geometric_random"
-    assert (stale, "0") in err and (geo, "0") in err
-    assert err[(stale, "0")] != err[(geo, "0")]  # the entry rule changes the run
+    default, stale, geo = ("css/random=0.3/low" + t for t in ("", "/stale", "/geometric_random"))
+    assert all((c, "0") in err for c in (default, stale, geo))
+    assert len({err[(c, "0")] for c in (default, stale, geo)}) == 3  # the entry rule changes the run
     summary = json.loads((tmp_path / "summary.json").read_text(encoding="utf-8"))
-    assert "slo.entry_policy=geometric_random" in json.dumps(summary["commands"])
-    assert (tmp_path / "fig4-8-geometric-entry.png").is_file()
+    for policy in ("stale", "geometric_random"):
+        assert f"slo.entry_policy={policy}" in json.dumps(summary["commands"])
+    for png in ("fig4-8.png", "fig4-8-stale.png", "fig4-8-geometric-entry.png"):
+        assert (tmp_path / png).is_file()

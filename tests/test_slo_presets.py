@@ -34,7 +34,8 @@ def test_slo_fields_reach_the_engine():
     cfg = sw.config
     chosen = (cfg.selection, cfg.neighbourhood, cfg.neighbourhood_param, cfg.prediction_weight)
     assert chosen == ("rts", "ring", 3, 0.25)
-    assert cfg.entry_policy == "geometric_random" and build(load("slo-walk")).config.entry_policy == "stale"
+    assert cfg.entry_policy == "geometric_random" and build(load("slo-walk")).config.entry_policy == "dead_reckoning"
+    assert build(load("slo-walk", ["slo.entry_policy=stale"])).config.entry_policy == "stale"  # the old reading
     assert cfg.motion == "random_walk" and sw.errors.range.sigma_m == 0.4
     assert sw.errors.range.sigma_a == 0.30  # the rest of the High set stays
 

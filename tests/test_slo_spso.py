@@ -46,6 +46,20 @@ def test_hypersphere_stays_inside_and_has_the_right_radial_law():
     assert np.array_equal(sample_hypersphere(centre, 1.0, np.zeros(2), 0.5), centre)  # no NaN
 
 
+@pytest.mark.parametrize("radial", ["uniform_radius", "uniform_area"])
+def test_both_hypersphere_laws_reach_the_engine_and_converge_on_sphere(radial):
+    """slo.radial: the default draws the radius uniformly (SPSO 2011 reference code), the
+    option uniformly over the disc; both run SLO-PSO to a tiny Sphere value without error."""
+    from shoal.presets.build import build
+    from shoal.presets.io import load
+
+    sw = build(load("slo-pso-sphere", [f"slo.radial={radial}"]), runs=2)
+    assert sw.spso.radial == radial and sw.config.radial == radial
+    assert load("slo-pso-sphere").slo.radial == "uniform_radius"
+    best = sw.run(300)["best_so_far"][-1]
+    assert np.all(best < 1e-20)
+
+
 def test_local_centre_uses_one_third_unless_halving():
     ones = SPSODraws(np.ones((1, 2)), np.ones((1, 2)), np.array([[1.0, 0.0]]), np.zeros(1))
     p, l = np.array([[3.0, 0.0]]), np.array([[0.0, 6.0]])

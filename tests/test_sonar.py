@@ -179,3 +179,16 @@ def test_acoustic_preset_rules_name_the_field():
         with pytest.raises(PresetError) as e:
             validate(patch)
         assert any(all(w in m for w in words) for m in e.value.messages), e.value.messages
+
+
+def test_lag_peak_reaches_the_receiver_in_both_acoustic_modes():
+    from shoal.presets.build import build_sonar
+    from shoal.presets.io import load
+
+    for mode in ("waveform", "surrogate"):
+        sw = build_sonar(load("sonar-xb-pso", [f"acoustics.mode={mode}", "acoustics.lag_peak=sample",
+                                               "acoustics.fs=4000"]), runs=2, seed=3)
+        assert sw.params.lag_peak == "sample"
+        sw.step()
+        tau = sw.state.bearing.tau
+        assert np.allclose(tau * 4000.0, np.round(tau * 4000.0))

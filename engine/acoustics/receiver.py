@@ -12,8 +12,9 @@ the mean (÷ n) of the discrete circular xcorr of the two windows (spec §6.1 st
 so R(0) of a window with itself is its mean-square value and ρ estimates the received
 signal intensity (Pa², or (R_ref/r)² in normalised units), comparable with f_A.
 
-Estimators: τ_lag = argmax R on the lag grid [6.10]/[7.4], refined by a 3-point parabola;
-ρ = R(τ_lag) evaluated exactly at the refined lag [6.11]/[7.5];
+Estimators: τ_lag = argmax R on the lag grid [6.10]/[7.4], refined by a 3-point parabola
+(or, with ``refine=False``, the grid lag itself, as Alg. 5 lines 28–31 take τ[I_lag]);
+ρ = R(τ_lag) evaluated exactly at that lag [6.11]/[7.5];
 α = arccos(clip(c·τ_lag/D, −1, 1)) [7.6]; rays r_± = (cos(o ± α), sin(o ± α)) [7.7].
 """
 
@@ -94,6 +95,13 @@ def _refine(corr: np.ndarray, lags: np.ndarray) -> np.ndarray:
     return np.where(flat, 0.0, tau)
 
 
+def _sample_peak(corr: np.ndarray, lags: np.ndarray) -> np.ndarray:
+    """τ at the grid maximum, not refined (Alg. 5 lines 28–31); a flat R gives τ = 0."""
+    tau = lags[np.argmax(corr, axis=-1)]
+    flat = np.max(corr, axis=-1) <= np.min(corr, axis=-1)
+    return np.where(flat, 0.0, tau)
+
+
 def angle_of_arrival(tau: np.ndarray, D: float, c: float) -> np.ndarray:
     """α = arccos(clip(c·τ/D, −1, 1)) in 0..π from the bow. [7.6], spec A8"""
     return np.arccos(np.clip(c * np.asarray(tau) / D, -1.0, 1.0))
@@ -106,12 +114,14 @@ def rays(alpha: np.ndarray, heading: np.ndarray) -> np.ndarray:
     return np.stack([np.cos(ang), np.sin(ang)], axis=-1)
 
 
-def bearing(spectra: np.ndarray, band: Band, D: float, heading: np.ndarray, full_lag: bool = False) -> Bearing:
+def bearing(spectra: np.ndarray, band: Band, D: float, heading: np.ndarray, full_lag: bool = False,
+            refine: bool = True) -> Bearing:
     """Bearing estimate of every robot from its bow/stern spectra (R, N, 2, K).
 
     ``D``: hydrophone separation (m); ``heading`` (R, N): robot heading o (rad);
-    ``full_lag``: search the whole window as MATLAB ``xcorr`` would (spec §6.1 option), so
-    a peak outside ±D/c is clipped to α = 0 or π.
+    ``full_lag``: search the whole window as MATLAB ``xcorr`` would, so a peak outside
+    ±D/c is clipped to α = 0 or π; ``refine``: refine the peak lag by a parabola, else keep
+    the sample lag (docs/readings.md, "The lag estimate and the sample rate").
     """
     if not D > 0:
         raise ValueError(f"D: hydrophone separation must be > 0, got {D}")
@@ -121,7 +131,7 @@ def bearing(spectra: np.ndarray, band: Band, D: float, heading: np.ndarray, full
     else:
         lags = lag_samples(band, D) / band.fs
         corr = correlate(X, band, lags)
-    tau = _refine(corr, lags)
+    tau = _refine(corr, lags) if refine else _sample_peak(corr, lags)
     rho = np.sum((X * band.phasor(tau)).real, axis=-1)  # ρ = R(τ_lag) [7.5]
     alpha = angle_of_arrival(tau, D, band.c)
     return Bearing(tau=tau, rho=rho, alpha=alpha, rays=rays(alpha, np.asarray(heading, dtype=float)), lags=lags,

@@ -60,10 +60,12 @@ def surrogate(
     heading: np.ndarray | None = None,
     D: float | None = None,
     source_per_robot: bool = False,
+    refine: bool = True,
 ) -> SurrogateReading:
     """APPROXIMATE intensities and (for H = 2, given ``heading`` and ``D``) bearings, with
     the shapes of the waveform mode: ``hydrophone_pos`` (R, N, H, 2), ``source_pos`` (R, 2),
-    one generator per run."""
+    one generator per run. ``refine=False`` rounds the lag to the sample grid, as the
+    waveform receiver does without peak refinement."""
     pos = np.asarray(hydrophone_pos, dtype=float)
     R, N, H, _ = pos.shape
     if len(rngs) != R:
@@ -106,6 +108,8 @@ def surrogate(
     sd = 1.0 / (2.0 * np.pi * f_rms * np.sqrt(2.0 * K * np.maximum(snr_eff, 1e-300)))
     lag = np.take_along_axis(cand, win[..., None], -1)[..., 0]
     tau = np.clip(lag + np.minimum(sd, 1e3 * edge) * z_lag, -edge, edge)
+    if not refine:
+        tau = np.round(tau * band.fs) / band.fs
     alpha = angle_of_arrival(tau, D, band.c)
     head = np.asarray(heading, dtype=float)
     b = Bearing(tau=tau, rho=rho, alpha=alpha, rays=rays(alpha, head), lags=np.zeros(0), corr=np.zeros((R, N, 0)))

@@ -61,13 +61,13 @@ class SLOConfig:
     c2: float = C_SPSO
     c3: float = 1.0
     c4: float = 0.0
-    radial: Radial = "uniform_radius"  # gap A3
+    radial: Radial = "uniform_radius"  # the SPSO 2011 reference code; docs/readings.md
     spso_self_best_halving: bool = False  # gap A5
     local_best: LocalBest = "current"  # gap A36
     pbest_shift: PbestShift = "commanded"  # gap A35 (thesis mode)
     init_area: tuple[float, float] | None = None  # S = [lo, hi]²; None: [−50, 50]² PSO (A29), [0, 100]² walk
     walk_speed: float = 5.0
-    entry_policy: EntryPolicy = "stale"  # gap A25
+    entry_policy: EntryPolicy = "dead_reckoning"  # docs/readings.md
     initial_estimates: InitialEstimates = "random"  # gap A9
     measure_all_ranges: bool = True
     max_range: float = np.inf

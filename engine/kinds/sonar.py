@@ -83,7 +83,8 @@ class SonarParams:
     c: float = 1500.0  # sound speed, m/s
     fs: float = 48_000.0  # sample rate of the lag grid (spec §12)
     d_over_lambda: float = 0.5  # hydrophone separation D/λ_c
-    full_lag: bool = False  # search the whole window (spec §6.1 option)
+    full_lag: bool = False  # search the whole window, as MATLAB xcorr
+    lag_peak: Literal["parabolic", "sample"] = "parabolic"  # refine τ_lag, or the sample lag of Alg. 5
     a: float = 1.0  # forgetting scale [7.2]
     d0: float = 50.0  # deployment radius, m
     dc: float = 50.0  # convergence radius, m
@@ -109,6 +110,8 @@ class SonarParams:
             raise ValueError(f"mode: 'waveform' or 'surrogate', got {self.mode!r}")
         if self.mode == "surrogate" and self.full_lag:
             raise ValueError("full_lag: the surrogate mode has no correlation function")
+        if self.lag_peak not in ("parabolic", "sample"):
+            raise ValueError(f"lag_peak: 'parabolic' or 'sample', got {self.lag_peak!r}")
         if self.r_trap > 0 and self.controller != "nonomni":
             raise ValueError("r_trap: escorting needs the nonomni controller")
         if self.start not in ("origin", "source"):
@@ -327,12 +330,14 @@ class AcousticSwarm:
         two = strat.hydrophones == 2
         pos = hydrophone_positions(x, heading, p.D if two else None)  # spec §5.5
         if p.mode == "surrogate":  # APPROXIMATE (spec §5)
-            sr = surrogate(rngs, pos, src, self.band, p.r_ref, heading=heading if two else None, D=p.D if two else None)
+            sr = surrogate(rngs, pos, src, self.band, p.r_ref, heading=heading if two else None, D=p.D if two else None,
+                           refine=p.lag_peak == "parabolic")
             power, b = sr.intensity, sr.bearing
         else:
             spectra = synthesise(rngs, pos, src, self.band, p.r_ref)  # [7.13]–[7.17] in normalised units
             power = intensity(spectra)  # f_A ≈ I + N [7.1]
-            b = bearing(spectra, self.band, p.D, heading, full_lag=p.full_lag) if two else None  # [6.9]–[7.7]
+            b = bearing(spectra, self.band, p.D, heading, full_lag=p.full_lag,
+                        refine=p.lag_peak == "parabolic") if two else None  # [6.9]–[7.7]
         sensed = Sensed(
             intensity=power.mean(axis=-1) if "intensity" in strat.needs else None,
             rho=b.rho if b is not None and "rho" in strat.needs else None,  # ρ [7.5]

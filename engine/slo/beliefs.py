@@ -22,7 +22,12 @@ from .sensors import ErrorModel, measure_odometry, measure_ranges, permanent_err
 
 PERFECT = "perfect"  # the oracle baseline: every estimate is the truth
 Selection = str  # a key of selection.SELECTIONS, or PERFECT
-EntryPolicy = Literal["stale", "geometric_random"]
+# How a robot's estimate of a non-neighbour is kept, and so where a neighbour that arrives
+# starts (docs/readings.md, "Estimates of robots outside the neighbourhood"):
+# "dead_reckoning" carries it by odometry, x̂ + v*_j − v*_i [3.4]; "stale" freezes it;
+# "geometric_random" freezes it and starts an arriving neighbour on x1 or x2 at random.
+EntryPolicy = Literal["dead_reckoning", "stale", "geometric_random"]
+ENTRY_POLICIES = ("dead_reckoning", "stale", "geometric_random")
 
 
 @dataclass(frozen=True)
@@ -34,7 +39,7 @@ class LocaliserParams:
     delta_cos: float = 0.03  # [3.5]; −inf = clip only
     delta_v: float = 0.03  # [3.6]
     literal_eq_3_1: bool = False  # FIX A18 off: the printed denominator d_{t−1}
-    entry_policy: EntryPolicy = "stale"  # gap A25
+    entry_policy: EntryPolicy = "dead_reckoning"
     measure_all_ranges: bool = True  # gap A9/A25: range to every particle, not only neighbours
     max_range: float = np.inf  # ranging sensor reach (0 beyond)
     rts_triangle: RTSTriangle = "first"  # gap A22
@@ -46,7 +51,7 @@ class LocaliserParams:
             SELECTIONS.pick(self.selection)
         if not 0.0 <= self.prediction_weight <= 1.0:
             raise ValueError(f"prediction_weight: must be in [0, 1], got {self.prediction_weight}")
-        if self.entry_policy not in ("stale", "geometric_random"):
+        if self.entry_policy not in ENTRY_POLICIES:
             raise ValueError(f"entry_policy: unknown {self.entry_policy!r}")
         if self.rts_triangle not in ("first", "best"):
             raise ValueError(f"rts_triangle: unknown {self.rts_triangle!r}")
@@ -56,7 +61,7 @@ class LocaliserParams:
 class Beliefs:
     """What every robot believes about its neighbours after one step."""
 
-    est: np.ndarray  # (R, N, N, 2) x̂_ij, kept (stale) for non-neighbours
+    est: np.ndarray  # (R, N, N, 2) x̂_ij; for non-neighbours dead-reckoned or frozen (entry policy)
     valid: np.ndarray  # (R, N, N) estimate refreshed this step (j ∈ N_i)
     adjacency: np.ndarray  # (R, N, N) neighbourhood of this step
     ranges: np.ndarray  # (R, N, N) d*_ij(t), the d*(t−1) of the next step
@@ -152,7 +157,10 @@ class Localiser:
             base = (loc.est, loc.kind)
             new, kind, triangle, round_trip = SELECTIONS[p.selection].select(loc.candidates, adjacency, ranges, base,
                                                                              p)
-        est = np.where(adjacency[..., None], new, b.est)
+        # non-neighbours: dead reckoning x3 = x̂(t−1) + v*_j − v*_i [3.4], or the stale estimate
+        carried = b.est + (v_meas[:, None, :, :] - v_meas[:, :, None, :]) if p.entry_policy == "dead_reckoning" \
+            else b.est
+        est = np.where(adjacency[..., None], new, carried)
         return Beliefs(
             est=est, valid=adjacency.copy(), adjacency=adjacency.copy(), ranges=ranges,
             kind=np.where(adjacency, kind, Kind.NONE).astype(np.int8), flag=loc.flag, odometry=v_meas,

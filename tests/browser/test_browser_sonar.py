@@ -30,7 +30,9 @@ def _plot_matches(tab, robot: int) -> bool:
     if b is None or tab.session.selected_robot != robot:
         return False
     x, y, _ = (np.asarray(a) for a in tab.panels.handles["corr"].data)
-    on_grid = np.isin(x, b.lags * 1e3)
+    first = np.zeros(len(x), bool)
+    first[np.unique(x, return_index=True)[1]] = True  # τ_lag may sit on the grid (sample lag)
+    on_grid = first & np.isin(x, b.lags * 1e3)
     return on_grid.sum() == b.corr.shape[-1] and np.allclose(y[on_grid], b.corr[0, robot])
 
 

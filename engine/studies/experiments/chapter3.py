@@ -2,7 +2,7 @@
 
 1-D swarms maximise f = x1 for 100 s; what is recorded is the swarm's highest speed. The
 thesis samples "the maximum velocity at every second" without saying whether that is a
-snapshot or the maximum over the second (spec §20 item 12): the series keep both, the
+snapshot or the maximum over the second (not stated): the series keep both, the
 figures and checks use the snapshot at whole seconds.
 """
 

@@ -20,8 +20,9 @@ import numpy as np
 
 from shoal.presets.build import build_fleet
 from shoal.presets.io import load
-from shoal.presets.models import Scenario
+from shoal.presets.models import Robot, Scenario
 
+from ...kinds.fleet import STALL_SPEED, STALL_STEPS
 from ...robots.dvc import TABLE_4_1
 from ..cost import run_cost
 from .output import num
@@ -64,7 +65,7 @@ def constant_case(law: str, ratio: str) -> Case:
     ))
 
 
-# The seven Chapter 4 cases (spec §12.1) and the non-omni controller of Chapter 5.
+# The seven Chapter 4 cases (Table 4.1) and the non-omni controller of Chapter 5.
 RATIOS = ("c3-high", "c3-equal", "c3-low")
 CH4_CASES: tuple[Case, ...] = (
     *(constant_case("rpso", r) for r in RATIOS),
@@ -119,7 +120,8 @@ class FleetBatch:
     layer_x: np.ndarray  # (L,)
     t: np.ndarray  # (K+1,)
     com: np.ndarray  # (K+1, R) CoM fitness [4.17]
-    collided: np.ndarray  # (K+1, R)
+    collided: np.ndarray  # (K+1, R) overlap beyond the contact tolerance
+    stalled: np.ndarray  # (K+1, R) operational robots stalled (``fleet.STALL_SPEED``, ``STALL_STEPS``)
     layers: np.ndarray  # (K+1, R) layers with x below the CoM
     x: np.ndarray | None = None  # (K+1, R, N, 2) when the job asked for positions
     status: np.ndarray | None = None  # (K+1, R, N)
@@ -136,6 +138,15 @@ class FleetBatch:
     def operational(self) -> np.ndarray:
         return self.robots - self.collided
 
+    def head(self, runs: int) -> "FleetBatch":
+        """The first ``runs`` runs of this batch."""
+        cut = lambda a: None if a is None else a[:, :runs]  # noqa: E731
+        return FleetBatch(
+            seed=self.seed, first_run=self.first_run, dt=self.dt, robots=self.robots, robot_radius=self.robot_radius,
+            layer_x=self.layer_x, t=self.t, com=cut(self.com), collided=cut(self.collided), stalled=cut(self.stalled),
+            layers=cut(self.layers), x=cut(self.x), status=cut(self.status),
+        )
+
     def median_run(self) -> int:
         """Position (0-based, in this batch) of the run with the median final CoM fitness;
         with an even number of runs the lower of the two middle ones (ties: lower run)."""
@@ -151,6 +162,7 @@ def simulate_fleet(job: FleetJob, first_run: int, runs: int) -> FleetBatch:
     t = np.empty(K + 1)
     com = np.empty((K + 1, runs))
     collided = np.empty((K + 1, runs), dtype=np.int64)
+    stalled = np.empty((K + 1, runs), dtype=np.int64)
     layers = np.empty((K + 1, runs), dtype=np.int64)
     x = np.empty((K + 1, runs, fleet.robots, 2)) if job.positions else None
     status = np.empty((K + 1, runs, fleet.robots), dtype=np.int8) if job.positions else None
@@ -159,12 +171,13 @@ def simulate_fleet(job: FleetJob, first_run: int, runs: int) -> FleetBatch:
         if k:
             info = fleet.step()
         t[k], com[k], collided[k], layers[k] = info.t, info.com_fitness, info.collided, info.layers_passed
+        stalled[k] = info.stalled
         if x is not None:
             x[k], status[k] = fleet.state.x, fleet.state.status
     return FleetBatch(
         seed=job.seed, first_run=first_run, dt=fleet.dt, robots=fleet.robots,
         robot_radius=fleet.params.robot_radius, layer_x=np.asarray(fleet.world.layer_x, dtype=float).copy(),
-        t=t, com=com, collided=collided, layers=layers, x=x, status=status,
+        t=t, com=com, collided=collided, stalled=stalled, layers=layers, x=x, status=status,
     )
 
 
@@ -185,30 +198,36 @@ def merge(parts: Sequence[FleetBatch]) -> FleetBatch:
     return FleetBatch(
         seed=first.seed, first_run=first.first_run, dt=first.dt, robots=first.robots,
         robot_radius=first.robot_radius, layer_x=first.layer_x, t=first.t,
-        com=cat("com"), collided=cat("collided"), layers=cat("layers"), x=cat("x"), status=cat("status"),
+        com=cat("com"), collided=cat("collided"), stalled=cat("stalled"), layers=cat("layers"), x=cat("x"),
+        status=cat("status"),
     )
 
 
 # ---------------------------------------------------------------------- statistics and rows
-RUNS_COLUMNS = ("case", "run", "seed", "mode", "com_fitness_final", "layers_passed", "collided", "operational")
+RUNS_COLUMNS = ("case", "run", "seed", "mode", "com_fitness_final", "layers_passed", "collided", "operational",
+                "stalled")
 SERIES_COLUMNS = ("case", "mode", "t", "com_fitness_median", "com_fitness_p05", "com_fitness_p95",
-                  "collided_mean", "layers_passed_median")
+                  "collided_mean", "layers_passed_median", "stalled_mean")
+CONTACTS = (f"A collision is an overlap deeper than the contact tolerance (`robot.contact_tolerance`, "
+            f"{1e3 * Robot().contact_tolerance:g} mm; a shallower touch stops the robot without disabling it). A robot "
+            f"is stalled while it has moved slower than {STALL_SPEED:g} m/s for {STALL_STEPS} ticks in a row "
+            "(counted among the operational robots, ours).")
 
 
 def runs_rows(case: str, mode: str, b: FleetBatch) -> list[list[str]]:
     return [
         [case, str(i), str(b.seed), mode, num(b.com[-1, j]), str(int(b.layers[-1, j])), str(int(b.collided[-1, j])),
-         str(int(b.operational[-1, j]))]
+         str(int(b.operational[-1, j])), str(int(b.stalled[-1, j]))]
         for j, i in enumerate(b.run_index)
     ]
 
 
 def series_rows(case: str, mode: str, b: FleetBatch) -> list[list[str]]:
     med, p05, p95 = band(b.com)
-    coll = b.collided.mean(axis=1)
+    coll, stall = b.collided.mean(axis=1), b.stalled.mean(axis=1)
     lay = np.median(b.layers, axis=1)
     return [
-        [case, mode, num(b.t[k]), num(med[k]), num(p05[k]), num(p95[k]), num(coll[k]), num(lay[k])]
+        [case, mode, num(b.t[k]), num(med[k]), num(p05[k]), num(p95[k]), num(coll[k]), num(lay[k]), num(stall[k])]
         for k in range(len(b.t))
     ]
 
@@ -231,6 +250,8 @@ class Outcome:
     runs_with_collision: int
     collided_total: int
     operational_median: float
+    stalled_median_run: int
+    stalled_mean: float
 
     def as_dict(self) -> dict[str, Any]:
         return {k: (round(v, 3) if isinstance(v, float) else v) for k, v in self.__dict__.items()}
@@ -244,6 +265,7 @@ def outcome(b: FleetBatch) -> Outcome:
         collided_median_run=int(end[m]), operational_median_run=int(b.robots - end[m]),
         collided_mean=float(end.mean()), runs_with_collision=int((end > 0).sum()), collided_total=int(end.sum()),
         operational_median=float(np.median(b.robots - end)),
+        stalled_median_run=int(b.stalled[-1, m]), stalled_mean=float(b.stalled[-1].mean()),
     )
 
 

@@ -44,7 +44,9 @@ class SonarJob:
 
     ``window`` > 0 averages the escort metrics over ticks ``window … steps`` and, with
     ``cell`` > 0, accumulates the occupancy of robots relative to the true source in
-    ``cell`` × ``cell`` m cells over the square of half-side ``extent`` (spec A27).
+    ``cell`` × ``cell`` m cells over the square of half-side ``extent`` (the fraction of
+    robot-ticks per cell, our reading of Figs. 8-4 and 8-5). ``routes`` keeps the CoM route
+    of every run in a frame that puts its source on the +x axis (Fig. 7-3).
     """
 
     key: tuple[Any, ...]
@@ -56,6 +58,7 @@ class SonarJob:
     window: int = 0
     cell: float = 0.0
     extent: float = 0.0
+    routes: bool = False
 
     @property
     def cost(self) -> float:
@@ -95,6 +98,7 @@ class SonarBatch:
     mean_dist: np.ndarray | None = None  # (K+1, R) float32 mean robot–source distance (escort jobs)
     frac_inside: np.ndarray | None = None  # (K+1, R) float32 fraction inside r_trap of the source
     occupancy: np.ndarray | None = None  # (R, C, C) int64 robot-ticks per cell in the window
+    com: np.ndarray | None = None  # (K+1, R, 2) float32 CoM, source on +x (held after a run stops)
     extent: float = 0.0
     cell: float = 0.0
     window: int = 0
@@ -113,7 +117,8 @@ class SonarBatch:
 
     def median_steps(self) -> float:
         """Median ticks to converge over all runs, a never-converged run counting as +∞
-        (spec A15); ``inf`` when fewer than half converged."""
+        (the thesis' "on average" read as the median its figures plot); ``inf`` when fewer
+        than half converged."""
         return median_time(self.first_converged)
 
     def window_mean(self, values: np.ndarray) -> np.ndarray:
@@ -138,16 +143,23 @@ def simulate_sonar(job: SonarJob, first_run: int, runs: int) -> SonarBatch:
     fr = np.empty((K + 1, runs), np.float32) if escort else None
     C = int(round(2 * job.extent / job.cell)) if job.cell > 0 else 0
     occ = np.zeros(runs * C * C, np.int64) if C else None
+    route = np.empty((K + 1, runs, 2), np.float32) if job.routes else None
+    if route is not None:  # rotate each run so that its source lies on +x
+        angle = np.arctan2(sw.source0[:, 1], sw.source0[:, 0])
+        turn = np.stack([np.stack([np.cos(angle), np.sin(angle)], -1),
+                         np.stack([-np.sin(angle), np.cos(angle)], -1)], axis=1)  # (R, 2, 2) = R(−angle)
     info = sw.info()
     for k in range(K + 1):
         if k > 0:
             if not sw.running.any():  # every run stopped: hold the last values
-                for a in (com, md, fr):
+                for a in (com, md, fr, route):
                     if a is not None:
                         a[k:] = a[k - 1]
                 break
             info = sw.step()
         com[k] = info.com_dist
+        if route is not None:
+            route[k] = np.einsum("rij,rj->ri", turn, info.com)
         if escort:
             md[k], fr[k] = info.mean_dist_to_source, info.frac_inside_ring
             if occ is not None and k >= job.window:
@@ -160,7 +172,7 @@ def simulate_sonar(job: SonarJob, first_run: int, runs: int) -> SonarBatch:
         seed=job.seed, first_run=first_run, robots=N, dt=p.dt, dc=p.dc, r_trap=p.r_trap, r_ref=p.r_ref,
         com_dist=com, first_converged=sw.state.first_converged.copy(), robot_steps=int(sw.state.steps.sum()) * N,
         mean_dist=md, frac_inside=fr, occupancy=None if occ is None else occ.reshape(runs, C, C),
-        extent=job.extent, cell=job.cell, window=job.window,
+        com=route, extent=job.extent, cell=job.cell, window=job.window,
     )
 
 
@@ -182,7 +194,7 @@ def merge(parts: Sequence[SonarBatch]) -> SonarBatch:
         r_trap=first.r_trap, r_ref=first.r_ref, com_dist=cat("com_dist", 1),
         first_converged=cat("first_converged", 0), robot_steps=sum(b.robot_steps for b in parts),
         mean_dist=cat("mean_dist", 1), frac_inside=cat("frac_inside", 1), occupancy=cat("occupancy", 0),
-        extent=first.extent, cell=first.cell, window=first.window,
+        com=cat("com", 1), extent=first.extent, cell=first.cell, window=first.window,
     )
 
 
@@ -278,7 +290,7 @@ def escort_series(case: EscortCase, b: SonarBatch, every: int = 10) -> list[list
 
 
 def occupancy_probability(b: SonarBatch) -> np.ndarray:
-    """(C, C) fraction of all robot-ticks of all runs in each cell (spec A27); rows = x cells."""
+    """(C, C) fraction of all robot-ticks of all runs in each cell; rows = x cells."""
     occ = b.occupancy.sum(axis=0).astype(float)
     window = b.com_dist.shape[0] - b.window  # ticks window … K
     return occ / max(b.robots * b.runs * window, 1)  # robots outside the mapped square count too
@@ -318,18 +330,21 @@ def convergence_sweep(
     jobs: Sequence[Any], runs: int, out_dir: Path, runs_columns: Sequence[str], series_every: int,
     workers: int, progress: bool, desc: str,
 ) -> tuple[dict[Any, Any], float]:
-    """Run (algorithm, SNR_0) jobs, write runs.csv and series.csv; return results and wall time."""
+    """Run convergence jobs keyed (algorithm, SNR_0, …), write runs.csv and series.csv
+    (columns: case, run, seed, one per further key entry, converged, steps_to_converge);
+    return the results and the wall time."""
     t0 = time.perf_counter()
     res = run_jobs(jobs, workers=workers, progress=progress, desc=desc, simulate=simulate_sonar, merge=merge,
                    chunk=runs)
     wall = time.perf_counter() - t0
     rows, series = [], []
     for j in jobs:
-        alg, snr = j.key
+        alg, *rest = j.key
+        cells = [f"{v:g}" for v in rest]
         b = res[j.key]
-        rows += [[alg, str(r), str(b.seed), f"{snr:g}", str(int(c)), steps_cell(f)]
+        rows += [[alg, str(r), str(b.seed), *cells, str(int(c)), steps_cell(f)]
                  for r, c, f in zip(b.run_index, b.converged, b.first_converged)]
-        series += series_rows((alg, f"{snr:g}"), b, series_every)
+        series += series_rows((alg, *cells), b, series_every)
     write_csv(out_dir / "runs.csv", runs_columns, rows)
-    write_csv(out_dir / "series.csv", ("case", "snr0_db", *SERIES_TAIL), series)
+    write_csv(out_dir / "series.csv", ("case", *runs_columns[3:-2], *SERIES_TAIL), series)
     return res, wall

@@ -1,4 +1,4 @@
-"""Fig. 3-5: response of the highest speed to step changes of U and A+ (spec §7.2, §22).
+"""Fig. 3-5: response of the highest speed to step changes of U and A+ (Section 3.5.2, p. 77).
 
 Δt = 1 s; the limits change at 34 s and 67 s (presets ``fig3-5a`` … ``fig3-5c``, attractors
 ahead). The velocity sampled at t was commanded with the parameters in force at t − Δt, so
@@ -125,11 +125,12 @@ def run(
     settle = {p: settle_times(R[p], t1, t2) for p in PANELS}
 
     def slow(key: str, thesis: float | str, claim: str) -> dict[str, Any]:
-        return c3.check(f"{key}: {claim}; pass = lags, median ≥ {SLOW:g} s ({big} particles, per run)",
+        return c3.check(f"{key}: {claim}; pass = lags, median ≥ {SLOW:g} s, threshold ours ({big} particles, per run)",
                         thesis, _fmt(times[key]), med[key] >= SLOW and math.isfinite(med[key]))
 
     def fast(key: str, thesis: float | str) -> dict[str, Any]:
-        return c3.check(f"{key}: high β follows at once; pass = median ≤ {FAST:g} s ({big} particles, per run)",
+        return c3.check(f"{key}: high β follows at once; pass = median ≤ {FAST:g} s, threshold ours "
+                        f"({big} particles, per run)",
                         thesis, _fmt(times[key]), med[key] <= FAST)
 
     checks = [
@@ -196,9 +197,9 @@ def _readme(runs: int, sizes: Sequence[int], summary: dict[str, Any]) -> str:
     return f"""# Fig. 3-5 reproduction: step changes of U and A+
 
 Adapted PSO in one dimension, f = x1 maximised, Δt = 1 s, 100 s, swarms of {sizes_txt}
-particles, {runs} seeded runs per case, attractors ahead (spec §7.2, §22). Presets
+particles, {runs} seeded runs per case, attractors ahead (docs/readings.md). Presets
 `fig3-5a` … `fig3-5c`; U and A+ change at 34 s and 67 s. The U and A+ of 3-5b and 3-5c are
-not stated in the thesis text; the presets use the reading of spec §7.2.
+not stated in the thesis text; the presets use our reading of the figure.
 
 Timing: {summary['timing']}.
 
@@ -231,6 +232,6 @@ where the carried term is below {DECAYED:.0%} of U.
 {rows}
 
 The thesis times (8 s, 6 s, 11 s) come from a single run with unstated details (c1 : c2
-split, initial state, best bookkeeping; spec §20 item 12) and are not matched number for
+split, initial state, best bookkeeping) and are not matched number for
 number; what is checked is the qualitative claim: low β lags, high β follows at once.
 """

@@ -19,7 +19,7 @@ from shoal.presets.build import sonar_params_for
 from shoal.presets.io import load
 
 from . import chapter78 as ch
-from .fig7_2 import RUNS_COLUMNS, SERIES_EVERY, make_jobs, seed_for
+from .fig7_2 import SERIES_EVERY, make_jobs, seed_for
 from .output import check, checks_table, new_figure, r3, save
 
 PRESET = "sonar-gt-pso"
@@ -27,6 +27,7 @@ DEFAULT_RUNS = 100
 HORIZON = 2000
 SNRS = (10.0, 6.0, 4.0, 0.0)
 ALGORITHMS = ("gt-pso", "xb-pso")
+RUNS_COLUMNS = ("case", "run", "seed", "snr0_db", "converged", "steps_to_converge")
 GT_CONVERGES = (10.0, 6.0)  # thesis: GT-PSO converges only there within 2000 steps
 
 

@@ -148,5 +148,6 @@ def _checks(stats: dict[str, dict[str, Any]], cases: Sequence[ch.EscortCase]) ->
     for c in cases:
         d = stats[c.name]["median_mean_dist_to_source"]
         checks.append(check(f"{c.name}: the swarm stays at the ring (median mean robot–source distance within "
-                            "r ± 50 %)", f"robots keep r = {c.r:g} m", f"{d:.1f} m", 0.5 * c.r <= d <= 1.5 * c.r))
+                            "r ± 50 %; threshold ours)", f"robots keep r = {c.r:g} m", f"{d:.1f} m",
+                            0.5 * c.r <= d <= 1.5 * c.r))
     return checks

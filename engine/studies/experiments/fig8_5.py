@@ -45,7 +45,7 @@ def _checks(stats: dict[str, dict[str, Any]], cases: Sequence[ch.EscortCase]) ->
         d, final, com = st["median_mean_dist_to_source"], st["median_final_mean_dist"], st["median_com_dist"]
         if c.v_n <= 0.1:
             checks.append(check(f"{c.name}: v_n = {c.v_n:g} is tracked (median mean robot–source distance ≤ 1.5 r "
-                                "over the window and at the end)", "follows and surrounds the source",
+                                "over the window and at the end; threshold ours)", "follows and surrounds the source",
                                 f"window {d:.1f} m, end {final:.1f} m (r = {c.r:g} m)",
                                 d <= 1.5 * c.r and final <= 1.5 * c.r))
             checks.append(check(f"{c.name}: the source stays inside the swarm (median |CoM − source| < r)",
@@ -61,11 +61,12 @@ def _checks(stats: dict[str, dict[str, Any]], cases: Sequence[ch.EscortCase]) ->
                                 com > s0["median_com_dist"] and d > s0["median_mean_dist_to_source"]))
         if c.r == 50.0 and c.psd_s == 120.0:
             checks.append(check(f"{c.name}: contact is lost (median mean robot–source distance at the end > "
-                                f"{LOST:g} r and above its window mean)", "lags badly and loses contact",
+                                f"{LOST:g} r and above its window mean; threshold ours)",
+                                "lags badly and loses contact",
                                 f"end {final:.1f} m, window {d:.1f} m (r = {c.r:g} m)",
                                 final > LOST * c.r and final > d))
         else:
             checks.append(check(f"{c.name}: lags without runaway (median mean robot–source distance at the end ≤ "
-                                f"{LOST:g} r)", "lags and cannot encircle, but no loss of contact",
+                                f"{LOST:g} r; threshold ours)", "lags and cannot encircle, but no loss of contact",
                                 f"end {final:.1f} m (r = {c.r:g} m)", final <= LOST * c.r))
     return checks

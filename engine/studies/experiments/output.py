@@ -26,22 +26,42 @@ def write_csv(path: Path, header: Sequence[str], rows: Sequence[Sequence[str]]) 
 
 
 def check(name: str, thesis: Any, measured: Any, passed: bool) -> dict[str, Any]:
-    """One entry of ``summary.json`` → ``checks``: a thesis claim beside what was measured."""
+    """One entry of ``summary.json`` → ``checks``: a thesis claim beside what was measured,
+    judged by the thesis' own metric."""
     return {"name": name, "thesis": thesis, "measured": measured, "pass": bool(passed)}
+
+
+def info(name: str, thesis: Any, measured: Any, holds: bool) -> dict[str, Any]:
+    """One entry of ``summary.json`` → ``information``: a stricter or other measure of a
+    claim than the thesis' own (e.g. over every run, not the median one), reported beside
+    the checks but not counted in them."""
+    return {"name": name, "thesis": thesis, "measured": measured, "holds": bool(holds)}
 
 
 def r3(v: float) -> float:
     return round(float(v), 3)
 
 
+def cell(v: Any) -> str:
+    """A value for a markdown table cell (pipes escaped, one line)."""
+    return str(v).replace("|", "\\|").replace("\n", " ")
+
+
 def checks_table(checks: Sequence[dict[str, Any]]) -> str:
     """The checks as a markdown table (for a target's README.md)."""
-    def cell(v: Any) -> str:
-        return str(v).replace("|", "\\|").replace("\n", " ")
-
     rows = [f"| {cell(c['name'])} | {cell(c['thesis'])} | {cell(c['measured'])} | {'yes' if c['pass'] else 'no'} |"
             for c in checks]
     return "| check | thesis | measured | pass |\n|---|---|---|---|\n" + "\n".join(rows)
+
+
+def information_table(entries: Sequence[dict[str, Any]]) -> str:
+    """The ``information`` entries as a markdown table (not counted as checks); "" if none."""
+    if not entries:
+        return ""
+    rows = [f"| {cell(c['name'])} | {cell(c['thesis'])} | {cell(c['measured'])} | {'yes' if c['holds'] else 'no'} |"
+            for c in entries]
+    return ("Also measured (information, not counted as checks):\n\n| measure | thesis | measured | holds |\n"
+            "|---|---|---|---|\n" + "\n".join(rows))
 
 
 def percentile_band(values: np.ndarray, axis: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
