@@ -65,7 +65,7 @@ def x_scale(span: tuple[float, float]) -> dict[str, Any]:
     t0, t1 = float(span[0]), float(span[1])
     if not math.isfinite(t0):
         t0 = 0.0
-    if not math.isfinite(t1) or t1 - t0 < 1e-9:
+    if not math.isfinite(t1) or t1 - t0 < 1e-5 * max(1.0, abs(t0)):  # one point (or a placeholder pair)
         t1 = t0 + MIN_SPAN
     return {"time": False, "range": (t0, t1)}
 
