@@ -38,6 +38,9 @@ from browser_helpers import (  # noqa: E402
     wait_until,
 )
 
+TAB_TOPS = ("[...new Set([...document.querySelectorAll('[role=tab]')]"
+            ".map(e => Math.round(e.getBoundingClientRect().top)))]")  # the tops of the tabs, measured in one go
+
 
 @pytest.fixture(scope="module")
 def browser():
@@ -69,8 +72,7 @@ def test_page_loads_with_its_own_session(server, page, client_id):
         assert page.locator("label", has_text=text).count() >= 1, text
     for tab in ("Controller", "Plots", "Lessons"):
         assert page.get_by_role("tab", name=tab).count() == 1
-    tops = page.evaluate("[...new Set([...document.querySelectorAll('[role=tab]')]"
-                         ".map(e => Math.round(e.getBoundingClientRect().top)))]")  # in one go: the status may grow
+    tops = page.evaluate(TAB_TOPS)  # in one go: the status line may grow meanwhile
     assert len(tops) == 1, f"the tab row wraps: tabs at y = {sorted(tops)}"
     session = server.sessions[client_id]
     assert session.scenario.name == "default"
@@ -224,3 +226,30 @@ def test_space_arrow_and_r_drive_the_playback_but_not_inside_a_box(server, page,
     page.evaluate("document.activeElement && document.activeElement.blur()")
     page.keyboard.press(" ")
     wait_until(lambda: session.playing, what="space plays")
+
+
+# ---------------------------------------------------------------------------- layout
+
+
+@pytest.mark.parametrize("preset, kind, folder, inside", [
+    ("course-dvc", "fleet", "Arena view and selected robot", "zoom"),
+    ("sonar-xb-pso", "sonar", "Selected robot", "robot"),
+    ("slo-walk", "mai", "Replay and files", "Export CSV"),
+    ("default", "swarm", "Positions", "error set"),
+])
+def test_every_kind_fits_its_tab_row_on_one_line_with_its_folders_closed(server, page, client_id, preset, kind,
+                                                                         folder, inside):
+    dismiss_toasts(page)
+    choose(page, "preset", preset)
+    wait_until(lambda: server.tabs[client_id].session.scenario.name == preset, what=preset)
+    page.get_by_role("tab", name="Lessons").wait_for(timeout=60000)
+    page.get_by_text(folder, exact=True).first.wait_for(timeout=60000)
+    seen: list = []
+
+    def one_row_high_up() -> bool:  # (measured once the new panel has settled)
+        seen[:] = page.evaluate(TAB_TOPS)
+        return len(seen) == 1 and seen[0] < 0.6 * VIEWPORT["height"]  # the kind's controls start on screen
+    wait_until(one_row_high_up, timeout=30.0, what=f"{preset}: one tab row in the upper 60 % of the page")
+    for closed in ("Export CSV", "compare with swarm B", inside):  # Replay and files, Compare, the kind's own
+        probe = page.get_by_text(closed, exact=True).or_(page.get_by_role("button", name=closed, exact=True))
+        assert not any(probe.nth(i).is_visible() for i in range(probe.count())), f"{preset}: {closed!r} shows"
