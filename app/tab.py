@@ -2,7 +2,11 @@
 
 ``tick(now)`` runs a few steps when playing (``view.steps_per_second``), redraws the arena
 at most ``SCENE_HZ`` times a second and the plots and readouts at most ``PLOT_HZ`` times,
-so that plot traffic never holds up the scene.
+so that plot traffic never holds up the scene. Control feedback comes first: a big swarm's
+redraws are spaced so that a page takes in at most ``SCENE_POINTS_PER_S`` robots and trail
+points a second (a software-rendered page fell seconds behind at 2 MB/s of scene updates),
+and after a control event the scene waits ``CONTROL_HOLD`` so that the page shows the
+control's answer first and a dragged slider's redraws coalesce.
 
 A tab shows one kind of scene at a time (:mod:`.kinds.registry`): a Chapter 3 swarm, a
 Chapter 4–5 fleet, a Chapter 6–8 acoustic swarm or Mai's SLO swarm; the first three run on
@@ -18,6 +22,8 @@ import time
 from collections import deque
 from typing import Any, Callable, ContextManager, Hashable
 
+import numpy as np
+
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
@@ -28,6 +34,7 @@ from .lessons.panel import LessonProgress
 from .panel.panel import Panel, Services
 from .preset_menu import PresetMenu
 from .session.session import Session
+from .session.snapshot import Snapshot
 
 CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
 
@@ -40,8 +47,18 @@ def share_page(session: Session) -> bytes:
         raise PresetError(err.messages) from None
 
 
+
+def scene_points(snap: Snapshot) -> int:
+    """Robots and trail points one redraw sends (swarm B's too): what a page has to take in."""
+    n = len(snap.x) + (int(np.prod(snap.trails.shape[:2])) if snap.trails.ndim >= 2 else 0)
+    if snap.twin is not None:
+        n += len(snap.twin[0]) + int(np.prod(np.shape(snap.twin[1])[:2]))
+    return n
+
 class TabApp:
     SCENE_HZ = 30.0
+    SCENE_POINTS_PER_S = 40_000.0  # robots and trail points drawn per second at most: a big swarm redraws less often
+    CONTROL_HOLD = 0.3  # s without scene redraws after a control event: feedback first, a dragged slider coalesces
     PLOT_HZ = 4.0
     MAX_STEPS_PER_TICK = 25
     STEP_BUDGET = 0.025  # s of engine steps per tick: a heavy scene plays slower, it never stalls the other tabs
@@ -87,6 +104,7 @@ class TabApp:
         self._was_playing = False
         self._last: float | None = None
         self._next_scene = 0.0
+        self._controls = self.panels.controls
         self._next_plot = 0.0
         self._plot_key: tuple | None = None
 
@@ -178,12 +196,15 @@ class TabApp:
         if s.scene_revision != self.arena.built_revision:
             with self._atomic():
                 self.arena.rebuild(s.scene_revision)
+        if self.panels.controls != self._controls:  # the page is busy with the control's answer: let it show
+            self._controls = self.panels.controls
+            self._next_scene = max(self._next_scene, now + self.CONTROL_HOLD)
         if now >= self._next_scene and s.revision != self.arena.drawn_revision:
             snap = s.shown_snapshot()  # live, or the recorded frame the timeline points at (and swarm B)
             with self._atomic():  # one wake-up of viser's event loop for the scene and its readouts
                 self.arena.draw(snap)
                 self.panels.on_snapshot(snap)
-            self._next_scene = now + 1.0 / self.SCENE_HZ
+            self._next_scene = now + max(1.0 / self.SCENE_HZ, scene_points(snap) / self.SCENE_POINTS_PER_S)
         if plots and now >= self._next_plot:
             key = (s.revision, s.selected_robot, s.selected_dim, s.playing)
             if key != self._plot_key:

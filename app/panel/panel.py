@@ -122,6 +122,7 @@ class Panel:
         self._local = threading.local()  # per thread: programmatic .value fires callbacks inline
         self._controls: list[tuple[Any, Any]] = []  # (spec, handle) in build order
         self._sent: dict[int, tuple] = {}  # uPlot (series, axes) last sent, by handle (see push_uplot)
+        self.controls = 0  # a count of the user's control events (the tab holds the scene a moment after one)
         self.part = kind.panel(self)
         self._build_header()
         badge = gui.add_markdown("", visible=False)  # names a loaded replay
@@ -320,6 +321,7 @@ class Panel:
 
     def _changed(self, item: Any, value: Any) -> None:
         """A user's change of a control's value."""
+        self.controls += 1
         if item.act is not None:
             item.act(self, value)
             return
@@ -451,6 +453,7 @@ class Panel:
     def press(self, what: str) -> None:
         """A playback button: Play, Pause, Step or Reset."""
         s = self.session
+        self.controls += 1
         if what == "Play":
             s.play()
         elif what == "Pause":
