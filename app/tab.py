@@ -2,11 +2,9 @@
 
 ``tick(now)`` runs a few steps when playing (``view.steps_per_second``), redraws the arena
 at most ``SCENE_HZ`` times a second and the plots and readouts at most ``PLOT_HZ`` times,
-so that plot traffic never holds up the scene. Control feedback comes first: a big swarm's
-redraws are spaced so that a page takes in at most ``SCENE_POINTS_PER_S`` robots and trail
-points a second (a software-rendered page fell seconds behind at 2 MB/s of scene updates),
-and after a control event the scene waits ``CONTROL_HOLD`` so that the page shows the
-control's answer first and a dragged slider's redraws coalesce.
+so that plot traffic never holds up the scene. Control feedback comes first: after a control
+event the scene waits ``CONTROL_HOLD``, so that the page shows the control's answer before
+more scene updates and a dragged slider's redraws coalesce.
 
 A tab shows one kind of scene at a time (:mod:`.kinds.registry`): a Chapter 3 swarm, a
 Chapter 4–5 fleet, a Chapter 6–8 acoustic swarm or Mai's SLO swarm; the first three run on
@@ -22,8 +20,6 @@ import time
 from collections import deque
 from typing import Any, Callable, ContextManager, Hashable
 
-import numpy as np
-
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
@@ -34,7 +30,6 @@ from .lessons.panel import LessonProgress
 from .panel.panel import Panel, Services
 from .preset_menu import PresetMenu
 from .session.session import Session
-from .session.snapshot import Snapshot
 
 CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
 
@@ -47,17 +42,8 @@ def share_page(session: Session) -> bytes:
         raise PresetError(err.messages) from None
 
 
-
-def scene_points(snap: Snapshot) -> int:
-    """Robots and trail points one redraw sends (swarm B's too): what a page has to take in."""
-    n = len(snap.x) + (int(np.prod(snap.trails.shape[:2])) if snap.trails.ndim >= 2 else 0)
-    if snap.twin is not None:
-        n += len(snap.twin[0]) + int(np.prod(np.shape(snap.twin[1])[:2]))
-    return n
-
 class TabApp:
     SCENE_HZ = 30.0
-    SCENE_POINTS_PER_S = 40_000.0  # robots and trail points drawn per second at most: a big swarm redraws less often
     CONTROL_HOLD = 0.3  # s without scene redraws after a control event: feedback first, a dragged slider coalesces
     PLOT_HZ = 4.0
     MAX_STEPS_PER_TICK = 25
@@ -204,7 +190,7 @@ class TabApp:
             with self._atomic():  # one wake-up of viser's event loop for the scene and its readouts
                 self.arena.draw(snap)
                 self.panels.on_snapshot(snap)
-            self._next_scene = now + max(1.0 / self.SCENE_HZ, scene_points(snap) / self.SCENE_POINTS_PER_S)
+            self._next_scene = now + 1.0 / self.SCENE_HZ
         if plots and now >= self._next_plot:
             key = (s.revision, s.selected_robot, s.selected_dim, s.playing)
             if key != self._plot_key:
