@@ -72,6 +72,7 @@ class TabApp:
         self._ticking = threading.Lock()
         self._clicks: list[Callable[[Any], None]] = []
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
+        self.control_hold = self.CONTROL_HOLD
         self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
         self.menu = PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included, across swaps
         self._build_kind()
@@ -90,7 +91,7 @@ class TabApp:
         self._was_playing = False
         self._last: float | None = None
         self._next_scene = 0.0
-        self._controls = self.panels.controls
+        self._controls = self.panels.controls  # (control events seen: the scene holds after a new one)
         self._next_plot = 0.0
         self._plot_key: tuple | None = None
 
@@ -184,7 +185,7 @@ class TabApp:
                 self.arena.rebuild(s.scene_revision)
         if self.panels.controls != self._controls:  # the page is busy with the control's answer: let it show
             self._controls = self.panels.controls
-            self._next_scene = max(self._next_scene, now + self.CONTROL_HOLD)
+            self._next_scene = max(self._next_scene, now + self.control_hold)
         if now >= self._next_scene and s.revision != self.arena.drawn_revision:
             snap = s.shown_snapshot()  # live, or the recorded frame the timeline points at (and swarm B)
             with self._atomic():  # one wake-up of viser's event loop for the scene and its readouts

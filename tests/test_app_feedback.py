@@ -9,6 +9,7 @@ from shoal.app.tab import TabApp
 
 def test_after_a_control_event_the_scene_waits_and_the_answer_is_there_first(tab):
     s = tab.session
+    tab.control_hold = TabApp.CONTROL_HOLD  # (hand-ticked tabs have none)
     s.play()
     tab.tick(1.0)
     tab.tick(1.2)
