@@ -482,7 +482,7 @@ def test_speed_series_bounds():
     assert len(data) == len(SPEED.options(s)) == 5
     np.testing.assert_allclose(data[4], 2.0 / (1 - 0.5))  # U_j = ĉ/(1 − ω)
     np.testing.assert_allclose(data[3], 4.0 * np.sqrt(2))  # U = U_j √d
-    assert SPEED.scales((0.0, 0.2), s)["x"]["time"] is False
+    assert SPEED.render(m, (0.0, 0.2), s).scales["x"]["time"] is False
     s.apply({"controller.mode": "raw", "controller.law": "standard"})
     hidden = SPEED.options(s)
     assert hidden[3]["show"] is False and hidden[4]["show"] is False

@@ -241,10 +241,6 @@ class PlotSpec:
         out = out + tuple(np.full(len(out[0]), float(line.value)) for line in lines)
         return tuple(np.nan_to_num(a, nan=self.nan_to) for a in out) if self.nan_to is not None else out
 
-    def scales(self, span: tuple[float, float], session: Session) -> dict[str, Any]:
-        """The x scale and the other y scales (the y range is the frame's)."""
-        return {"x": x_scale(span), **self.more_scales}
-
     def render(self, m: Columns, span: tuple[float, float], session: Session,
                twin: np.ndarray | None = None) -> Frame:
         """The frame to send for metrics ``m`` over ``span`` (with B's ``twin`` column at the same times)."""
