@@ -102,19 +102,20 @@ class TabApp:
         self.panels.remove()
         self.arena.clear()
 
-    def replace(self, scenario: Scenario) -> Session:
-        """Load ``scenario``; a scene of the other kind swaps session, panels and arena.
-        Returns the session now shown. Raises :class:`PresetError` (nothing changed) when it
-        cannot be shown."""
+    def replace(self, scenario: Scenario, *, play: bool = True) -> Session:
+        """Load ``scenario``, playing (``play=False``: paused at step 0); a scene of the other
+        kind swaps session, panels and arena. Returns the session now shown. Raises
+        :class:`PresetError` (nothing changed) when it cannot be shown."""
         kind = kind_for(scenario)
         with self._ticking:
             if app_kind(self.session) is kind:
-                self.session.load_scenario(scenario)
+                self.session.load_scenario(scenario, play=play)
                 self.panels.sync()
                 return self.session
             new = kind.session(scenario)  # may refuse: then the old scene stays
             new.choose_at_end(self.session.at_end)  # the tab's choice outlives the scene
-            new.play()  # every scene opens playing
+            if play:
+                new.play()  # every scene opens playing
             self._drop_kind()
             self.session = new
             self._build_kind()

@@ -56,9 +56,20 @@ def test_a_paused_scene_switched_to_another_kind_opens_playing(tab):
 
 
 def test_a_lessons_set_up_keeps_its_scene_paused_at_step_0(tab):
-    tab.session.play()
+    s = tab.session
+    s.play()
+    load = s.load_scenario
+    seen: list[bool] = []
+
+    def spy(scenario, **kw):  # the ticker could step the moment the scene is in: is it playing then?
+        load(scenario, **kw)
+        seen.append(s.playing)
+    s.load_scenario = spy
     assert tab.panels.set_up_lesson("standard-pso", {}) == []
-    assert not tab.session.playing and tab.session.k == 0
+    assert seen == [False]  # loaded paused, not paused afterwards
+    assert tab.session is s and not s.playing and s.k == 0
+    assert tab.panels.set_up_lesson("course-dvc", {}) == []  # another kind: a new session, paused too
+    assert tab.session is not s and not tab.session.playing and tab.session.k == 0
 
 
 @pytest.mark.parametrize("preset", list(KINDS))

@@ -78,7 +78,7 @@ class Services:
     send_file: SendFile
     menu: PresetMenu  # the preset dropdown's choices (the tab keeps it: uploads outlive a swap of panels)
     make_session: Callable[[Scenario], Session]  # a fresh session of any kind (to check a replay)
-    replace: Callable[[Scenario], Session] | None = None  # load a scene, maybe of another kind
+    replace: Callable[..., Session] | None = None  # load a scene, maybe of another kind (play=False: paused)
     share: Callable[[Session], bytes] | None = None  # the recorded run as one web page
     lessons: LessonProgress = field(default_factory=LessonProgress)  # where the Lessons tab is (the tab keeps it)
     experiments: ExperimentService | None = None  # the server's experiments (None: no Experiment tab)
@@ -494,15 +494,13 @@ class Panel:
         would be, loaded paused at step 0. Returns the refusal's messages (empty: loaded)."""
         try:
             scenario = load_scene(preset, values)
-            if self.services.replace is not None:
-                session = self.services.replace(scenario)  # may rebuild the panel (another kind of scene)
+            if self.services.replace is not None:  # (never a step before it is paused)
+                self.services.replace(scenario, play=False)  # may rebuild the panel (another kind of scene)
             else:
-                self.session.load_scenario(scenario)
+                self.session.load_scenario(scenario, play=False)
                 self.sync()
-                session = self.session
         except PresetError as err:
             return list(err.messages)
-        session.pause()
         return []
 
     def upload_preset(self, filename: str, content: bytes) -> bool:

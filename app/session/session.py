@@ -163,14 +163,15 @@ class Session:
         self.selected_robot = min(self.selected_robot, self.robots - 1)
         self.selected_dim = min(self.selected_dim, self.scenario.sim.d - 1)
 
-    def load_scenario(self, scenario: Scenario) -> None:
-        """Replace the whole scene (preset switch, upload) and play it; refuses scenes of another kind."""
+    def load_scenario(self, scenario: Scenario, *, play: bool = True) -> None:
+        """Replace the whole scene (preset switch, upload) and play it (``play=False``: paused at
+        step 0, as a lesson's *Set up* wants it); refuses scenes of another kind."""
         self.check(scenario)
         with self.lock:
             self._load(scenario)
             self.compare = None  # a new scene: no swarm B until asked again
             self._clamp_selection()
-            self.playing = True  # every scene opens playing
+            self.playing = play  # every scene opens playing
             self.revision += 1
 
     def load_preset(self, name: str) -> Scenario:
