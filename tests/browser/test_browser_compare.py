@@ -125,6 +125,8 @@ def test_compare_runs_b_in_lock_step_and_draws_it_in_teal(server, page, cid):
     wait_until(lambda: session.sim.state.k >= 40, what="40 steps")
     page.get_by_role("button", name="Pause", exact=True).click()
     wait_until(lambda: not session.playing, what="pause")
+    tab = server.tabs[cid]  # the scene follows a moment after a control event (TabApp.CONTROL_HOLD)
+    wait_until(lambda: tab.arena.drawn_revision == session.revision, what="the paused step drawn")
     assert session.twin.sim.state.k == session.sim.state.k
     dismiss_toasts(page)
     # B's robots that lie clear of A's are teal on screen
