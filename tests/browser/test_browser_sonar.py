@@ -47,6 +47,8 @@ def test_switching_to_sonar_draws_rays_and_the_correlation_follows_the_robot(ser
     wait_until(lambda: tab.session.sim.state.k >= 1, what="one step")
     session = tab.session
     wait_until(lambda: "rays_true" in tab.arena.nodes and tab.arena.nodes["rays_true"].visible, what="rays drawn")
+    wait_until(lambda: not session.playing and tab.arena.drawn_revision == session.revision,
+               what="the stepped scene drawn")  # (a moment after the click: TabApp.CONTROL_HOLD)
     x = session.sim.state.x[0]
     pts = np.asarray(tab.arena.nodes["rays_true"].points)
     np.testing.assert_allclose(pts[:, 0, :2], tab.arena.to_view(x)[:, :2], atol=1e-4)
