@@ -27,6 +27,7 @@ from .input_guard import guard_inputs
 from .kinds.registry import check_supported, session_for
 from .native_memory import keep_large_blocks_returnable
 from .origin_guard import OriginPolicy, guarded_viser, is_loopback
+from .panel.keys import install_keys
 from .replay import MAX_REPLAY_BYTES
 from .session.session import Session
 from .session.upload import MAX_UPLOAD_BYTES
@@ -205,6 +206,7 @@ class ShoalServer:
         guard_uploads(client.gui, MAX_TRANSFER_BYTES, MAX_PENDING_BYTES,
                       lambda name, why: refuse(f"Refused: uploaded {name}", why))
         tab = self.open_tab(client.client_id, client.gui, client.scene, client)
+        install_keys(client.gui)  # space, →, r
         tab.session.play()
 
     def _disconnect(self, client: viser.ClientHandle) -> None:

@@ -2,7 +2,9 @@
 
 ``tick(now)`` runs a few steps when playing (``view.steps_per_second``), redraws the arena
 at most ``SCENE_HZ`` times a second and the plots and readouts at most ``PLOT_HZ`` times,
-so that plot traffic never holds up the scene.
+so that plot traffic never holds up the scene. Control feedback comes first: after a control
+event the scene waits ``CONTROL_HOLD``, so that the page shows the control's answer before
+more scene updates and a dragged slider's redraws coalesce.
 
 A tab shows one kind of scene at a time (:mod:`.kinds.registry`): a Chapter 3 swarm, a
 Chapter 4–5 fleet, a Chapter 6–8 acoustic swarm or Mai's SLO swarm; the first three run on
@@ -42,6 +44,7 @@ def share_page(session: Session) -> bytes:
 
 class TabApp:
     SCENE_HZ = 30.0
+    CONTROL_HOLD = 0.3  # s without scene redraws after a control event: feedback first, a dragged slider coalesces
     PLOT_HZ = 4.0
     MAX_STEPS_PER_TICK = 25
     STEP_BUDGET = 0.025  # s of engine steps per tick: a heavy scene plays slower, it never stalls the other tabs
@@ -69,6 +72,7 @@ class TabApp:
         self._ticking = threading.Lock()
         self._clicks: list[Callable[[Any], None]] = []
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
+        self.control_hold = self.CONTROL_HOLD
         self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
         self.menu = PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included, across swaps
         self._build_kind()
@@ -87,6 +91,7 @@ class TabApp:
         self._was_playing = False
         self._last: float | None = None
         self._next_scene = 0.0
+        self._controls = self.panels.controls  # (control events seen: the scene holds after a new one)
         self._next_plot = 0.0
         self._plot_key: tuple | None = None
 
@@ -97,19 +102,20 @@ class TabApp:
         self.panels.remove()
         self.arena.clear()
 
-    def replace(self, scenario: Scenario) -> Session:
-        """Load ``scenario``; a scene of the other kind swaps session, panels and arena.
-        Returns the session now shown. Raises :class:`PresetError` (nothing changed) when it
-        cannot be shown."""
+    def replace(self, scenario: Scenario, *, play: bool = True) -> Session:
+        """Load ``scenario``, playing (``play=False``: paused at step 0); a scene of the other
+        kind swaps session, panels and arena. Returns the session now shown. Raises
+        :class:`PresetError` (nothing changed) when it cannot be shown."""
         kind = kind_for(scenario)
         with self._ticking:
             if app_kind(self.session) is kind:
-                self.session.load_scenario(scenario)
+                self.session.load_scenario(scenario, play=play)
                 self.panels.sync()
                 return self.session
             new = kind.session(scenario)  # may refuse: then the old scene stays
-            if self.session.playing:
-                new.play()
+            new.choose_at_end(self.session.at_end)  # the tab's choice outlives the scene
+            if play:
+                new.play()  # every scene opens playing
             self._drop_kind()
             self.session = new
             self._build_kind()
@@ -157,7 +163,7 @@ class TabApp:
         dropped, not queued). Tabs ticked by hand (tests) always take all ``n``."""
         end = time.monotonic() + self.STEP_BUDGET if self.auto_tick else float("inf")
         for _ in range(n):
-            if not self.session.step(1) or time.monotonic() >= end:
+            if not self.session.play_step() or time.monotonic() >= end:
                 return
 
     def _tick(self, now: float, plots: bool = True) -> None:
@@ -178,6 +184,9 @@ class TabApp:
         if s.scene_revision != self.arena.built_revision:
             with self._atomic():
                 self.arena.rebuild(s.scene_revision)
+        if self.panels.controls != self._controls:  # the page is busy with the control's answer: let it show
+            self._controls = self.panels.controls
+            self._next_scene = max(self._next_scene, now + self.control_hold)
         if now >= self._next_scene and s.revision != self.arena.drawn_revision:
             snap = s.shown_snapshot()  # live, or the recorded frame the timeline points at (and swarm B)
             with self._atomic():  # one wake-up of viser's event loop for the scene and its readouts

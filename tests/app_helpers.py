@@ -13,6 +13,7 @@ def hand_tab(server: Any, cid: int = HAND_TAB) -> Iterator[Any]:
     """A tab whose panels live on ``server.viser.gui``, ticked only by the test; closed (and
     the server's GUI and scene cleared) afterwards."""
     t = server.open_tab(cid, server.viser.gui, server.viser.scene, auto_tick=False)
+    t.control_hold = 0.0  # a test ticks by hand, at the times it picks: the scene follows each change at once
     t.tick(0.0)
     try:
         yield t

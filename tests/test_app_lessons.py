@@ -24,7 +24,8 @@ def _open(tab, word: str):
 
 def test_every_kind_of_panel_has_a_lessons_tab(tab):
     labels = [t._label for t in tab.panels.tabs._tab_handles]
-    assert labels[labels.index("Notes") + 1] == "Lessons" and "Controller" in labels  # (then the tab's Experiment)
+    assert labels[labels.index("Controller") + 2:] == ["Lessons", "Sweep"]  # the chapter's notes are in Lessons
+    assert tab.panels.notes.content.startswith("#")
     lessons = tab.panels.lessons
     assert lessons.progress is tab.lesson_progress
     assert len(lessons.lesson_menu.options) >= 8

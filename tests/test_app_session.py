@@ -90,7 +90,13 @@ def test_physical_mode_derives_omega_c_beta_from_U_A_dt(tab):
     assert omega == pytest.approx(1 - beta)  # [3.35]
     assert c_hat == pytest.approx(20.0 * 0.1 / np.sqrt(2))  # [3.32]
     tab.tick(10.0)
-    assert f"{beta:.4g}" in p.handles["readout"].content and f"{c_hat:.4g}" in p.handles["readout"].content
+    assert f"β = {beta:.4g}" in p.handles["readout"].content
+    h = p.handles  # ω, c1, c2 in force are read-outs on their sliders (moving one switches to raw mode)
+    assert h["controller.omega"].value == pytest.approx(1 - beta, rel=1e-3)
+    assert h["controller.c1"].value + h["controller.c2"].value == pytest.approx(c_hat, rel=1e-3)
+    h["controller.omega"].value = 0.5
+    assert s.scenario.controller.mode == "raw" and s.scenario.controller.omega == 0.5
+    assert s.scenario.controller.c1 + s.scenario.controller.c2 == pytest.approx(c_hat, rel=1e-3)
 
 
 def test_law_dropdown_swaps_the_law(tab):
@@ -106,7 +112,10 @@ def test_mode_switch_keeps_the_controllers_behaviour(tab):
     assert swarm.driver(s).coefficients() == pytest.approx(before, rel=1e-5)
     tab.panels.handles["controller.mode"].value = "physical"
     assert swarm.driver(s).coefficients() == pytest.approx(before, rel=1e-5)
-    assert tab.panels.handles["physical"].visible and not tab.panels.handles["raw"].visible
+    h = tab.panels.handles
+    assert h["controller.U"].visible and h["controller.omega"].visible  # ω, c1, c2 are on screen in both modes
+    tab.panels.handles["controller.mode"].value = "raw"
+    assert not h["controller.U"].visible and h["controller.omega"].visible
 
 
 # ---------------------------------------------------------------------------- refusals
@@ -204,7 +213,7 @@ def test_preset_dropdown_switches_scene_and_syncs_sliders(tab):
     assert tab.panels.handles["controller.omega"].value == pytest.approx(0.7)
     h = tab.panels.handles
     assert h["controller.law"].value == "standard" and h["controller.mode"].value == "raw"
-    assert tab.panels.handles["raw"].visible
+    assert h["controller.omega"].visible and not h["controller.U"].visible
 
 
 def test_download_preset_round_trips(tab):
@@ -401,6 +410,12 @@ def test_stability_figure_draws_the_region_boundaries_and_live_point():
     assert max(traces["order-2 (standard)"].y) == pytest.approx(4.03, abs=0.01)  # peak near ω ≈ 0.42
     assert (traces["current"].x[0], traces["current"].y[0]) == (0.42, 3.1)
     assert fig.layout.uirevision == "stability"
+    assert not any(name.startswith("Adapted") for name in traces)  # only the regions of the law in use
+    assert "no unit" in fig.layout.yaxis.title.text and "m/s" not in fig.layout.title.text
+    adapted = figures.stability_figure(0.42, 3.1, adapted=True)
+    traces = {t.name: t for t in adapted.data}
+    assert not any("standard" in name for name in traces) and "3.1 m/s" in adapted.layout.title.text
+    assert "bounded" in adapted.layout.annotations[0].text  # "stable" means bounded, beside the point
     robots = traces["Adapted on robots (0 ≤ ω < 1)"]
     assert min(robots.x) == 0 and max(robots.x) == 1
     # the live point is judged against the active law's region
@@ -410,14 +425,17 @@ def test_stability_figure_draws_the_region_boundaries_and_live_point():
 
 def test_plots_update_in_place_like_a_fresh_figure():
     fig = figures.stability_figure(0.5, 1.0, adapted=True)
-    figures.update_stability_point(fig, 1.1, 12.0, adapted=False)
-    fresh = figures.stability_figure(1.1, 12.0, adapted=False)
+    assert figures.update_stability_point(fig, 1.1, 12.0, adapted=True) is fig  # moved in place
+    fresh = figures.stability_figure(1.1, 12.0, adapted=True)
     for name in ("current", "Adapted (−1 < ω < 1)"):
         a = next(t for t in fig.data if t.name == name)
         b = next(t for t in fresh.data if t.name == name)
         assert list(a.x) == list(b.x) and list(a.y) == list(b.y) and a.marker.color == b.marker.color
     assert fig.layout.title.text == fresh.layout.title.text and "OUTSIDE" in fig.layout.title.text
     assert list(fig.layout.yaxis.range) == list(fresh.layout.yaxis.range)
+    assert fig.layout.annotations[0].text == fresh.layout.annotations[0].text
+    standard = figures.update_stability_point(fig, 1.1, 12.0, adapted=False)  # the other law: drawn anew
+    assert standard is not fig and "order-2 (standard)" in {t.name for t in standard.data}
 
     phase = figures.phase_figure(0.6, 4.0, 1.0, np.array([1.0]), np.array([1.0]))
     assert figures.update_phase_points(phase, np.array([1.0, 30.0]), np.array([2.0, -3.0]))
@@ -464,7 +482,7 @@ def test_speed_series_bounds():
     assert len(data) == len(SPEED.options(s)) == 5
     np.testing.assert_allclose(data[4], 2.0 / (1 - 0.5))  # U_j = ĉ/(1 − ω)
     np.testing.assert_allclose(data[3], 4.0 * np.sqrt(2))  # U = U_j √d
-    assert SPEED.scales((0.0, 0.2), s)["x"]["time"] is False
+    assert SPEED.render(m, (0.0, 0.2), s).scales["x"]["time"] is False
     s.apply({"controller.mode": "raw", "controller.law": "standard"})
     hidden = SPEED.options(s)
     assert hidden[3]["show"] is False and hidden[4]["show"] is False

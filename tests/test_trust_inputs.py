@@ -43,6 +43,9 @@ HOSTILE = [
     ("law", "warp-drive", "not one of the choices"),
     ("mode", None, "expected text"),
     ("playback", "Explode", "not one of the choices"),
+    ("at the end", "stop at step 1", "not one of the choices"),
+    ("at the end", "../loop", "not one of the choices"),
+    ("at the end", ["loop"], "expected text"),
     ("compare with swarm B", "yes", "true or false"),
     ("Export CSV", 1, "true or false"),
 ]

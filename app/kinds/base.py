@@ -80,6 +80,9 @@ class BaseDriver:
     def frame(self, t: float) -> Frame:
         return frame_of(self.sim.state, t)
 
+    def metrics(self) -> dict[str, float]:
+        return {}
+
     def recorded(self, frame: Frame) -> dict[str, Any]:
         return {}
 

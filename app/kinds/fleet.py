@@ -637,7 +637,7 @@ def _readout(s: Session) -> str:
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc, edits = s.scenario, driver(s).edits
-    return (f"**{sc.name}** · {state} · t = {r['t']:.0f} s · step {int(r['k'])}/{sc.sim.steps} · "
+    return (f"**{sc.name}** · {state} · t = {r['t']:.0f} s · {s.progress()} · "
             f"CoM x = {r['com']:.1f} m"
             + (f" · layers passed {int(r['layers_passed'])}/{int(r['layers'])}" if r["layers"] else "")
             + f" · {int(r['operational'])}/{int(r['operational'] + r['collided'])} operational"
@@ -664,14 +664,14 @@ def _world_layers(s: Session) -> tuple[Line, ...]:
                  for i, x in enumerate(s.sim.world.layer_x))
 
 
-COM = PlotSpec("com", "swarm fitness: CoM x [m] vs time [s] · dotted: layers",
+COM = PlotSpec("com", "swarm fitness: CoM x [m] · dotted: layers",
                (Series("CoM x [m]", "com_fitness", "rgb(220,50,50)", 2),), lines=_world_layers, twin="com_fitness",
                y_range=lambda s: (float(s.sim.world.bounds[0]), float(s.sim.world.bounds[2])), aspect=1.6,
                legend={"show": False})
-ROBOTS = PlotSpec("robots", "robots vs time [s]", (
+ROBOTS = PlotSpec("robots", "robots", (
     Series("operational", "operational", "rgb(30,140,70)", 2),
     Series("collided", "collided", "rgb(150,150,150)", 2, dash=(6.0, 4.0)),
-), y_range=lambda s: (0.0, float(max(s.robots, 1)) + 0.5), axes=({}, {"size": 40}))
+), y_range=lambda s: (0.0, float(max(s.robots, 1)) + 0.5))
 
 
 def panel(api: PanelAPI) -> KindPanel:
@@ -683,7 +683,7 @@ def panel(api: PanelAPI) -> KindPanel:
     omni = lambda s: _omni(s.scenario)  # noqa: E731
     return KindPanel(
         folders=(
-            Folder("Arena view and selected robot", items=(
+            Folder("Arena view and selected robot", expand=False, items=(
                 Dropdown("view", "view", tuple(VIEWS), act=_view,
                          hint="the whole world, or a closer view that follows"),
                 Slider("zoom", "zoom", 1.0, 6.0, 0.5, "how close the following view is", act=_view,

@@ -30,7 +30,7 @@ from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario, SLOErrorValues
 
 from ..panel.panel import TRAIL_SLIDER
-from ..panel.plots import PlotSpec, Series
+from ..panel.plots import PlotSpec, Series, log10_abs
 from ..panel.positions import ERROR_SETS, label_of
 from ..panel.selection import robot_number
 from ..panel.spec import Dropdown, Folder, KindPanel, Number, PanelAPI, Slider, Tab, Text, fmt
@@ -250,7 +250,6 @@ OBJECTIVES = ("sphere", "ackley", "griewank", "rastrigin", "rosenbrock", "plane"
 MOTIONS = ("pso", "random_walk")
 PARAM_DEFAULT = {"knn": 5, "radius": 25, "ring": 2, "random": 0.5, "full": math.nan}
 ERROR_FIELDS = tuple(SLOErrorValues.model_fields)
-TINY = 1e-300
 EXPORT_NOTE = " The JSON export adds the selected robot's estimates of the others."
 
 
@@ -358,7 +357,7 @@ def _inspector(s: Session, snap: Snapshot) -> str:
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
-    return (f"**{sc.name}** · {state} · gen {int(r['k'])}/{sc.sim.steps} · "
+    return (f"**{sc.name}** · {state} · {s.progress('gen')} · "
             f"mean e_abs {fmt(r['e_abs_mean'])} · best f {fmt(r['generation_best'])}")
 
 
@@ -389,26 +388,18 @@ def _click(panel: PanelAPI, x: float, y: float, modifier: str | None) -> str:
     return "observer"
 
 
-def log_fitness(best: np.ndarray) -> np.ndarray:
-    """log10 |f| with 0 and non-finite values floored at 1e-300 (uPlot's own log axis rejects
-    values ≤ 0, and Sphere runs reach 1e-140)."""
-    b = np.abs(np.asarray(best, dtype=float))
-    return np.log10(np.where(np.isfinite(b) & (b > TINY), b, TINY))
-
-
 ERROR_PLOT = PlotSpec("error", "localisation error", (
     Series("mean e_abs", "e_abs_mean", "rgb(220,50,50)", 2),
     Series("median e_abs", "e_abs_median", "rgb(240,150,30)", 2, dash=(6.0, 4.0)),
     Series("median e_rel", "e_rel_median", "rgb(60,110,230)", 1, scale="rel"),
 ), x_label="generation", more_scales={"rel": {"range": (0.0, None)}}, nan_to=0.0, twin="e_abs_mean", history=2000,
-    aspect=1.8, axes=({}, {"size": 45}, {"scale": "rel", "side": 1, "size": 40}))
+    aspect=1.8, more_axes=({"scale": "rel", "side": 1, "size": 40},))
 DISTANCE_PLOT = PlotSpec("distance", "median distance between robots", (
     Series("median distance between robots", "distance_median", "rgb(30,140,70)", 2),), x_label="generation",
-    y_range=None, history=2000, aspect=2.2, axes=({}, {"size": 45}))
+    history=2000, aspect=2.2)
 FITNESS_PLOT = PlotSpec("fitness", "best fitness, log10 |f|", (
-    Series("log10 |best f|", lambda m, sc: log_fitness(m["generation_best"]), "rgb(120,60,200)", 2),),
-    x_label="generation",
-    y_range=None, history=2000, aspect=2.2, axes=({}, {"size": 45}))
+    Series("log10 |best f|", lambda m, sc: log10_abs(m["generation_best"]), "rgb(120,60,200)", 2),),
+    x_label="generation", y_range=(None, None), history=2000, aspect=2.2)
 
 
 def panel(api: PanelAPI) -> KindPanel:

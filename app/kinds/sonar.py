@@ -477,14 +477,17 @@ def _snr(s: Session) -> np.ndarray:
         return s.sim.state.snr_db[0].copy()
 
 
-CORR_PLOT = Chart("corr", "selected robot: R(τ) vs τ [ms] · red: τ_lag", corr_series(), _corr,
-                  lambda s, data: corr_scales(data), aspect=1.8)
-DIST = PlotSpec("dist", "|CoM − source| [m] vs time [s]",
+CORR_PLOT = Chart("corr", "selected robot: R(τ) · red: τ_lag", corr_series(), _corr,
+                  lambda s, data: corr_scales(data), x_label="τ [ms]", aspect=1.8,
+                  visible=lambda s: _two_hydrophones(s))
+NO_CORR = Text(text="*R(τ): only the algorithms with two hydrophones (X-, B- and XB-PSO) measure a bearing.*",
+               visible=lambda s: not _two_hydrophones(s))
+DIST = PlotSpec("dist", "|CoM − source| [m]",
                 (Series("|CoM − source| [m]", "com_dist", "rgb(220,50,50)", 2),),
                 lines=lambda s: (Line("d_c", float(s.scenario.acoustics.d_c)),), twin="com_dist", history=2000,
                 aspect=1.8)
 SNR_PLOT = Chart("snr", "SNR [dB] at each robot", snr_series(), lambda s: snr_data(_snr(s)),
-                 lambda s, data: snr_scales(_snr(s)), axes=({}, {"size": 40}), legend={"show": False})
+                 lambda s, data: snr_scales(_snr(s)), x_label="robot", legend={"show": False})
 
 
 def _algorithm(s: Session) -> str:
@@ -520,7 +523,7 @@ def _status(s: Session, r: dict[str, float], state: str) -> str:
     conv = f" · reached d_c at step {int(r['converged_at'])}" if r["converged_at"] >= 0 else ""
     ring = f" · {100 * r['inside']:.0f}% inside r" if sc.acoustics.r > 0 else ""
     return (f"**{sc.name}** · {LABELS[sc.acoustics.algorithm]} · {state} · t = {r['t']:.0f} s · "
-            f"step {int(r['k'])}/{sc.sim.steps} · |CoM − source| = {r['com_dist']:.0f} m{conv}{ring}")
+            f"{s.progress()} · |CoM − source| = {r['com_dist']:.0f} m{conv}{ring}")
 
 
 def _compare(s: Session) -> dict[str, dict[str, Any]]:
@@ -558,7 +561,7 @@ def panel(api: PanelAPI) -> KindPanel:
 
     return KindPanel(
         folders=(
-            Folder("Selected robot", items=(
+            Folder("Selected robot", expand=False, items=(
                 robot_number(hint="whose rays are drawn thick and whose R(τ) is plotted; or click a robot"),
                 Text("hearing", on_snapshot=_hearing),
             )),
@@ -596,7 +599,7 @@ def panel(api: PanelAPI) -> KindPanel:
                 TRAIL_SLIDER,
                 Text(text=GLYPHS),
             )),
-            Tab("Plots", (CORR_PLOT, DIST, SNR_PLOT)),
+            Tab("Plots", (CORR_PLOT, NO_CORR, DIST, SNR_PLOT)),
         ),
         status=_status, compare=_compare, export_note=EXPORT_NOTE, click=_click, drag=drag,
         rebuilt=lambda s, what, changes: ("Swarm rebuilt", f"{what}: the robots start again"))

@@ -9,6 +9,7 @@ same seed.
 from __future__ import annotations
 
 import math
+import time
 from typing import Any
 
 import numpy as np
@@ -23,7 +24,7 @@ from shoal.presets.models import Scenario
 
 from ..panel import figures
 from ..panel.panel import TRAIL_SLIDER
-from ..panel.plots import PlotSpec, Series
+from ..panel.plots import PlotSpec, Series, log10_abs
 from ..panel.positions import positions_choices, positions_folder
 from ..panel.selection import robot_number
 from ..panel.spec import Dropdown, Figure, Folder, KindPanel, PanelAPI, Slider, Tab, Text, fmt, round_sig
@@ -60,6 +61,13 @@ ARENA = (40, 40, 40)
 BENCHMARKS = ("sphere", "rastrigin", "ackley", "rosenbrock", "griewank")
 
 
+def second_moment(x: np.ndarray, yg: np.ndarray) -> float:
+    """Mean over robots and coordinates of (x − y_g)² [m²]: what the order-2 region [3.9] bounds,
+    measured (our reading: about the global best, the part of every attractor the robots share)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return float(np.mean((np.asarray(x, float) - np.asarray(yg, float)) ** 2))
+
+
 class SwarmDriver(BaseDriver):
     """A Chapter 3 swarm's side of a session."""
 
@@ -86,6 +94,11 @@ class SwarmDriver(BaseDriver):
     def snapshot(self, selected: int) -> dict[str, Any]:
         s = self.sim.state
         return {"y": s.y[0].copy(), "yg": s.yg[0].copy(), "ghosts": self.ghosts(selected, s.yg[0])}
+
+    def metrics(self) -> dict[str, float]:
+        """The measured second moment of the swarm (see :func:`second_moment`)."""
+        s = self.sim.state
+        return {"second_moment": second_moment(s.x[0], s.yg[0])}
 
     def coefficients(self) -> tuple[float, float]:
         """The (ω, ĉ) the controller uses at the current time (means over robots for per-robot policies)."""
@@ -222,22 +235,45 @@ def _pick_dim(panel: PanelAPI, value: Any) -> None:
 
 def _readout(s: Session) -> str:
     r, c = s.readout(), s.scenario.controller
-    lines = [
-        "| ω | ĉ [m/s] | β | U [m/s] | U_j [m/s] | A+ | A− |",
-        "|---|---|---|---|---|---|---|",
-        f"| {fmt(r['omega'])} | {fmt(r['c_hat'])} | {fmt(r['beta'])} | {fmt(r['U'])} | "
-        f"{fmt(r['U_j'])} | {fmt(r['A_plus'])} | {fmt(r['A_minus'])} |",
-    ]
     if not LAWS[c.law].adapted:
-        lines.append("\nStandard PSO: ĉ has no unit and nothing bounds the speed.")
-    elif c.mode == "physical":
-        lines.append("\nDerived from U, A+ and Δt: β = A+Δt/U, ω = 1 − β, ĉ = A+Δt/√d.")
-    return "\n".join(lines)
+        return "*Standard PSO: ĉ = c1 + c2 has no unit and nothing bounds the speed.*"
+    if c.mode == "physical":
+        return (f"β = {fmt(r['beta'])} · U_j = {fmt(r['U_j'], 'm/s')} · A− = {fmt(r['A_minus'], 'm/s²')}  \n"
+                "*ω, c1 and c2 follow from U, A+ and Δt; moving one of them switches to raw mode.*")
+    return (f"β = {fmt(r['beta'])} · U = {fmt(r['U'], 'm/s')} · U_j = {fmt(r['U_j'], 'm/s')} · "
+            f"A+ = {fmt(r['A_plus'], 'm/s²')} · A− = {fmt(r['A_minus'], 'm/s²')}  \n"
+            "*Raw mode: U and A+ follow from ω and ĉ = c1 + c2 [m/s].*")
+
+
+def _physical(s: Session) -> bool:
+    return not _raw(s)
+
+
+def _coefficient(name: str) -> Any:
+    """``read`` of a raw coefficient slider: the field in raw mode, the value in force (derived
+    from U, A+, Δt) in physical mode."""
+    key = f"controller.{name}"
+
+    def read(s: Session) -> float:
+        return float(getattr(s.scenario.controller, name)) if _raw(s) else round_sig(_raw_coefficients(s)[key], 4)
+    return read
+
+
+def _set_coefficient(name: str) -> Any:
+    """``write`` of a raw coefficient slider: in physical mode, switch to raw mode at the
+    coefficients in force with this one changed."""
+    key = f"controller.{name}"
+
+    def write(s: Session, value: float) -> dict[str, Any] | None:
+        if _raw(s):
+            return None if value == getattr(s.scenario.controller, name) else {key: value}
+        return {**_raw_coefficients(s), key: value}
+    return write
 
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
-    return (f"**{sc.name}** · {state} · t = {r['t']:.1f} s · step {int(r['k'])}/{sc.sim.steps} · "
+    return (f"**{sc.name}** · {state} · t = {r['t']:.1f} s · {s.progress()} · "
             f"best f = {r['best']:.4g}" + (f" · {int(r['outside'])} outside the arena" if r["outside"] else ""))
 
 
@@ -278,21 +314,42 @@ def _bound(j: int) -> Any:
     return values
 
 
+def _source(s: Session) -> bool:
+    return s.scenario.objective.kind == "source-distance"
+
+
+SPREAD = PlotSpec(
+    "spread", "measured spread: log₁₀ of mean (x − y_g)² [m²]", (
+        Series("log10 spread", lambda m, sc: log10_abs(m["second_moment"]), "rgb(120,60,200)", 2),
+    ), y_range=(None, None), aspect=3.4, legend={"show": False})
+BEST_DISTANCE = PlotSpec(
+    "best_distance", "best position's distance to the source [m]", (
+        Series("|y_g − source| [m]", "best_fitness", "rgb(30,140,70)", 2),
+    ), twin="best_fitness", aspect=2.4, visible=_source)
+BEST_F = PlotSpec(
+    "best_f", "best f, log₁₀ |f|", (
+        Series("log10 |best f|", lambda m, sc: log10_abs(m["best_fitness"]), "rgb(30,140,70)", 2),
+    ), y_range=(None, None), aspect=2.4, visible=lambda s: not _source(s))
 SPEED = PlotSpec(
-    "speed", "highest speed vs time [m/s]", (
+    "speed", "highest speed [m/s]", (
         Series("max |u|", "max_speed", "rgb(220,50,50)", 2),
         Series("max |u_j|", "max_component", "rgb(240,160,40)", 1),
         Series("U", _bound(0), "rgb(40,90,200)", 2, dash=(6.0, 4.0), show=_adapted),
         Series("U_j", _bound(1), "rgb(90,170,230)", 1, dash=(3.0, 3.0), show=_adapted),
-    ), twin="max_speed", aspect=2.0, axes=({}, {"size": 76}))
+    ), twin="max_speed", aspect=2.0)
 
 
 class _Figures:
-    """The (ω, ĉ) plane and the phase plane of one panel, moved rather than rebuilt where they can."""
+    """The (ω, ĉ) plane and the phase plane of one panel, moved rather than rebuilt where they can.
+    Each plotly update is a whole figure for the page to lay out again, so while the run plays the
+    phase plane follows at most once every ``PHASE_PERIOD`` seconds (control feedback first)."""
+
+    PHASE_PERIOD = 1.0
 
     def __init__(self) -> None:
         self._stability: tuple | None = None
         self._phase: tuple | None = None
+        self._phase_at = -math.inf
 
     def stability(self, s: Session) -> Any:
         return figures.stability_figure(0.5, 1.0, adapted=True)
@@ -312,6 +369,10 @@ class _Figures:
 
     def refresh_phase(self, panel: PanelAPI, handle: Any) -> None:
         s = panel.session
+        now = time.monotonic()
+        if s.playing and now - self._phase_at < self.PHASE_PERIOD:
+            return
+        self._phase_at = now
         key = self._key(s)
         omega, c_hat, adapted = key
         robot, dim = s.selected_robot, s.selected_dim
@@ -330,8 +391,6 @@ def panel(api: PanelAPI) -> KindPanel:
     plots and the speed plot; in 2-D the *Positions* folder."""
     figs = _Figures()
     return KindPanel(
-        folders=(positions_folder(" The robot is the *particle* of the Plots tab.",
-                                  visible=lambda s: s.scenario.sim.d == 2),),  # SLO localises in the plane
         tabs=(
             Tab("Controller", (
                 Dropdown("controller.law", "law", LAWS.names(),
@@ -342,27 +401,34 @@ def panel(api: PanelAPI) -> KindPanel:
                        "controller period: the real time of one PSO iteration"),
                 Slider("sim.robots", "robots", 1, 1000, 1,
                        "number of particles; changes at once, new ones spawn at the start", integer=True),
-                Folder("Raw coefficients", key="raw", visible=_raw, items=(
+                Folder("Coefficients", key="coefficients", items=(  # ω, c1, c2 always: moving one gives raw mode
                     Slider("controller.omega", "omega ω", -1.0, 1.2, 0.01,
-                           "inertia weight (raw mode); Adapted laws need 0 ≤ ω < 1"),
+                           "inertia weight; Adapted laws need 0 ≤ ω < 1 (in physical mode: moving it switches to raw)",
+                           read=_coefficient("omega"), write=_set_coefficient("omega")),
                     Slider("controller.c1", "c1", 0.0, 5.0, 0.05,
-                           "cognitive coefficient: pull towards the personal best"),
-                    Slider("controller.c2", "c2", 0.0, 5.0, 0.05, "social coefficient: pull towards the global best"),
-                )),
-                Folder("Physical limits", key="physical", visible=lambda s: not _raw(s), items=(
-                    Slider("controller.U", "U [m/s]", 0.1, 30.0, 0.1, "top speed (physical mode)"),
-                    Slider("controller.A_plus", "A+ [m/s²]", 0.1, 200.0, 0.1, "top acceleration (physical mode)"),
+                           "cognitive coefficient: pull towards the personal best", widen=True,
+                           read=_coefficient("c1"), write=_set_coefficient("c1")),
+                    Slider("controller.c2", "c2", 0.0, 5.0, 0.05, "social coefficient: pull towards the global best",
+                           widen=True, read=_coefficient("c2"), write=_set_coefficient("c2")),
+                    Slider("controller.U", "U [m/s]", 0.1, 30.0, 0.1, "top speed (physical mode)", visible=_physical),
+                    Slider("controller.A_plus", "A+ [m/s²]", 0.1, 200.0, 0.1, "top acceleration (physical mode)",
+                           visible=_physical),
                     Slider("controller.c1_share", "c1 : c2 split", 0.0, 1.0, 0.05,
-                           "c1/(c1+c2): 0 = all social, 1 = all cognitive"),
+                           "c1/(c1+c2): 0 = all social, 1 = all cognitive", visible=_physical),
                 )),
                 Slider("controller.smooth_width", "smooth width [m]", 0.05, 10.0, 0.05,
                        "width of tanh / logistic in place of sgn",
                        visible=lambda s: s.scenario.controller.law in SMOOTH_LAWS),
                 TRAIL_SLIDER,
                 Text("readout", compute=_readout),
+                positions_folder(" The robot is the *particle* of the Plots tab.",
+                                 visible=lambda s: s.scenario.sim.d == 2),  # SLO localises in the plane
             )),
             Tab("Plots", (
-                Figure("stability", figs.stability, figs.refresh_stability),
+                Figure("stability", figs.stability, figs.refresh_stability, aspect=0.7),
+                SPREAD,
+                BEST_DISTANCE,
+                BEST_F,
                 robot_number("particle", "which particle the phase plane shows", key="particle"),
                 Dropdown("dimension", "dimension", _dims, read=_dim, act=_pick_dim),
                 Figure("phase", figs.phase, figs.refresh_phase),

@@ -1,4 +1,4 @@
-"""The Compare tab of every panel: switch swarm B on, say how it differs from A.
+"""The Compare folder of every panel (closed at first): switch swarm B on, say how it differs from A.
 
 B = A with the overrides typed as ``dotted.key=value`` lines, validated by the preset model
 (a bad line or value is refused with a red notification naming the field, nothing changes).
@@ -22,15 +22,15 @@ INTRO = ("**Swarm B** runs the same preset and seed as A with the overrides belo
          "the playback. In the arena B is drawn in teal under A; in the main plot its curve is teal and dashed.")
 
 
-class CompareTab:
-    """The handles of the Compare tab, wired to ``panel.session``."""
+class CompareFolder:
+    """The handles of the Compare folder, wired to ``panel.session``."""
 
     def __init__(self, panel: Host) -> None:
         self.panel = panel
         gui = panel.gui
         choices = panel.compare_choices()
         first = next(iter(choices), CUSTOM)
-        with panel.tabs.add_tab("Compare"):
+        with gui.add_folder("Compare with swarm B", expand_by_default=False) as self.folder:
             gui.add_markdown(INTRO)
             self.enabled = gui.add_checkbox("compare with swarm B", False,
                                             hint="run B beside A; both restart from step 0 with the same seed")

@@ -1,7 +1,8 @@
 """The Chapter 3 figures as plotly figures: pure functions of numbers, no viser.
 
-* the (ω, ĉ) plane of Fig. 3-1: standard-PSO order-1 and order-2 regions [3.7], [3.9],
-  the Adapted PSO strip [3.13] and its robot subset [3.14], and the live point;
+* the (ω, ĉ) plane of Fig. 3-1 for the law in use: standard-PSO order-1 and order-2 regions
+  [3.7], [3.9], or the Adapted PSO strip [3.13] and its robot subset [3.14]; the live point
+  and what being inside means;
 * the (u, a) phase plane of Fig. 3-3: lines a1, a2, a3 [3.24]-[3.25], the reachable
   parallelogram and the marked points, plus one particle's recent states;
 * the speed bounds U [3.29] and U_j [3.26] of the speed plot.
@@ -62,52 +63,72 @@ def in_region(omega: float, c_hat: float, adapted: bool) -> bool:
     return bool(stability.order2_stable(omega, c_hat))
 
 
-def stability_figure(omega: float, c_hat: float, *, adapted: bool, n: int = 201) -> go.Figure:
-    """Fig. 3-1 with the live (ω, ĉ).
+STABLE_MEANS = "inside: the steps stay bounded<br>(not: the swarm finds the optimum)"
+OUTSIDE_MEANS = "outside: nothing keeps the steps<br>bounded (see the spread below)"
 
-    Traces, by name: ``Adapted (−1 < ω < 1)``, ``Adapted on robots (0 ≤ ω < 1)``,
-    ``order-1 (standard)``, ``order-2 (standard)``, ``current``.
+
+def stability_figure(omega: float, c_hat: float, *, adapted: bool, n: int = 201) -> go.Figure:
+    """Fig. 3-1 for the law in use, with the live (ω, ĉ) and what "stable" means beside it.
+
+    Traces, by name: the Adapted law's ``Adapted (−1 < ω < 1)`` and ``Adapted on robots
+    (0 ≤ ω < 1)`` [3.13], [3.14], or the standard law's ``order-1 (standard)`` and ``order-2
+    (standard)`` [3.7], [3.9]; then ``current``.
     """
-    cur = stability_curves(n)
-    w = cur["omega"]
-    top = max(8.5, 1.15 * float(c_hat) if math.isfinite(c_hat) else 8.5)
+    top = _top(c_hat)
     fig = go.Figure()
-    fig.add_trace(go.Scatter(
-        x=[-1, 1, 1, -1, -1], y=[0, 0, top, top, 0], fill="toself", fillcolor=ADAPTED_FILL,
-        line=dict(color="rgba(220,150,30,0.9)", dash="dot", width=1), name="Adapted (−1 < ω < 1)", mode="lines",
-        hoverinfo="skip",
-    ))
-    fig.add_trace(go.Scatter(
-        x=[0, 1, 1, 0, 0], y=[0, 0, top, top, 0], fill="toself", fillcolor=ROBOT_FILL,
-        line=dict(color="rgba(40,140,70,0.9)", width=1), name="Adapted on robots (0 ≤ ω < 1)", mode="lines",
-        hoverinfo="skip",
-    ))
-    fig.add_trace(go.Scatter(
-        x=w, y=cur["order1"], fill="tozeroy", fillcolor=ORDER1_FILL, mode="lines",
-        line=dict(color="rgb(90,130,210)", width=1.5), name="order-1 (standard)",
-    ))
-    fig.add_trace(go.Scatter(
-        x=w, y=cur["order2"], fill="tozeroy", fillcolor=ORDER2_FILL, mode="lines",
-        line=dict(color="rgb(30,70,170)", width=1.5), name="order-2 (standard)",
-    ))
+    if adapted:
+        fig.add_trace(go.Scatter(
+            x=[-1, 1, 1, -1, -1], y=[0, 0, top, top, 0], fill="toself", fillcolor=ADAPTED_FILL,
+            line=dict(color="rgba(220,150,30,0.9)", dash="dot", width=1), name="Adapted (−1 < ω < 1)",
+            mode="lines", hoverinfo="skip",
+        ))
+        fig.add_trace(go.Scatter(
+            x=[0, 1, 1, 0, 0], y=[0, 0, top, top, 0], fill="toself", fillcolor=ROBOT_FILL,
+            line=dict(color="rgba(40,140,70,0.9)", width=1), name="Adapted on robots (0 ≤ ω < 1)", mode="lines",
+            hoverinfo="skip",
+        ))
+    else:
+        cur = stability_curves(n)
+        w = cur["omega"]
+        fig.add_trace(go.Scatter(
+            x=w, y=cur["order1"], fill="tozeroy", fillcolor=ORDER1_FILL, mode="lines",
+            line=dict(color="rgb(90,130,210)", width=1.5), name="order-1 (standard)",
+        ))
+        fig.add_trace(go.Scatter(
+            x=w, y=cur["order2"], fill="tozeroy", fillcolor=ORDER2_FILL, mode="lines",
+            line=dict(color="rgb(30,70,170)", width=1.5), name="order-2 (standard)",
+        ))
     ok = in_region(omega, c_hat, adapted)
     fig.add_trace(go.Scatter(
         x=[omega], y=[c_hat], mode="markers", name="current",
         marker=dict(size=13, color=POINT_OK if ok else POINT_BAD, symbol="x", line=dict(width=1, color="white")),
     ))
+    fig.add_annotation(name="meaning", **_meaning(omega, c_hat, top, ok))
     fig = _layout(
         fig, title=_stability_title(omega, c_hat, adapted, ok),
         x="inertia weight ω", y=_stability_ylabel(adapted), revision="stability",
-
+        legend=dict(orientation="v", yanchor="top", y=0.99, xanchor="left", x=0.01, font=dict(size=9),
+                    bgcolor="rgba(255,255,255,0.8)"),  # inside the plot: the spread below stays on screen
     )
     fig.update_xaxes(range=[-1.05, 1.25], autorange=False, zeroline=True)
     fig.update_yaxes(range=[0, top], autorange=False)
     return fig
 
 
+def figure_law(fig: go.Figure) -> bool | None:
+    """Whether a :func:`stability_figure` shows the Adapted law's regions (None: not one)."""
+    names = {t.name for t in fig.data}
+    if "current" not in names:
+        return None
+    return any(name.startswith("Adapted") for name in names)
+
+
 def update_stability_point(fig: go.Figure, omega: float, c_hat: float, *, adapted: bool) -> go.Figure:
-    """Move the live point of a :func:`stability_figure` in place (cheap: no new figure)."""
-    top = max(8.5, 1.15 * float(c_hat) if math.isfinite(c_hat) else 8.5)
+    """Move the live point of a :func:`stability_figure` in place (cheap: no new figure); a
+    figure of the other law is drawn anew."""
+    if figure_law(fig) is not adapted:
+        return stability_figure(omega, c_hat, adapted=adapted)
+    top = _top(c_hat)
     ok = in_region(omega, c_hat, adapted)
     with fig.batch_update():
         for trace in fig.data:
@@ -119,17 +140,34 @@ def update_stability_point(fig: go.Figure, omega: float, c_hat: float, *, adapte
         fig.layout.title.text = _stability_title(omega, c_hat, adapted, ok)
         fig.layout.yaxis.title.text = _stability_ylabel(adapted)
         fig.layout.yaxis.range = [0, top]
+        fig.layout.annotations[0].update(**_meaning(omega, c_hat, top, ok))
     return fig
+
+
+def _top(c_hat: float) -> float:
+    return max(8.5, 1.15 * float(c_hat) if math.isfinite(c_hat) else 8.5)
+
+
+def _meaning(omega: float, c_hat: float, top: float, ok: bool) -> dict[str, Any]:
+    """The note beside the live point: what inside (or outside) the region means. It points at
+    the point from the side with more room."""
+    x = float(np.clip(omega, -1.05, 1.25)) if math.isfinite(omega) else 0.0
+    y = float(np.clip(c_hat, 0.0, top)) if math.isfinite(c_hat) else 0.0
+    return dict(x=x, y=y, text=STABLE_MEANS if ok else OUTSIDE_MEANS, showarrow=True, arrowhead=2, arrowwidth=1,
+                arrowcolor="rgb(90,90,90)", ax=-70 if x > 0.2 else 70, ay=-45 if y < 0.6 * top else 45,
+                font=dict(size=10, color=POINT_OK if ok else POINT_BAD), bgcolor="rgba(255,255,255,0.85)",
+                align="left")
 
 
 def _stability_title(omega: float, c_hat: float, adapted: bool, ok: bool) -> str:
     verdict = "inside" if ok else "OUTSIDE"
     region = "the Adapted region" if adapted else "the order-2 region"
-    return f"(ω, ĉ) = ({omega:.3g}, {c_hat:.3g}): {verdict} {region}"
+    unit = " m/s" if adapted else ""  # ĉ has a unit only for the Adapted law
+    return f"(ω, ĉ) = ({omega:.3g}, {c_hat:.3g}{unit}): {verdict} {region}"
 
 
 def _stability_ylabel(adapted: bool) -> str:
-    return f"ĉ = c1 + c2 ({'m/s, Adapted law' if adapted else 'no unit, standard law'})"
+    return "ĉ = c1 + c2 [m/s] (Adapted law)" if adapted else "ĉ = c1 + c2 (no unit: standard law)"
 
 
 # --------------------------------------------------------------------- (u, a) plane

@@ -1,7 +1,8 @@
 """The control panel of one tab, the same for every scene kind: the header (preset, status,
-playback, speed, seed), the Replay folder, the kind's folders and tabs (built from their
-:mod:`.spec`), the Compare, Export, Notes and Lessons tabs, and the rule that every change goes
-through the scenario model.
+playback, speed, what happens at the last step, seed), the *Replay and files* and *Compare*
+folders (closed at first), the kind's folders and tabs (built from their :mod:`.spec`), the
+Lessons tab (with the chapter's notes) and the Sweep tab, and the rule that every change goes
+through the scenario model. The tab row holds one line at 1280 px.
 
 A change is validated by ``session.apply``; a refused value shows a red notification and
 every handle goes back to the scenario, the running scene untouched. ``sync`` pushes the
@@ -27,11 +28,13 @@ from ..experiment.service import ExperimentService
 from ..lessons.panel import LessonProgress, LessonsPanel
 from ..lessons.scenes import load_scene
 from ..preset_menu import PresetMenu
+from ..session.lifecycle import AT_END, at_end_choice, at_end_label
 from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
-from .compare import CompareTab
-from .plots import Chart, PlotSpec, twin_series
+from .compare import CompareFolder
+from .keys import PLAYING
+from .plots import PADDING, Chart, Frame, PlotSpec
 from .replay import ReplayFolder
 from .spec import (
     Button,
@@ -53,7 +56,7 @@ PLAYBACK = ("Play", "Pause", "Step", "Reset")
 SPEED_SLIDER = Slider("view.steps_per_second", "speed [steps/s]", 1.0, 240.0, 1.0, "playback rate")
 TRAIL_SLIDER = Slider("view.trail_seconds", "trail [s]", 0.0, 60.0, 1.0, "length of the drawn trails")
 
-SHOWN_WHEN = (Slider, Dropdown, Checkbox, Number, Text, Folder)  # controls that may be hidden (``visible``)
+SHOWN_WHEN = (Slider, Dropdown, Checkbox, Number, Text, Folder, PlotSpec, Chart)  # may be hidden (``visible``)
 Notify = Callable[[str, str, str], None]
 SendFile = Callable[[str, bytes], None]
 
@@ -75,7 +78,7 @@ class Services:
     send_file: SendFile
     menu: PresetMenu  # the preset dropdown's choices (the tab keeps it: uploads outlive a swap of panels)
     make_session: Callable[[Scenario], Session]  # a fresh session of any kind (to check a replay)
-    replace: Callable[[Scenario], Session] | None = None  # load a scene, maybe of another kind
+    replace: Callable[..., Session] | None = None  # load a scene, maybe of another kind (play=False: paused)
     share: Callable[[Session], bytes] | None = None  # the recorded run as one web page
     lessons: LessonProgress = field(default_factory=LessonProgress)  # where the Lessons tab is (the tab keeps it)
     experiments: ExperimentService | None = None  # the server's experiments (None: no Experiment tab)
@@ -118,23 +121,27 @@ class Panel:
         self.removed = False
         self._local = threading.local()  # per thread: programmatic .value fires callbacks inline
         self._controls: list[tuple[Any, Any]] = []  # (spec, handle) in build order
-        self._series: dict[int, tuple] = {}  # uPlot series last sent, by handle (see push_uplot)
+        self._sent: dict[int, tuple] = {}  # uPlot (series, axes) last sent, by handle (see push_uplot)
+        self.controls = 0  # a count of the user's control events (the tab holds the scene a moment after one)
         self.part = kind.panel(self)
         self._build_header()
-        self.replay_gui = ReplayFolder(self)
+        badge = gui.add_markdown("", visible=False)  # names a loaded replay
+        with gui.add_folder("Replay and files", expand_by_default=False) as files:  # closed: the controls fit
+            self.replay_gui = ReplayFolder(self, badge)
+            self._build_files()
+        self.compare_gui = CompareFolder(self)
+        self.top += [badge, files, self.compare_gui.folder]
         for folder in self.part.folders:
             self.top.append(self._build(folder))
-        self.tabs = gui.add_tab_group()
+        self.tabs = gui.add_tab_group()  # one row at 1280 px: the kind's tabs, Lessons and Sweep
         self.top.append(self.tabs)
         focus = services.lessons.focus  # a lesson's Set up rebuilt this panel: keep its tab in view
         if focus:
-            self._build_lessons()
+            self._build_lessons(kind.notes)
         for tab in self.part.tabs:
             self._build_tab(tab)
-        self.compare_gui = CompareTab(self)
-        self._build_export_notes(kind.notes)
         if not focus:
-            self._build_lessons()
+            self._build_lessons(kind.notes)
         self.experiment = self._build_experiment()
         self.sync()
 
@@ -148,9 +155,13 @@ class Panel:
         self.status = gui.add_markdown("")
         self.playback = gui.add_button_group("playback", PLAYBACK)
         self.top += [self.preset, self.status, self.playback, self._build(SPEED_SLIDER)]
+        self.at_end = gui.add_dropdown(
+            "at the end", self._at_end_options(), initial_value=at_end_label(self.session.at_end, sc.sim.steps),
+            hint="at the preset's last step the run stops (Play, Step or a changed control start it again), "
+                 "starts again from step 0, or runs on")
         self.seed = gui.add_number("seed", initial_value=int(sc.sim.seed), min=0, step=1,
                                    hint="random seed; changing it restarts the run")
-        self.top.append(self.seed)
+        self.top += [self.at_end, self.seed]
 
         @self.preset.on_update
         def _(event: Any) -> None:
@@ -166,22 +177,41 @@ class Panel:
             if not self.syncing:
                 self._seed_changed()
 
+        @self.at_end.on_update
+        def _(event: Any) -> None:
+            if not self.syncing:
+                self.choose_at_end(self.at_end.value)
+
+    def _at_end_options(self) -> tuple[str, ...]:
+        steps = self.session.scenario.sim.steps
+        return tuple(at_end_label(c, steps) for c in AT_END)
+
+    def choose_at_end(self, label: str) -> bool:
+        """The header's *at the end* choice (a label of the dropdown); anything else is refused."""
+        choice = at_end_choice(str(label), self.session.scenario.sim.steps)
+        if choice is None:
+            self.notify("Refused: at the end", f"{label!r} is not one of: {', '.join(self._at_end_options())}",
+                        "red")
+            self.sync()
+            return False
+        self.session.choose_at_end(choice)
+        self.refresh_status()
+        return True
+
     def _build_tab(self, tab: Tab) -> None:
         with self.tabs.add_tab(tab.label):
             for item in tab.items:
                 self._build(item)
 
-    def _build_export_notes(self, notes: str) -> None:
+    def _build_files(self) -> None:
+        """Trajectories and the scenario as files, and a preset of one's own (in the current folder)."""
         gui = self.gui
-        with self.tabs.add_tab("Export"):
-            gui.add_markdown("Trajectories of the current run (the last steps kept in memory), "
-                             "the scenario as a preset file, or load your own preset." + self.part.export_note)
-            self.export_csv = gui.add_button("Export CSV", hint="run,step,t,robot,x,y,heading,vx,vy,status")
-            self.export_json = gui.add_button("Export JSON", hint="resolved preset, seed, version, trajectories")
-            self.download = gui.add_button("Download preset", hint="the current scenario as TOML")
-            self.upload = gui.add_upload_button("Upload preset", hint=".toml or .json, at most 256 KiB")
-        with self.tabs.add_tab("Notes"):
-            self.notes = gui.add_markdown(notes_text(notes))
+        gui.add_markdown("Trajectories of the current run (the last steps kept in memory), the scenario "
+                         "as a preset file, or load your own preset." + self.part.export_note)
+        self.export_csv = gui.add_button("Export CSV", hint="run,step,t,robot,x,y,heading,vx,vy,status")
+        self.export_json = gui.add_button("Export JSON", hint="resolved preset, seed, version, trajectories")
+        self.download = gui.add_button("Download preset", hint="the current scenario as TOML")
+        self.upload = gui.add_upload_button("Upload preset", hint=".toml or .json, at most 256 KiB")
 
         @self.export_csv.on_click
         def _(event: Any) -> None:
@@ -204,13 +234,16 @@ class Panel:
         sv = self.services
         if sv.experiments is None:
             return None
-        with self.tabs.add_tab("Experiment"):
+        with self.tabs.add_tab("Sweep"):
             return ExperimentPanel(self.gui, sv.experiments, sv.owner, scenario=lambda: self.session.scenario,
                                    open_cell=sv.replace, notify=self.notify, send_file=self.send_file)
 
-    def _build_lessons(self) -> None:
+    def _build_lessons(self, notes: str) -> None:
+        """The Lessons tab, the chapter's teaching notes below the lessons."""
         with self.tabs.add_tab("Lessons"):
             self.lessons = LessonsPanel(self.gui, self.set_up_lesson, self.notify, self.services.lessons)
+            with self.gui.add_folder("Notes on this chapter", expand_by_default=False):
+                self.notes = self.gui.add_markdown(notes_text(notes))
 
     def _build(self, item: Control) -> Any:
         """A handle for ``item`` (a folder with its items), kept as ``handles[key]`` and wired."""
@@ -244,14 +277,12 @@ class Panel:
             h = gui.add_markdown(item.text)
         elif isinstance(item, Figure):
             h = gui.add_plotly(item.make(s), aspect=item.aspect)  # (plotly's aspect is height/width)
-        elif isinstance(item, PlotSpec):
-            empty = {name: np.zeros(0) for name in s.history.names}
-            h = gui.add_uplot(data=item.data(empty, s), series=item.options(s), scales=item.scales((0.0, 0.0), s),
-                              title=item.title, aspect=item.aspect, axes=item.axes, legend=item.legend)
-        elif isinstance(item, Chart):
-            data = item.data(s)
-            h = gui.add_uplot(data=data, series=item.series, scales=item.scales(s, data), title=item.title,
-                              aspect=item.aspect, axes=item.axes, legend=item.legend)
+        elif isinstance(item, (PlotSpec, Chart)):
+            f = self._frame(item)
+            h = gui.add_uplot(data=f.data, series=f.series, scales=f.scales, axes=f.axes, title=item.title,
+                              aspect=item.aspect, legend=item.legend, padding=PADDING,
+                              visible=item.visible is None or bool(item.visible(s)))
+            self._sent[id(h)] = (f.series, f.axes)
         else:
             raise TypeError(f"not a control: {item!r}")
         if item.key:
@@ -290,6 +321,7 @@ class Panel:
 
     def _changed(self, item: Any, value: Any) -> None:
         """A user's change of a control's value."""
+        self.controls += 1
         if item.act is not None:
             item.act(self, value)
             return
@@ -332,6 +364,9 @@ class Panel:
             for item, h in self._controls:
                 self._sync_one(item, h, s, sc)
             self.set_quietly(self.seed, int(sc.sim.seed))
+            if tuple(self.at_end.options) != self._at_end_options():
+                self.at_end.options = self._at_end_options()
+            self.set_quietly(self.at_end, at_end_label(s.at_end, sc.sim.steps))
             menu = self.services.menu
             if tuple(self.preset.options) != menu.options():
                 self.preset.options = menu.options()
@@ -418,6 +453,7 @@ class Panel:
     def press(self, what: str) -> None:
         """A playback button: Play, Pause, Step or Reset."""
         s = self.session
+        self.controls += 1
         if what == "Play":
             s.play()
         elif what == "Pause":
@@ -458,15 +494,13 @@ class Panel:
         would be, loaded paused at step 0. Returns the refusal's messages (empty: loaded)."""
         try:
             scenario = load_scene(preset, values)
-            if self.services.replace is not None:
-                session = self.services.replace(scenario)  # may rebuild the panel (another kind of scene)
+            if self.services.replace is not None:  # (never a step before it is paused)
+                self.services.replace(scenario, play=False)  # may rebuild the panel (another kind of scene)
             else:
-                self.session.load_scenario(scenario)
+                self.session.load_scenario(scenario, play=False)
                 self.sync()
-                session = self.session
         except PresetError as err:
             return list(err.messages)
-        session.pause()
         return []
 
     def upload_preset(self, filename: str, content: bytes) -> bool:
@@ -522,7 +556,7 @@ class Panel:
 
     def refresh_status(self) -> None:
         s = self.session
-        state = "▶ playing" if s.playing else ("■ finished" if s.finished else "paused")
+        state = PLAYING if s.playing else ("■ finished: Play runs it again" if s.finished else "paused")
         self.status.content = self.part.status(s, s.readout(), state)
 
     def refresh_readout(self) -> None:
@@ -547,36 +581,41 @@ class Panel:
         """Redraw the live plots (the caller throttles this)."""
         if self.removed:
             return
-        s = self.session
         for item, h in self._controls:
-            if isinstance(item, PlotSpec):
-                m, span = s.shown_metrics(item.history)
-                self.push_uplot(h, item.data(m, s), item.options(s), item.scales(span, s),
-                                twin=(item.twin, item.twin_label()) if item.twin is not None else None)
-            elif isinstance(item, Chart):
-                data = item.data(s)
-                h.data = data
-                h.scales = item.scales(s, data)
+            if isinstance(item, (PlotSpec, Chart)):
+                if item.visible is not None and not h.visible:
+                    continue
+                self.push_uplot(h, self._frame(item))
             elif isinstance(item, Figure):
                 item.refresh(self, h)
+
+    def _frame(self, item: PlotSpec | Chart) -> Frame:
+        """What ``item`` shows now: the metrics up to the step shown (with swarm B's curve) or the chart."""
+        s = self.session
+        if isinstance(item, Chart):
+            return item.render(s)
+        m, span = s.shown_metrics(item.history)
+        if not len(m.get("t", ())):
+            m = {name: np.zeros(0) for name in s.history.names}
+        twin = s.twin_metric(item.twin, np.asarray(m["t"], float)) if item.twin is not None else None
+        if twin is not None and len(m["t"]) < 2:
+            twin = None
+        return item.render(m, span, s, twin)
 
     def refresh_timeline(self) -> None:
         """The Replay folder: timeline and badge (the caller throttles this)."""
         self.replay_gui.refresh()
 
-    def push_uplot(self, handle: Any, data: tuple, series: tuple, scales: dict[str, Any],
-                   twin: tuple[str, str] | None = None) -> None:
-        """Set a uPlot's data and scales (its series only when they change). ``twin = (metric,
-        label)``: with swarm B on, B's metric at the same times is one more (dashed teal) series.
-        An explicit x range goes with every update: viser's client keeps a *relative* x range
-        across data pushes, which goes wrong for a chart first mounted in a hidden tab."""
-        if twin is not None:
-            b = self.session.twin_metric(twin[0], data[0])
-            if b is not None:
-                data = tuple(data) + (np.nan_to_num(b, nan=0.0),)
-                series = tuple(series) + (twin_series(twin[1]),)
-        if self._series.get(id(handle)) != series:
-            handle.series = series
-            self._series[id(handle)] = series
-        handle.data = data
-        handle.scales = scales
+    def push_uplot(self, handle: Any, f: Frame) -> None:
+        """Send a chart's frame: data and scales always, series and axes only when they change
+        (the client rebuilds the chart for those). An explicit x range goes with every update:
+        viser's client keeps a *relative* x range across data pushes, which goes wrong for a
+        chart first mounted in a hidden tab."""
+        series, axes = self._sent.get(id(handle), (None, None))
+        if series != f.series:
+            handle.series = f.series
+        if axes != f.axes:
+            handle.axes = f.axes
+        self._sent[id(handle)] = (f.series, f.axes)
+        handle.data = f.data
+        handle.scales = f.scales

@@ -67,7 +67,7 @@ def _readout(s: Session, snap: Snapshot) -> str:
 
 def positions_folder(observer: str = "", visible: Visible | None = None) -> Folder:
     """The folder; ``observer``: words on how to pick the robot whose ghosts are drawn."""
-    return Folder("Positions", key="Positions", expand=_on_slo, visible=visible, items=(
+    return Folder("Positions", key="Positions", expand=False, visible=visible, items=(
         Dropdown("positions", "positions", tuple(POSITIONS), read=_positions, write=_switch,
                  hint="the robots act on true (oracle) or SLO-estimated positions; same seed (rebuilds)"),
         Dropdown("positions.errors", "error set", tuple(ERROR_SETS), read=_errors, write=_set_errors,

@@ -1,5 +1,6 @@
-"""The Replay folder of every panel: a timeline over the recorded steps, a badge while a
-loaded replay is shown, and the Export replay / Load replay / Share buttons.
+"""The replay part of every panel's *Replay and files* folder: a timeline over the recorded
+steps, a badge while a loaded replay is shown, and the Export replay / Load replay / Share
+buttons.
 
 Dragging the timeline pauses and shows the recorded frame of that step (robots, trails up
 to then, the plots cut there); Play carries on from the live end. *Load replay* reads a
@@ -24,24 +25,23 @@ from .spec import Host
 
 
 class ReplayFolder:
-    """The handles of the Replay folder, wired to ``panel.session``."""
+    """The replay handles (built in the caller's folder; ``badge``, the line that names a loaded
+    replay, outside it so that it shows with the folder closed), wired to ``panel.session``."""
 
-    def __init__(self, panel: Host) -> None:
+    def __init__(self, panel: Host, badge: Any) -> None:
         self.panel = panel
         gui = panel.gui
-        with gui.add_folder("Replay") as self.folder:
-            self.badge = gui.add_markdown("", visible=False)
-            self.timeline = gui.add_slider(
-                "timeline [step]", min=0, max=1, step=1, initial_value=0,
-                hint="drag to see a recorded step (pauses); Play carries on from the live end")
-            self.where = gui.add_markdown("")
-            self.export = gui.add_button("Export replay", hint="the recorded steps, preset and seed as one .npz file")
-            self.upload = gui.add_upload_button(
-                "Load replay", hint=f"a .npz from Export replay, at most {replay.MAX_REPLAY_BYTES // 2**20} MiB")
-            self.share = gui.add_button(
-                "Share", hint="the recorded steps as one web page (.html) that plays in any browser, no install",
-                visible=panel.services.share is not None)
-        panel.top.append(self.folder)
+        self.badge = badge
+        self.timeline = gui.add_slider(
+            "timeline [step]", min=0, max=1, step=1, initial_value=0,
+            hint="drag to see a recorded step (pauses); Play carries on from the live end")
+        self.where = gui.add_markdown("")
+        self.export = gui.add_button("Export replay", hint="the recorded steps, preset and seed as one .npz file")
+        self.upload = gui.add_upload_button(
+            "Load replay", hint=f"a .npz from Export replay, at most {replay.MAX_REPLAY_BYTES // 2**20} MiB")
+        self.share = gui.add_button(
+            "Share", hint="the recorded steps as one web page (.html) that plays in any browser, no install",
+            visible=panel.services.share is not None)
         self._wire()
 
     @property

@@ -50,6 +50,10 @@ class Driver(Protocol):
         """Run 0's robots now."""
         ...
 
+    def metrics(self) -> dict[str, float]:
+        """Run 0's metrics the app records beyond the engine's columns (none for most kinds)."""
+        ...
+
     def snapshot(self, selected: int) -> dict[str, Any]:
         """The kind's part of a :class:`~.snapshot.Snapshot`: ``y``, ``yg``, ``ghosts``, ``extras``."""
         ...

@@ -35,6 +35,7 @@ from ..limits import check_app_limits
 from ..replay import Recording
 from .driver import Driver
 from .history import TRAIL_LIMITS, Frame, History
+from .lifecycle import Lifecycle
 from .snapshot import Snapshot
 from .timeline import ReplayInfo, Timeline
 from .twin import Twin
@@ -60,7 +61,7 @@ class Session:
         self.kind = kind
         self.check(scenario)
         self.lock = threading.RLock()
-        self.playing = False
+        self.lifecycle = Lifecycle()  # playing or not, and what happens at the last step
         self.revision = 0  # bumps whenever the robots change (scene redraw)
         self.scene_revision = 0  # bumps when the static scene changes (rebuild)
         self.selected_robot = 0  # the robot the panels and the view single out
@@ -77,6 +78,14 @@ class Session:
         return self.kind.check(scenario)
 
     # ------------------------------------------------------------------ what the parts share
+    @property
+    def playing(self) -> bool:
+        return self.lifecycle.playing
+
+    @playing.setter
+    def playing(self, value: bool) -> None:
+        self.lifecycle.playing = bool(value)
+
     @property
     def k(self) -> int:
         """The engine's step."""
@@ -154,13 +163,15 @@ class Session:
         self.selected_robot = min(self.selected_robot, self.robots - 1)
         self.selected_dim = min(self.selected_dim, self.scenario.sim.d - 1)
 
-    def load_scenario(self, scenario: Scenario) -> None:
-        """Replace the whole scene (preset switch, upload); refuses scenes of another kind."""
+    def load_scenario(self, scenario: Scenario, *, play: bool = True) -> None:
+        """Replace the whole scene (preset switch, upload) and play it (``play=False``: paused at
+        step 0, as a lesson's *Set up* wants it); refuses scenes of another kind."""
         self.check(scenario)
         with self.lock:
             self._load(scenario)
             self.compare = None  # a new scene: no swarm B until asked again
             self._clamp_selection()
+            self.playing = play  # every scene opens playing
             self.revision += 1
 
     def load_preset(self, name: str) -> Scenario:
@@ -189,13 +200,15 @@ class Session:
 
         Raises :class:`PresetError` (nothing changed) when the model refuses the result. Swarm B
         takes the same change (keeping its overrides); a change B cannot take is refused too.
-        A change beyond the view ends a replay (a live run of the preset starts).
+        A change beyond the view ends a replay (a live run of the preset starts), and starts a
+        finished run again from step 0 with the new values.
         """
         with self.lock:
             new = self.propose(changes)
             self.check(new)
             new_b = self.compare.propose(new) if self.compare is not None else None
             view_only = all(k.startswith("view.") for k in changes)
+            was_finished = self.finished and self.replaying is None
             if self.replaying is not None and not view_only:
                 self.leave_replay()
             elif not view_only:
@@ -208,6 +221,10 @@ class Session:
                 if self.compare is not None and old_b is not None:
                     self.compare.adopt(old_b)
                 raise
+            if was_finished and not view_only:
+                if self.history.frames is before:  # taken by the running engine: start it again
+                    self.restart(self.scenario.sim.seed)
+                self.playing = True
             if self.history.frames is before and not view_only:
                 self.live_edits += 1
             return new
@@ -235,27 +252,59 @@ class Session:
         self.revision += 1
 
     # ------------------------------------------------------------------ playback
+    @property
+    def at_end(self) -> str:
+        """What the run does at its last step: ``stop``, ``loop`` or ``run on`` (see :mod:`.lifecycle`)."""
+        return self.lifecycle.at_end
+
+    def choose_at_end(self, choice: str) -> None:
+        """Set the end rule (ValueError for anything else); a run already past its last step
+        that is now to stop there is finished."""
+        with self.lock:
+            self.lifecycle.choose(choice)
+            if self.finished:
+                self.playing = False
+
+    @property
+    def finished(self) -> bool:
+        """Has the run stopped at its last step (the end rule is ``stop``)?"""
+        with self.lock:
+            return self.lifecycle.finished(self.k, self.scenario.sim.steps)
+
+    def progress(self, unit: str = "step") -> str:
+        """The status line's ``step k/N`` (never beyond N over N)."""
+        with self.lock:
+            return self.lifecycle.progress(self.k, self.scenario.sim.steps, unit)
+
     def play(self) -> None:
-        """Run on from the live end (a replay: on through the recording, from its start if at the end)."""
+        """Run on from the live end (a replay: on through the recording, from its start if at the
+        end). A finished run starts again from step 0 with the current values."""
         with self.lock:
             if self.replaying is None:
                 self.timeline.cursor = None
+                if self.finished:
+                    self.restart(self.scenario.sim.seed)
+                    self.revision += 1
             elif self.timeline.rewind_if_at_end():
                 self.revision += 1
             self.playing = True
 
     def pause(self) -> None:
-        with self.lock:
-            self.playing = False
+        """Stop playing. It takes no lock: a Pause never waits for the step the ticker has in hand,
+        and the steps left in the ticker's batch see it (:meth:`play_step`)."""
+        self.playing = False
 
     def reset(self, seed: int | None = None) -> None:
-        """Back to step 0; with ``seed`` also change the scenario's seed (validated)."""
+        """Back to step 0 with the current values; with ``seed`` also change the scenario's seed
+        (validated). A playing run plays on, and so does one that had finished."""
         with self.lock:
+            play = self.playing or self.finished
             if seed is not None and seed != self.scenario.sim.seed:
                 self.apply({"sim.seed": int(seed)})  # resets as part of the change
-                return
-            self.restart(self.scenario.sim.seed)
-            self.revision += 1
+            else:
+                self.restart(self.scenario.sim.seed)
+                self.revision += 1
+            self.playing = play
 
     def restart(self, seed: int) -> None:
         """The engine back to step 0 with ``seed``, the history cleared, swarm B too (the lock held)."""
@@ -265,8 +314,10 @@ class Session:
             self.compare.restart()
 
     def step(self, n: int = 1) -> int:
-        """Advance ``n`` ticks (swarm B too). Pauses when the preset's ``sim.steps`` is reached;
-        returns the steps done. A replay moves ``n`` recorded frames on instead."""
+        """Advance up to ``n`` ticks (swarm B too) by the end rule: at the preset's ``sim.steps``
+        the run stops (pauses, finished), loops to step 0 or runs on. A call on a finished run
+        starts it again from step 0. Returns the steps done. A replay moves ``n`` recorded frames
+        on instead."""
         done = 0
         with self.lock:
             if self.replaying is not None:
@@ -279,24 +330,45 @@ class Session:
             if self.timeline.cursor is not None:
                 self.timeline.cursor = None
                 self.revision += 1
+            if self.finished:
+                self.restart(self.scenario.sim.seed)
+            steps = self.scenario.sim.steps
             for _ in range(n):
-                self.driver.before_step()
-                info = self.sim.step()
-                self._record(info)
-                if self.compare is not None:
-                    self.compare.step()
+                rule = self.lifecycle.at_last(self.k, steps)
+                if rule == "restart":
+                    self.restart(self.scenario.sim.seed)
+                self._advance()
                 done += 1
-                if self.k == self.scenario.sim.steps:
+                if self.lifecycle.finished(self.k, steps):
                     self.playing = False
                     break
             if done:
                 self.revision += 1
         return done
 
-    @property
-    def finished(self) -> bool:
+    def play_step(self) -> int:
+        """One step if the run is playing (the ticker's call): a Pause that arrives between the
+        steps of a tick stops the rest of them."""
         with self.lock:
-            return self.k >= self.scenario.sim.steps
+            return self.step(1) if self.playing else 0
+
+    def advance(self, n: int = 1) -> int:
+        """``n`` engine steps regardless of the end rule (swarm B follows A this way)."""
+        n = max(int(n), 0)
+        with self.lock:
+            for _ in range(n):
+                self._advance()
+            if n:
+                self.revision += 1
+        return n
+
+    def _advance(self) -> None:
+        """One engine step, recorded, and swarm B's (the lock held)."""
+        self.driver.before_step()
+        info = self.sim.step()
+        self._record(info)
+        if self.compare is not None:
+            self.compare.step()
 
     # ------------------------------------------------------------------ swarm B
     def enable_compare(self, overrides: dict[str, Any]) -> None:
@@ -333,9 +405,11 @@ class Session:
         return self._t0 + (self.k - self._k0) * self.driver.dt()
 
     def _metrics(self, info: Any) -> dict[str, float]:
-        """Run 0's metric columns now, as ``shoal run`` writes them (``t`` the session's clock)."""
+        """Run 0's metric columns now, as ``shoal run`` writes them (``t`` the session's clock),
+        then the kind's own (``driver.metrics``)."""
         table = metric_table(self.sim.state, info, self.clock())
-        return {name: float(v[0]) for name, v in table.items() if name not in ("run", "step")}
+        row = {name: float(v[0]) for name, v in table.items() if name not in ("run", "step")}
+        return {**row, **self.driver.metrics()}
 
     def _record(self, info: Any) -> None:
         """Record the robots and the metrics (``info`` of the step just taken; None at a start)."""

@@ -43,7 +43,7 @@ class Rerun(Protocol):
     @property
     def k(self) -> int: ...
 
-    def step(self, n: int = 1) -> int: ...
+    def advance(self, n: int = 1) -> int: ...
 
 
 def verify_replay(fresh: Rerun, rec: Recording, steps: int = VERIFY_STEPS) -> tuple[bool | None, str]:
@@ -53,7 +53,7 @@ def verify_replay(fresh: Rerun, rec: Recording, steps: int = VERIFY_STEPS) -> tu
     if k0 > MAX_VERIFY_START:
         return None, f"not checked: the recording starts at step {k0}"
     upto = [i for i in range(rec.frames) if rec.k[i] <= k0 + steps]
-    fresh.step(int(rec.k[upto[-1]]) - fresh.k)
+    fresh.advance(int(rec.k[upto[-1]]) - fresh.k)
     frames = {f.k: f for f in fresh.history.frames}
     for i in upto:
         x, _, _ = rec.robots(i)

@@ -79,7 +79,7 @@ class Side(Protocol):
 
     def check(self, scenario: Scenario) -> Scenario: ...
 
-    def step(self, n: int = 1) -> int: ...
+    def advance(self, n: int = 1) -> int: ...
 
     def adopt(self, new: Scenario) -> None: ...
 
@@ -113,7 +113,7 @@ class Twin:
         return old
 
     def step(self) -> None:
-        self.b.step(1)
+        self.b.advance(1)  # A's end rule decides for both
 
     def restart(self) -> None:
         with self.b.lock:

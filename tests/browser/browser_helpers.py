@@ -72,3 +72,12 @@ def to_pixel(server, cid, page, xy: np.ndarray) -> np.ndarray:
     s = tab.arena.to_scene(np.asarray(xy, dtype=float))
     return np.stack([box["x"] + box["width"] / 2 + s[..., 0] * px_per_unit,
                      box["y"] + box["height"] / 2 - s[..., 1] * px_per_unit], axis=-1)
+
+
+def open_folder(page, title: str, probe: str) -> None:
+    """Open the folder titled ``title`` (folders may start closed) unless the control labelled
+    or named ``probe`` inside it already shows."""
+    inside = page.get_by_text(probe, exact=True).or_(page.get_by_role("button", name=probe, exact=True)).first
+    if not (inside.count() and inside.is_visible()):
+        page.get_by_text(title, exact=True).first.click()
+        inside.wait_for(state="visible", timeout=10000)

@@ -26,7 +26,20 @@ sync_api = pytest.importorskip("playwright.sync_api")
 from shoal.app.kinds.swarm import ROBOT, ROBOT_SIZE  # noqa: E402
 from shoal.app.view.camera import VIEW_HALF  # noqa: E402
 
-from browser_helpers import ARGS, VIEWPORT, canvas_box, choose, dismiss_toasts, number_box, upload_input, wait_until  # noqa: E402
+from browser_helpers import (  # noqa: E402
+    ARGS,
+    VIEWPORT,
+    canvas_box,
+    choose,
+    dismiss_toasts,
+    number_box,
+    open_folder,
+    upload_input,
+    wait_until,
+)
+
+TAB_TOPS = ("[...new Set([...document.querySelectorAll('[role=tab]')]"
+            ".map(e => Math.round(e.getBoundingClientRect().top)))]")  # the tops of the tabs, measured in one go
 
 
 @pytest.fixture(scope="module")
@@ -57,8 +70,10 @@ def client_id(server, page):
 def test_page_loads_with_its_own_session(server, page, client_id):
     for text in ("law", "Δt [s]", "robots", "speed [steps/s]", "seed"):
         assert page.locator("label", has_text=text).count() >= 1, text
-    for tab in ("Controller", "Plots", "Export", "Notes"):
+    for tab in ("Controller", "Plots", "Lessons"):
         assert page.get_by_role("tab", name=tab).count() == 1
+    tops = page.evaluate(TAB_TOPS)  # in one go: the status line may grow meanwhile
+    assert len(tops) == 1, f"the tab row wraps: tabs at y = {sorted(tops)}"
     session = server.sessions[client_id]
     assert session.scenario.name == "default"
     k0 = session.sim.state.k
@@ -136,7 +151,7 @@ def test_export_csv_download_matches_the_engine(server, page, client_id):
     session = server.sessions[client_id]
     page.get_by_role("button", name="Pause", exact=True).click()
     wait_until(lambda: not session.playing, what="pause")
-    page.get_by_role("tab", name="Export").click()
+    open_folder(page, "Replay and files", "Export CSV")
     with page.expect_download(timeout=20000) as dl:
         page.get_by_role("button", name="Export CSV").click()
     download = dl.value
@@ -154,7 +169,7 @@ def test_export_csv_download_matches_the_engine(server, page, client_id):
 def test_bad_upload_shows_the_field_and_keeps_the_scene(server, page, client_id):
     session = server.sessions[client_id]
     sim, k = session.sim, session.sim.state.k
-    page.get_by_role("tab", name="Export").click()
+    open_folder(page, "Replay and files", "Export CSV")
     upload_input(page, "Upload preset").set_input_files(
         {"name": "bad.toml", "mimeType": "application/toml", "buffer": b"[controller]\nomega = 7\n"})
     page.wait_for_selector(".mantine-Notification-root:has-text('controller.omega')", timeout=10000)
@@ -177,3 +192,64 @@ def test_a_second_tab_gets_its_own_session(server, browser, page, client_id):
     finally:
         other.close()
     wait_until(lambda: len(server.sessions) == 1, what="the closed tab's session to go")
+
+
+# ---------------------------------------------------------------------------- keys
+def test_space_arrow_and_r_drive_the_playback_but_not_inside_a_box(server, page, client_id):
+    """Real key presses: space toggles Play/Pause, → steps, r resets (a paused run stays paused);
+    a key typed into a number box is the box's. (The keys click the playback buttons, whose
+    hostile values are refused in tests/test_trust_inputs.py.)"""
+    session = server.sessions[client_id]
+    dismiss_toasts(page)
+    if not session.playing:
+        page.get_by_role("button", name="Play", exact=True).click()
+        wait_until(lambda: session.playing, what="playing")
+    page.evaluate("document.activeElement && document.activeElement.blur()")
+    page.keyboard.press(" ")
+    wait_until(lambda: not session.playing, what="space pauses")
+    with session.lock:  # (the step the ticker had in hand is done)
+        k = session.sim.state.k
+    page.keyboard.press("ArrowRight")
+    wait_until(lambda: session.sim.state.k == k + 1, what="→ steps once")
+    page.keyboard.press("r")
+    wait_until(lambda: session.sim.state.k == 0, what="r resets")
+    assert not session.playing
+    page.keyboard.press("ArrowRight")
+    wait_until(lambda: session.sim.state.k == 1, what="→ steps once more")
+    box = number_box(page, "seed")
+    box.click()
+    box.press("r")  # the box's, not a Reset...
+    box.press("ArrowRight")  # ...nor a Step
+    page.get_by_role("button", name="Step", exact=True).click()  # after the keys: the page keeps the order
+    wait_until(lambda: session.sim.state.k == 2, what="the Step click")
+    assert session.sim.state.k == 2 and not session.playing
+    page.evaluate("document.activeElement && document.activeElement.blur()")
+    page.keyboard.press(" ")
+    wait_until(lambda: session.playing, what="space plays")
+
+
+# ---------------------------------------------------------------------------- layout
+
+
+@pytest.mark.parametrize("preset, kind, folder, inside", [
+    ("course-dvc", "fleet", "Arena view and selected robot", "zoom"),
+    ("sonar-xb-pso", "sonar", "Selected robot", "robot"),
+    ("slo-walk", "mai", "Replay and files", "Export CSV"),
+    ("default", "swarm", "Positions", "error set"),
+])
+def test_every_kind_fits_its_tab_row_on_one_line_with_its_folders_closed(server, page, client_id, preset, kind,
+                                                                         folder, inside):
+    dismiss_toasts(page)
+    choose(page, "preset", preset)
+    wait_until(lambda: server.tabs[client_id].session.scenario.name == preset, what=preset)
+    page.get_by_role("tab", name="Lessons").wait_for(timeout=60000)
+    page.get_by_text(folder, exact=True).first.wait_for(timeout=60000)
+    seen: list = []
+
+    def one_row_high_up() -> bool:  # (measured once the new panel has settled)
+        seen[:] = page.evaluate(TAB_TOPS)
+        return len(seen) == 1 and seen[0] < 0.6 * VIEWPORT["height"]  # the kind's controls start on screen
+    wait_until(one_row_high_up, timeout=30.0, what=f"{preset}: one tab row in the upper 60 % of the page")
+    for closed in ("Export CSV", "compare with swarm B", inside):  # Replay and files, Compare, the kind's own
+        probe = page.get_by_text(closed, exact=True).or_(page.get_by_role("button", name=closed, exact=True))
+        assert not any(probe.nth(i).is_visible() for i in range(probe.count())), f"{preset}: {closed!r} shows"

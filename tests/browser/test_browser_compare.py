@@ -34,6 +34,7 @@ from browser_helpers import (  # noqa: E402
     canvas_box,
     dismiss_toasts,
     number_box,
+    open_folder,
     root_for,
     to_pixel,
     upload_input,
@@ -115,7 +116,7 @@ def test_compare_runs_b_in_lock_step_and_draws_it_in_teal(server, page, cid):
     box.fill("0")
     box.press("Enter")
     wait_until(lambda: session.scenario.view.trail_seconds == 0, what="trails off")
-    page.get_by_role("tab", name="Compare").click()
+    open_folder(page, "Compare with swarm B", "compare with swarm B")
     root_for(page, "compare with swarm B").click()
     wait_until(lambda: session.twin is not None, what="swarm B")
     assert session.twin.scenario.controller.law == "standard"  # the first quick choice
@@ -124,6 +125,8 @@ def test_compare_runs_b_in_lock_step_and_draws_it_in_teal(server, page, cid):
     wait_until(lambda: session.sim.state.k >= 40, what="40 steps")
     page.get_by_role("button", name="Pause", exact=True).click()
     wait_until(lambda: not session.playing, what="pause")
+    tab = server.tabs[cid]  # the scene follows a moment after a control event (TabApp.CONTROL_HOLD)
+    wait_until(lambda: tab.arena.drawn_revision == session.revision, what="the paused step drawn")
     assert session.twin.sim.state.k == session.sim.state.k
     dismiss_toasts(page)
     # B's robots that lie clear of A's are teal on screen
@@ -148,6 +151,7 @@ def test_a_replay_exported_here_plays_back_in_another_server(server, browser, pa
     session = server.tabs[cid].session
     page.get_by_role("button", name="Pause", exact=True).click()
     wait_until(lambda: not session.playing, what="pause")
+    open_folder(page, "Replay and files", "Export replay")
     with page.expect_download(timeout=30000) as dl:
         page.get_by_role("button", name="Export replay").click()
     data = open(dl.value.path(), "rb").read()
@@ -161,6 +165,7 @@ def test_a_replay_exported_here_plays_back_in_another_server(server, browser, pa
         try:
             wait_until(lambda: len(other.tabs) == 1, what="the second server's tab")
             cid2 = next(iter(other.tabs))
+            open_folder(page2, "Replay and files", "Load replay")
             upload_input(page2, "Load replay").set_input_files(
                 {"name": "run-replay.npz", "mimeType": "application/octet-stream", "buffer": data})
             wait_until(lambda: getattr(other.tabs[cid2].session, "replaying", None) is not None, what="the replay")
@@ -170,6 +175,7 @@ def test_a_replay_exported_here_plays_back_in_another_server(server, browser, pa
             page2.wait_for_selector(".mantine-Notification-root:has-text('verified')", timeout=30000)
             # scrub to step 12: the arena shows the recorded robots of that step
             k = 12
+            open_folder(page2, "Replay and files", "timeline [step]")  # (the panel was rebuilt: closed again)
             box = number_box(page2, "timeline [step]")
             box.fill(str(k))
             box.press("Enter")

@@ -38,7 +38,7 @@ PROGRESS_JS = """() => Array.from(document.querySelectorAll('[role=progressbar]'
 
 def test_an_experiment_run_from_the_page_shows_progress_and_the_result_plot(server, page, cid):
     dismiss_toasts(page)
-    page.get_by_role("tab", name="Experiment").click()
+    page.get_by_role("tab", name="Sweep").click()
     text_box(page, "values 1").fill("6, 8, 10, 12")
     choose(page, "field 2", "controller.A_plus")
     panel = server.tabs[cid].panels.experiment

@@ -26,7 +26,7 @@ sync_api = pytest.importorskip("playwright.sync_api")
 
 from shoal.app.kinds import fleet  # noqa: E402
 
-from browser_helpers import choose, dismiss_toasts, root_for, to_pixel, wait_until  # noqa: E402
+from browser_helpers import choose, dismiss_toasts, open_folder, root_for, to_pixel, wait_until  # noqa: E402
 
 
 def screenshot(page) -> np.ndarray:
@@ -55,7 +55,7 @@ def free_point(session, x_min: float, x_max: float) -> np.ndarray:
 
 # ---------------------------------------------------------------------------- switch
 def test_the_preset_dropdown_switches_to_the_obstacle_course(server, page, cid):
-    server.tabs[cid].session.pause()  # stays paused across the switch (a still scene renders faster)
+    server.tabs[cid].session.pause()
     dismiss_toasts(page)
     choose(page, "preset", "course-dvc")
     wait_until(lambda: server.tabs[cid].session.kind.name == "fleet", what="a fleet session")
@@ -63,7 +63,8 @@ def test_the_preset_dropdown_switches_to_the_obstacle_course(server, page, cid):
     page.wait_for_selector("label:has-text('controller')", timeout=20000)
     wait_until(lambda: "obstacles" in tab.arena.nodes, what="the obstacles drawn")
     session = tab.session
-    assert not session.playing
+    assert session.playing  # every scene opens playing, whatever the one before did
+    session.pause()  # (a still scene renders faster)
     circles = session.sim.world.circles
     node = tab.arena.nodes["obstacles"]
     np.testing.assert_allclose(np.asarray(node.batched_positions)[:, :2],
@@ -126,6 +127,7 @@ def _sector_centre(tab) -> np.ndarray:
 def test_the_sector_view_follows_the_robot_chosen_in_the_gui(server, page, cid):
     session = pause(server, cid, page)
     tab = server.tabs[cid]
+    open_folder(page, "Arena view and selected robot", "robot")  # closed at first: the controls fit
     field = root_for(page, "robot")  # a number input
     field.fill("3")
     field.press("Enter")

@@ -23,7 +23,7 @@ from shoal.app.kinds import swarm  # noqa: E402
 from shoal.engine.kinds.fleet import Fleet  # noqa: E402
 from shoal.engine.kinds.slo_swarm import SLOSwarm  # noqa: E402
 
-from browser_helpers import choose, dismiss_toasts, number_box, wait_until  # noqa: E402
+from browser_helpers import choose, dismiss_toasts, number_box, open_folder, wait_until  # noqa: E402
 
 
 def test_the_dropdown_switches_to_slo_walk_and_the_ghosts_are_drawn(server, page, cid):
@@ -58,7 +58,8 @@ def test_the_chapter3_positions_switch_and_controller_in_the_gui(server, page, c
     box.press("Enter")
     wait_until(lambda: session.scenario.controller.U == 4.0, what="U = 4")
     assert session.sim is sim and swarm.driver(session).coefficients()[0] == pytest.approx(0.25)  # no rebuild
-    choose(page, "positions", "oracle (true)")  # the Positions folder starts open on SLO positions
+    open_folder(page, "Positions", "error set")  # the Positions folder starts closed (the controls fit)
+    choose(page, "positions", "oracle (true)")
     wait_until(lambda: session.sim.positions.exact, what="the oracle swarm")
     assert server.tabs[cid].session is session and session.scenario.controller.U == 4.0
     choose(page, "positions", "SLO (estimated)")

@@ -22,7 +22,7 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import choose, dismiss_toasts, root_for, to_pixel, wait_until  # noqa: E402
+from browser_helpers import choose, dismiss_toasts, open_folder, root_for, to_pixel, wait_until  # noqa: E402
 
 
 def _plot_matches(tab, robot: int) -> bool:
@@ -47,11 +47,14 @@ def test_switching_to_sonar_draws_rays_and_the_correlation_follows_the_robot(ser
     wait_until(lambda: tab.session.sim.state.k >= 1, what="one step")
     session = tab.session
     wait_until(lambda: "rays_true" in tab.arena.nodes and tab.arena.nodes["rays_true"].visible, what="rays drawn")
+    wait_until(lambda: not session.playing and tab.arena.drawn_revision == session.revision,
+               what="the stepped scene drawn")  # (a moment after the click: TabApp.CONTROL_HOLD)
     x = session.sim.state.x[0]
     pts = np.asarray(tab.arena.nodes["rays_true"].points)
     np.testing.assert_allclose(pts[:, 0, :2], tab.arena.to_view(x)[:, :2], atol=1e-4)
     wait_until(lambda: _plot_matches(tab, 0), what="robot 0's R(τ) plotted")
     before = np.asarray(tab.panels.handles["corr"].data[1]).copy()
+    open_folder(page, "Selected robot", "robot")  # closed at first: the controls fit
     field = root_for(page, "robot")
     field.fill("6")
     field.press("Enter")
@@ -59,7 +62,7 @@ def test_switching_to_sonar_draws_rays_and_the_correlation_follows_the_robot(ser
     wait_until(lambda: _plot_matches(tab, 6), what="robot 6's R(τ) plotted")
     assert not np.allclose(np.asarray(tab.panels.handles["corr"].data[1]), before)
     page.get_by_role("tab", name="Plots").click()
-    page.wait_for_selector("text=R(τ) vs τ", timeout=10000)
+    page.wait_for_selector("text=τ [ms]", timeout=10000)  # the x axis is labelled
 
 
 def test_dragging_the_source_with_the_mouse_moves_it_in_the_engine(server, page, cid):
