@@ -43,6 +43,7 @@ HOSTILE = [
     ("law", "warp-drive", "not one of the choices"),
     ("mode", None, "expected text"),
     ("playback", "Explode", "not one of the choices"),
+    ("view", "Zoom to Mars", "not one of the choices"),
     ("compare with swarm B", "yes", "true or false"),
     ("Export CSV", 1, "true or false"),
 ]

@@ -447,6 +447,9 @@ class FollowCamera:
     def reset(self) -> None:
         self._followed = None
 
+    def interest(self, snap: Snapshot) -> np.ndarray:
+        return np.zeros((0, 2))  # its home is the whole world already
+
     def follow(self, canvas: Canvas, snap: Snapshot) -> None:
         follow, self.zoom = snap.extras["follow"], float(snap.extras["zoom"])
         if follow == "world" or self.zoom <= 1.0:

@@ -48,6 +48,7 @@ from .spec import (
     Text,
     get_path,
 )
+from .view_row import ViewRow
 
 PLAYBACK = ("Play", "Pause", "Step", "Reset")
 SPEED_SLIDER = Slider("view.steps_per_second", "speed [steps/s]", 1.0, 240.0, 1.0, "playback rate")
@@ -80,6 +81,7 @@ class Services:
     lessons: LessonProgress = field(default_factory=LessonProgress)  # where the Lessons tab is (the tab keeps it)
     experiments: ExperimentService | None = None  # the server's experiments (None: no Experiment tab)
     owner: Hashable = None  # this browser tab's key among the experiments
+    view: Callable[[str], None] | None = None  # the arena's view buttons: "fit" or "follow"
 
 
 def notes_text(name: str = "ch3") -> str:
@@ -121,6 +123,7 @@ class Panel:
         self._series: dict[int, tuple] = {}  # uPlot series last sent, by handle (see push_uplot)
         self.part = kind.panel(self)
         self._build_header()
+        self.view_gui = ViewRow(self)
         self.replay_gui = ReplayFolder(self)
         for folder in self.part.folders:
             self.top.append(self._build(folder))
