@@ -155,10 +155,15 @@ def test_bad_upload_shows_the_field_and_keeps_the_scene(server, page, client_id)
     session = server.sessions[client_id]
     sim, k = session.sim, session.sim.state.k
     page.get_by_role("tab", name="Export").click()
+    dismiss_toasts(page)  # the page shows only a few toasts at once
     upload_input(page, "Upload preset").set_input_files(
         {"name": "bad.toml", "mimeType": "application/toml", "buffer": b"[controller]\nomega = 7\n"})
     page.wait_for_selector(".mantine-Notification-root:has-text('controller.omega')", timeout=10000)
     assert session.sim is sim and session.sim.state.k == k
+    for _ in range(10):  # the page's own "File uploaded successfully." would show just before the verdict
+        toasts = page.locator(".mantine-Notification-root").all_inner_texts()
+        assert not any("uploaded successfully" in t for t in toasts), toasts  # only the verdict
+        time.sleep(0.1)
     dismiss_toasts(page)
 
 
