@@ -108,9 +108,10 @@ LANDSCAPE_TINT = 0.8  # of the colour map, the rest white
 
 
 def landscape_values(fitness: Callable[[np.ndarray], np.ndarray], half_size: float, n: int = 160) -> np.ndarray:
-    """The cost on an ``n × n`` grid over the arena (row 0 = top, +y); a maximised objective negated."""
+    """The cost on an ``n × n`` grid over the arena, as viser lays an image on the ground seen from
+    above: row 0 at −y (the bottom of the screen); a maximised objective negated."""
     xs = np.linspace(-half_size, half_size, n)
-    gx, gy = np.meshgrid(xs, xs[::-1])  # image rows run from +y (top) to −y
+    gx, gy = np.meshgrid(xs, xs)  # image rows run from −y to +y
     f = np.asarray(fitness(np.stack([gx, gy], axis=-1)), dtype=float)
     return -f if getattr(fitness, "maximise", False) else f
 
@@ -140,7 +141,7 @@ class HeatScale:
 
 
 def landscape_rgb(fitness: Callable[[np.ndarray], np.ndarray], half_size: float, n: int = 160) -> np.ndarray:
-    """The objective over the arena as an RGB image (row 0 = top, +y)."""
+    """The objective over the arena as an RGB image (row 0 at −y, see :func:`landscape_values`)."""
     f = landscape_values(fitness, half_size, n)
     return HeatScale(f).rgb(HeatScale(f).level(f))
 
@@ -171,7 +172,7 @@ class Landscape(Static):
         canvas.add("landscape", canvas.scene.add_image(
             canvas.name("landscape"), heat.rgb(heat.level(f)), render_width=side, render_height=side,
             position=(0.0, 0.0, self.z), cast_shadow=False, receive_shadow=False))
-        levels = np.linspace(1.0, 0.0, 64)[:, None].repeat(4, axis=1)  # top = high cost
+        levels = np.linspace(0.0, 1.0, 64)[:, None].repeat(4, axis=1)  # row 0 at the bottom: low cost
         width, gap = 0.035 * side, 0.02 * side
         x = side / 2 + gap + width / 2
         canvas.add("colour_bar", canvas.scene.add_image(
