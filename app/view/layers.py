@@ -103,7 +103,7 @@ class Ground(Static):
         canvas.lines("arena", polyline(box, closed=True), self.border, self.border_px, self.border_z)
 
 
-LANDSCAPE_MAP = "YlGnBu"  # low cost light (where the swarm gathers, red robots and blue trails read well), high dark
+LANDSCAPE_MAP = "YlGn"  # low cost light (where the swarm gathers), high green: red robots and blue trails read on both
 LANDSCAPE_TINT = 0.8  # of the colour map, the rest white
 
 
@@ -136,7 +136,7 @@ class HeatScale:
     def rgb(level: np.ndarray) -> np.ndarray:
         from matplotlib import colormaps
 
-        rgb = colormaps[LANDSCAPE_MAP](0.02 + 0.68 * np.asarray(level))[..., :3]  # no navy: blue trails stay seen
+        rgb = colormaps[LANDSCAPE_MAP](0.02 + 0.7 * np.asarray(level))[..., :3]  # no dark end: trails stay seen
         return (255 * (LANDSCAPE_TINT * rgb + 1 - LANDSCAPE_TINT)).astype(np.uint8)
 
 
@@ -156,7 +156,7 @@ class Landscape(Static):
 
     name = "landscape"
     keys = ("landscape", "colour_bar", "bar_low", "bar_mid", "bar_high", "bar_title")
-    legend = (LegendEntry("■", (120, 190, 180), "objective (light: low cost)"),)
+    legend = (LegendEntry("■", (95, 175, 100), "objective (light: low cost)"),)
 
     def __init__(self, objective: Callable[[Scenario], Callable[[np.ndarray], np.ndarray] | None], z: float) -> None:
         self.objective, self.z = objective, z

@@ -26,7 +26,17 @@ sync_api = pytest.importorskip("playwright.sync_api")
 from shoal.app.kinds.swarm import ROBOT, ROBOT_SIZE  # noqa: E402
 from shoal.app.view.camera import VIEW_HALF  # noqa: E402
 
-from browser_helpers import ARGS, VIEWPORT, canvas_box, choose, dismiss_toasts, number_box, upload_input, wait_until  # noqa: E402
+from browser_helpers import (  # noqa: E402
+    ARGS,
+    VIEWPORT,
+    arena_in_view,
+    canvas_box,
+    choose,
+    dismiss_toasts,
+    number_box,
+    upload_input,
+    wait_until,
+)
 
 
 @pytest.fixture(scope="module")
@@ -39,7 +49,7 @@ def browser():
 
 @pytest.fixture(scope="module")
 def page(browser, server):
-    context = browser.new_context(accept_downloads=True, viewport=VIEWPORT)
+    context = arena_in_view(browser.new_context(accept_downloads=True, viewport=VIEWPORT))
     pg = context.new_page()
     pg.goto(f"http://127.0.0.1:{server.port}/")
     pg.wait_for_selector("label:has-text('robots')", timeout=90000)
@@ -168,7 +178,7 @@ def test_bad_upload_shows_the_field_and_keeps_the_scene(server, page, client_id)
 
 
 def test_a_second_tab_gets_its_own_session(server, browser, page, client_id):
-    other = browser.new_page(viewport=VIEWPORT)
+    other = arena_in_view(browser.new_page(viewport=VIEWPORT))
     try:
         other.goto(f"http://127.0.0.1:{server.port}/")
         other.wait_for_selector("label:has-text('robots')", timeout=90000)
