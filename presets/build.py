@@ -162,10 +162,10 @@ def slo_errors_for(slo: SLO) -> str | ErrorModel:
 
 def slo_unit(scenario: Scenario, world: WorldSpec | None = None) -> float:
     """Metres per thesis length unit (``slo.unit`` if set). The thesis area is 100 wide
-    (spec §15.1), so the area the swarm works in over 100: the larger side of a fleet's
-    world; for an acoustic swarm its deployment disc (2·d_0; the drawn arena is a window
-    several times larger, whose unit would make the additive odometry errors many times
-    a step); the arena's width otherwise."""
+    (docs/readings.md, "Thesis units on a scene (ours)"), so the area the swarm works in over
+    100: the larger side of a fleet's world; for an acoustic swarm its deployment disc (2·d_0;
+    the drawn arena is a window several times larger, whose unit would make the additive
+    odometry errors many times a step); the arena's width otherwise."""
     if scenario.slo is not None and scenario.slo.unit is not None:
         return scenario.slo.unit
     if scenario.world is not None:

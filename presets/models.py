@@ -142,7 +142,8 @@ class Sensing(_Model):
 
 
 class Bests(_Model):
-    """Personal-best bookkeeping choices the thesis leaves open (spec §20 item 12, §22)."""
+    """Personal-best bookkeeping choices the thesis leaves open (docs/readings.md, "Unstated settings of
+    Section 3.5", "Attractors in Figure 3-4")."""
 
     pbest_order: Literal["before_velocity", "after_velocity"] = "before_velocity"
     attractors: Literal["literal", "ahead"] = "literal"
@@ -260,7 +261,7 @@ class SLO(_Model):
     of ``[acoustics]``) on SLO-estimated (``positions = "slo"``) or true
     (``positions = "oracle"``) positions, same seed either way. ``"chapter3"`` is read as
     ``"host"``. Lengths are in thesis units on a 100-wide area, rescaled to the scene
-    (spec §15.1).
+    (docs/readings.md, "Thesis units on a scene (ours)").
     """
 
     swarm: Literal["slo", "host"] = Field(

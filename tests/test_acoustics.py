@@ -1,4 +1,5 @@
-"""Propagation, SNR and frequency-domain signal synthesis (spec §2, §4, §5)."""
+"""Propagation, SNR and frequency-domain signal synthesis (Rossides §6.1, p. 130;
+§6.2.4, p. 135; §7.3.2, p. 161)."""
 
 import numpy as np
 import pytest
@@ -37,7 +38,7 @@ def test_cylindrical_equals_hybrid_with_r1_1km_beyond_r1():
     r = np.array([1500.0, 3000.0, 10_000.0])
     cyl = received_level_db(170.0, r, "cylindrical", alpha_db_per_km=0.1)
     hyb = received_level_db(170.0, r, "hybrid", alpha_db_per_km=0.1, R1_km=1.0)
-    assert cyl == pytest.approx(hyb)  # spec A3
+    assert cyl == pytest.approx(hyb)  # docs/readings.md, "The −60 in the spreading laws"
 
 
 def test_hybrid_is_continuous_at_r1_and_spherical_inside():

@@ -1,4 +1,4 @@
-"""The ``shoal`` command contract (DESIGN.md), run as a real subprocess."""
+"""The ``shoal`` command contract (``shoal --help``; README.md), run as a real subprocess."""
 
 import csv
 import json

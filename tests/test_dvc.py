@@ -98,7 +98,7 @@ def test_dvc_one_step_displacement_bounds(gap, u_dir, r, sgn, alpha, beta, dt):
         Δt |u_new|            ≤ αβ s_2 + ω Δt |u|,
 
     and from rest (u = 0) the step is ≤ α s_1 resp. ≤ α s_2. The thesis' "never reaches
-    the nearest body within one step" is approximate (spec §20 item 19): the carried
+    the nearest body within one step" is approximate (docs/readings.md, "The DVC guard (ours)"): the carried
     ω u (up to (1 − β)·αR_s/Δt) is not shrunk when s_1 drops, other robots move too, and
     sgn(F_t) points only within 45° of the push. So only these bounds are asserted.
     """
@@ -121,7 +121,7 @@ def test_dvc_one_step_displacement_bounds(gap, u_dir, r, sgn, alpha, beta, dt):
 
 
 def test_thesis_guarantee_is_only_approximate():
-    """Carried velocity can overshoot a nearest body that just appeared (spec §20 item 19)."""
+    """Carried velocity can overshoot a nearest body that just appeared (Algorithm 1, Rossides p. 90)."""
     gap = np.array([[[0.1, 3.0, 3.0, 3.0, 3.0, 3.0]]])
     omega, c = dvc_omni(gap)
     u = np.full((1, 1, 2), 0.9 * RANGE / math.sqrt(2))  # open-space top speed 2.7 m/s

@@ -143,7 +143,7 @@ def test_kinematic_sweep_stops_at_a_grazing_contact():
 
 
 def test_without_the_guard_dvc_can_reach_the_nearest_body():
-    """Spec §20 item 19: DVC bounds the new terms, not the carried ω·u. A robot 0.1 m from a
+    """docs/readings.md, "The DVC guard (ours)": DVC bounds the new terms, not the carried ω·u. A robot 0.1 m from a
     body, still moving at 3 m/s toward it, with a second body 0.7 m away (small c3): the
     thesis algorithm closes more than α·s in many runs; with the guard in none."""
     world = _world(np.array([[1.6, 0.0, 1.0], [0.0, 2.2, 1.0]]))

@@ -91,7 +91,8 @@ def test_adapted_speed_and_acceleration_stay_within_limits(law, omega, c1, c2, d
 
 
 def test_standard_pso_has_no_speed_limit():
-    """Standard PSO steps grow with the distance to the bests (§2): the motivation of §3."""
+    """Standard PSO steps grow with the distance to the bests (Rossides §3.1, p. 59): the motivation
+    of Adapted PSO (§3.2, p. 62)."""
     u = np.zeros((1, 1, 1))
     g = np.full((2, 1, 1, 1), 1e4)
     new = Law("standard").velocity(u, g, np.array([1.5, 1.5]), 0.7, np.ones_like(g))

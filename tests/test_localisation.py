@@ -1,4 +1,5 @@
-"""Source-localisation strategies on hand-built geometries (spec §7, §10)."""
+"""Source-localisation strategies on hand-built geometries (Rossides §7.1–§8.1, pp. 148–174;
+docs/readings.md)."""
 
 from __future__ import annotations
 
@@ -100,7 +101,7 @@ def test_apso_candidate_is_own_position_and_gbest_is_best_robot():
     assert np.allclose(yg2, [[10.0, 2.0]])
 
 
-def test_xpso_negative_rho_reads_as_zero():  # spec A7
+def test_xpso_negative_rho_reads_as_zero():  # docs/readings.md, "Negative fitness"
     x = np.zeros((1, 2, 2))
     f, y, yg, info = step("x-pso", x, Sensed(rho=np.array([[-2.0, 0.5]])), f_hat=np.array([[0.2, 0.0]]))
     assert info.fitness[0, 0] == 0.0 and f[0, 0] == pytest.approx(0.2 * E)
@@ -142,7 +143,7 @@ def test_bpso_furthest_rule_takes_mirror_point_when_it_is_further():
     S, F = np.array([10.0, 20.0]), np.array([10.0, 100.0])
     x, rays = two_robots(S, F)
     f, y, yg, info = step("b-pso", x, Sensed(rays=rays))
-    assert np.allclose(info.candidate, F)  # the spec's rule, an "unhealthy" type-3 point
+    assert np.allclose(info.candidate, F)  # Alg. 5's furthest rule, an "unhealthy" type-3 point
     assert np.allclose(f, 1.0 / np.linalg.norm(F - x[0], axis=-1))
 
 
@@ -215,7 +216,7 @@ def test_xbpso_rejects_source_on_the_wrong_side():
     assert np.allclose(plain.candidate, S)
 
 
-def test_xbpso_equal_rho_drops_everything():  # spec A10
+def test_xbpso_equal_rho_drops_everything():  # docs/readings.md, "Ties in the cell deletion"
     x, rays = two_robots(np.array([2.0, 60.0]), np.array([10.0, 15.0]))
     f, y, yg, info = step("xb-pso", x, Sensed(rays=rays, rho=np.ones((1, 2))), f_hat=np.ones((1, 2)))
     assert info.forward.all() and not info.kept.any() and np.allclose(f, E)
@@ -235,7 +236,7 @@ def test_gtpso_two_triplets_triangulate_the_source():
     t = info.triangles
     assert t.valid.all()
     assert np.all(np.isin(info.partner[0, :3], [3, 4, 5])) and np.all(np.isin(info.partner[0, 3:], [0, 1, 2]))
-    # plane gradient points at the source within the near-field approximation (spec L1)
+    # plane gradient points at the source within the near-field approximation ([8.2]–[8.4], Rossides §8.1, p. 174)
     to_src = src - t.centroid
     cos = np.sum(t.direction * to_src, axis=-1) / np.linalg.norm(to_src, axis=-1)
     assert np.all(cos > 0.999)

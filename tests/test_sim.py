@@ -61,7 +61,8 @@ def test_no_component_ever_exceeds_U_j(seed, beta, U, d):
 
 
 def test_attractors_ahead_reach_higher_speed_than_literal():
-    """Spec §22: with f = x1 the literal order caps the swarm near U/2; 'ahead' reaches ≈ U."""
+    """docs/readings.md, "Attractors in Figure 3-4": with f = x1 the literal order caps the swarm
+    near U/2; 'ahead' reaches ≈ U."""
     peaks = {}
     for mode in ("literal", "ahead"):
         sim = build_simulation(load("fig3-4a", [f"bests.attractors={mode}", "sim.robots=200"]), seed=1)

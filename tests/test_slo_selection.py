@@ -26,7 +26,7 @@ def random_candidates(seed: int, R: int, n: int, p_geo: float = 0.7) -> tuple[Ca
 
 
 def rts_reference(c: Candidates, adj: np.ndarray, fb_est: np.ndarray, triangle: str) -> np.ndarray:
-    """The greedy of spec §7.5, one edge at a time in ascending (a, b) order."""
+    """The greedy RTS [3.8] (Mai §3.5.3, p. 30), one edge at a time in ascending (a, b) order."""
     n = adj.shape[0]
     sets = {(a, b): [c.points[a, b, k] for k in range(3) if c.mask[a, b, k]]
             for a in range(n) for b in range(n) if adj[a, b]}

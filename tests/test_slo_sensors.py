@@ -65,7 +65,8 @@ def test_stochastic_multiplicative_range_error():
 
 
 def test_additive_and_permanent_range_errors_belong_to_the_robot():
-    """[4.3]: σ̂_a is one offset per ranging robot (gap A12), constant over steps."""
+    """[4.3]: σ̂_a is one offset per ranging robot, constant over steps (docs/readings.md, "Who
+    owns a permanent error")."""
     model = ErrorModel(RangeErrors(perm_sigma_a=1.0))
     rngs = gens(8)
     perm = draw_permanent(model, rngs, N)
@@ -87,7 +88,7 @@ def test_range_failures_and_clamping():
     d = measure_ranges(dist_matrix(100.0), model.range, draw_permanent(model, rngs, N), rngs)
     assert (off_diagonal(d) == 0).mean() == pytest.approx(0.3, abs=0.02)
     short = measure_ranges(dist_matrix(0.5), model.range, draw_permanent(model, rngs, N), rngs)
-    assert short.min() >= 0.0  # gap A13: no negative ranges
+    assert short.min() >= 0.0  # docs/readings.md, "Negative ranges"
     far = measure_ranges(dist_matrix(100.0), RangeErrors(), draw_permanent(model, rngs, N), rngs, max_range=50.0)
     assert np.all(far == 0)
 

@@ -19,7 +19,7 @@ def test_defaults():
 @settings(max_examples=50, deadline=None)
 @given(seed=st.integers(0, 2**31), halving=st.booleans(), c3=st.floats(0.0, 2.0), c4=st.floats(0.0, 3.0))
 def test_global_form_equals_local_form(seed, halving, c3, c4):
-    """[2.1]–[2.5] with FIX A2 and [3.10]–[3.12] give the same move for X ≡ 0 in i's frame."""
+    """[2.1]–[2.5] with the "− X" of docs/readings.md and [3.10]–[3.12] give the same move for X ≡ 0 in i's frame."""
     rng = np.random.default_rng(seed)
     x, v, p, l = (rng.uniform(-50, 50, (2, 6, 2)) for _ in range(4))
     d = draw([np.random.default_rng(seed + 1), np.random.default_rng(seed + 2)], 6)

@@ -1,4 +1,4 @@
-"""The SLO loop (Mai §3, Alg. 1; spec §15.4): determinism, localisation without error,
+"""The SLO loop (Mai §3, p. 21; Alg. 1, p. 22): determinism, localisation without error,
 PSO on Sphere, metrics and state for the app."""
 
 from __future__ import annotations
@@ -122,8 +122,8 @@ def test_range_failures_fall_back_to_dead_reckoning():
 
 
 def test_options_run():
-    """The open choices of §14 are parameters: local best from pbests (A36), SPSO halving
-    (A5), measured pbest shift (A35), fitness noise (A15), entry policy (A25), radius scale."""
+    """The open choices are parameters (docs/readings.md, "Mai: SLO"): local best from pbests,
+    SPSO halving, measured pbest shift, fitness noise, entry policy, radius scale."""
     sw = SLOSwarm(runs=2, seed=1, particles=10, errors="low", local_best="pbest", spso_self_best_halving=True,
                   pbest_shift="measured", fitness_noise=0.01, entry_policy="geometric_random", radial="uniform_area",
                   neighbourhood="random", rts_triangle="best", selection="rts", rts_prefer_geometric=True)
@@ -190,7 +190,8 @@ def test_slo_objectives():
 
 
 def test_attraction_repulsion_settles_at_the_equilibrium_spacing():
-    """Gap A6 (Gazi–Passino, external to the thesis): two robots end √(c·ln(b/a)) apart."""
+    """Attraction–repulsion (Gazi–Passino, external to the thesis; docs/readings.md): two robots
+    end √(c·ln(b/a)) apart."""
     sw = SLOSwarm(runs=2, seed=1, particles=2, neighbourhood="full", errors="none", motion="formation",
                   ar_gain=2.0, selection="perfect")
     history = sw.run(150)

@@ -43,7 +43,7 @@ def test_seeded_runs_repeat_and_a_run_is_the_same_alone_or_in_a_batch(params):
     assert not np.array_equal(other.state.x[0], alone.state.x[0])
 
 
-def test_initial_layout_follows_the_spec():
+def test_initial_layout_follows_initial_state_and_partners():
     p = SonarParams(snr0_db=4.0)
     sw = AcousticSwarm(p, robots=50, runs=4, seed=1)
     s = sw.state

@@ -192,11 +192,12 @@ def test_an_oversized_upload_is_dropped_while_it_arrives(server):
     from shoal.app.server import MAX_TRANSFER_BYTES
     from shoal.presets.io import to_toml
 
+    before = set(server.tabs)  # a tab of an earlier test may still be leaving
     c = WireClient(server.port, decode=True)
     try:
-        wait_until(lambda: c.uuid_of("Upload preset"), what="the upload button")
+        wait_until(lambda: c.uuid_of("Upload preset") and set(server.tabs) - before, what="the upload button")
         button = c.uuid_of("Upload preset")
-        cid = max(server.tabs)
+        (cid,) = set(server.tabs) - before
         states = server.viser.get_clients()[cid].gui._current_file_upload_states
 
         def start(name: str, size: int, parts: int) -> str:

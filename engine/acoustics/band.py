@@ -1,4 +1,5 @@
-"""The analysis band of the acoustic receiver (spec §5, §8.1): f_c, Q, TBP and what follows.
+"""The analysis band of the acoustic receiver (Rossides §7.3.2, p. 161; Table 7.1, p. 160): f_c, Q,
+TBP and what follows.
 
 A window of length T = TBP/B has frequency resolution 1/T, so the band
 [f_c − B/2, f_c + B/2] holds about TBP DFT bins f_k = k/T. Waveforms are represented by
@@ -19,7 +20,8 @@ _EDGE_TOL = 1e-9  # bins: a bin exactly on a band edge belongs to the band
 class Band:
     """Band-limited signal and noise: centre ``f_c`` (Hz), quality factor ``Q`` = f_c/B
     [7.13], time–bandwidth product ``tbp`` = B·T, sound speed ``c`` (m/s) and the sample
-    rate ``fs`` (Hz, spec §12 default 48 kHz) that sets the lag grid of the receiver."""
+    rate ``fs`` (Hz, 48 kHz by default) that sets the lag grid of the receiver; see
+    docs/readings.md, "The lag estimate and the sample rate (Chapter 7)"."""
 
     f_c: float = 1000.0
     Q: float = 1.5

@@ -1,9 +1,10 @@
-"""Source entrapment and escorting (Ch 8.2; [8.7], [8.8]; spec §7.6).
+"""Source entrapment and escorting (Rossides §8.2, p. 182; [8.7], [8.8]).
+See docs/readings.md, "The escort ring's gap".
 
 The global best y_g is handed to the non-omnidirectional controller as a virtual circular
 obstacle of radius r_trap, so ordinary collision avoidance holds the swarm on a ring.
 Sectors follow the sensing module: sector k covers bearings [−180° + 60k, −120° + 60k)
-relative to the heading. The ring's gap is the spec's s_ring = max(|x − y_g| − r_trap, 0),
+relative to the heading. The ring's gap is s_ring = max(|x − y_g| − r_trap, 0),
 placed in the sector of the bearing to y_g; a robot inside the ring therefore reads contact
 (gap 0) toward y_g, and its repulsion points outward. A robot exactly at y_g sees it dead ahead.
 """
@@ -46,7 +47,7 @@ def escort_gap(
 
     Every sector but the ring's reads ``sensing_range`` (and so does the ring's when it is
     further), so ``np.minimum(reading.gap, escort_gap(...))`` merges it into a reading.
-    ``robot_radius`` (default 0, the spec's formula) makes the gap surface to surface.
+    ``robot_radius`` (default 0: the gap from the robot's centre) makes the gap surface to surface.
     """
     gap, k, _, _ = _ring(x, heading, yg, r_trap, robot_radius)
     here = np.arange(SECTORS) == k[..., None]

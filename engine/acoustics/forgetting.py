@@ -1,6 +1,6 @@
 """Personal-best memory with forgetting and the two global-best forms of Chapters 7–8.
 
-The forgetting rule ([7.2], [7.9], [8.6]; spec §7.0) lets a remembered fitness fade by
+The forgetting rule ([7.2], [7.9], [8.6]; Rossides §7.1.1, p. 149) lets a remembered fitness fade by
 e^(−a) every step it is not beaten, so a noisy or moving source keeps refreshing the memory.
 """
 

@@ -1,4 +1,4 @@
-"""Ray–ray intersections for triangulation PSO (Fig. 7-1, Alg. 5–7; spec §7.3, §7.4).
+"""Ray–ray intersections for triangulation PSO (Fig. 7-1, p. 154; Alg. 5–7; Rossides §7.2.2–7.2.3, pp. 154, 157).
 
 A ray starts at a point P and runs along a unit direction d. Two rays meet where
 P_a + t·d_a = P_b + s·d_b; the meeting counts only ahead of both origins (t, s > ``eps``).
@@ -88,7 +88,7 @@ def furthest(points: np.ndarray, dist: np.ndarray, valid: np.ndarray) -> tuple[n
 def rho_consistent(d_i: np.ndarray, d_j: np.ndarray, rho_i: np.ndarray, rho_j: np.ndarray) -> np.ndarray:
     """[7.12]: a point is kept iff it lies nearer the robot that hears the stronger ρ.
 
-    Strict inequalities, so ties in distance or in ρ are dropped (spec A10).
+    Strict inequalities, so ties in distance or in ρ are dropped (docs/readings.md, "Ties in the cell deletion").
     Shapes broadcast: ``d_*`` (R, N, K), ``rho_*`` (R, N, 1) or (R, N, K).
     """
     return ((d_i < d_j) & (rho_i > rho_j)) | ((d_i > d_j) & (rho_i < rho_j))

@@ -1,4 +1,5 @@
-"""Random communication partners: each robot hears one other robot per step (spec §7.0).
+"""Random communication partners: each robot hears one other robot per step (Rossides §7.2.2, p. 154;
+docs/readings.md, "Initial state and partners").
 
 Every run draws from its own generator, one U(0,1) number per robot per step whatever the
 exclusion set, so a run's random stream does not depend on how many runs share the call.

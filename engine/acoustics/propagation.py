@@ -1,7 +1,7 @@
 """Underwater propagation and SNR (Ch. 6.1, 6.2.4, 7.3.2–7.3.3).
 
 Transmission loss [6.1]–[6.6], the absorption fit of [6.5], the general SNR [6.7] and the
-simulation form [7.13]–[7.17] in the normalised units of spec §4.2 (noise intensity 1,
+simulation form [7.13]–[7.17] in normalised units (Rossides §7.3.3, p. 162: noise intensity 1,
 signal intensity (R_ref/r)²).
 
 Ranges are clamped to ``R_FLOOR_M`` = 1 m, the reference distance of the source level:
@@ -46,7 +46,7 @@ def received_level_db(
 
     - ``spherical``: L = Ls − 20 log R − αR − 60  [6.1], [6.3]
     - ``cylindrical``: L = Ls − 10 log R − αR − 60  [6.2], [6.4] (equals hybrid with
-      R1 = 1 km, spec A3)
+      R1 = 1 km; docs/readings.md, "The −60 in the spreading laws")
     - ``hybrid``: spherical to R1, then L = Ls − 10 log R1 − 10 log R − αR − AR − 60 [6.6];
       the two branches meet at R1, and αR + AR apply over the whole range.
 
@@ -67,8 +67,9 @@ def received_level_db(
 
 def snr_general_db(Ls_db: np.ndarray | float, noise_ms_pa2: np.ndarray | float,
                    range_m: np.ndarray | float) -> np.ndarray:
-    """SNR [6.7] with the reference fixed as in spec A1: NL = 10 log10(N / (1 µPa)²),
-    N the mean-square noise in the band (Pa²); spherical spreading, range clamped to 1 m."""
+    """SNR [6.7] with NL = 10 log10(N / (1 µPa)²), N the mean-square noise in the band (Pa²);
+    spherical spreading, range clamped to 1 m. See docs/readings.md, "Noise level units in the
+    SNR [6.7]"."""
     R = clamp_range(range_m) / 1000.0
     nl = 10.0 * np.log10(np.asarray(noise_ms_pa2, dtype=float) / UPA2)
     return np.asarray(Ls_db, dtype=float) - nl - 20.0 * np.log10(R) - 60.0
@@ -97,5 +98,5 @@ def snr_db(r: np.ndarray | float, psd_s_db: np.ndarray | float, psd_n_db: np.nda
 
 
 def source_distance_for_snr(snr0_db: np.ndarray | float, r_ref_m: np.ndarray | float) -> np.ndarray:
-    """Source distance d_s giving SNR_0 at the origin: d_s = R_ref·10^(−SNR_0/20) (spec §4.2)."""
+    """Source distance d_s giving SNR_0 at the origin: d_s = R_ref·10^(−SNR_0/20) ([7.16], [7.17])."""
     return np.asarray(r_ref_m, dtype=float) * 10.0 ** (-np.asarray(snr0_db, dtype=float) / 20.0)

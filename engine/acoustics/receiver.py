@@ -1,14 +1,16 @@
-"""Two-hydrophone receiver: cross-correlation, lag, ρ, angle of arrival and rays (spec §6).
+"""Two-hydrophone receiver: cross-correlation, lag, ρ, angle of arrival and rays (Rossides §6.3.1,
+p. 138; §7.2, p. 151).
 
-Sign convention (spec §6.1, A5): hydrophone 0 is the bow (s1), hydrophone 1 the stern
-(s2). R(τ) = mean_t s1(t)·s2(t+τ) peaks at τ = +D cos α/c, so a source dead ahead gives
-τ > 0 and α = 0.
+Sign convention (docs/readings.md, "Bow, stern and the sign of the lag"): hydrophone 0 is
+the bow (s1), hydrophone 1 the stern (s2). R(τ) = mean_t s1(t)·s2(t+τ) peaks at
+τ = +D cos α/c, so a source dead ahead gives τ > 0 and α = 0.
 
 From band spectra (``signals``) the correlation is exact at any lag τ:
 
     R(τ) = Re Σ_k X_k e^{j2π f_k τ},   X_k = conj(S1_k)·S2_k            [6.9]
 
-the mean (÷ n) of the discrete circular xcorr of the two windows (spec §6.1 step 1, A6),
+the mean (÷ n) of the discrete circular xcorr of the two windows (docs/readings.md, "Scale of
+the correlation peak ρ"),
 so R(0) of a window with itself is its mean-square value and ρ estimates the received
 signal intensity (Pa², or (R_ref/r)² in normalised units), comparable with f_A.
 
@@ -42,7 +44,8 @@ class Bearing:
 
 
 def lag_samples(band: Band, D: float, full_lag: bool = False) -> np.ndarray:
-    """Integer lags of the search grid: |ℓ| ≤ ceil(D·fs/c) + 1 (spec §6.1), or with
+    """Integer lags of the search grid: |ℓ| ≤ ceil(D·fs/c) + 1 (docs/readings.md, "Clipping the arccos
+    and the lag search"), or with
     ``full_lag`` the whole circular window, −n/2 ≤ ℓ < n/2."""
     if full_lag:
         n = _fft_size(band)
@@ -103,7 +106,9 @@ def _sample_peak(corr: np.ndarray, lags: np.ndarray) -> np.ndarray:
 
 
 def angle_of_arrival(tau: np.ndarray, D: float, c: float) -> np.ndarray:
-    """α = arccos(clip(c·τ/D, −1, 1)) in 0..π from the bow. [7.6], spec A8"""
+    """α = arccos(clip(c·τ/D, −1, 1)) in 0..π from the bow. [7.6]; docs/readings.md,
+    "Clipping the arccos and the lag search".
+    """
     return np.arccos(np.clip(c * np.asarray(tau) / D, -1.0, 1.0))
 
 

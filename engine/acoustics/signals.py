@@ -1,4 +1,5 @@
-"""Hydrophone signals synthesised in the frequency domain over the occupied band (spec §5).
+"""Hydrophone signals synthesised in the frequency domain over the occupied band (Rossides §7.3.2,
+p. 161; docs/readings.md, "Synthesised hydrophone signals").
 
 Each hydrophone's window of length T is represented by its complex spectrum on the K band
 bins f_k = k/T (``Band.bins``), not by its n = T·fs time samples. Spectra are scaled so
@@ -6,7 +7,7 @@ that the window's mean-square value is Σ_k |S_k|²: a real sequence x[m] of n s
 DFT X_k maps to S_k = √2·X_k/n.
 
 Model per run and timestep, in normalised units (noise intensity 1, signal intensity
-(R_ref/r)², spec §4.2, [7.15]):
+(R_ref/r)², [7.15], [7.17]):
 
 - one source spectrum S_k, circular complex Gaussian with E|S_k|² = 1/K (a filtered
   Gaussian process of unit power), shared by every hydrophone of every robot of the run;
@@ -37,7 +38,8 @@ def hydrophone_positions(x: np.ndarray, heading: np.ndarray, D: float | None = N
     """World positions (R, N, H, 2) of each robot's hydrophones.
 
     ``D=None``: one hydrophone at the robot centre (A-PSO, GT-PSO), H = 1. Otherwise bow
-    p1 = x + (D/2)(cos o, sin o) and stern p2 = x − (D/2)(cos o, sin o), H = 2 (spec §5.5).
+    p1 = x + (D/2)(cos o, sin o) and stern p2 = x − (D/2)(cos o, sin o), H = 2
+    (docs/readings.md, "Bow, stern and the sign of the lag").
     """
     x = np.asarray(x, dtype=float)
     if D is None:
@@ -76,11 +78,11 @@ def synthesise(
 
     ``rngs``: one generator per run (R). ``hydrophone_pos`` (R, N, H, 2) and ``source_pos``
     (R, 2) in metres (the source at this timestep; a moving source is simply a new
-    position each step, spec §5.6). ``r_ref``: R_ref in metres [7.17], scalar or (R,).
+    position each step, no Doppler). ``r_ref``: R_ref in metres [7.17], scalar or (R,).
     ``source_per_robot``: draw an independent source window per robot instead of one per
     run (robots far apart hear different stretches of the source; not the default).
     ``renormalise``: rescale every source and noise window to unit power (the literal
-    "renormalise to unit variance" of spec §5 step 2); the default keeps Gaussian
+    renormalisation to unit variance); the default keeps Gaussian
     fluctuations, so intensity(noise) ~ χ²_{2K}/(2K).
     """
     pos = np.asarray(hydrophone_pos, dtype=float)
@@ -111,8 +113,8 @@ def intensity(spectra: np.ndarray) -> np.ndarray:
 
 
 def to_time(spectra: np.ndarray, band: Band) -> np.ndarray:
-    """Real time series (…, n) of the windows at ``band.fs``, for plotting (spec §11.1
-    item 7); its mean square equals ``intensity(spectra)``."""
+    """Real time series (…, n) of the windows at ``band.fs``, for plotting; its mean
+    square equals ``intensity(spectra)``."""
     s = np.asarray(spectra)
     n = max(band.n, 2 * int(band.bins[-1]) + 2)
     full = np.zeros(s.shape[:-1] + (n // 2 + 1,), dtype=complex)

@@ -1,15 +1,16 @@
-"""Source-localisation strategies of Chapters 7–8: A-, X-, B-, XB- and GT-PSO (spec §7), and
-their registry :data:`STRATEGIES`.
+"""Source-localisation strategies of Chapters 7–8: A-, X-, B-, XB- and GT-PSO (Rossides Ch. 7–8,
+pp. 148–189), and their registry :data:`STRATEGIES`.
 
 Every strategy turns one step of sensed arrays into a candidate location and fitness per
-robot, updates the personal bests with forgetting (spec §7.0) and forms the global best
+robot, updates the personal bests with forgetting [7.2] and forms the global best
 afresh. All arrays are shaped (runs R, robots N, …); no per-robot Python loops.
 
     strategy = make_strategy("xb-pso", a=1.0)
     f_hat, y, y_g, info = strategy.update(f_hat, y, x, Sensed(rho=rho, rays=rays), rngs)
 
 Robots with no candidate this step (no intersection, every intersection rejected, no ray)
-keep their personal best and its fitness decays by e^(−a) (spec A9).
+keep their personal best and its fitness decays by e^(−a) (docs/readings.md, "No intersection to choose
+from").
 """
 
 from __future__ import annotations
@@ -80,7 +81,8 @@ class Strategy(Protocol):
 
 
 def _own_position(f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, f: np.ndarray, a: float) -> Update:
-    """Alg. 3/4: candidate = own position, fitness clamped at 0 (A7), y_g = best robot's y."""
+    """Alg. 3/4: candidate = own position, fitness clamped at 0, y_g = best robot's y; see
+    docs/readings.md, "Negative fitness"."""
     x, f_hat = np.asarray(x, dtype=float), np.asarray(f_hat, dtype=float)
     f = np.where(np.isfinite(f), np.maximum(f, 0.0), 0.0)
     valid = np.ones(f.shape, bool)
@@ -120,7 +122,8 @@ class APSO:
 
 @dataclass(frozen=True)
 class XPSO:
-    """X-PSO (Alg. 4): fitness = correlation peak ρ [7.8], [7.9], negative ρ read as 0 (A7)."""
+    """X-PSO (Alg. 4): fitness = correlation peak ρ [7.8], [7.9], negative ρ read as 0 (docs/readings.md,
+    "Negative fitness")."""
 
     a: float = 1.0
     name: ClassVar[str] = "x-pso"
@@ -160,7 +163,8 @@ class BPSO:
         points, d_i, d_j, forward = pair_intersections(x, rays, partner, self.eps)  # step 2b
         kept = forward & self._keep(d_i, d_j, sensed, partner)
         p_s, k, dist = furthest(points, d_i, kept)  # step 2d: p_s = argmax |x^i − p|
-        valid = k >= 0  # step 2c: empty set → forgetting only (A9)
+        valid = k >= 0  # step 2c: empty set → forgetting only (see docs/readings.md,
+        # "No intersection to choose from")
         f_hat, y, y_g, cand, fit, better, valid = _remote(f_hat, y, x, p_s, dist, valid, self.a)
         info = LocInfo(cand, fit, valid, better, partner=partner, points=points, forward=forward,
                        kept=kept, selected=np.where(valid, k, -1))
@@ -231,6 +235,7 @@ def make_strategy(name: str, **params: float | bool) -> Strategy:
 
 
 def initial_memory(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Spec §7.0 defaults: f̂ = 0 and y = x[0]. Returns ``f_hat`` (R, N) and ``y`` (R, N, 2)."""
+    """Initial memories f̂ = 0 and y = x[0] (docs/readings.md, "Initial state and partners").
+    Returns ``f_hat`` (R, N) and ``y`` (R, N, 2)."""
     x = np.asarray(x, dtype=float)
     return np.zeros(x.shape[:2]), x.copy()

@@ -1,5 +1,6 @@
-"""APPROXIMATE fast acoustics: draw the receiver statistics without spectra (spec §5,
-"surrogate" mode, not in the thesis). Validate against the waveform mode (``signals`` +
+"""APPROXIMATE fast acoustics: draw the receiver statistics without spectra
+("surrogate" mode, ours, not in the thesis; docs/readings.md, "The fast surrogate receiver
+(ours)"). Validate against the waveform mode (``signals`` +
 ``receiver``) before comparing numbers with the thesis; tests/test_receiver.py does.
 
 It mirrors the waveform model's second-order statistics, per robot, with K = band bins
@@ -7,11 +8,11 @@ It mirrors the waveform model's second-order statistics, per robot, with K = ban
 power (one per run, as in ``synthesise``):
 
 - intensity: f_A,h = a_h²·P_s + sqrt(2·a_h²·P_s/K)·z + χ²_{2K}/(2K)  (signal, signal×noise,
-  noise), whose mean is I + N and std ≈ (I + N)/sqrt(K) (spec §5: (I+N)·χ²_{2K}/(2K));
+  noise), whose mean is I + N and std ≈ (I + N)/sqrt(K), i.e. (I+N)·χ²_{2K}/(2K);
 - correlation: R(τ) near the carrier peaks d + m/f_c inside the search window has mean
   a1·a2·P_s·g(m/f_c) and noise covariance σ²·g((m − m')/f_c), with
   g(δ) = mean_k cos(2π f_k δ) and σ² = (a1² + a2² + 1)/(2K); the highest candidate wins,
-  so narrowband signals with D > λ_c/2 slip by whole carrier cycles (spec §6.2);
+  so narrowband signals with D > λ_c/2 slip by whole carrier cycles (Rossides §6.3.2, p. 139);
 - lag: τ = d + m*/f_c + e, e ~ N(0, 1/((2π f_rms)²·2K·SNR_eff)),
   SNR_eff = (a1·a2)²/(a1² + a2² + 1), f_rms² = mean_k f_k²; τ is kept inside the
   search grid, then α = arccos(clip(cτ/D)) [7.6] and rays [7.7] as in the receiver;

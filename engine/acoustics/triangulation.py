@@ -1,4 +1,4 @@
-"""GT-PSO's position–intensity plane (Ch 8.1, Alg. 7, Fig. 8-1; [8.2]–[8.4]; spec §7.5).
+"""GT-PSO's position–intensity plane (Rossides §8.1, p. 174; Alg. 7; Fig. 8-1, p. 175; [8.2]–[8.4]).
 
 Each robot and its two nearest neighbours give three points q = (x1, x2, I) [8.2]. The plane
 through them tilts toward the stronger intensity; the horizontal part of its normal,

@@ -1,8 +1,8 @@
-"""Fitness and cost functions (Rossides Alg. 1, §3.5; common PSO benchmarks).
+"""Fitness and cost functions (Rossides Alg. 1, p. 90; §3.5, p. 74; common PSO benchmarks).
 
 Every objective returns a value per robot, shape ``(runs, robots)``, and says whether
 it is maximised; :meth:`Objective.is_better` is the single comparison the swarm uses
-(spec §20 item 1).
+(docs/readings.md, "Fitness or cost").
 """
 
 from __future__ import annotations
@@ -23,13 +23,13 @@ def source_distance(x: np.ndarray, source: np.ndarray) -> np.ndarray:
 
 
 def linear(x: np.ndarray) -> np.ndarray:
-    """f(x) = x_1 of §3.5 (maximised: the swarm drifts in +x_1 for ever)."""
+    """f(x) = x_1 of Rossides §3.5, p. 74 (maximised: the swarm drifts in +x_1 for ever)."""
     return x[..., 0].copy()
 
 
 def line(x: np.ndarray) -> np.ndarray:
     """Mai's "line" objective, undefined in the thesis: x_0², minimum 0 on the line x_0 = 0
-    (SLO spec gap A32)."""
+    (docs/readings.md, "The line objective")."""
     return x[..., 0] ** 2
 
 

@@ -2,7 +2,7 @@
 ``SeedSequence(seed)``, so a run is the same whether it is simulated alone (``first_run=i,
 runs=1``), in a batch or in another process.
 
-An SLO run splits its draws further (spec §15.4 item 6): component k draws from child k of run
+An SLO run splits its draws further: component k draws from child k of run
 i's sequence, spawn key (i, k), so each component (motion, sensors, PSO, …) keeps its own
 stream whatever the others consume.
 """

@@ -38,7 +38,7 @@ class FleetParams:
     law: str = "adapted-rpso"  # a key of robots.laws.ROBOT_LAWS
     dvc: bool = True
     dt: float = 1.0
-    omega: float = 0.1  # constant mode; ω = 1 − β (spec §20 item 17)
+    omega: float = 0.1  # constant mode; ω = 1 − β: docs/readings.md, "Table 4.1: ω and the tuned speed"
     c: tuple[float, ...] = (0.4296, 0.4296, 0.8591)  # constant c1, c2, c3
     alpha: float = 0.9
     beta: float = 0.9
@@ -304,7 +304,7 @@ class Fleet:
         before = s.f_y.copy()
         active = s.status == ACTIVE
         s.f = self.cost(s.x)
-        better = active & (s.f < s.f_y)  # disabled robots keep their last best (spec §20 item 20)
+        better = active & (s.f < s.f_y)  # disabled robots keep their last best: docs/readings.md, "Disabled robots"
         s.y = np.where(better[..., None], s.x, s.y)
         s.f_y = np.where(better, s.f, s.f_y)
         idx = np.argmin(s.f_y, axis=1)
@@ -426,7 +426,7 @@ class Fleet:
             reading = sense(self.spaces, s.x, s.heading, sensing_range=p.sensing_range,
                             robot_frame=p.body_frame, active=m)
             gap = reading.gap
-            if p.s_min > 0:  # §5.4: keep a clearance s_min by treating it as contact distance
+            if p.s_min > 0:  # Rossides §5.4 (p. 125): keep a clearance s_min by treating it as contact distance
                 gap = np.maximum(gap - p.s_min, 0.0)
             omega, c = self._coefficients(gap)
             force = virtual_force(s.x, reading, p.gamma) if not p.body_frame else np.zeros_like(s.x)

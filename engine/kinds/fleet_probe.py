@@ -43,7 +43,7 @@ def robot_view(fleet: Fleet, robot: int, run: int = 0) -> RobotView:
     reading = sense(fleet.spaces, s.x, s.heading, sensing_range=p.sensing_range, robot_frame=p.body_frame,
                     active=active)
     gap = reading.gap
-    if p.s_min > 0:  # as in Fleet.step (spec §5.4)
+    if p.s_min > 0:  # as in Fleet.step (Rossides §5.4, p. 125)
         gap = np.maximum(gap - p.s_min, 0.0)
     omega, c = fleet._coefficients(gap)
     force = np.zeros_like(s.x) if p.body_frame else virtual_force(s.x, reading, p.gamma)

@@ -1,10 +1,11 @@
-"""Simultaneous Localisation and Optimisation (Mai §3, synchronous Alg. 1, spec §5):
+"""Simultaneous Localisation and Optimisation (Mai §3, p. 21; Alg. 1, p. 22, run synchronously:
+docs/readings.md, "Synchronous update"):
 a swarm whose members act only on relative positions they estimate from noisy ranges and
-odometry. Motion is SPSO 2011 in each robot's own frame [3.10]–[3.13] or a random walk (§4.5).
+odometry. Motion is SPSO 2011 in each robot's own frame [3.10]–[3.13] or a random walk (Mai §4.5, p. 41).
 
 One :meth:`SLOSwarm.step` = one generation t → t+1 for every run:
 PSO or random-walk command from the beliefs at t, perfect move, then at t+1 neighbourhoods
-from truth, ranges, odometry, candidates and selection, and the metrics of §11.
+from truth, ranges, odometry, candidates and selection, and the metrics of Tab. 4.2 (Mai p. 39).
 Arrays are (runs R, particles N, 2); run i draws from the children of
 ``SeedSequence(seed, spawn_key=(i,))`` (:mod:`~shoal.engine.core.rng`), one per component.
 """
@@ -34,49 +35,53 @@ LocalBest = Literal["current", "pbest"]
 PbestShift = Literal["commanded", "measured"]
 InitialEstimates = Literal["random", "truth"]
 
-GENERATIONS = {"pso": 1000, "random_walk": 100, "formation": 100}  # gap A28; Figs. 4.2, 4.4
-REPETITIONS = 31  # runs per parameter set [§4.2]
+# Figs. 4.2, 4.4 (walks); PSO: docs/readings.md, "Number of PSO generations"
+GENERATIONS = {"pso": 1000, "random_walk": 100, "formation": 100}
+REPETITIONS = 31  # runs per parameter set (Mai §4.2, p. 36)
 
 
 @dataclass(frozen=True)
 class SLOConfig:
-    """Every SLO parameter with the spec's names and defaults (§9, §14).
+    """Every SLO parameter, with the defaults of Mai Tab. 4.1 (p. 37) where the thesis gives them.
 
     Distance-type values (additive errors, radius r, walk speed, init area, c4, RTS
-    tolerance) are in thesis units and multiplied by ``unit`` = arena width / 100 (§15.1)."""
+    tolerance) are in thesis units and multiplied by ``unit`` = arena width / 100 (docs/readings.md,
+    "Thesis units on a scene (ours)"). A quoted comment names the section of docs/readings.md
+    behind a default."""
 
-    particles: int = 20  # gap A1
+    particles: int = 20  # "Swarm size"
     objective: str | Fitness = "sphere"
     motion: Motion = "pso"
-    selection: Selection = "css"  # gap A27
+    selection: Selection = "css"  # "Default selection"
     prediction_weight: float = 0.5
     delta_cos: float = 0.03
     delta_v: float = 0.03
-    literal_eq_3_1: bool = False  # FIX A18
+    literal_eq_3_1: bool = False  # "The denominator of [3.1]"
     neighbourhood: NeighbourhoodKind = "knn"
     neighbourhood_param: float | None = None  # k, r, n or p; None = default (knn 5, r 25, ring 2, p 0.5)
     errors: str | ErrorModel = "low"
-    inertia: float = OMEGA_SPSO  # ω, gap A4
+    inertia: float = OMEGA_SPSO  # ω, "Inertia weight ω"
     c1: float = C_SPSO
     c2: float = C_SPSO
     c3: float = 1.0
     c4: float = 0.0
     radial: Radial = "uniform_radius"  # the SPSO 2011 reference code; docs/readings.md
-    spso_self_best_halving: bool = False  # gap A5
-    local_best: LocalBest = "current"  # gap A36
-    pbest_shift: PbestShift = "commanded"  # gap A35 (thesis mode)
-    init_area: tuple[float, float] | None = None  # S = [lo, hi]²; None: [−50, 50]² PSO (A29), [0, 100]² walk
+    spso_self_best_halving: bool = False  # "SPSO's own-best rule"
+    local_best: LocalBest = "current"  # "Local best from positions or personal bests"
+    pbest_shift: PbestShift = "commanded"  # "Shifting the personal best [3.13]" (thesis mode)
+    init_area: tuple[float, float] | None = None  # S = [lo, hi]²; None: [−50, 50]² PSO, [0, 100]² walk
+    # ("Initial area of the PSO experiment")
     walk_speed: float = 5.0
     entry_policy: EntryPolicy = "dead_reckoning"  # docs/readings.md
-    initial_estimates: InitialEstimates = "random"  # gap A9
+    initial_estimates: InitialEstimates = "random"  # "Initial estimates x̂(−1)"
     measure_all_ranges: bool = True
     max_range: float = np.inf
-    rts_triangle: RTSTriangle = "first"  # gap A22
+    rts_triangle: RTSTriangle = "first"  # "Order of Round Trip Selection"
     rts_prefer_geometric: bool = False
     rts_tolerance: float = 1.0
-    fitness_noise: float = 0.0  # σ_f, gap A15
-    quality_threshold: float | None = None  # T; None: the §12 table (gap A33)
-    ar_gain: float = 0.0  # gap A6: Gazi–Passino attraction–repulsion (external to the thesis); 0 = off
+    fitness_noise: float = 0.0  # σ_f, "Fitness noise"
+    quality_threshold: float | None = None  # T; None: the benchmark's, "Quality thresholds"
+    ar_gain: float = 0.0  # "Attraction–repulsion (external)"; 0 = off
     ar_a: float = 0.01
     ar_b: float = 0.2
     ar_c: float = 25.0  # a squared length: scaled by unit²
@@ -187,7 +192,7 @@ STATS = metrics.STATS
 
 @dataclass
 class SLOInfo:
-    """Per-run metrics of one generation (spec §11), each (R,).
+    """Per-run metrics of one generation (Mai Tab. 4.2, p. 39), each (R,).
 
     The localisation errors, distances, dead-reckoning share and round-trip error are worked
     out when first read, from the generation's true positions ``x`` and ``beliefs`` (a step
@@ -383,7 +388,7 @@ class SLOSwarm:
         return f
 
     def _pso_command(self) -> np.ndarray:
-        """§2.6 steps 1–7 for every particle: pbest update, local best, [3.10]–[3.11]."""
+        """The PSO part of Alg. 1 (Mai §3.6, p. 32) for every particle: pbest update, local best, [3.10]–[3.11]."""
         s, cfg = self.state, self.config
         f = self._sensed_fitness()
         better = f < s.fP  # step 2: the pbest moves to the particle itself
@@ -398,12 +403,12 @@ class SLOSwarm:
         j = np.where(self_best, np.arange(n), np.argmin(ranked, axis=-1))  # step 3
         to_j = np.take_along_axis(s.est, j[..., None, None], axis=2)[:, :, 0, :]
         L = np.where(self_best[..., None], 0.0, to_j)  # step 4
-        if cfg.local_best == "pbest":  # gap A36: best neighbour pbest, x̂_ij* + P_j*
+        if cfg.local_best == "pbest":  # best neighbour pbest, x̂_ij* + P_j* (see SLOConfig.local_best)
             L = np.where(self_best[..., None], s.P, to_j + np.take_along_axis(s.P, j[..., None], axis=1))
         return self.spso.local_velocity(s.u, s.P, L, draw(self.streams["pso"], n), self_best)  # steps 5–7
 
     def _walk_command(self) -> np.ndarray:
-        """§8: speed ~ U(0, walk_speed), direction ~ U(0, 2π)."""
+        """Random walk (Mai §4.5, p. 41): speed ~ U(0, walk_speed), direction ~ U(0, 2π)."""
         n = self.config.particles
         top = self.config.walk_speed * self.config.unit
         sv = np.stack([g.random((2, n)) for g in self.streams["motion"]])
@@ -420,10 +425,10 @@ class SLOSwarm:
             v_new = self._walk_command()
         else:
             v_new = self.formation.velocity(s.est, s.valid)
-        if cfg.motion != "formation" and cfg.ar_gain > 0:  # collision-avoidance term (§3)
+        if cfg.motion != "formation" and cfg.ar_gain > 0:  # collision-avoidance term (Mai §2.1.2, p. 9)
             v_new = v_new + self.formation.velocity(s.est, s.valid)
         x_prev = s.x
-        s.x = s.x + v_new  # [3.12], perfect movement (§1)
+        s.x = s.x + v_new  # [3.12], perfect movement (Mai §3.1, p. 21)
         s.u = v_new
         moving = np.any(v_new != 0, axis=-1)
         s.heading = np.where(moving, np.arctan2(v_new[..., 1], v_new[..., 0]), s.heading)
@@ -432,7 +437,7 @@ class SLOSwarm:
         adjacency = self.rule.adjacency(s.x, self.streams["topology"])
         s.beliefs = self.localiser.update(s.beliefs, x_prev, s.x, adjacency)
         if cfg.pbest_shift == "measured":
-            s.P = s.P - s.beliefs.odometry  # gap A35, physical mode
+            s.P = s.P - s.beliefs.odometry  # "Shifting the personal best [3.13]", physical mode
         s.f = self.fitness(s.x)
         s.k += 1
         self._last = self._record()

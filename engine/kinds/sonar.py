@@ -1,17 +1,19 @@
-"""Acoustic source localisation by a swarm (Rossides Ch. 7–8): one tick of spec §7.0.
+"""Acoustic source localisation by a swarm (Rossides Ch. 7–8): one tick of the loop common to
+A-, X-, B-, XB- and GT-PSO (§7.1–§8.1, pp. 148–174).
 
     listen → bests (strategy, forgetting) → velocity law → move → metrics
 
 1. listen: hydrophone positions (one at the centre for A-/GT-PSO, bow and stern at ±D/2
-   for X-/B-/XB-PSO, spec §5.5) → band spectra (``signals.synthesise``, the default
-   waveform mode) → intensity, and the two-hydrophone ``receiver.bearing`` (ρ, τ, α, rays)
-   when the strategy needs it. ``mode="surrogate"`` draws the same statistics directly
-   (``acoustics.surrogate``): APPROXIMATE, not in the thesis.
+   for X-/B-/XB-PSO; docs/readings.md, "Bow, stern and the sign of the lag") → band spectra
+   (``signals.synthesise``, the default waveform mode) → intensity, and the two-hydrophone
+   ``receiver.bearing`` (ρ, τ, α, rays) when the strategy needs it. ``mode="surrogate"`` draws the
+   same statistics directly (``acoustics.surrogate``): APPROXIMATE, not in the thesis.
 2. bests: ``strategy.update`` (A/X/B/XB/GT-PSO, forgetting a [7.2]/[7.9]/[8.6]) in ``_bests``,
    which also gives the attractor vectors (on SLO positions each robot decides in its own
    believed frame: ``acoustics.frames``).
 3. velocity: ``adapted`` = Adapted PSO [3.11]/[3.10] in the global frame (Ch. 7: unbounded
-   plane, kinematic, collisions ignored, heading = direction of u, spec §1.1), tuned by
+   plane, kinematic, collisions ignored, heading = direction of u: docs/readings.md, "Heading of an omnidirectional
+   robot"), tuned by
    β: ω = 1 − β, ĉ = βU/√2 [4.15]; ``nonomni`` = non-omnidirectional controller
    [8.7] = [5.13] with DVC [5.14]–[5.16] (Ch. 8): robots sense each other in six sectors
    (R_sense, robots as discs of ``robot_radius``), the global best is a ring obstacle of
@@ -26,9 +28,9 @@ Collisions are ignored, as in the thesis' kinematic runs: robots pass through ea
 and nobody is disabled, but every step counts the robots whose discs touch another's
 (``contacts``). All robots sense, decide and move together (simultaneous update).
 
-Initialisation (spec §7.0): f̂ = 0, y = x[0], u = 0; robots uniform in a disc of radius d_0
-round the origin (``start="source"``: round the source, Fig. 8-5); headings U[0, 2π); the
-source at d_s = R_ref·10^(−SNR_0/20) on a uniformly random bearing (or a fixed one).
+Initialisation (docs/readings.md, "Initial state and partners"): f̂ = 0, y = x[0], u = 0;
+robots uniform in a disc of radius d_0 round the origin (``start="source"``: round the source,
+Fig. 8-5); headings U[0, 2π); the source at d_s = R_ref·10^(−SNR_0/20) on a uniformly random bearing (or a fixed one).
 
 Runs are independent: run i draws everything from child i of ``SeedSequence(seed)`` in a
 fixed order per step (initial layout; then per tick: spectra, partners, velocity draws), so
@@ -69,19 +71,21 @@ Start = Literal["origin", "source"]
 
 @dataclass(frozen=True)
 class SonarParams:
-    """Everything an acoustic swarm needs (spec §8 defaults: Table 7.1, Table 8.1)."""
+    """Everything an acoustic swarm needs (defaults: Rossides Table 7.1, p. 160; Table 8.1,
+    p. 180)."""
 
     algorithm: str = "xb-pso"  # a key of acoustics.strategies.STRATEGIES
     controller: ControllerName = "adapted"
     mode: AcousticMode = "waveform"
-    snr0_db: float = 10.0  # SNR at the origin, sets d_s (spec §4.2)
+    snr0_db: float = 10.0  # SNR at the origin, sets d_s ([7.16], [7.17])
     psd_s_db: float = 120.0  # source PSD at 1 m, dB re 1 µPa²/Hz
     psd_n_db: float = 60.0  # noise PSD, dB re 1 µPa²/Hz
     f_c: float = 1000.0  # Hz
     Q: float = 1.5  # f_c/B [7.13]
     tbp: float = 100.0  # B·T
     c: float = 1500.0  # sound speed, m/s
-    fs: float = 48_000.0  # sample rate of the lag grid (spec §12)
+    fs: float = 48_000.0  # sample rate of the lag grid (not in the thesis; docs/readings.md,
+    # "The lag estimate and the sample rate (Chapter 7)")
     d_over_lambda: float = 0.5  # hydrophone separation D/λ_c
     full_lag: bool = False  # search the whole window, as MATLAB xcorr
     lag_peak: Literal["parabolic", "sample"] = "parabolic"  # refine τ_lag, or the sample lag of Alg. 5
@@ -139,7 +143,7 @@ class SonarParams:
 
     @property
     def d_s(self) -> float:
-        """Source distance from the origin giving SNR_0 (spec §4.2), m."""
+        """Source distance from the origin giving SNR_0 ([7.16], [7.17]), m."""
         return float(source_distance_for_snr(self.snr0_db, self.r_ref))
 
 
@@ -247,7 +251,7 @@ class AcousticSwarm:
         tune = from_beta(p.dt, p.U, p.beta, d=2)  # ω = 1 − β, ĉ = βU/√2 [4.15]
         self.omega = tune.omega
         self.c = np.array(split(tune.c_hat, p.c1_share))  # c1, c2
-        self.w_max = w_max(p.U, p.dt)  # §14: min(√(4 e_max/π), π/(2Δt))
+        self.w_max = w_max(p.U, p.dt)  # min(√(4 e_max/π), π/(2Δt)) [5.12], Rossides §5.2, p. 114
 
     def retune(self, **changes: Any) -> list[str]:
         """Change :data:`LIVE` settings from the next tick on, keeping the swarm and its memory;
@@ -299,7 +303,7 @@ class AcousticSwarm:
         x = np.empty((self.runs, N, 2))
         heading = np.empty((self.runs, N))
         bearing0 = np.empty(self.runs)
-        for r, g in enumerate(self.rngs):  # spec §7.0, fixed draw order per run
+        for r, g in enumerate(self.rngs):  # fixed draw order per run: docs/readings.md, "Initial state and partners"
             rad = p.d0 * np.sqrt(g.random(N))
             ang = 2.0 * np.pi * g.random(N)
             x[r] = np.stack([rad * np.cos(ang), rad * np.sin(ang)], axis=-1)
@@ -328,8 +332,8 @@ class AcousticSwarm:
         intensity and (two hydrophones) the receiver output."""
         p, strat = self.params, self.strategy
         two = strat.hydrophones == 2
-        pos = hydrophone_positions(x, heading, p.D if two else None)  # spec §5.5
-        if p.mode == "surrogate":  # APPROXIMATE (spec §5)
+        pos = hydrophone_positions(x, heading, p.D if two else None)  # bow and stern
+        if p.mode == "surrogate":  # APPROXIMATE: docs/readings.md, "The fast surrogate receiver (ours)"
             sr = surrogate(rngs, pos, src, self.band, p.r_ref, heading=heading if two else None, D=p.D if two else None,
                            refine=p.lag_peak == "parabolic")
             power, b = sr.intensity, sr.bearing
@@ -399,7 +403,7 @@ class AcousticSwarm:
 
     def _adapted(self, idx: np.ndarray, x: np.ndarray, g: np.ndarray, rngs: list):
         """Adapted PSO [3.11], [3.10] towards the attractor vectors ``g`` (2, R', N, 2);
-        heading = direction of u (spec §1.1)."""
+        heading = direction of u (docs/readings.md, "Heading of an omnidirectional robot")."""
         s, N = self.state, self._robots
         r = np.stack([gen.random((2, N, 2)) for gen in rngs], axis=1)  # r1, r2 per component
         u = adapted_velocity(s.cmd[idx], g, self.c, self.omega, r)  # [3.11]
@@ -430,7 +434,8 @@ class AcousticSwarm:
         s.snr_db[idx] = snr_db(np.linalg.norm(s.x[idx] - s.source[idx, None, :], axis=-1), p.psd_s_db, p.psd_n_db)
 
     def _converge(self, idx: np.ndarray) -> None:
-        """Record the first tick with |CoM − x_src| ≤ d_c (spec §7.0 step 7); freeze if asked."""
+        """Record the first tick with |CoM − x_src| ≤ d_c (Rossides §7.3.2, p. 161; docs/readings.md,
+        "How convergence is declared (Chapter 7)"); freeze if asked."""
         s = self.state
         d = np.linalg.norm(s.x[idx].mean(axis=1) - s.source[idx], axis=-1)
         new = (s.first_converged[idx] < 0) & (d <= self.params.dc)
@@ -483,7 +488,7 @@ class AcousticSwarm:
 
 
 def straight_line_steps(params: SonarParams) -> float:
-    """Lower bound (d_s − d_c)/(U·Δt) on the ticks to converge (spec §4.2 table)."""
+    """Lower bound (d_s − d_c)/(U·Δt) on the ticks to converge (a straight run at full speed)."""
     return max(params.d_s - params.dc, 0.0) / (params.U * params.dt)
 
 

@@ -1,6 +1,6 @@
 """One control tick of a swarm, vectorised over runs × robots × dimensions.
 
-Stages (DESIGN.md): bests → coefficients → velocity → move → record. Run ``i`` draws
+Stages (Rossides §3.5, p. 74): bests → coefficients → velocity → move → record. Run ``i`` draws
 from child ``i`` of one ``SeedSequence(seed)``, so it is the same whether it is simulated
 alone (``first_run=i, runs=1``) or inside a batch.
 """
@@ -239,7 +239,7 @@ class Simulation:
         """Direction inputs g_n of the accelerating terms, (2, R, N, d): the vectors to the
         personal and the global best, as the robots know them."""
         s = self.state
-        if self.attractors == "ahead":  # spec §22: both attractors always ahead
+        if self.attractors == "ahead":  # both attractors always ahead: docs/readings.md, "Attractors in Figure 3-4"
             g = np.broadcast_to(self.ahead_direction, s.x.shape)
             return np.stack([g, g])
         self.positions.observe(s.x, s.k)

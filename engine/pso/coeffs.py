@@ -1,4 +1,5 @@
-"""Coefficient policies: how ω and c_1..c_n are set each control step (§3.4, §6).
+"""Coefficient policies: how ω and c_1..c_n are set each control step (Rossides §3.4, p. 73;
+§4.2.2, p. 90).
 
 A policy is asked once per tick for ``(omega, c)`` with ``c`` of shape ``(n,)``; later
 policies (DVC) return per-robot arrays ``(n, runs, robots)`` through the same call.
@@ -38,7 +39,8 @@ class Constant:
 
 @dataclass(frozen=True)
 class Segment:
-    """From time ``t_start`` on, the robot limits are U and A+ (§7.2 step changes)."""
+    """From time ``t_start`` on, the robot limits are U and A+ (the step changes of Fig. 3-5, p. 78;
+    docs/readings.md, "Step changes in Figures 3-5b and 3-5c")."""
 
     t_start: float
     U: float
@@ -50,7 +52,7 @@ class Physical:
     """Physical tuning: from (U, A+, Δt, d) derive ω, ĉ [3.32]–[3.35], split c1:c2.
 
     Several segments make the step changes of Fig. 3-5; with one segment it is the
-    plain guideline of §3.4. ``c1_share`` = c1/ĉ.
+    plain guideline of Rossides §3.4 (p. 73). ``c1_share`` = c1/ĉ.
     """
 
     segments: tuple[Segment, ...]

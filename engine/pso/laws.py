@@ -23,7 +23,7 @@ def squash(z: np.ndarray, kind: Squash = "sgn", width: float = 1.0) -> np.ndarra
     """Bounded per-component direction of ``z``.
 
     ``sgn`` is [3.12] with sgn(0) = 0; ``tanh`` and ``logistic`` (squashed to (-1, 1))
-    are the smooth options of §3.2.1 against chattering: sgn-like when the attractor is
+    are the smooth options of Rossides §3.2.1 (p. 64) against chattering: sgn-like when the attractor is
     far compared with ``width`` (metres), proportional like standard PSO when close.
     """
     if kind == "sgn":
@@ -106,7 +106,7 @@ LAWS: Registry[VelocityLaw] = Registry(
     "law",
     VelocityLaw("standard", "Standard PSO", False, _standard),  # [2.1], [2.2]
     VelocityLaw("adapted-sgn", "Adapted PSO (sgn)", True, _adapted("sgn")),  # [3.11]
-    VelocityLaw("adapted-tanh", "Adapted PSO (tanh)", True, _adapted("tanh")),  # §3.2.1 smooth option
+    VelocityLaw("adapted-tanh", "Adapted PSO (tanh)", True, _adapted("tanh")),  # Rossides §3.2.1 smooth option
     VelocityLaw("adapted-logistic", "Adapted PSO (logistic)", True, _adapted("logistic")),
 )
 
@@ -136,7 +136,7 @@ class Law:
 
 
 def motion_heading(u: np.ndarray, previous: np.ndarray, moving: np.ndarray | None = None) -> np.ndarray:
-    """Direction of motion atan2(u_2, u_1) (spec §1.1 heading default); kept from before
+    """Direction of motion atan2(u_2, u_1) (docs/readings.md, "Heading of an omnidirectional robot"); kept from before
     while the robot is at rest (``moving``: any component of u non-zero). In 1-D: 0 or π by
     the sign of u."""
     if u.shape[-1] < 2:

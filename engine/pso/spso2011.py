@@ -13,7 +13,7 @@ from typing import Literal, Sequence
 
 import numpy as np
 
-OMEGA_SPSO = 1.0 / (2.0 * np.log(2.0))  # gap A4: SPSO 2011 default inertia
+OMEGA_SPSO = 1.0 / (2.0 * np.log(2.0))  # SPSO 2011 default; docs/readings.md, "Inertia weight ω"
 C_SPSO = 0.5 + np.log(2.0)  # [Tab. 4.1] c1 = c2
 
 Radial = Literal["uniform_radius", "uniform_area"]
@@ -30,7 +30,8 @@ class SPSODraws:
 
 
 def draw(rngs: Sequence[np.random.Generator], n: int) -> SPSODraws:
-    """Fresh draws for ``n`` particles of every run (gap A37: per particle per step), (R, n, …)."""
+    """Fresh draws for ``n`` particles of every run, (R, n, …): per particle per step
+    (docs/readings.md, "How often errors are drawn")."""
     R = len(rngs)
     d = SPSODraws(np.empty((R, n, 2)), np.empty((R, n, 2)), np.empty((R, n, 2)), np.empty((R, n)))
     for r, g in enumerate(rngs):  # each run's stream, drawn in place
@@ -44,7 +45,8 @@ def draw(rngs: Sequence[np.random.Generator], n: int) -> SPSODraws:
 def sample_hypersphere(
     centre: np.ndarray, radius: np.ndarray, normal: np.ndarray, rho: np.ndarray, radial: Radial = "uniform_radius"
 ) -> np.ndarray:
-    """H(G, r) (gap A3): G + r·ρ·g/‖g‖, ρ ~ U(0,1) as the reference code, or √ρ (uniform in
+    """H(G, r) [3.11] (docs/readings.md, "The point in the hypersphere (SPSO 2011)"):
+    G + r·ρ·g/‖g‖, ρ ~ U(0,1) as the reference code, or √ρ (uniform in
     area). Returns G where r ≤ 0 or the direction is degenerate."""
     norm = np.linalg.norm(normal, axis=-1, keepdims=True)
     direction = np.divide(normal, norm, out=np.zeros_like(normal), where=norm > 0)
@@ -55,8 +57,9 @@ def sample_hypersphere(
 
 @dataclass(frozen=True)
 class SPSO2011:
-    """Coefficients of the SLO swarm behaviour (spec §2.4): ``inertia`` is ω; c3, c4 scale and
-    offset the sampling radius; ``spso_self_best_halving`` is SPSO's own-best rule (gap A5)."""
+    """Coefficients of the SLO swarm behaviour (Mai §3.6, p. 32; Tab. 4.1, p. 37): ``inertia`` is ω; c3, c4 scale and
+    offset the sampling radius; ``spso_self_best_halving`` is SPSO's own-best rule (docs/readings.md,
+    "SPSO's own-best rule")."""
 
     inertia: float = OMEGA_SPSO
     c1: float = C_SPSO
@@ -91,7 +94,8 @@ class SPSO2011:
         self, x: np.ndarray, v: np.ndarray, p: np.ndarray, l: np.ndarray, d: SPSODraws,
         self_best: np.ndarray | None = None,
     ) -> np.ndarray:
-        """Reference form in global coordinates [2.1]–[2.4], with the "− X" of FIX A2:
+        """Reference form in global coordinates [2.1]–[2.4], with the "− X" of docs/readings.md,
+        "The missing − X in [2.4]":
         p' = X + c1·U1⊗(P − X), l' = X + c2·U2⊗(L − X), G = (X + p' + l')/3,
         V' = ω·V + H(G, c3·‖G − X‖ + c4) − X. Position update [2.5]: X + V'."""
         p_ = x + self.c1 * d.u1 * (p - x)  # [2.1]

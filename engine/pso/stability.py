@@ -62,7 +62,7 @@ def reduced_step(
 def a1(u: np.ndarray | float, omega: float, dt: float) -> np.ndarray:
     """Line a1 [3.24]: a = (ω − 1)/(ωΔt) · u, the locus of M̂ẑ.
 
-    Undefined at ω = 0, where the locus is the vertical line u = 0 (spec §20 item 7);
+    Undefined at ω = 0, where the locus is the vertical line u = 0 (docs/readings.md, "The stability locus at ω = 0");
     use :func:`line_a1` for drawing. Raises ``ValueError`` at ω = 0.
     """
     if omega * dt == 0:  # also catches subnormal ω
@@ -103,7 +103,7 @@ def phase_markers(omega: float, c_hat: float, dt: float) -> dict[str, np.ndarray
 
 
 def reachable_parallelogram(omega: float, c_hat: float, dt: float) -> np.ndarray:
-    """Vertices of the set reachable by ẑ[k+1] from |u| ≤ U_j (Fig. 3-3b, spec §5)."""
+    """Vertices of the set reachable by ẑ[k+1] from |u| ≤ U_j (Fig. 3-3b, p. 71; Rossides §3.3.3, p. 70)."""
     U_j = c_hat / (1.0 - omega)
     return np.array(
         [

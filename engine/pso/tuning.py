@@ -39,7 +39,8 @@ class Tuning:
 
     @property
     def A_minus_j(self) -> float:
-        """Per-component top deceleration 2ĉ/Δt [3.28] (magnitude, spec §20 item 8)."""
+        """Per-component top deceleration 2ĉ/Δt [3.28] (magnitude; docs/readings.md, "The sign of the top
+        deceleration A−")."""
         return self.A_minus / math.sqrt(self.d)
 
     def as_dict(self) -> dict[str, float]:
@@ -91,7 +92,7 @@ def from_limits(
 
 
 def from_beta(dt: float, U: float, beta: float, d: int = 1) -> Tuning:
-    """Choose β directly (spec §20 item 11): A+ = βU/Δt, ĉ = βU/√d [4.15]."""
+    """Choose β directly (docs/readings.md, "Setting β directly"): A+ = βU/Δt, ĉ = βU/√d [4.15]."""
     _check_positive(dt=dt, U=U, beta=beta)
     return from_limits(dt, U, A_plus=beta * U / dt, d=d)
 
@@ -115,7 +116,8 @@ def from_coefficients(omega: float, c_hat: float, dt: float, d: int = 1) -> Tuni
 
 
 def split(c_hat: float, c1_share: float) -> tuple[float, float]:
-    """Split ĉ = c1 + c2 with c1 = share·ĉ (the thesis leaves the split open, §20 item 12)."""
+    """Split ĉ = c1 + c2 with c1 = share·ĉ (the thesis leaves the split open:
+    docs/readings.md, "Unstated settings of Section 3.5")."""
     if not 0.0 <= c1_share <= 1.0:
         raise TuningError(f"c1_share must be in [0, 1], got {c1_share!r}")
     return c_hat * c1_share, c_hat * (1.0 - c1_share)

@@ -1,7 +1,7 @@
 """Dynamic Velocity Control: per-robot coefficients from sensed gaps (Rossides §4.2.2, §5.2.2).
 
 Input ``gap`` is (R, N, 6): the surface distance (0 = contact) to the closest body in each
-60° sector, R_s when a sector is empty (spec §20 item 13). Sector k covers bearings
+60° sector, R_s when a sector is empty (docs/readings.md, "Empty sensor sectors and gaps"). Sector k covers bearings
 [−180° + 60k, −120° + 60k) in the robot frame: RIGHT = 0–2, LEFT = 3–5, FRONT = 1–4.
 Every policy returns ``(omega (R, N), c (n, R, N))``; the shapes work for any leading dims.
 """
@@ -18,7 +18,8 @@ RIGHT = slice(0, 3)
 LEFT = slice(3, 6)
 FRONT = slice(1, 5)
 
-# Table 4.1 constant cases (β = 0.9, Δt = 1 s); ω = 1 − β (spec §20 items 16–17).
+# Table 4.1 constant cases (β = 0.9, Δt = 1 s; Rossides p. 95); ω = 1 − β (docs/readings.md,
+# "Table 4.1: ω and the tuned speed").
 TABLE_4_1: dict[str, dict[str, float]] = {
     "c3-high": {"c1": 0.2864, "c2": 0.2864, "c3": 1.1455, "omega": 0.1},
     "c3-equal": {"c1": 0.4296, "c2": 0.4296, "c3": 0.8591, "omega": 0.1},
@@ -79,9 +80,9 @@ def constant_rpso(
 def w_max(
     v_max: float, dt: float, inertia: Inertia = "pi", body_radius: float | None = None
 ) -> float:
-    """Angular speed limit from the energy budget e_max = v_max²/2 (spec §14).
+    """Angular speed limit from the energy budget e_max = v_max²/2 (Rossides §5.2, p. 114).
 
-    ``pi``: √(4 e_max/π) [5.12] as printed; ``disc``: e_r = R_b² w²/4 (spec §20 item 25).
+    ``pi``: √(4 e_max/π) [5.12] as printed; ``disc``: e_r = R_b² w²/4 (docs/readings.md, "Rotational energy [5.12]").
     Capped at π/(2Δt) so one step turns at most 90°.
     """
     if not (dt > 0 and v_max >= 0):
@@ -102,7 +103,7 @@ def dvc_nonomni(
     c1_share: float = 0.5,
     v_max: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Algorithm 2 DVC [5.14]–[5.16], typos fixed (spec §20 item 23): c = [c1..c5] (5, R, N).
+    """Algorithm 2 DVC [5.14]–[5.16], typos fixed (docs/readings.md, "Typos in Algorithm 2"): c = [c1..c5] (5, R, N).
 
     W12 = (s_1/R) w_max, W3 = (1 − sl_1/R) w_max, W4 = (1 − sr_1/R) w_max; c1 + c2 = β W12,
     c3 = β W3, c4 = β W4; U = α sf_1/Δt (≤ v_max if given, an engineering choice), c5 = β U.
@@ -137,7 +138,7 @@ def approach_guard(
     """Scale each global velocity so one step closes at most α·s_p toward every sensed body.
 
     DVC bounds the accelerating terms but not the carried-over ω·u, so the thesis'
-    "never reaches the nearest body in one step" is approximate (spec §20 item 19). This
+    "never reaches the nearest body in one step" is approximate (docs/readings.md, "The DVC guard (ours)"). This
     optional guard (ours, not in the thesis) makes it exact for straight-line motion:
     with n_p the unit vector to body p's closest point, Δt·(u·n_p) ≤ α s_p for all p.
     ``u``, ``x``: (R, N, 2); ``point``: (R, N, 6, 2), nan where a sector is empty; ``gap``: (R, N, 6).

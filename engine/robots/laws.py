@@ -3,7 +3,8 @@ registry of the fleet's laws :data:`ROBOT_LAWS`.
 
 Shapes follow :mod:`shoal.engine.pso.laws`: positions and velocities ``(runs, robots, 2)``, headings and
 scalar speeds ``(runs, robots)``; the ``n`` accelerating terms are stacked on a leading
-axis. Body frame: x along the heading, y to the left; w > 0 turns left (CCW), §13.
+axis. Body frame: x along the heading, y to the left; w > 0 turns left (CCW); docs/readings.md,
+"Body frame and turn direction".
 """
 
 from __future__ import annotations
@@ -50,7 +51,7 @@ def rpso_velocity(
 
     ``g_personal`` = y − x and ``g_global`` = y_g − x are (R, N, 2); ``c`` is (3,) or
     (3, R, N); ``r`` is (3, R, N, 2). The law is unbounded; with ``v_max`` the result is
-    clipped to that speed keeping its direction (spec §20 item 18).
+    clipped to that speed keeping its direction (docs/readings.md, "Speed limit of Original RPSO").
     """
     g = np.stack([g_personal, g_global, F_t])
     out = standard_velocity(u, g, c, omega, r)
@@ -76,7 +77,8 @@ def adapted_rpso_velocity(
 
 
 def to_body(vec: np.ndarray, heading: np.ndarray | float) -> np.ndarray:
-    """Rot(−o)·vec: a world-frame vector (R, N, 2) in the robot frame (spec §13)."""
+    """Rot(−o)·vec: a world-frame vector (R, N, 2) in the robot frame ([5.4]; docs/readings.md, "Body frame and turn
+    direction")."""
     cos, sin = np.cos(heading), np.sin(heading)
     x, y = vec[..., 0], vec[..., 1]
     return np.stack([cos * x + sin * y, -sin * x + cos * y], axis=-1)
@@ -133,7 +135,7 @@ def nonomni_velocity(
     ``w' = ω w + c1 r1 sgn(ỹ_2) + c2 r2 sgn(ỹ_g,2) − c3 r3 + c4 r4`` and
     ``v' = ω v + c5 r5``. ``y_tilde``/``yg_tilde`` are body-frame offsets (R, N, 2) of
     which only the lateral component is used; ``c`` is (5,) or (5, R, N); ``r`` is
-    (5, R, N); ``omega`` a scalar or (R, N). v is floored at 0 (forward only, §14 item 1),
+    (5, R, N); ``omega`` a scalar or (R, N). v is floored at 0 (forward only, Rossides §5.2, p. 114),
     which is a no-op for v ≥ 0, ω ≥ 0, c5 ≥ 0.
     """
     c = np.asarray(c, dtype=float)
@@ -147,7 +149,7 @@ def nonomni_velocity(
 
 
 def rotational_energy_factor(inertia: Inertia = "pi", body_radius: float | None = None) -> float:
-    """k in e_r = k·w²: π/4 as printed [5.12], or R_b²/4 for a disc (spec §20 item 25)."""
+    """k in e_r = k·w²: π/4 as printed [5.12], or R_b²/4 for a disc (docs/readings.md, "Rotational energy [5.12]")."""
     if inertia == "pi":
         return np.pi / 4.0
     if inertia == "disc":
@@ -164,7 +166,8 @@ def energy_limit(
     inertia: Inertia = "pi",
     body_radius: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Shrink (v, w) by one factor λ = √(e_max/e_t) where e_t > e_max (spec §14, §20 item 26).
+    """Shrink (v, w) by one factor λ = √(e_max/e_t) where e_t > e_max (docs/readings.md,
+    "Scaling v and w to the energy budget").
 
     e_l = v²/2 [5.11], e_r = k w² [5.12], e_max = v_max²/2; the turning radius v/w is kept.
     """
@@ -177,7 +180,8 @@ def energy_limit(
 
 
 def min_turning_radius(v: np.ndarray, w: np.ndarray, r_min: float) -> np.ndarray:
-    """Limit |w| so that |v/w| ≥ r_min [5.6], keeping v (spec §17); r_min = 0 disables."""
+    """Limit |w| so that |v/w| ≥ r_min [5.6], keeping v (Rossides §5.4, p. 125; docs/readings.md, "Minimum
+    turning radius and clearance"); r_min = 0 disables."""
     if r_min < 0:
         raise ValueError(f"r_min must be >= 0, got {r_min!r}")
     w = np.asarray(w, dtype=float)
@@ -229,7 +233,8 @@ def mecanum_body(
 
 
 def mecanum_limit(u: np.ndarray, heading: np.ndarray, v_max: float) -> np.ndarray:
-    """Scale a world-frame demand (R, N, 2) into the mecanum-reachable set (spec §12.5).
+    """Scale a world-frame demand (R, N, 2) into the mecanum-reachable set [4.18]–[4.19] (docs/readings.md,
+    "Mecanum drive: the reachable set").
 
     The wheel-speed limit is the one that gives ``v_max`` straight ahead, so with w_z = 0
     the reachable body-frame set is |v_x| + |v_y| ≤ v_max. A demand whose wheel speeds
@@ -277,7 +282,7 @@ class RobotLaw:
 
 def _rpso(cmd: np.ndarray, g_p: np.ndarray, g_g: np.ndarray, force: np.ndarray, heading: np.ndarray, c: np.ndarray,
           omega: np.ndarray, r: np.ndarray, lim: Limits) -> np.ndarray:
-    return rpso_velocity(cmd, g_p, g_g, force, c, omega, r, v_max=lim.v_max)  # clipped (spec §20 item 18)
+    return rpso_velocity(cmd, g_p, g_g, force, c, omega, r, v_max=lim.v_max)  # clipped (see rpso_velocity)
 
 
 def _adapted_rpso(cmd: np.ndarray, g_p: np.ndarray, g_g: np.ndarray, force: np.ndarray, heading: np.ndarray,
@@ -286,7 +291,8 @@ def _adapted_rpso(cmd: np.ndarray, g_p: np.ndarray, g_g: np.ndarray, force: np.n
 
 
 def _limited(vw: np.ndarray, lim: Limits) -> np.ndarray:
-    """[v, w] within the energy limit (§14) and the minimum turning radius (§5.4)."""
+    """[v, w] within the energy limit [5.11]–[5.12] and the minimum turning radius (Rossides §5.4,
+    p. 125)."""
     v, w = energy_limit(vw[..., 0], vw[..., 1], lim.v_max, lim.inertia, lim.radius)
     w = min_turning_radius(v, w, lim.r_min)
     return np.stack([v, w], axis=-1)

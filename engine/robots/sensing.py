@@ -2,11 +2,12 @@
 
 Each robot splits its surroundings into six 60° sectors and keeps only the closest body
 (obstacle, wall or other robot, disabled robots included) in each, as a LiDAR would
-(spec §12.4). Sector k (0-based) covers bearings [−180° + 60k, −120° + 60k), measured
-from the world x-axis, or from the robot's heading with ``robot_frame=True`` (spec §15,
-§20 item 14). The thesis numbers them 1–6; sectors 1–3 are on the right, 4–6 on the left.
+(Rossides §4.3.2, p. 96). Sector k (0-based) covers bearings [−180° + 60k, −120° + 60k), measured
+from the world x-axis, or from the robot's heading with ``robot_frame=True`` (docs/readings.md,
+"Sectors fixed to the world in Chapter 4", "Sector layout of the non-omnidirectional
+controller"). The thesis numbers them 1–6; sectors 1–3 are on the right, 4–6 on the left.
 
-Choices the thesis leaves open (spec §20 item 13):
+Choices the thesis leaves open (docs/readings.md, "Empty sensor sectors and gaps"):
 
 - a gap is surface to surface (robot radius subtracted), clipped at 0, and kept if it is
   at most the sensing range; an empty sector reads the range;
@@ -169,6 +170,6 @@ def virtual_force(x: np.ndarray, reading: SectorReading, gamma: float = 1.0, s_f
 
 def sorted_gaps(reading: SectorReading, sectors: Sequence[int] | None = None) -> np.ndarray:
     """(R, N, k) gaps of ``sectors`` (default all six) sorted ascending: the s, sr, sl, sf
-    lists of spec §15 with sectors ``None``, ``RIGHT``, ``LEFT``, ``FRONT``."""
+    lists of Algorithm 2 (Rossides §5.2.2, p. 119) with sectors ``None``, ``RIGHT``, ``LEFT``, ``FRONT``."""
     g = reading.gap if sectors is None else reading.gap[..., list(sectors)]
     return np.sort(g, axis=-1)

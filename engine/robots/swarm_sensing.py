@@ -1,4 +1,5 @@
-"""Six-sector sensing in an open sea: robots are the only bodies (Ch. 8; spec §1.2, §7.6).
+"""Six-sector sensing in an open sea: robots are the only bodies (Rossides Ch. 8, §8.1, p. 174;
+§8.2, p. 182).
 
 The same reading as :func:`shoal.engine.robots.sensing.sense` gives for a world without circles,
 polygons or walls, where every robot is a disc of radius ``robot_radius``, computed from

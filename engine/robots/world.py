@@ -185,7 +185,8 @@ def obstacle_course(
     wall_radius: float = 0.1,
 ) -> WorldSpec:
     """Layers of circular obstacles between a start square (left) and a source (right),
-    in the spirit of the thesis Fig. 4-1, which gives no dimensions (spec §20 item 22).
+    in the spirit of the thesis Fig. 4-1, which gives no dimensions (docs/readings.md, "The obstacle course of
+    Figure 4-1").
 
     Layers sit at evenly spaced x; in layer l the mean surface gap between neighbouring
     circles shrinks linearly from ``first_gap`` to ``last_gap``, so the course gets denser

@@ -1,4 +1,4 @@
-"""The SLO belief store and its per-step update (Mai §3.4–3.5, spec §5.3 steps 2–5):
+"""The SLO belief store and its per-step update (Mai §3.4–3.5, pp. 25–31; Alg. 1, p. 22):
 measure ranges and odometry, build candidates, select an estimate for every neighbour pair.
 
 Shapes: positions (R, N, 2); per ordered pair (observer i, neighbour j) arrays (R, N, N, …),
@@ -32,18 +32,20 @@ ENTRY_POLICIES = ("dead_reckoning", "stale", "geometric_random")
 
 @dataclass(frozen=True)
 class LocaliserParams:
-    """Localisation choices (spec §7, §9). ``selection`` :data:`PERFECT` is the oracle baseline."""
+    """Localisation choices (Mai §3.5, p. 26; Tab. 4.1, p. 37). ``selection`` :data:`PERFECT` is the
+    oracle baseline. A quoted comment names the section of docs/readings.md behind a default."""
 
-    selection: Selection = "css"  # gap A27
+    selection: Selection = "css"  # "Default selection"
     prediction_weight: float = 0.5  # w of [3.7]
     delta_cos: float = 0.03  # [3.5]; −inf = clip only
     delta_v: float = 0.03  # [3.6]
-    literal_eq_3_1: bool = False  # FIX A18 off: the printed denominator d_{t−1}
+    literal_eq_3_1: bool = False  # True: the printed denominator d_{t−1}; "The denominator of [3.1]"
     entry_policy: EntryPolicy = "dead_reckoning"
-    measure_all_ranges: bool = True  # gap A9/A25: range to every particle, not only neighbours
+    measure_all_ranges: bool = True  # range to every particle, not only neighbours
+    # ("Estimates of robots outside the neighbourhood (SLO)")
     max_range: float = np.inf  # ranging sensor reach (0 beyond)
-    rts_triangle: RTSTriangle = "first"  # gap A22
-    rts_prefer_geometric: bool = False  # optional runaway remedy (§7.5)
+    rts_triangle: RTSTriangle = "first"  # "Order of Round Trip Selection"
+    rts_prefer_geometric: bool = False  # optional runaway remedy; "Order of Round Trip Selection"
     rts_tolerance: float = 1.0  # e_r below which a geometric loop excludes x3
 
     def __post_init__(self) -> None:
@@ -85,7 +87,8 @@ def relative_truth(x: np.ndarray) -> np.ndarray:
 
 
 def random_estimates(rngs: list[np.random.Generator], n: int, low: float, high: float) -> np.ndarray:
-    """x̂_ij(−1) = a_ij − b_ij with a, b ~ U(S), S = [low, high]² (gap A9), (R, N, N, 2)."""
+    """x̂_ij(−1) = a_ij − b_ij with a, b ~ U(S), S = [low, high]², (R, N, N, 2); docs/readings.md,
+    "Initial estimates x̂(−1)"."""
     est = np.stack([g.uniform(low, high, (n, n, 2)) - g.uniform(low, high, (n, n, 2)) for g in rngs])
     idx = np.arange(n)
     est[:, idx, idx] = 0.0
@@ -125,7 +128,8 @@ class Localiser:
         return d if self.params.measure_all_ranges else np.where(adjacency, d, 0.0)
 
     def start(self, x: np.ndarray, adjacency: np.ndarray, initial: np.ndarray) -> Beliefs:
-        """t = 0: measure ranges, no localisation yet (gap A10); ``initial`` = x̂(−1)."""
+        """t = 0: measure ranges, no localisation yet (docs/readings.md, "The first step");
+        ``initial`` = x̂(−1)."""
         shape = adjacency.shape
         return Beliefs(
             est=initial.copy(), valid=adjacency.copy(), adjacency=adjacency.copy(),

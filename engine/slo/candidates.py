@@ -54,22 +54,23 @@ def candidates(
     """Candidates for ranges ``d0`` = d*(t−1), ``d1`` = d*(t), relative displacement
     ``v`` = v*_j − v*_i (..., 2) and previous estimate ``prev`` (..., 2).
 
-    cos α = (d1² + |v|² − d0²)/(2|v|·d1) (FIX A18; ``literal_eq_3_1`` keeps the printed d0 in
-    the denominator); x1,2 = d1·(c·u ± s·u⊥) [3.2]–[3.3] in vector form; x3 = prev + v [3.4].
-    ``delta_cos = -inf`` only clips cos α to [−1, 1] (footnote of §3.5.2)."""
+    cos α = (d1² + |v|² − d0²)/(2|v|·d1) (docs/readings.md, "The denominator of [3.1]";
+    ``literal_eq_3_1`` keeps the printed d0 in the denominator);
+    x1,2 = d1·(c·u ± s·u⊥) [3.2]–[3.3] in vector form; x3 = prev + v [3.4].
+    ``delta_cos = -inf`` only clips cos α to [−1, 1] (footnote of Mai §3.5.2, p. 28)."""
     d0 = np.asarray(d0, dtype=float)
     d1 = np.asarray(d1, dtype=float)
     v = np.asarray(v, dtype=float)
     prev = np.asarray(prev, dtype=float)
     with np.errstate(all="ignore"):
-        x3 = prev + v  # [3.4], FIX A19
+        x3 = prev + v  # [3.4]; see docs/readings.md, "The index of v* in [3.4]"
         speed = np.linalg.norm(v, axis=-1)
         ok = (d0 > 0) & (d1 > 0) & (speed > 0) & np.isfinite(d0) & np.isfinite(d1) & np.isfinite(speed)
         ok &= np.all(np.isfinite(x3), axis=-1)
         s0, s1, sv = np.where(ok, d0, 1.0), np.where(ok, d1, 1.0), np.where(ok, speed, 1.0)
         thin = np.minimum(sv / s0, sv / s1)
-        thin_ok = ~(thin <= delta_v)  # [3.6], "OR" reading (gap A20)
-        denom = 2.0 * sv * (s0 if literal_eq_3_1 else s1)  # [3.1] / FIX A18
+        thin_ok = ~(thin <= delta_v)  # [3.6]; see docs/readings.md, '"And" or "or" in [3.6]'
+        denom = 2.0 * sv * (s0 if literal_eq_3_1 else s1)  # [3.1]; "The denominator of [3.1]"
         c = (s1**2 + sv**2 - s0**2) / denom
         c = np.where(np.isfinite(c), c, 2.0)
         cos_ok = ~(1.0 - np.abs(c) <= delta_cos)  # [3.5]

@@ -1,6 +1,8 @@
-"""Attraction–repulsion between neighbours from relative estimates only (spec §3, gap A6).
+"""Attraction–repulsion between neighbours from relative estimates only (docs/readings.md,
+"Attraction–repulsion (external)").
 
-NOT from the Mai thesis, which describes the behaviour only in words [§2.1.2, §5]: the form
+NOT from the Mai thesis, which describes the behaviour only in words (Mai §2.1.2, p. 9; Ch. 5,
+p. 61): the form
 is Gazi & Passino's swarm aggregation function, the reference the thesis names.
 g(y) = −y·(a − b·exp(−‖y‖²/c)), b > a > 0, c > 0; the equilibrium spacing is √(c·ln(b/a)).
 """

@@ -1,8 +1,10 @@
-"""SLO metrics (Mai §4.1, Tab. 4.2, spec §11): localisation errors over neighbour pairs,
-inter-particle distances over all unordered pairs (gap A30), dead-reckoning share,
+"""SLO metrics (Mai §4.1, p. 35; Tab. 4.2, p. 39): localisation errors over neighbour pairs,
+inter-particle distances over all unordered pairs (docs/readings.md, "Pairs behind the
+metrics"), dead-reckoning share,
 round-trip error, and the per-run summaries (best, end, first generation meeting T).
 
-Every statistic is per run, shape (R,); mean, std, SEM (gap A31: both) and median;
+Every statistic is per run, shape (R,); mean, std, SEM (both: docs/readings.md, "Standard
+deviation or standard error") and median;
 NaN when a run has no pair.
 """
 
@@ -116,8 +118,8 @@ def run_summary(best: np.ndarray, threshold: float) -> dict[str, np.ndarray]:
 
 
 def median_over_runs(values: np.ndarray) -> tuple[float, int]:
-    """Median across repetitions, inf ranking above every finite value (gap A34), and the
-    count used."""
+    """Median across repetitions, inf ranking above every finite value, and the count used
+    (docs/readings.md, "Medians with runs that never reach")."""
     v = np.asarray(values, dtype=float)
     v = v[~np.isnan(v)]
     return (float(np.median(v)) if v.size else float("nan")), int(v.size)

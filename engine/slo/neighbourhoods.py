@@ -15,7 +15,8 @@ from . import kernels
 
 NeighbourhoodKind = Literal["knn", "radius", "full", "random", "ring"]
 
-DEFAULT_PARAM: dict[str, float] = {"knn": 5, "radius": 25.0, "full": 0, "random": 0.5, "ring": 2}  # gap A7
+DEFAULT_PARAM: dict[str, float] = {"knn": 5, "radius": 25.0, "full": 0, "random": 0.5, "ring": 2}
+# the defaults: docs/readings.md, "Radius and ring size of the neighbourhoods"
 
 
 def distances(x: np.ndarray) -> np.ndarray:
@@ -35,7 +36,8 @@ def full(runs: int, n: int) -> np.ndarray:
 
 
 def knn(dist: np.ndarray, k: int) -> np.ndarray:
-    """The k closest particles, ties broken by index; directed (gap A8)."""
+    """The k closest particles, ties broken by index; directed (docs/readings.md,
+    "Symmetric and directed neighbourhoods")."""
     n = dist.shape[-1]
     k = int(min(max(k, 0), n - 1))
     return _no_self(kernels.nearest(np.ascontiguousarray(dist, dtype=float), k))  # compiled stable argsort[:k]
@@ -57,7 +59,8 @@ def ring(runs: int, n: int, width: int) -> np.ndarray:
 
 def random_links(uniforms: np.ndarray, p: float) -> np.ndarray:
     """Each unordered pair linked with probability p from ``uniforms`` (R, N, N); only the
-    upper triangle is used, so links are symmetric (gap A8)."""
+    upper triangle is used, so links are symmetric (docs/readings.md,
+    "Symmetric and directed neighbourhoods")."""
     upper = np.triu(uniforms < p, k=1)
     return upper | np.swapaxes(upper, -1, -2)
 

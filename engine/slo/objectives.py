@@ -16,14 +16,14 @@ Fitness = Callable[[np.ndarray], np.ndarray]
 SLO_OBJECTIVES: dict[str, Fitness] = {
     "ackley": ackley,
     "griewank": griewank,
-    "line": line,  # gap A32: x_0²
+    "line": line,  # x_0²; see docs/readings.md, "The line objective"
     "plane": linear,
     "rastrigin": rastrigin,
     "rosenbrock": rosenbrock,
     "sphere": sphere,
 }
 
-# Gap A33: thresholds inside the bounds implied by Tab. 4.4.
+# Thresholds inside the bounds implied by Tab. 4.4 (Mai p. 55); docs/readings.md, "Quality thresholds".
 QUALITY_THRESHOLDS: dict[str, float] = {
     "ackley": 0.1,
     "griewank": 0.01,

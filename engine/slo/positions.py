@@ -1,13 +1,14 @@
-"""The positions a host swarm acts on (spec §15): a collaborator each scene kind with robots in
-the plane (the Chapter 3 swarm, the fleet, the acoustic swarm) asks wherever its controller
+"""The positions a host swarm acts on (SLO, Mai Ch. 3, p. 21): a collaborator each scene kind
+with robots in the plane (the Chapter 3 swarm, the fleet, the acoustic swarm) asks wherever its controller
 reads a position.
 
 * :class:`Oracle`: every robot knows every true position, as in the theses (the default).
 * :class:`Estimated`: each robot localises the others with SLO (a :class:`~.tracker.BeliefTracker`)
   and knows only its own displacement (odometry) and its estimates x̂_ij of the vectors to the
   others, never a position. So it keeps its personal best *relative to itself*, P_i ≈ y_i − x_i,
-  shifted by the measured odometry every tick (gap A35) and reset to the offset of a new best;
-  and it places another robot's best at x̂_ij + P_j, P_j being communicated (gap A36).
+  shifted by the measured odometry every tick and reset to the offset of a new best; and it
+  places another robot's best at x̂_ij + P_j, P_j being communicated (docs/readings.md,
+  "Shifting the personal best [3.13]", "Local best from positions or personal bests").
 
 The vectors a kind asks for are the two attractors of the theses: to a robot's own best, to the
 best robot's best (Chapters 3–5, A-/X-PSO) or to the centroid of all personal bests
@@ -131,7 +132,8 @@ class Estimated:
 
     def observe(self, x: np.ndarray, k: int) -> bool:
         """Localise at ``x`` and carry every personal best along by the measured odometry:
-        P_i ← P_i − v*_i ([3.13], measured, gap A35)."""
+        P_i ← P_i − v*_i ([3.13], measured; docs/readings.md, "Shifting the personal best
+        [3.13]")."""
         if k == self.sensed_k:
             return False
         self.tracker.observe(x)
@@ -154,7 +156,7 @@ class Estimated:
         return self.pbest
 
     def to_owner(self, x: np.ndarray, y: np.ndarray, owner: np.ndarray) -> np.ndarray:
-        """x̂_i,owner + P_owner (gap A36)."""
+        """x̂_i,owner + P_owner (docs/readings.md, "Local best from positions or personal bests")."""
         own = np.take_along_axis(self.pbest, np.asarray(owner)[:, None, None], axis=1)  # (R, 1, 2)
         return self.tracker.relative(owner) + own
 

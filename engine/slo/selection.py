@@ -36,11 +36,12 @@ def css(
     c: Candidates, prediction_weight: float = 0.5, entry: np.ndarray | None = None,
     coin: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """[3.7] with FIX A21: x̂ = w·x3 + (1 − w)·x_c, x_c the geometric candidate closest to x3;
-    x3 alone when there is no geometric pair.
+    """[3.7] read as in docs/readings.md, "x_c in [3.7]": x̂ = w·x3 + (1 − w)·x_c, x_c the
+    geometric candidate closest to x3; x3 alone when there is no geometric pair.
 
     ``entry`` marks newly arrived neighbours; there ``coin`` (True → x1) picks x1 or x2
-    unblended (entry policy "geometric_random", gap A25)."""
+    unblended (entry policy "geometric_random"; docs/readings.md, "Estimates of robots
+    outside the neighbourhood (SLO)")."""
     x1, x2, x3 = c.points[..., 0, :], c.points[..., 1, :], c.x3
     pick1 = np.linalg.norm(x1 - x3, axis=-1) <= np.linalg.norm(x2 - x3, axis=-1)
     if entry is not None and coin is not None:
@@ -64,7 +65,8 @@ def _masked_points(c: Candidates) -> np.ndarray:
 def akcan(
     c: Candidates, adjacency: np.ndarray, ranges: np.ndarray, fallback: tuple[np.ndarray, np.ndarray],
 ) -> tuple[np.ndarray, np.ndarray]:
-    """[3.9], aggregated as gap A24: score(p) = Σ_{C ∈ N_A ∩ N_B} min_{q ∈ C_AC} |‖p − q‖ − d*_BC|
+    """[3.9], aggregated as in docs/readings.md, "Aggregating Akcan's criterion":
+    score(p) = Σ_{C ∈ N_A ∩ N_B} min_{q ∈ C_AC} |‖p − q‖ − d*_BC|
     with d*_BC measured by B; x̂_AB = argmin score; no common neighbour → ``fallback`` (CSS)."""
     pts, mask = _masked_points(c), c.mask
     r, a, b = np.nonzero(adjacency)  # the edges (a → b) of every run
@@ -129,15 +131,17 @@ def rts(
     prefer_geometric: bool = False,
     tolerance: float = 0.0,
 ) -> RTSResult:
-    """Greedy RTS [3.8] in ascending (a, b) order (gap A22), e_r = ‖x̂_ab + x̂_bc + x̂_ca‖.
+    """Greedy RTS [3.8] in ascending (a, b) order, e_r = ‖x̂_ab + x̂_bc + x̂_ca‖ (docs/readings.md, "Order
+    of Round Trip Selection").
 
     An edge with one candidate is resolved at once. An open edge (a → b) takes the candidate
     p minimising e_r over S_bc × S_ca, where S is the resolved value or the candidate set;
     only (a → b) is fixed. ``triangle`` = "first" uses the first closing c (thesis), "best"
-    the c with the lowest e_r. No triangle → ``fallback`` (CSS). Output is unblended (gap A23).
+    the c with the lowest e_r. No triangle → ``fallback`` (CSS). Output is unblended
+    (docs/readings.md, "No blending after RTS or Akcan").
 
     ``prefer_geometric`` admits x3 only when no geometric candidate closes a loop with
-    e_r < ``tolerance`` (an optional runaway remedy, §7.5).
+    e_r < ``tolerance`` (an optional runaway remedy).
 
     Edge (a → b) only reads edges with tails b and c ≠ a, so all edges of one tail are resolved
     together, exactly as the sequential order would; the loop runs over tails because each

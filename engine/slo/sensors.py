@@ -31,7 +31,7 @@ class RangeErrors:
 @dataclass(frozen=True)
 class OdometryErrors:
     """[4.4]: per-axis v'_k = v_k·E_m,k + E_a,k, then rotation by θ = N(0, σ_r) + P_r (radians,
-    gap A14); ``p_fail`` zeroes the whole vector."""
+    docs/readings.md, "Unit of the rotation error σ_r"); ``p_fail`` zeroes the whole vector."""
 
     sigma_m: float = 0.0
     sigma_a: float = 0.0
@@ -50,7 +50,8 @@ class ErrorModel:
     odometry: OdometryErrors = OdometryErrors()
 
     def scaled(self, unit: float) -> "ErrorModel":
-        """Additive σ_a, σ̂_a multiplied by ``unit`` = arena width / 100 (spec §15.1)."""
+        """Additive σ_a, σ̂_a multiplied by ``unit`` = arena width / 100 (docs/readings.md,
+        "Thesis units on a scene (ours)")."""
         if unit == 1.0:
             return self
         return ErrorModel(
@@ -98,8 +99,8 @@ def error_model(errors: str | ErrorModel) -> ErrorModel:
 
 @dataclass(frozen=True)
 class PermanentErrors:
-    """Per-robot calibration offsets of one run (gap A12): the ranging sensor of robot i and
-    its odometry (per axis for P_m and P_a)."""
+    """Per-robot calibration offsets of one run (docs/readings.md, "Who owns a permanent error"):
+    the ranging sensor of robot i and its odometry (per axis for P_m and P_a)."""
 
     range_m: np.ndarray  # (R, N)
     range_a: np.ndarray  # (R, N)
@@ -138,7 +139,7 @@ def measure_ranges(
     """d*_ij for every ordered pair (R, N, N) from true distances (diagonal ignored).
 
     Stochastic parts are drawn per measurement, so d*_ij and d*_ji are independent; negative
-    readings are clamped to 0 (gap A13); 0 means failure; beyond ``max_range`` reads 0."""
+    readings are clamped to 0 (docs/readings.md, "Negative ranges"); 0 means failure; beyond ``max_range`` reads 0."""
     R, n, _ = dist.shape
     fail, z = np.empty((R, n, n)), np.empty((R, 2, n, n))
     for r, g in enumerate(rngs):  # each run's stream, drawn in place
@@ -148,7 +149,7 @@ def measure_ranges(
     e_a = model.sigma_a * z[:, 1] + perm.range_a[:, :, None]  # [4.3]
     finite = np.isfinite(dist) & (dist <= max_range)
     d = np.where(finite, dist, 0.0)
-    reading = np.maximum(d * e_m + e_a, 0.0)  # [4.1], gap A13
+    reading = np.maximum(d * e_m + e_a, 0.0)  # [4.1]; see docs/readings.md, "Negative ranges"
     failed = (fail < model.p_fail) | ~finite
     out = np.where(failed, 0.0, reading)
     idx = np.arange(n)

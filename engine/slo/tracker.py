@@ -1,5 +1,5 @@
 """Beliefs of a swarm's robots about each other, followed step by step from the swarm's true
-positions (spec §15): each robot localises the others from noisy ranges and odometry
+positions (Mai §3, p. 21): each robot localises the others from noisy ranges and odometry
 (:class:`~.beliefs.Localiser`) with the SLO settings of a preset. :class:`BeliefTracker` is what
 :class:`~.positions.Estimated` positions of a host swarm (the Chapter 3 swarm, the fleet, the
 acoustic swarm) are made of.
@@ -31,7 +31,8 @@ class BeliefTracker:
     ``x0`` (R, N, 2) are the true starting positions. ``errors`` is a preset name (none, low,
     high) or an :class:`ErrorModel` in thesis units, rescaled by ``unit`` (arena width / 100).
     ``initial_estimates`` "truth" starts from correct beliefs (a calibrated deployment);
-    "random" uses differences of points in ``init_area`` (gap A9). Other keywords are
+    "random" uses differences of points in ``init_area`` (docs/readings.md, "Initial estimates x̂(−1)").
+    Other keywords are
     :class:`LocaliserParams` fields (``selection``, ``prediction_weight``, ``delta_cos``, …).
     """
 
@@ -67,7 +68,8 @@ class BeliefTracker:
                                                      self._initial(x0))
 
     def _initial(self, x: np.ndarray) -> np.ndarray:
-        """x̂(−1) of a swarm deployed at ``x`` (R, N, 2): the truth or random vectors (gap A9)."""
+        """x̂(−1) of a swarm deployed at ``x`` (R, N, 2): the truth or random vectors
+        (docs/readings.md, "Initial estimates x̂(−1)")."""
         if self.initial_estimates == "truth":
             return relative_truth(x)
         return random_estimates(self.streams["init"], x.shape[1], *self.init_area)

@@ -163,7 +163,8 @@ def simulate_sonar(job: SonarJob, first_run: int, runs: int) -> SonarBatch:
         if escort:
             md[k], fr[k] = info.mean_dist_to_source, info.frac_inside_ring
             if occ is not None and k >= job.window:
-                rel = sw.state.x - sw.state.source[:, None, :]  # source-centred frame (A27)
+                # source-centred frame: docs/readings.md, "Occupancy maps of Figures 8-4 and 8-5"
+                rel = sw.state.x - sw.state.source[:, None, :]
                 ij = np.floor((rel + job.extent) / job.cell).astype(np.int64)
                 ok = np.all((ij >= 0) & (ij < C), axis=-1)
                 flat = (np.arange(runs)[:, None] * C + ij[..., 0]) * C + ij[..., 1]

@@ -1,11 +1,12 @@
-"""Fig. 8-2: Generalised Triangulation PSO against XB-PSO (spec §8.2, §9.3).
+"""Fig. 8-2: Generalised Triangulation PSO against XB-PSO (Rossides §8.1.1, p. 179; Fig. 8-2, p. 181).
 
 Both drive the non-omnidirectional controller [8.7] with DVC (Table 8.1: α = β = 0.9,
 U = 2 m/s, Δt = 1 s), 10 robots sensing each other in six sectors (R_sense = 10 m,
 robots as 1 m-radius discs; collisions not enforced, contacts counted), waveform-level
 signals (Q = 1.5, TBP = 100; D = 0.75 m for XB-PSO, one centre hydrophone for GT-PSO),
 a = 1, d_0 = d_c = 50 m, horizon 2000 timesteps (preset ``sonar-gt-pso``). The thesis
-names only SNR_0 = 10 and 6 dB; 4 and 0 dB stand for its unlisted lower values (spec A20).
+names only SNR_0 = 10 and 6 dB; 4 and 0 dB stand for its unlisted lower values (docs/readings.md, "Unstated settings of
+Chapter 8").
 """
 
 from __future__ import annotations

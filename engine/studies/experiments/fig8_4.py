@@ -1,12 +1,13 @@
 """Fig. 8-4: escorting a stationary source with 10 and 40 robots at r = 25, 50, 75 m
-(spec §7.6, §8.3, §9.4).
+(Rossides §8.2, p. 182; Fig. 8-4, p. 185).
 
 GT-PSO finds the source; its global best y_g is a ring obstacle of radius r in the
 six-sector reading of the non-omnidirectional DVC controller (Table 8.1), so the robots
 bounce off the ring (preset ``escort-stationary``). Robots start as in Chapter 7 (disc of
-50 m round the origin, source at SNR_0 = 10 dB, random bearing); 2000 steps (spec §8.3
-default). Metrics and occupancy are taken over the second half (steps 1000–2000), relative
-to the true source, in 5 × 5 m cells (spec A27). Collisions are not enforced.
+50 m round the origin, source at SNR_0 = 10 dB, random bearing); 2000 steps (docs/readings.md, "Unstated
+settings of Chapter 8"). Metrics and occupancy are taken over the second half (steps 1000–2000), relative
+to the true source, in 5 × 5 m cells (docs/readings.md, "Occupancy maps of Figures 8-4 and
+8-5"). Collisions are not enforced.
 """
 
 from __future__ import annotations
@@ -80,7 +81,7 @@ def run_escort(out_dir: Path, target: str, preset: str, cases: Sequence[ch.Escor
     }
     (out_dir / "README.md").write_text(f"""# {target} reproduction: source escorting
 
-GT-PSO with the non-omnidirectional DVC controller; y_g is a ring obstacle of radius r (spec §7.6).
+GT-PSO with the non-omnidirectional DVC controller; y_g is a ring obstacle of radius r (Rossides §8.2, p. 182).
 {runs} seeded runs per panel, {steps} steps, acoustics mode `{mode}`; preset `{preset}` with `--set`
 overrides (`summary.json` → `cases.*.command`). Window for all averages and maps: steps {w}–{steps}.
 Collisions are not enforced (robots may overlap; `summary.json` does not count them as failures).

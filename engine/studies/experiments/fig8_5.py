@@ -1,8 +1,9 @@
-"""Fig. 8-5: escorting a source that moves right at v_n = 0.1 and 0.25 (spec §7.6, §8.3, §9.4).
+"""Fig. 8-5: escorting a source that moves right at v_n = 0.1 and 0.25 (Rossides §8.2, p. 182;
+Fig. 8-5, p. 187).
 
-40 robots start round the source (disc of 50 m, spec §8.3) and escort it with GT-PSO and
-the ring obstacle r (preset ``escort-moving``). Panels (spec A19): a/b r = 25 m, c/d r = 50 m
-at PSD_s = 120 dB, e/f r = 50 m with a louder source (130 dB, spec default); a, c, e move at
+40 robots start round the source (disc of 50 m, "Unstated settings of Chapter 8") and escort it with GT-PSO and
+the ring obstacle r (preset ``escort-moving``). Panels (docs/readings.md, "Panels of Figure 8-5"): a/b r = 25 m,
+c/d r = 50 m at PSD_s = 120 dB, e/f r = 50 m with a louder source (130 dB, our value); a, c, e move at
 v_n = 0.1 (0.2 m/s), b, d, f at v_n = 0.25 (0.5 m/s) [8.8]. 2000 steps; averages and maps
 over the second half, in the frame of the moving source.
 """
@@ -21,7 +22,7 @@ DEFAULT_RUNS = 20
 HORIZON = 2000
 EXTENT = 300.0
 LEVEL = 0.01  # 1 % contour (Fig. 8-5)
-LOUD = 130.0  # dB, the unstated louder source (spec §8.3 default)
+LOUD = 130.0  # dB, the unstated louder source ("Panels of Figure 8-5")
 CASES = tuple(
     ch.EscortCase(f"{panel}-r{r:g}-{psd:g}dB-vn{vn:g}", 40, r, vn, psd, "source")
     for panel, r, psd, vn in (("a", 25.0, 120.0, 0.1), ("b", 25.0, 120.0, 0.25), ("c", 50.0, 120.0, 0.1),

@@ -1,7 +1,7 @@
 """Shared machinery of the SLO reproductions (Mai, Chapter 4: Figs. 4.1–4.13, Table 4.4).
 
 A *case* is a shipped SLO preset plus ``--set`` overrides (``slo-walk`` for the random-walk
-experiments of §4.5, ``slo-pso-sphere`` for the PSO experiment of §4.6), so every case can
+experiments of Mai §4.5, ``slo-pso-sphere`` for the PSO experiment of §4.6), so every case can
 be run by hand with ``shoal run``. An :class:`SLOJob` is one case for ``runs`` seeded runs;
 :func:`simulate_slo` advances a chunk of its runs and keeps per-generation series, and
 :func:`merge` glues chunks back together, so

@@ -22,12 +22,12 @@ from .runner import run_jobs
 FUNCTIONS = ("ackley", "griewank", "line", "plane", "rastrigin", "rosenbrock", "sphere")
 SELECTIONS = ("akcan", "css", "rts")
 LEVELS = ("none", "low", "high")
-FULL = 1000  # generations of the spec (A28)
+FULL = 1000  # generations (docs/readings.md, "Number of PSO generations")
 SHORT = FULL  # generations of the other cases (fewer for a quick look)
 RUNS_COLUMNS = ("case", "run", "seed", "function", "selection", "error_level", "first_gen_below_threshold",
                 "best_fitness", "final_fitness")
-# Table 4.4 as given in the thesis (gen, fit, end) per (function, selection, level); typographical slips
-# normalised as in the spec.
+# Table 4.4 (Mai p. 55) as given in the thesis (gen, fit, end) per (function, selection, level); typographical
+# slips in the printed numbers (e.g. a missing "e" in 1.068-02) normalised.
 THESIS = {
     ("ackley", "akcan"): ((np.inf, 7.035e+00, 7.035e+00), (117.5, 9.570e-03, 1.068e-02), (269.5, 2.102e-02, 2.342e-02)),
     ("ackley", "css"): ((46.0, 5.154e-03, 5.154e-03), (76.0, 6.798e-03, 7.659e-03), (402.5, 4.785e-02, 4.785e-02)),

@@ -32,7 +32,7 @@ HIGH = {  # Tab. 4.3 High values, each applied alone (everything else 0)
 
 
 def single(param: str | None, value: float = 0.0, selection: str = "css", neighbourhood: str = "knn") -> sc.Case:
-    """All errors 0 except ``param`` = ``value`` (§4.5.1)."""
+    """All errors 0 except ``param`` = ``value`` (Mai §4.5.1, p. 42)."""
     name = f"{selection}/{neighbourhood}/" + ("no-error" if param is None else f"{param}={value:g}")
     sets = ["slo.errors=none", f"slo.selection={selection}", f"slo.neighbourhood={neighbourhood}",
             "slo.neighbourhood_param="
