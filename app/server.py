@@ -33,7 +33,7 @@ from .session.session import Session
 from .session.upload import MAX_UPLOAD_BYTES
 from .tab import TabApp
 from .upload_guard import guard_uploads
-from .view.camera import CAMERA_FOV, CAMERA_HEIGHT, camera_height
+from .view.camera import CAMERA_FOV, CAMERA_HEIGHT, home_camera
 
 TICK_HZ = 60.0
 PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round
@@ -144,6 +144,7 @@ class ShoalServer:
                     title, body, color=color, auto_close_seconds=10.0 if color == "red" else 4.0),
                 send_file=lambda name, data: client.send_file_download(name, data, save_immediately=True),
                 atomic=client.atomic,
+                camera=client.camera,
             )
         tab = TabApp(session, gui, scene, experiments=self.experiments, owner=key, **kwargs)
         tab.auto_tick = auto_tick
@@ -187,9 +188,7 @@ class ShoalServer:
             client.gui.add_markdown(text)
 
     def _open_client(self, client: viser.ClientHandle) -> None:
-        client.camera.position = (0.0, 0.0, CAMERA_HEIGHT)
-        client.camera.look_at = (0.0, 0.0, 0.0)
-        client.camera.up_direction = (0.0, 1.0, 0.0)
+        home_camera(client.camera)
         fitted = threading.Event()
 
         @client.camera.on_update
@@ -197,7 +196,7 @@ class ShoalServer:
             if fitted.is_set():
                 return
             fitted.set()  # once: the first report tells the canvas' aspect; later moves are the user's
-            camera.position = (0.0, 0.0, camera_height(camera.aspect))
+            home_camera(camera)
 
         def refuse(title: str, body: str) -> None:
             client.add_notification(title, body, color="red", auto_close_seconds=10.0)

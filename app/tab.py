@@ -30,6 +30,7 @@ from .lessons.panel import LessonProgress
 from .panel.panel import Panel, Services
 from .preset_menu import PresetMenu
 from .session.session import Session
+from .view.camera import Viewport, home_camera
 
 CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
 
@@ -60,6 +61,7 @@ class TabApp:
         atomic: Callable[[], ContextManager[None]] | None = None,
         experiments: ExperimentService | None = None,
         owner: Hashable = None,
+        camera: Any = None,
     ) -> None:
         self.session = session
         self.experiments, self.owner = experiments, owner  # the server's experiments; this tab's key there
@@ -69,6 +71,7 @@ class TabApp:
         self._notify_client = notify
         self._send_client = send_file
         self._atomic = atomic or contextlib.nullcontext
+        self.camera = camera  # the browser's camera (viser ``CameraHandle``), None without one
         self._ticking = threading.Lock()
         self._clicks: list[Callable[[Any], None]] = []
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
@@ -76,14 +79,18 @@ class TabApp:
         self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
         self.menu = PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included, across swaps
         self._build_kind()
+        if camera is not None:
+            camera.on_update(self._camera_moved)
 
     def _build_kind(self) -> None:
         kind = app_kind(self.session)
         services = Services(notify=self.notify, send_file=self.send_file, menu=self.menu, make_session=session_for,
                             replace=self.replace, share=share_page, lessons=self.lesson_progress,
-                            experiments=self.experiments, owner=self.owner)
+                            experiments=self.experiments, owner=self.owner, view=self.view_action)
         self.panels = Panel(self.gui, self.session, kind, services)
         self.arena = kind.view(self.scene, self.panels.part)
+        if self.camera is not None:
+            self._camera_moved(self.camera)
         if self.panels.part.click is not None:
             for modifier in CLICK_MODIFIERS:
                 self._clicks.append(self.scene.on_click(modifier=modifier)(self.scene_click))
@@ -120,6 +127,24 @@ class TabApp:
             self.session = new
             self._build_kind()
             return new
+
+    def view_action(self, action: str) -> None:
+        """The panel's view buttons: "fit" (everything on screen, the camera back home) or "follow"
+        (the swarm's middle stays in the middle)."""
+        if action == "fit":
+            self.arena.fit_all()
+            self._home_camera()
+        elif action == "follow":
+            self.arena.follow_swarm()
+
+    def _camera_moved(self, camera: Any) -> None:
+        with contextlib.suppress(Exception):  # no report yet, or a tab closing
+            self.arena.look(Viewport.of(camera))
+
+    def _home_camera(self) -> None:
+        if self.camera is not None:
+            with contextlib.suppress(Exception):  # a tab closing meanwhile
+                home_camera(self.camera)
 
     def close(self) -> None:
         """The browser tab went away: stop listening to its scene and its experiment."""
@@ -182,6 +207,8 @@ class TabApp:
             self._acc = 0.0
         self._was_playing = s.playing
         if s.scene_revision != self.arena.built_revision:
+            if self.arena.built_revision >= 0:  # a scene built again is fitted again, seen from home
+                self._home_camera()
             with self._atomic():
                 self.arena.rebuild(s.scene_revision)
         if self.panels.controls != self._controls:  # the page is busy with the control's answer: let it show
@@ -192,6 +219,7 @@ class TabApp:
             with self._atomic():  # one wake-up of viser's event loop for the scene and its readouts
                 self.arena.draw(snap)
                 self.panels.on_snapshot(snap)
+                self.panels.view_gui.show_legend(self.arena.legend())
             self._next_scene = now + 1.0 / self.SCENE_HZ
         if plots and now >= self._next_plot:
             key = (s.revision, s.selected_robot, s.selected_dim, s.playing)

@@ -10,6 +10,10 @@ uploads together would pass ``pending_limit``; it frees the parts already receiv
 tells the tab why (each kind of refusal at most every few seconds). Viser itself drops a
 client's unfinished uploads when it disconnects.
 
+The page's own toast for an upload ("Uploading …", then "File uploaded successfully." as soon
+as the bytes are in, before the app has read them) is closed when the upload starts, so the
+only message a user sees is the app's verdict (loaded, or refused and why).
+
 It reads viser's bookkeeping of transfers in progress (``GuiApi._current_file_upload_states``,
 viser 1.x). If a viser version keeps them elsewhere, :func:`guard_uploads` installs nothing
 and says so; the size checks after the upload still hold.
@@ -23,6 +27,7 @@ from typing import Any, Callable
 from viser import _messages
 
 Refuse = Callable[[str, str], None]  # (file name, why)
+UPLOAD_TOAST = "upload-"  # the page's id of its own upload toast, before the transfer's uuid
 QUIET_SECONDS = 3.0  # a refusal within this time of the last one of its kind told is not told again
 
 
@@ -50,6 +55,8 @@ def guard_uploads(gui: Any, limit: int, pending_limit: int, refuse: Refuse) -> b
         return max(int(state.get("total_bytes", 0)), int(state.get("transferred_bytes", 0)))
 
     def on_start(client_id: Any, message: _messages.FileTransferStartUpload) -> None:
+        # the page names its toast "upload-<transfer uuid>"; later updates of a closed toast do nothing
+        interface.queue_message(_messages.RemoveNotificationMessage(UPLOAD_TOAST + message.transfer_uuid))
         pending = sum(size(s) for s in list(states.values()))  # this one included
         if message.size_bytes > limit:
             drop(message.transfer_uuid, "size",

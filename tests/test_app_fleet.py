@@ -104,6 +104,33 @@ def test_collided_robots_get_their_own_colour(tab):
     assert {tuple(c) for c in colors[status == 1]} != {tuple(c) for c in colors[status == 0]}
 
 
+def test_stalled_robots_are_ringed_counted_in_the_status_and_plotted(tab):
+    from shoal.engine.kinds.fleet import STALL_STEPS
+
+    s = tab.session
+    s.step(2)
+    with s.lock:
+        s.sim.state.slow[0, :3] = STALL_STEPS  # three robots held still for a while
+        s.sim.state.status[0, :3] = 0
+    s.revision += 1
+    tab.tick(3.0)
+    rings = np.asarray(tab.arena.nodes["stalled"].points, dtype=float)[:, :, :2].reshape(-1, 2)
+    centres = tab.arena.to_view(s.sim.state.x[0, :3])[:, :2]
+    assert tab.arena.nodes["stalled"].visible and len(rings) == 3 * 16 * 2
+    for c in centres:  # each ring goes round its robot
+        near = rings[np.hypot(*(rings - c).T) < 2.0 * s.sim.params.robot_radius * tab.arena.scale]
+        assert len(near) >= 32
+    assert "stalled robot" in tab.panels.view_gui.legend.content
+    assert f"{int(s.sim.info().stalled[0])} stalled" in tab.panels.status.content
+    s.sim.state.slow[0] = 0
+    s.step(1)
+    tab.panels.refresh_plots()
+    m = s.metric_arrays()
+    np.testing.assert_allclose(tab.panels.handles["robots"].data[3], m["stalled"])
+    tab.tick(4.0)
+    assert not tab.arena.nodes["stalled"].visible
+
+
 # ---------------------------------------------------------------------------- panels → engine
 def test_sliders_reach_the_fleet_params_without_restart(tab):
     s, p = tab.session, tab.panels

@@ -393,11 +393,11 @@ def test_a_diverging_swarm_keeps_the_home_view_and_is_reported(tab):
     assert "outside the arena" in tab.panels.status.content
 
 
-def test_landscape_image_is_oriented_with_plus_y_up():
-    img = landscape_rgb(Objective(name="sphere", source=np.array([5.0, 5.0]), scale=1.0), half_size=10.0, n=41)
+def test_landscape_image_rows_run_from_minus_y_as_viser_lays_them_on_the_ground():
+    img = landscape_rgb(Objective(name="sphere", source=np.array([5.0, -5.0]), scale=1.0), half_size=10.0, n=41)
     brightness = img.astype(float).sum(axis=-1)
-    row, col = np.unravel_index(np.argmin(brightness), brightness.shape)
-    assert row < 20 and col > 20  # darkest (lowest cost) at upper right, i.e. (+x, +y)
+    row, col = np.unravel_index(np.argmax(brightness), brightness.shape)
+    assert row < 20 and col > 20  # lightest (lowest cost) in an early row at the right: (+x, −y)
 
 
 # ---------------------------------------------------------------------------- plots

@@ -98,3 +98,93 @@ def test_a_fleet_zoom_builds_the_scene_again_at_the_new_scale(scene):
     view.draw(session.snapshot())
     assert view.scale == pytest.approx(2.5 * scale) and len(fits) == 2
     assert view.camera.zoom == pytest.approx(2.5)
+
+
+def _on_screen(view, xy) -> bool:
+    """Is world point ``xy`` inside the scene square the home camera shows (± VIEW_HALF)?"""
+    return bool(np.all(np.abs(view.to_scene(np.asarray(xy, dtype=float))) <= VIEW_HALF))
+
+
+def test_a_rebuild_that_moves_the_source_far_away_fits_source_and_swarm_on_screen(scene):
+    session, view = _view(scene, "sonar-xb-pso")
+    view.draw(session.snapshot())
+    home_scale = view.scale
+    session.apply({"acoustics.snr0_db": -10.0})  # the source goes some 3 km away: a new scene
+    view.rebuild(session.scene_revision)
+    view.draw(session.snapshot())
+    source = session.sim.state.source[0]
+    assert np.hypot(*source) > 2.5 * session.scenario.arena.half_size
+    assert _on_screen(view, source) and all(_on_screen(view, x) for x in session.sim.state.x[0])
+    assert view.scale < home_scale
+    session.apply({"acoustics.snr0_db": 10.0})  # back near: the home view again
+    view.rebuild(session.scene_revision)
+    view.draw(session.snapshot())
+    assert view.scale == pytest.approx(home_scale) and np.allclose(view.focus, 0.0)
+
+
+def test_fit_all_frames_a_swarm_that_left_the_arena_and_follow_keeps_it_in_the_middle(scene):
+    session, view = _view(scene, "default")
+    view.draw(session.snapshot())
+    session.sim.state.x[0] += 5 * session.scenario.arena.half_size  # the swarm far off the arena
+    session.revision += 1
+    view.follow_swarm()
+    view.draw(session.snapshot())
+    middle = session.sim.state.x[0].mean(axis=0)
+    np.testing.assert_allclose(view.focus, middle)
+    view.fit_all()
+    assert not view.following
+    view.draw(session.snapshot())
+    assert all(_on_screen(view, x) for x in session.sim.state.x[0]) and _on_screen(view, (0.0, 0.0))
+
+
+# ---------------------------------------------------------------------------- what the arena says about itself
+def test_the_panel_legend_lists_the_glyphs_drawn_and_swarm_b_only_with_compare(server):
+    from app_helpers import hand_tab
+
+    with hand_tab(server) as tab:
+        tab.session.step(3)
+        tab.tick(1.0)
+        text = tab.panels.view_gui.legend.content
+        assert "robot" in text and "trail" in text and "objective" in text and "swarm B" not in text
+        assert "rgb(" in text  # each glyph in its colour
+        tab.session.enable_compare({"controller.law": "adapted-tanh"})
+        tab.session.step(2)
+        tab.tick(2.0)
+        assert "swarm B" in tab.panels.view_gui.legend.content
+
+
+def _scale_bar(view) -> tuple[float, str]:
+    """(length in metres of the scale bar drawn, its label)."""
+    segs = np.asarray(view.nodes["scale"].points, dtype=float)
+    bar = segs[0, :, :2] / view.scale  # scene units under the root → metres
+    return float(np.hypot(*(bar[1] - bar[0]))), view.nodes["scale_label"].text
+
+
+@pytest.mark.parametrize("preset", KINDS)
+def test_the_scale_bar_says_its_true_length_and_follows_the_zoom(scene, preset):
+    from shoal.app.view.camera import Viewport
+    from shoal.app.view.layers import metre_text
+
+    session, view = _view(scene, preset)
+    view.draw(session.snapshot())
+    metres, text = _scale_bar(view)
+    assert text == metre_text(float(f"{metres:.4g}"))  # the label says the bar's true length
+    shown = 2 * Viewport().half_height * Viewport().aspect / view.scale  # metres across the screen
+    assert 0.05 * shown <= metres <= 0.2 * shown
+    view.look(Viewport(half_height=Viewport().half_height / 20))  # the user zooms in 20×
+    view.draw(session.snapshot())
+    closer, text = _scale_bar(view)
+    assert text == metre_text(float(f"{closer:.4g}"))
+    assert closer < metres / 5 and 0.05 * shown / 20 <= closer <= 0.2 * shown / 20
+
+
+@pytest.mark.parametrize("preset, drawn", [("default", True), ("rastrigin", True), ("standard-pso", True),
+                                           ("slo-pso-sphere", True), ("slo-adapted", True), ("slo-walk", False)])
+def test_chapter_3_and_slo_objectives_are_drawn_with_a_colour_bar(scene, preset, drawn):
+    session, view = _view(scene, preset)
+    view.draw(session.snapshot())
+    assert ("landscape" in view.nodes) is drawn and ("colour_bar" in view.nodes) is drawn
+    if drawn:
+        low, high = (float(view.nodes[k].text) for k in ("bar_low", "bar_high"))
+        assert low < high
+        assert "objective (light: low cost)" in _labels(view)

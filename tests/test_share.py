@@ -134,8 +134,13 @@ def test_a_seeded_run_of_every_scene_kind_plays_the_robots_as_run(name, kind):
 def test_a_seeded_run_draws_what_the_app_draws_live():
     page = preset_html(presets_io.load("sonar-gt-pso", ["sim.steps=6"]))
     rec = recorded(page)
-    for layer in ("rays_true", "rays_mirror", "pbests", "gbest", "trails", "source"):
+    for layer in ("rays_true", "rays_mirror", "pbests", "gbest", "trails", "source", "scale"):
         node(rec, layer)  # drawn by the acoustic view, as in the app
+    legend = page[page.index('<p class="legend">'):]
+    legend = legend[:legend.index("</p>")]
+    for label in ("robot", "source", "GT-PSO triangle", "personal best"):
+        assert f"&nbsp;{label}" in legend  # the page's panel names the glyphs it draws
+    assert "swarm B" not in legend and "believed position" not in legend
 
 
 def test_swarm_b_is_drawn_where_it_ran():
@@ -149,6 +154,7 @@ def test_swarm_b_is_drawn_where_it_ran():
     block = data_block(page)
     assert block["twin"] == {"overrides": overrides} and block["run"]["robots"] == 12
     assert "swarm B" in page and "controller.law=standard" in page
+    assert "&nbsp;swarm B" in page[page.index('<p class="legend">'):]  # B in the legend, with Compare
 
 
 # ---------------------------------------------------------------------------- recorded history

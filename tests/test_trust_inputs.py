@@ -46,6 +46,7 @@ HOSTILE = [
     ("at the end", "stop at step 1", "not one of the choices"),
     ("at the end", "../loop", "not one of the choices"),
     ("at the end", ["loop"], "expected text"),
+    ("view", "Zoom to Mars", "not one of the choices"),
     ("compare with swarm B", "yes", "true or false"),
     ("Export CSV", 1, "true or false"),
 ]

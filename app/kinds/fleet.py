@@ -18,7 +18,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from shoal.engine.kinds.fleet import Fleet, FleetParams
+from shoal.engine.kinds.fleet import STALL_STEPS, Fleet, FleetParams
 from shoal.engine.kinds.fleet_probe import RobotView, robot_view
 from shoal.engine.robots.dvc import TABLE_4_1
 from shoal.engine.robots.laws import ROBOT_LAWS
@@ -197,7 +197,8 @@ class FleetDriver(BaseDriver):
 
     def snapshot(self, selected: int) -> dict[str, Any]:
         s = self.sim.state
-        extras = dict(u=s.u[0].copy(), cmd=s.cmd[0].copy(), world_revision=self.world_revision, world=self.sim.world,
+        extras = dict(u=s.u[0].copy(), cmd=s.cmd[0].copy(), stalled=s.slow[0] >= STALL_STEPS,
+                      world_revision=self.world_revision, world=self.sim.world,
                       params=dataclasses.replace(self.sim.params), view=self.view(), follow=self.follow,
                       zoom=self.zoom if self.follow != "world" else 1.0)
         return {"y": s.y[0].copy(), "yg": s.yg[0].copy(), "ghosts": self.ghosts(selected, s.yg[0]),
@@ -212,8 +213,8 @@ class FleetDriver(BaseDriver):
         return {
             "t": self.session.clock(), "k": float(self.sim.state.k), "com": float(info.com_fitness[0]),
             "operational": float(info.operational[0]), "collided": float(info.collided[0]),
-            "layers_passed": float(info.layers_passed[0]), "layers": float(len(self.sim.world.layer_x)),
-            "best": float(info.best_fitness[0]),
+            "stalled": float(info.stalled[0]), "layers_passed": float(info.layers_passed[0]),
+            "layers": float(len(self.sim.world.layer_x)), "best": float(info.best_fitness[0]),
         }
 
     def export_extra(self) -> dict[str, Any]:
@@ -232,6 +233,7 @@ SOURCE = (20, 150, 60)
 LAYER = (150, 150, 150)
 ROBOT = (220, 50, 50)
 COLLIDED = (150, 150, 150)
+STALLED = (255, 120, 0)
 HEADING = (90, 15, 15)
 TRAIL = (110, 150, 255)
 PBEST = (120, 120, 120)
@@ -248,6 +250,22 @@ REACH_TOTAL = (240, 140, 20)
 # heights: later entries are drawn above earlier ones in the top view
 Z = dict(grid=-0.025, start=-0.02, layers=-0.015, sectors=-0.01, trails=-0.005, obstacles=0.0,
          pbests=0.004, source=0.006, gbest=0.008, robots=0.01, headings=0.012, probe=0.014, hits=0.016)
+
+class Stalled(Static):
+    """A ring round each running robot that has barely moved for a while (squeezed between bodies
+    it may not approach: the engine's ``stalled``); not on recorded frames."""
+
+    name = "stalled"
+    keys = ("stalled",)
+    legend = (LegendEntry("○", STALLED, "stalled robot (barely moving)"),)
+
+    def draw(self, canvas: Canvas, snap: Snapshot) -> None:
+        stalled = snap.extras.get("stalled")
+        x = snap.x[stalled] if stalled is not None else np.zeros((0, 2))
+        r = 1.6 * snap.extras["params"].robot_radius
+        segs = (shapes.circle_segments(np.zeros(2), r, 16)[None] + shapes.plane(x)[:, None, None, :]).reshape(-1, 2, 2)
+        canvas.lines("stalled", segs, STALLED, 2.5, Z["robots"] + 0.001)
+
 
 PROBE_NODES = ("selected", "sectors", "sector_edges", "hits", "hit_lines", "force", "reach_attract", "reach_total")
 
@@ -447,6 +465,9 @@ class FollowCamera:
     def reset(self) -> None:
         self._followed = None
 
+    def interest(self, snap: Snapshot) -> np.ndarray:
+        return np.zeros((0, 2))  # its home is the whole world already
+
     def follow(self, canvas: Canvas, snap: Snapshot) -> None:
         follow, self.zoom = snap.extras["follow"], float(snap.extras["zoom"])
         if follow == "world" or self.zoom <= 1.0:
@@ -472,6 +493,7 @@ def layers(part: KindPanel | None) -> tuple[Layer, ...]:
         WorldLayer(),
         Obstacles(part.drag if part is not None else None),
         Robots(ROBOT, _radius, Z["robots"], collided=COLLIDED),
+        Stalled(),
         Headings(HEADING, lambda canvas, snap: 1.3 * snap.extras["params"].robot_radius, Z["headings"],
                  angle=_heading_angle),
         Trails(TRAIL, 1.5, Z["trails"]),
@@ -641,6 +663,7 @@ def _status(s: Session, r: dict[str, float], state: str) -> str:
             f"CoM x = {r['com']:.1f} m"
             + (f" · layers passed {int(r['layers_passed'])}/{int(r['layers'])}" if r["layers"] else "")
             + f" · {int(r['operational'])}/{int(r['operational'] + r['collided'])} operational"
+            + (f" · {int(r['stalled'])} stalled" if r.get("stalled") else "")
             + (f" · {edits} obstacle edit{'s' * (edits != 1)}" if edits else ""))
 
 
@@ -671,6 +694,7 @@ COM = PlotSpec("com", "swarm fitness: CoM x [m] · dotted: layers",
 ROBOTS = PlotSpec("robots", "robots", (
     Series("operational", "operational", "rgb(30,140,70)", 2),
     Series("collided", "collided", "rgb(150,150,150)", 2, dash=(6.0, 4.0)),
+    Series("stalled", "stalled", "rgb(255,120,0)", 2, dash=(2.0, 3.0)),
 ), y_range=lambda s: (0.0, float(max(s.robots, 1)) + 0.5))
 
 

@@ -18,11 +18,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from shoal.engine.kinds.slo_swarm import SLOSwarm
+from shoal.engine.slo.objectives import slo_objective
 from shoal.engine.slo.selection import SELECTIONS
 from shoal.engine.slo.sensors import error_model
 from shoal.presets.build import build_slo, kind_of, slo_live_changes
@@ -40,7 +41,7 @@ from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..view import shapes
 from ..view.canvas import Canvas
-from ..view.layers import Ghosts, Ground, Layer, LegendEntry, Robots, Selected, Static, Trails, Twin
+from ..view.layers import Ghosts, Ground, Landscape, Layer, LegendEntry, Robots, Selected, Static, Trails, Twin
 from ..view.view import KeepSwarmInView
 from .base import AppKind, BaseDriver
 
@@ -227,12 +228,19 @@ class Pair(Static):
             canvas.label(key, key[-2:], xy + 0.5 / canvas.scale, 0.02)
 
 
+def landscape(scenario: Scenario) -> Callable[[np.ndarray], np.ndarray] | None:
+    """The benchmark a PSO-moved SLO swarm minimises (a random walk minimises nothing)."""
+    slo = scenario.slo
+    return slo_objective(slo.objective) if slo is not None and slo.motion == "pso" else None
+
+
 def layers(part: KindPanel | None) -> tuple[Layer, ...]:
     """Truth against belief: the true robots (red) and their neighbourhood (grey), trails, the
     observer (yellow ring) and its ghosts, the triangle inspector; swarm B."""
     return (
         Ground(cell=lambda half: half / 10, cell_colour=(228, 228, 224), section_colour=(200, 200, 196), z=Z["grid"],
                border=ARENA, border_px=2.5, border_z=0.0),
+        Landscape(landscape, z=-0.04),
         Edges(),
         Trails(TRAIL, 1.2, Z["trails"]),
         Robots(ROBOT, ROBOT_SIZE, Z["robots"]),

@@ -356,6 +356,9 @@ class SourceCamera:
     def reset(self) -> None:
         pass
 
+    def interest(self, snap: Snapshot) -> np.ndarray:
+        return np.vstack([snap.x, snap.extras["source"][None]])
+
     def follow(self, canvas: Canvas, snap: Snapshot) -> None:
         com, src = snap.x.mean(axis=0), snap.extras["source"]
         lim = 0.92 * _half(snap)
@@ -391,10 +394,7 @@ LABELS = {v: k for k, v in ALGORITHMS.items()}
 CORR = "rgb(40,90,200)"
 MARK = "rgb(220,50,50)"
 REBUILD_NOTE = "*SNR₀, the algorithm and the swarm size rebuild the swarm; the rest applies at the next step.*"
-GLYPHS = ("Drag the green source in the arena to move it; click a robot to select it. Green ray: the one of the "
-          "pair nearer the true source; orange: its mirror. Purple dots: ray intersections ahead of both rays "
-          "(grey: dropped by the ρ test [7.12]); pink diamonds: each robot's chosen intersection. Gold diamond: "
-          "the global best; green circle: d_c round the source; gold rings: the escort ring.")
+GLYPHS = "Drag the green source in the arena to move it; click a robot to select it (the legend names the glyphs)."
 EXPORT_NOTE = " The JSON export also lists the source where it is now (it may have been dragged)."
 
 

@@ -58,7 +58,6 @@ PBEST = (110, 110, 110)
 GBEST = (240, 170, 0)
 SOURCE = (20, 150, 60)
 ARENA = (40, 40, 40)
-BENCHMARKS = ("sphere", "rastrigin", "ackley", "rosenbrock", "griewank")
 
 
 def second_moment(x: np.ndarray, yg: np.ndarray) -> float:
@@ -158,9 +157,8 @@ class Optimum(Static):
 
 
 def landscape(scenario: Scenario) -> Objective | None:
-    """The benchmark objectives of a 2-D (or 3-D) swarm are drawn as a heat map."""
-    o = scenario.objective
-    return objective_for(o) if o.kind in BENCHMARKS and scenario.sim.d >= 2 else None
+    """The objective of a 2-D (or 3-D) swarm is drawn as a heat map (the distance to a source too)."""
+    return objective_for(scenario.objective) if scenario.sim.d >= 2 else None
 
 
 def layers(panels: Any) -> tuple[Layer, ...]:

@@ -51,6 +51,7 @@ from .spec import (
     Text,
     get_path,
 )
+from .view_row import ViewRow
 
 PLAYBACK = ("Play", "Pause", "Step", "Reset")
 SPEED_SLIDER = Slider("view.steps_per_second", "speed [steps/s]", 1.0, 240.0, 1.0, "playback rate")
@@ -83,6 +84,7 @@ class Services:
     lessons: LessonProgress = field(default_factory=LessonProgress)  # where the Lessons tab is (the tab keeps it)
     experiments: ExperimentService | None = None  # the server's experiments (None: no Experiment tab)
     owner: Hashable = None  # this browser tab's key among the experiments
+    view: Callable[[str], None] | None = None  # the arena's view buttons: "fit" or "follow"
 
 
 def notes_text(name: str = "ch3") -> str:
@@ -125,6 +127,7 @@ class Panel:
         self.controls = 0  # a count of the user's control events (the tab holds the scene a moment after one)
         self.part = kind.panel(self)
         self._build_header()
+        self.view_gui = ViewRow(self)
         badge = gui.add_markdown("", visible=False)  # names a loaded replay
         with gui.add_folder("Replay and files", expand_by_default=False) as files:  # closed: the controls fit
             self.replay_gui = ReplayFolder(self, badge)

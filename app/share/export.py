@@ -3,6 +3,7 @@ session's recorded history (the app's *Share*)."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
@@ -23,11 +24,13 @@ def _page(scenario: Scenario, frames: Iterable[Snapshot], info: page.PageInfo) -
     with page.recording_scene() as (scene, serializer):
         view = draw.new_view(scenario, scene)
         label = page.step_label(scene)
+        legend: dict = {}  # what any frame showed, in the order the view lists it
         for frame in frames:
             draw.draw_frame(view, frame)
+            legend.update(dict.fromkeys(view.legend()))
             label.text = page.step_text(frame.k, frame.t)
             serializer.insert_sleep(info.seconds_per_frame)
-        return page.to_html(serializer, info, stem)
+        return page.to_html(serializer, dataclasses.replace(info, legend=tuple(legend)), stem)
 
 
 def _info(scenario: Scenario, fp: FramePlan, *, origin: str, shoal_version: str, max_frames: int, robots: int,

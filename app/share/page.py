@@ -19,8 +19,10 @@ import urllib.parse
 from dataclasses import dataclass, field
 from typing import Any, Iterator
 
+from ..panel.view_row import legend_html
 from ..session.twin import literal
 from ..view.camera import CAMERA_FOV, CAMERA_HEIGHT, VIEW_HALF
+from ..view.layers import LegendEntry
 from .frames import MAX_FRAMES, MAX_ROBOT_FRAMES
 
 _LOCK = threading.Lock()  # one export at a time per process: CPU, and stdout is swapped while viser prints
@@ -102,6 +104,7 @@ class PageInfo:
     live_edits: int = 0
     twin_overrides: dict[str, Any] = field(default_factory=dict)
     twin_toml: str | None = None
+    legend: tuple[LegendEntry, ...] = ()  # the glyphs the page draws
 
     def data(self) -> dict[str, Any]:
         run = {k: getattr(self, k) for k in ("name", "seed", "shoal", "kind", "origin", "first", "last", "stride",
@@ -124,6 +127,7 @@ STYLE = """
 #shoal-run pre{font-size:11px;max-height:16rem;overflow:auto;background:#f5f6f8;padding:.3rem}
 #shoal-run code{font-size:12px}
 #shoal-run .twin{color:#14aab4;font-weight:600}
+#shoal-run .legend{margin:.3rem 0}
 """
 
 
@@ -146,6 +150,8 @@ def panel(info: PageInfo, file_stem: str) -> str:
     every = "every step" if info.stride == 1 else f"every {_ordinal(info.stride)} step and the last"
     pace = "the app's pace" if info.stride == 1 else f"{info.stride}× the app's pace"
     parts = [f"<details open><summary>Shoal · {e(info.name)}, seed {info.seed}</summary><table>{table}</table>"]
+    if info.legend:
+        parts.append(f'<p class="legend">{legend_html(info.legend)}</p>')
     if info.twin_toml is not None:
         lines = ", ".join(f"<code>{e(k)}={e(literal(v))}</code>" for k, v in info.twin_overrides.items())
         parts.append(f'<p><span class="twin">Teal: swarm B</span>, the same preset and seed with {lines or "no change"}'

@@ -5,6 +5,8 @@ scene units around the middle of the screen, so the camera need not move between
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Any
 
 VIEW_HALF = 10.0  # the arena's half size in scene units
 CAMERA_FOV = math.radians(8.0)
@@ -15,3 +17,33 @@ def camera_height(aspect: float) -> float:
     """Camera height that shows the whole arena (plus a margin) in a canvas of ``aspect`` = width/height."""
     aspect = aspect if math.isfinite(aspect) and aspect > 0 else 1.0
     return CAMERA_HEIGHT * max(1.0, 1.0 / aspect)
+
+
+def home_camera(camera: Any) -> None:
+    """Put a client's camera (viser ``CameraHandle``) back straight above the middle of the
+    screen at the height that shows the arena (undoes a user's orbit, pan and zoom)."""
+    camera.position = (0.0, 0.0, camera_height(camera.aspect))
+    camera.look_at = (0.0, 0.0, 0.0)
+    camera.up_direction = (0.0, 1.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Viewport:
+    """What a browser's camera shows of the scene: the scene point in the middle of the screen,
+    half the height shown (scene units) and width / height. The default is the home camera of a
+    square canvas (a page with no camera reports, such as a shared run)."""
+
+    centre: tuple[float, float] = (0.0, 0.0)
+    half_height: float = CAMERA_HEIGHT * math.tan(CAMERA_FOV / 2)
+    aspect: float = 1.0
+
+    @classmethod
+    def of(cls, camera: Any) -> "Viewport":
+        """The viewport of a viser ``CameraHandle`` looking down (its distance to what it looks at)."""
+        position, look_at = (tuple(float(v) for v in p) for p in (camera.position, camera.look_at))
+        distance = math.dist(position, look_at)
+        aspect = float(camera.aspect)
+        ok = all(map(math.isfinite, (distance, aspect, float(camera.fov)))) and distance > 0 and aspect > 0
+        if not ok:
+            return cls()
+        return cls((look_at[0], look_at[1]), distance * math.tan(float(camera.fov) / 2), aspect)

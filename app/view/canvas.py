@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .camera import Viewport
 from .shapes import lift, plane, ray_ground
 
 # Every build of a scene gets a root name never used before (and so do re-created nodes that
@@ -35,6 +36,7 @@ class Canvas:
         self.scale = 1.0
         self.centre = np.zeros(2)
         self.focus = np.zeros(2)
+        self.viewport = Viewport()  # what the browser's camera shows (a scale bar follows its zoom)
 
     # ------------------------------------------------------------------ lifecycle
     def reset(self, centre: np.ndarray, scale: float) -> None:
@@ -143,13 +145,16 @@ class Canvas:
                 node.colors = colors
         self.nodes[key].visible = bool(len(segs))
 
-    def label(self, key: str, text: str, xy: np.ndarray | None, z: float = 0.0) -> None:
-        """A text label at world ``xy`` (hidden when None or not finite)."""
+    def label(self, key: str, text: str, xy: np.ndarray | None, z: float = 0.0, **style: Any) -> None:
+        """A text label at world ``xy`` (hidden when None or not finite); ``style``: viser's
+        ``add_label`` keywords (anchor, font size), used when it is created."""
         ok = xy is not None and bool(np.all(np.isfinite(xy)))
         pos = tuple(float(v) for v in self.to_view(np.asarray(xy, dtype=float), z)) if ok else (0.0, 0.0, 0.0)
         node = self.nodes.get(key)
         if node is None:
-            self.nodes[key] = self.scene.add_label(self.name(key), text, position=pos)
+            self.nodes[key] = self.scene.add_label(self.name(key), text, position=pos, **style)
         else:
             node.position = pos
+            if node.text != text:
+                node.text = text
         self.nodes[key].visible = ok

@@ -9,12 +9,12 @@ the snapshot (markers sized in metres). Heights ``z`` order the layers in the to
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Callable, Protocol, Union
 
 import numpy as np
 
-from shoal.engine.core.objectives import Objective
 from shoal.presets.models import Scenario
 
 from ..session.snapshot import Snapshot
@@ -103,46 +103,121 @@ class Ground(Static):
         canvas.lines("arena", polyline(box, closed=True), self.border, self.border_px, self.border_z)
 
 
-def landscape_rgb(objective: Objective, half_size: float, n: int = 160) -> np.ndarray:
-    """The objective on an ``n × n`` grid over the arena as an RGB image (row 0 = top, +y).
+LANDSCAPE_MAP = "YlGn"  # low cost light (where the swarm gathers), high green: red robots and blue trails read on both
+LANDSCAPE_TINT = 0.8  # of the colour map, the rest white
 
-    Low cost is dark blue, high cost pale; values are log-compressed so that the many local
-    minima of Rastrigin or Griewank stay visible next to the steep walls.
-    """
-    from matplotlib import colormaps
 
+def landscape_values(fitness: Callable[[np.ndarray], np.ndarray], half_size: float, n: int = 160) -> np.ndarray:
+    """The cost on an ``n × n`` grid over the arena, as viser lays an image on the ground seen from
+    above: row 0 at −y (the bottom of the screen); a maximised objective negated."""
     xs = np.linspace(-half_size, half_size, n)
-    gx, gy = np.meshgrid(xs, xs[::-1])  # image rows run from +y (top) to −y
-    f = objective(np.stack([gx, gy], axis=-1))
-    if objective.maximise:
-        f = -f
-    f = np.log1p(f - f.min())
-    span = f.max() - f.min()
-    v = (f - f.min()) / span if span > 0 else np.zeros_like(f)
-    rgb = colormaps["YlGnBu_r"](0.15 + 0.85 * v)[..., :3]
-    rgb = 0.55 * rgb + 0.45  # paler, so the robots stand out
-    return (255 * rgb).astype(np.uint8)
+    gx, gy = np.meshgrid(xs, xs)  # image rows run from −y to +y
+    f = np.asarray(fitness(np.stack([gx, gy], axis=-1)), dtype=float)
+    return -f if getattr(fitness, "maximise", False) else f
+
+
+class HeatScale:
+    """Cost → colour, log-compressed (the many local minima of Rastrigin or Griewank stay visible
+    next to the steep walls): 0 at the lowest cost shown, 1 at the highest."""
+
+    def __init__(self, f: np.ndarray) -> None:
+        finite = f[np.isfinite(f)]
+        self.low = float(finite.min()) if finite.size else 0.0
+        self.span = float(np.log1p(finite.max() - self.low)) if finite.size else 0.0
+
+    def level(self, f: np.ndarray) -> np.ndarray:
+        v = np.log1p(np.maximum(np.nan_to_num(f, nan=self.low) - self.low, 0.0))
+        return np.clip(v / self.span, 0.0, 1.0) if self.span > 0 else np.zeros_like(v)
+
+    def cost(self, level: float) -> float:
+        return self.low + float(np.expm1(level * self.span))
+
+    @staticmethod
+    def rgb(level: np.ndarray) -> np.ndarray:
+        from matplotlib import colormaps
+
+        rgb = colormaps[LANDSCAPE_MAP](0.02 + 0.7 * np.asarray(level))[..., :3]  # no dark end: trails stay seen
+        return (255 * (LANDSCAPE_TINT * rgb + 1 - LANDSCAPE_TINT)).astype(np.uint8)
+
+
+def landscape_rgb(fitness: Callable[[np.ndarray], np.ndarray], half_size: float, n: int = 160) -> np.ndarray:
+    """The objective over the arena as an RGB image (row 0 at −y, see :func:`landscape_values`)."""
+    f = landscape_values(fitness, half_size, n)
+    return HeatScale(f).rgb(HeatScale(f).level(f))
+
+
+def cost_text(f: float) -> str:
+    return f"{f:.2g}" if abs(f) < 1e4 else f"{f:.0e}"
 
 
 class Landscape(Static):
-    """The objective as a heat map under the arena (when ``objective`` gives one)."""
+    """The objective as a heat map under the arena (when ``objective`` gives one), with a colour
+    bar beside the arena's right edge: the cost at its bottom, middle and top."""
 
     name = "landscape"
-    keys = ("landscape",)
-    legend = (LegendEntry("■", (40, 90, 160), "objective (dark: low)"),)
+    keys = ("landscape", "colour_bar", "bar_low", "bar_mid", "bar_high", "bar_title")
+    legend = (LegendEntry("■", (95, 175, 100), "objective (light: low cost)"),)
 
-    def __init__(self, objective: Callable[[Scenario], Objective | None], z: float) -> None:
+    def __init__(self, objective: Callable[[Scenario], Callable[[np.ndarray], np.ndarray] | None], z: float) -> None:
         self.objective, self.z = objective, z
 
     def build(self, canvas: Canvas, snap: Snapshot) -> None:
-        objective = self.objective(snap.scenario)
-        if objective is None:
+        fitness = self.objective(snap.scenario)
+        if fitness is None:
             return
         half = float(snap.scenario.arena.half_size)
         side = 2 * half * canvas.scale
+        f = landscape_values(fitness, half)
+        heat = HeatScale(f)
         canvas.add("landscape", canvas.scene.add_image(
-            canvas.name("landscape"), landscape_rgb(objective, half), render_width=side, render_height=side,
+            canvas.name("landscape"), heat.rgb(heat.level(f)), render_width=side, render_height=side,
             position=(0.0, 0.0, self.z), cast_shadow=False, receive_shadow=False))
+        levels = np.linspace(0.0, 1.0, 64)[:, None].repeat(4, axis=1)  # row 0 at the bottom: low cost
+        width, gap = 0.035 * side, 0.02 * side
+        x = side / 2 + gap + width / 2
+        canvas.add("colour_bar", canvas.scene.add_image(
+            canvas.name("colour_bar"), heat.rgb(levels), render_width=width, render_height=side,
+            position=(x, 0.0, self.z), cast_shadow=False, receive_shadow=False))
+        c, right = canvas.centre, half + (gap + width) / canvas.scale
+        for key, level in (("bar_low", 0.0), ("bar_mid", 0.5), ("bar_high", 1.0)):
+            canvas.label(key, cost_text(heat.cost(level)), c + (right, (2 * level - 1) * half), self.z + 0.06,
+                         anchor="center-left", font_screen_scale=0.85)
+        canvas.label("bar_title", "cost f", c + (right - width / canvas.scale, 1.035 * half), self.z + 0.06,
+                     anchor="bottom-left", font_screen_scale=0.85)
+
+
+def nice_length(most: float) -> float:
+    """The longest 1, 2 or 5 × 10^k not above ``most`` (> 0)."""
+    k = math.floor(math.log10(most))
+    return max(m for m in (1.0, 2.0, 5.0, 10.0) if m * 10**k <= most * (1 + 1e-9)) * 10**k
+
+
+def metre_text(m: float) -> str:
+    return f"{m / 1000:g} km" if m >= 1000 else f"{m:g} m" if m >= 1 else f"{m * 100:g} cm"
+
+
+class ScaleBar(Static):
+    """A bar of a round number of metres near the bottom left of what the camera shows, about a
+    sixth of its width: it follows the user's zoom and pan (``canvas.viewport``)."""
+
+    name = "scale"
+    keys = ("scale", "scale_label")
+    COLOUR = (30, 30, 30)
+
+    def __init__(self, z: float = 0.05) -> None:
+        self.z = z
+
+    def draw(self, canvas: Canvas, snap: Snapshot) -> None:
+        vp = canvas.viewport
+        hh = vp.half_height
+        hw = hh * max(vp.aspect, 1e-3)
+        length = nice_length(0.35 * hw / canvas.scale)
+        start = canvas.to_world(np.array(vp.centre) + (-0.8 * hw, -0.96 * hh))
+        end, tick = start + (length, 0.0), np.array([0.0, 0.018 * hh / canvas.scale])
+        segs = np.array([[start, end], [start - tick, start + tick], [end - tick, end + tick]])
+        canvas.lines("scale", segs, self.COLOUR, 3.0, self.z)
+        canvas.label("scale_label", metre_text(length), end + 0.5 * tick[::-1], self.z, anchor="center-left",
+                     font_screen_scale=1.1)
 
 
 # ---------------------------------------------------------------------------- robots

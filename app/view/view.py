@@ -2,9 +2,11 @@
 a :class:`Camera` that says where the world sits on screen.
 
 ``rebuild`` (a new static scene) forgets every node; the next ``draw`` builds the layers'
-static nodes for the snapshot's scene and calls the ``fit`` hook with the scene's extent, then
-every ``draw`` moves the nodes that follow the snapshot. A camera whose ``home`` changes (a
-fleet's zoom) builds the scene again at the new scale.
+static nodes for the snapshot's scene, fitted to the camera's home and what it names as of
+interest (the robots, a source: a rebuild that moved the source 2 km away shows it), and calls
+the ``fit`` hook with the scene's extent; then every ``draw`` moves the nodes that follow the
+snapshot. A camera whose ``home`` changes (a fleet's zoom) builds the scene again at the new
+scale; ``fit_all`` does so at once, ``follow_swarm`` keeps the swarm in the middle.
 """
 
 from __future__ import annotations
@@ -15,9 +17,9 @@ from typing import Any, Callable, Protocol, Sequence
 import numpy as np
 
 from ..session.snapshot import Snapshot
-from .camera import VIEW_HALF
+from .camera import VIEW_HALF, Viewport
 from .canvas import Canvas
-from .layers import Layer, LegendEntry
+from .layers import Layer, LegendEntry, ScaleBar
 from .shapes import plane
 
 Fit = Callable[[float, float], None]  # half width and half height of the scene just built, scene units
@@ -44,6 +46,38 @@ class Camera(Protocol):
         """Move ``canvas.focus`` to keep what matters in view."""
         ...
 
+    def interest(self, snap: Snapshot) -> np.ndarray:
+        """World points (m, (P, 2)) a fitted view keeps on screen besides its home (robots, a source)."""
+        ...
+
+
+MAX_FIT = 1e3  # a fitted view spans at most this many times the home's extent (a diverged swarm)
+FIT_MARGIN = 1.08
+
+
+def fitted(home: Home, points: np.ndarray) -> tuple[Home, np.ndarray]:
+    """``home`` widened (a smaller scale, the same centre, so the static scene stays where it is)
+    until the box round it and every finite point of ``points`` fits on screen, and the world
+    point to put in the middle of the screen: ``home`` and its centre when they already fit."""
+    pts = plane(np.asarray(points, dtype=float)).reshape(-1, 2)
+    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    c, h = np.array(home.centre), np.array(home.half)
+    if not len(pts) or (np.all(pts >= c - h) and np.all(pts <= c + h)):
+        return home, c
+    lo, hi = np.minimum(c - h, pts.min(axis=0)), np.maximum(c + h, pts.max(axis=0))
+    grow = float(np.max((hi - lo) / 2 / h)) * FIT_MARGIN
+    if grow > MAX_FIT:
+        return Home(home.centre, home.scale / MAX_FIT, (float(h[0] * MAX_FIT), float(h[1] * MAX_FIT))), c
+    return Home(home.centre, home.scale / grow, (float(h[0] * grow), float(h[1] * grow))), (lo + hi) / 2
+
+
+def swarm_middle(snap: Snapshot) -> np.ndarray | None:
+    """The middle of the robots still running (all of them when none is), None without a finite one."""
+    x = plane(snap.x)
+    alive = x[snap.status == 0] if snap.status is not None and np.any(snap.status == 0) else x
+    alive = alive[np.all(np.isfinite(alive), axis=1)]
+    return alive.mean(axis=0) if len(alive) else None
+
 
 def arena_home(snap: Snapshot, centre: np.ndarray | None = None) -> Home:
     """The arena square (``arena.half_size``) filling ``VIEW_HALF`` scene units around ``centre``."""
@@ -65,6 +99,9 @@ class KeepSwarmInView:
 
     def reset(self) -> None:
         pass
+
+    def interest(self, snap: Snapshot) -> np.ndarray:
+        return plane(snap.x)
 
     def follow(self, canvas: Canvas, snap: Snapshot) -> None:
         x = plane(snap.x)
@@ -95,11 +132,14 @@ class View:
     """The arena of one tab for one kind of scene (``name``). ``scene`` is a viser ``SceneApi``."""
 
     def __init__(self, scene: Any, name: str, camera: Camera, layers: Sequence[Layer], fit: Fit | None = None) -> None:
-        self.name, self.camera, self.layers, self.fit = name, camera, tuple(layers), fit
+        self.name, self.camera, self.layers, self.fit = name, camera, (*layers, ScaleBar()), fit
         self.canvas = Canvas(scene, name)
         self.drawn_revision = -1
         self.built_revision = -1
-        self._home: Home | None = None
+        self._home: Home | None = None  # the scene's home, fitted to what mattered when it was built
+        self._base: Home | None = None  # the camera's home it was fitted from
+        self._refit = False
+        self.following = False  # "follow swarm": the swarm's middle stays in the middle of the screen
 
     # ------------------------------------------------------------------ geometry (clicks, tests)
     @property
@@ -137,19 +177,38 @@ class View:
     def clear(self) -> None:
         """Remove every node of this view."""
         self.canvas.clear()
-        self._home = None
+        self._home = self._base = None
         self.built_revision = self.drawn_revision = -1
+
+    def fit_all(self) -> None:
+        """Build the scene again at the next draw, fitted to the home and everything that matters
+        now (the robots wherever they went, a source), and stop following the swarm."""
+        self._refit, self.following = True, False
+        self.drawn_revision = -1
+
+    def look(self, viewport: Viewport) -> None:
+        """The browser's camera moved (a zoom, a pan): draw again what depends on it."""
+        if viewport != self.canvas.viewport:
+            self.canvas.viewport = viewport
+            self.drawn_revision = -1
+
+    def follow_swarm(self) -> None:
+        self.following = True
+        self.drawn_revision = -1
 
     def rebuild(self, scene_revision: int) -> None:
         """A new static scene: the next ``draw`` builds it."""
         self.clear()
         self.built_revision = scene_revision
 
-    def _build(self, home: Home, snap: Snapshot) -> None:
+    def _build(self, base: Home, snap: Snapshot) -> None:
+        home, middle = fitted(base, self.camera.interest(snap))
+        self._base, self._refit = base, False
         self.canvas.reset(np.array(home.centre), home.scale)
         self.camera.reset()
         for layer in self.layers:
             layer.build(self.canvas, snap)
+        self.canvas.set_focus(middle)
         self._home = home
         if self.fit is not None:
             self.fit(home.half[0] * home.scale, home.half[1] * home.scale)
@@ -158,10 +217,15 @@ class View:
         """Push one snapshot into the nodes (nothing before the first ``rebuild``)."""
         if self.built_revision < 0:
             return
-        home = self.camera.home(snap)
-        if home != self._home:
-            self._build(home, snap)
-        self.camera.follow(self.canvas, snap)
+        base = self.camera.home(snap)
+        if base != self._base or self._refit:
+            self._build(base, snap)
+        if self.following:
+            middle = swarm_middle(snap)
+            if middle is not None:
+                self.canvas.set_focus(middle)
+        elif self._home == self._base:  # a view fitted wider than its home keeps what it framed
+            self.camera.follow(self.canvas, snap)
         for layer in self.layers:
             layer.draw(self.canvas, snap)
         self.drawn_revision = snap.revision

@@ -14,6 +14,52 @@ ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-f
 VIEWPORT = {"width": 1280, "height": 800}
 
 
+# viser's page renders the arena only while an IntersectionObserver says its canvas is in view
+# (the client mounts a no-op render loop of top priority otherwise: the panel stays live, the
+# scene tree fills, the canvas stays blank but for the axes gizmo). Headless Chromium on a busy
+# machine sometimes leaves the observer's last report at "not in view" for a canvas that fills
+# the window, which is the empty arena seen on load or after a click. This init script keeps
+# the observer's reports and adds the one it failed to send: every 0.5 s an element last
+# reported (or not yet reported) out of view that lies inside the window is reported in view.
+ARENA_IN_VIEW = """
+(() => {
+  const Native = window.IntersectionObserver;
+  if (!Native) return;
+  window.IntersectionObserver = class extends Native {
+    constructor(callback, options) {
+      const shown = new Map();  // element -> last "in view" told to the page
+      super((entries, observer) => {
+        for (const e of entries) if (shown.has(e.target)) shown.set(e.target, e.isIntersecting);
+        callback(entries, observer);
+      }, options);
+      this._shown = shown;
+      this._timer = setInterval(() => {
+        for (const [el, inView] of shown) {
+          if (inView) continue;
+          const r = el.getBoundingClientRect();
+          const inside = r.bottom > 0 && r.right > 0 && r.top < innerHeight && r.left < innerWidth;
+          if (r.width > 0 && r.height > 0 && inside) {
+            shown.set(el, true);
+            callback([{target: el, isIntersecting: true, intersectionRatio: 1, boundingClientRect: r,
+                       intersectionRect: r, rootBounds: null, time: performance.now()}], this);
+          }
+        }
+      }, 500);
+    }
+    observe(el) { if (!this._shown.has(el)) this._shown.set(el, false); super.observe(el); }
+    unobserve(el) { this._shown.delete(el); super.unobserve(el); }
+    disconnect() { clearInterval(this._timer); this._shown.clear(); super.disconnect(); }
+  };
+})();
+"""
+
+
+def arena_in_view(target):
+    """Install :data:`ARENA_IN_VIEW` on a Playwright page or browser context (before it loads the app)."""
+    target.add_init_script(ARENA_IN_VIEW)
+    return target
+
+
 def wait_until(cond, timeout: float = 45.0, what: str = "condition"):
     end = time.monotonic() + timeout
     while time.monotonic() < end:

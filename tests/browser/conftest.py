@@ -6,7 +6,7 @@ import shutil
 
 import pytest
 
-from browser_helpers import ARGS, VIEWPORT, wait_until
+from browser_helpers import ARGS, VIEWPORT, arena_in_view, wait_until
 
 CHROMIUM = shutil.which("chromium")
 
@@ -25,7 +25,7 @@ def page(server):
     sync_api = pytest.importorskip("playwright.sync_api")
     with sync_api.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        pg = browser.new_page(viewport=VIEWPORT)
+        pg = arena_in_view(browser.new_page(viewport=VIEWPORT))
         pg.goto(f"http://127.0.0.1:{server.port}/")
         pg.wait_for_selector("label:has-text('robots')", timeout=90000)
         yield pg

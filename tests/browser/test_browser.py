@@ -29,6 +29,7 @@ from shoal.app.view.camera import VIEW_HALF  # noqa: E402
 from browser_helpers import (  # noqa: E402
     ARGS,
     VIEWPORT,
+    arena_in_view,
     canvas_box,
     choose,
     dismiss_toasts,
@@ -52,7 +53,7 @@ def browser():
 
 @pytest.fixture(scope="module")
 def page(browser, server):
-    context = browser.new_context(accept_downloads=True, viewport=VIEWPORT)
+    context = arena_in_view(browser.new_context(accept_downloads=True, viewport=VIEWPORT))
     pg = context.new_page()
     pg.goto(f"http://127.0.0.1:{server.port}/")
     pg.wait_for_selector("label:has-text('robots')", timeout=90000)
@@ -170,15 +171,20 @@ def test_bad_upload_shows_the_field_and_keeps_the_scene(server, page, client_id)
     session = server.sessions[client_id]
     sim, k = session.sim, session.sim.state.k
     open_folder(page, "Replay and files", "Export CSV")
+    dismiss_toasts(page)  # the page shows only a few toasts at once
     upload_input(page, "Upload preset").set_input_files(
         {"name": "bad.toml", "mimeType": "application/toml", "buffer": b"[controller]\nomega = 7\n"})
     page.wait_for_selector(".mantine-Notification-root:has-text('controller.omega')", timeout=10000)
     assert session.sim is sim and session.sim.state.k == k
+    for _ in range(10):  # the page's own "File uploaded successfully." would show just before the verdict
+        toasts = page.locator(".mantine-Notification-root").all_inner_texts()
+        assert not any("uploaded successfully" in t for t in toasts), toasts  # only the verdict
+        time.sleep(0.1)
     dismiss_toasts(page)
 
 
 def test_a_second_tab_gets_its_own_session(server, browser, page, client_id):
-    other = browser.new_page(viewport=VIEWPORT)
+    other = arena_in_view(browser.new_page(viewport=VIEWPORT))
     try:
         other.goto(f"http://127.0.0.1:{server.port}/")
         other.wait_for_selector("label:has-text('robots')", timeout=90000)

@@ -31,6 +31,7 @@ from shoal.app.server import start_server  # noqa: E402
 from browser_helpers import (  # noqa: E402
     ARGS,
     VIEWPORT,
+    arena_in_view,
     canvas_box,
     dismiss_toasts,
     number_box,
@@ -51,7 +52,7 @@ def browser():
 
 
 def open_page(browser, port: int, ready: str):
-    context = browser.new_context(accept_downloads=True, viewport=VIEWPORT)
+    context = arena_in_view(browser.new_context(accept_downloads=True, viewport=VIEWPORT))
     pg = context.new_page()
     pg.goto(f"http://127.0.0.1:{port}/")
     pg.wait_for_selector(f"label:has-text('{ready}')", timeout=90000)

@@ -30,7 +30,7 @@ pytestmark = [
 
 sync_api = pytest.importorskip("playwright.sync_api")
 
-from browser_helpers import ARGS, VIEWPORT, canvas_box, dismiss_toasts, wait_until  # noqa: E402
+from browser_helpers import ARGS, VIEWPORT, arena_in_view, canvas_box, dismiss_toasts, wait_until  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from share_pages import data_block  # noqa: E402
@@ -110,7 +110,7 @@ def browser():
 
 
 def open_page(browser, url: str):
-    pg = browser.new_page(viewport=VIEWPORT)
+    pg = arena_in_view(browser.new_page(viewport=VIEWPORT))
     sockets: list[str] = []
     requests: list[str] = []
     pg.on("websocket", lambda ws: sockets.append(ws.url))
