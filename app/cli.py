@@ -241,9 +241,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--allow-origin", action="append", metavar="URL",
                    help="also accept pages of this origin, e.g. http://192.168.1.10:8080 or a proxy's "
                         "https://shoal.example.org (repeatable; by default only this server's own pages)")
-    s.add_argument("--scheduler", help="run the Experiment tab's sweeps on this Dask scheduler (tcp://HOST:PORT)")
+    s.add_argument("--scheduler", help="run the Sweep tab's sweeps on this Dask scheduler (tcp://HOST:PORT)")
     s.add_argument("--experiment-workers", type=int, default=1, metavar="W",
-                   help="without --scheduler: local worker processes for the Experiment tab (default 1)")
+                   help="without --scheduler: local worker processes for the Sweep tab (default 1)")
     s.set_defaults(func=_cmd_serve)
 
     r = sub.add_parser("run", help="headless seeded runs")

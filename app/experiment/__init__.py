@@ -4,7 +4,7 @@ server with the machinery of ``shoal sweep``, its medians shown as the cells com
 * :mod:`.request`: what a tab may ask for, checked against the scene and the server's limits;
 * :mod:`.service`: the server's queue, the thread that runs it, Cancel, one experiment per tab;
 * :mod:`.figure`: the plot in the page and the PNG to download;
-* :mod:`.panel`: the Experiment tab's handles.
+* :mod:`.panel`: the Sweep tab's handles.
 """
 
 from .request import AxisRequest, ExperimentRequest, Limits, Refused

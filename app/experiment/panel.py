@@ -1,4 +1,4 @@
-"""The Experiment tab: pick one or two fields of the scene, their values, the runs per cell and
+"""The Sweep tab: pick one or two fields of the scene, their values, the runs per cell and
 the outcome; run the sweep on the server; watch the medians come in; open a cell in the arena;
 download the tidy CSV and the figure.
 
@@ -90,7 +90,7 @@ class _AxisGui:
 
 
 class ExperimentPanel:
-    """The handles of the Experiment tab, wired to ``service`` for ``owner``."""
+    """The handles of the Sweep tab, wired to ``service`` for ``owner``."""
 
     def __init__(self, gui: Any, service: ExperimentService, owner: Hashable, *, scenario: Callable[[], Scenario],
                  open_cell: Callable[[Scenario], Any], notify: Callable[[str, str, str], None],
