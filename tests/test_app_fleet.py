@@ -120,7 +120,7 @@ def test_stalled_robots_are_ringed_counted_in_the_status_and_plotted(tab):
     for c in centres:  # each ring goes round its robot
         near = rings[np.hypot(*(rings - c).T) < 2.0 * s.sim.params.robot_radius * tab.arena.scale]
         assert len(near) >= 32
-    assert "stalled robot" in tab.panels.view_gui.legend.content
+    assert "&nbsp;stalled" in tab.panels.view_gui.legend.content
     assert f"{int(s.sim.info().stalled[0])} stalled" in tab.panels.status.content
     s.sim.state.slow[0] = 0
     s.step(1)

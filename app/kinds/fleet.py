@@ -282,7 +282,7 @@ class WorldLayer(Static):
 
     name = "world"
     keys = ("grid", "start", "start_edge", "walls", "layers", "source", "source_label")
-    legend = (LegendEntry("■", START, "start box"), LegendEntry("—", LAYER, "obstacle layer"),
+    legend = (LegendEntry("■", START, "start box"), LegendEntry("—", LAYER, "layer"),
               LegendEntry("●", SOURCE, "source"))
 
     def build(self, canvas: Canvas, snap: Snapshot) -> None:
@@ -377,9 +377,9 @@ class Probe(Static):
 
     name = "probe"
     keys = PROBE_NODES
-    legend = (LegendEntry("○", SELECTED, "selected robot"), LegendEntry("■", (215, 70, 20), "sector (near: red)"),
-              LegendEntry("◆", HIT, "closest hit"), LegendEntry("—", FORCE, "virtual force F_t"),
-              LegendEntry("○", REACH_ATTRACT, "reach of c1 + c2"), LegendEntry("○", REACH_TOTAL, "reach of ĉ"))
+    legend = (LegendEntry("○", SELECTED, "selected"), LegendEntry("■", (215, 70, 20), "sector (near: red)"),
+              LegendEntry("◆", HIT, "closest hit"), LegendEntry("—", FORCE, "force F_t"),
+              LegendEntry("○", REACH_ATTRACT, "reach c1+c2"), LegendEntry("○", REACH_TOTAL, "reach ĉ"))
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         if not snap.live:

@@ -201,8 +201,8 @@ class Pair(Static):
 
     name = "pair"
     keys = PAIR_LINES + PAIR_POINTS + PAIR_LABELS
-    legend = (LegendEntry("—", TRUTH, "true neighbour"), LegendEntry("■", MIRROR, "mirror pair x1, x2"),
-              LegendEntry("■", DEAD_RECKONING, "dead reckoning x3"), LegendEntry("●", PREVIOUS, "previous estimate"),
+    legend = (LegendEntry("—", TRUTH, "true neighbour"), LegendEntry("■", MIRROR, "x1, x2"),
+              LegendEntry("■", DEAD_RECKONING, "x3"), LegendEntry("●", PREVIOUS, "previous estimate"),
               LegendEntry("●", CHOSEN, "estimate kept"))
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:

@@ -220,8 +220,8 @@ class Source(Static):
 
     name = "source"
     keys = ("source", "source_label", "dc_ring", "escort")
-    legend = (LegendEntry("●", SOURCE, "source"), LegendEntry("○", DC_RING, "d_c round the source"),
-              LegendEntry("○", ESCORT, "escort ring r"))
+    legend = (LegendEntry("●", SOURCE, "source"), LegendEntry("○", DC_RING, "d_c"),
+              LegendEntry("○", ESCORT, "escort ring"))
 
     def __init__(self, on_drag: SourceDrag | None) -> None:
         self.on_drag = on_drag
@@ -278,7 +278,7 @@ class Rays(Static):
 
     name = "rays"
     keys = ("rays_true", "rays_mirror", "rays_sel_true", "rays_sel_mirror")
-    legend = (LegendEntry("—", RAY_TRUE, "bearing ray nearer the source"), LegendEntry("—", RAY_MIRROR, "its mirror"))
+    legend = (LegendEntry("—", RAY_TRUE, "bearing ray"), LegendEntry("—", RAY_MIRROR, "mirror ray"))
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         true, mirror = ray_segments(snap)
@@ -295,8 +295,8 @@ class Hits(Static):
 
     name = "hits"
     keys = ("hits_kept", "hits_dropped", "picks", "partner")
-    legend = (LegendEntry("●", HIT_KEPT, "ray intersection"), LegendEntry("●", HIT_DROPPED, "dropped by the ρ test"),
-              LegendEntry("◆", PICK, "chosen intersection"))
+    legend = (LegendEntry("●", HIT_KEPT, "intersection"), LegendEntry("●", HIT_DROPPED, "dropped (ρ test)"),
+              LegendEntry("◆", PICK, "chosen"))
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         e = snap.extras

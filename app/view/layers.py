@@ -230,7 +230,7 @@ class Robots(Static):
     def __init__(self, colour: Colour, size: Size, z: float, *, collided: Colour | None = None) -> None:
         self.colour, self.size, self.z, self.collided = colour, size, z, collided
         self.legend = (LegendEntry("●", colour, "robot"),) + (
-            (LegendEntry("●", collided, "collided robot"),) if collided is not None else ())
+            (LegendEntry("●", collided, "collided"),) if collided is not None else ())
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         colour: Colour | np.ndarray = self.colour
@@ -313,7 +313,7 @@ class Selected(Static):
         """``radius`` in metres."""
         self.colour, self.radius, self.z, self.px = colour, radius, z, px
         self.segments, self.live_only = segments, live_only
-        self.legend = (LegendEntry("○", colour, "selected robot"),)
+        self.legend = (LegendEntry("○", colour, "selected"),)
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         if self.live_only and not snap.live:
