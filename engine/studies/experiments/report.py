@@ -266,8 +266,10 @@ def render(outcomes: Sequence[Outcome], *, image_prefix: str = "") -> str:
                          f"{s.get('workers', '')} |")
     ran = [o.summary or {} for o in outcomes if o.error is None]
     if ran:
-        wall, cpu = sum(s.get("elapsed_s", 0.0) for s in ran), sum(s.get("cpu_s", 0.0) for s in ran)
-        lines.append(f"| all | | | | {wall:.0f} | {cpu:.0f} | |")
+        wall = sum(s.get("elapsed_s", 0.0) for s in ran)
+        timed = [s["cpu_s"] for s in ran if "cpu_s" in s]  # (reports older than the CPU column have none)
+        cpu = f"{sum(timed):.0f}{'' if len(timed) == len(ran) else ' (of the targets timed)'}" if timed else ""
+        lines.append(f"| all | | | | {wall:.0f} | {cpu} | |")
     total = sum(len(o.checks) for o in outcomes)
     lines += ["", f"In all: {sum(o.passed for o in outcomes)} of {total} checks pass over "
               f"{sum(o.error is None for o in outcomes)} targets.", ""]
