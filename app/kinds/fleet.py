@@ -5,8 +5,7 @@
   rebuild the fleet (robots back in the start box, world edits dropped); the SLO error set
   and localisation settings retune the running fleet;
 * world edits: add, remove and move obstacles while the robots run (``Fleet.set_world``);
-  they live in the running fleet only, since a preset describes its world by generator
-  parameters;
+  a downloaded preset keeps them in ``world.obstacles`` (``kept``);
 * the selected robot's view: its sectors, hits, force and budget (``robot_view``).
 """
 
@@ -24,7 +23,7 @@ from shoal.engine.robots.dvc import TABLE_4_1
 from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.engine.robots.world import WorldSpec
 from shoal.presets.build import build_fleet, fleet_params_for, kind_of, world_for
-from shoal.presets.io import PresetError
+from shoal.presets.io import PresetError, kept_fields
 from shoal.presets.models import Scenario
 
 from ..panel.panel import TRAIL_SLIDER
@@ -220,6 +219,12 @@ class FleetDriver(BaseDriver):
     def export_extra(self) -> dict[str, Any]:
         w = self.sim.world
         return {"world": {"name": w.name, "circles": w.circles.tolist(), "edits": self.edits}}
+
+    def kept(self, scenario: Scenario) -> Scenario:
+        """The obstacles as edited by hand in ``world.obstacles`` (unchanged without edits)."""
+        if not self.edits or scenario.world is None:
+            return scenario
+        return kept_fields(scenario, "world", obstacles=self.sim.world.circles.tolist())
 
 
 # ---------------------------------------------------------------------------- view

@@ -546,6 +546,11 @@ class Session:
                "trajectories": trajectories}
         return json.dumps(doc, separators=(",", ":")).encode()
 
-    def preset_toml(self) -> bytes:
+    def kept_scenario(self) -> Scenario:
+        """The scenario with the hand edits of the running scene in its fields (``Driver.kept``)."""
         with self.lock:
-            return presets_io.to_toml(self.scenario).encode()
+            return self.driver.kept(self.scenario)
+
+    def preset_toml(self) -> bytes:
+        """The preset a user downloads: the scenario with the hand edits kept."""
+        return presets_io.to_toml(self.kept_scenario()).encode()
