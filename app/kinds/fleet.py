@@ -168,7 +168,7 @@ class FleetDriver(BaseDriver):
             self._world_changed()
 
     def restore_world(self) -> None:
-        """Drop the edits: the world the scenario generates, robots kept where they are."""
+        """Drop the edits: the world the scenario describes, robots kept where they are."""
         with self.session.lock:
             self.sim.set_world(world_for(self.session.scenario.world))
             self.world_revision += 1
@@ -627,7 +627,7 @@ def _view(panel: PanelAPI, value: Any) -> None:
 
 def _restore(panel: PanelAPI) -> None:
     driver(panel.session).restore_world()
-    panel.notify("World restored", "the generated obstacles are back; the robots carry on", "blue")
+    panel.notify("World restored", "the preset's obstacles are back; the robots carry on", "blue")
 
 
 def _obstacle_radius(panel: PanelAPI, value: Any) -> None:
@@ -772,7 +772,7 @@ def panel(api: PanelAPI) -> KindPanel:
                     Dropdown("click", "click does", CLICK_MODES, act=_keep),
                     Slider("obstacle_radius", "new obstacle radius [m]", 0.2, 3.0, 0.1,
                            read=lambda s: driver(s).obstacle_radius, act=_obstacle_radius),
-                    Button("restore", "Restore world", _restore, hint="drop the edits: the generated world again"),
+                    Button("restore", "Restore world", _restore, hint="drop the edits: the preset's world again"),
                 )),
                 TRAIL_SLIDER,
             )),
