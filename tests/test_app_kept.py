@@ -42,6 +42,15 @@ def test_fleet_edits_survive_download_and_load():
     assert t.sim.state.k == 3
 
 
+def test_a_new_world_setting_in_the_app_generates_the_world_afresh():
+    s = session_for(presets_io.load("course-dvc", ["world.obstacles=[[10.0, 0.0, 1.0]]"]))
+    assert len(s.sim.world.circles) == 1
+    s.apply({"world.layers": 3})
+    assert s.scenario.world.obstacles is None
+    np.testing.assert_array_equal(s.sim.world.circles, world_for(s.scenario.world).circles)
+    assert len(s.sim.world.circles) > 1
+
+
 def test_a_preset_without_edits_downloads_as_before():
     s = session_for(presets_io.load("course-dvc"))
     assert s.preset_toml().decode() == presets_io.to_toml(s.scenario)

@@ -191,6 +191,8 @@ class Session:
         """The scenario with ``changes`` (dotted path → value) applied, validated; nothing is changed."""
         with self.lock:
             data = copy.deepcopy(self.scenario.model_dump(mode="json"))
+        if data.get("world") and any(k.startswith("world.") and k != "world.obstacles" for k in changes):
+            data["world"].pop("obstacles", None)  # a new generator setting lays its world out afresh
         for key, value in changes.items():
             presets_io.set_dotted(data, key, value)
         return check_app_limits(presets_io.validate(data))
