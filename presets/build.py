@@ -100,15 +100,23 @@ def world_for(w: WorldModel) -> WorldSpec:
 
 def with_obstacles(world: WorldSpec, obstacles: list[tuple[float, float, float]]) -> WorldSpec:
     """``world`` with the circles of ``world.obstacles`` in place of its generated ones; a
-    circle whose centre lies outside the world is refused by its index."""
+    circle whose centre lies outside the world, or that reaches into the start box (the robots
+    are placed there), is refused by its index."""
     circles = np.asarray(obstacles, dtype=float).reshape(-1, 3)
+    x, y, r = circles.T
     x0, y0, x1, y1 = world.bounds
-    outside = np.flatnonzero(~((x0 < circles[:, 0]) & (circles[:, 0] < x1) & (y0 < circles[:, 1])
-                               & (circles[:, 1] < y1)))
+    outside = np.flatnonzero(~((x0 < x) & (x < x1) & (y0 < y) & (y < y1)))
     if outside.size:
         i = int(outside[0])
-        raise PresetError([f"world.obstacles.{i}: centre ({circles[i, 0]:g}, {circles[i, 1]:g}) m is outside the "
+        raise PresetError([f"world.obstacles.{i}: centre ({x[i]:g}, {y[i]:g}) m is outside the "
                            f"world ({x0:g} < x < {x1:g}, {y0:g} < y < {y1:g})"])
+    sx0, sy0, sx1, sy1 = world.start_box
+    gap = np.hypot(x - np.clip(x, sx0, sx1), y - np.clip(y, sy0, sy1)) - r  # surface to the box
+    inside = np.flatnonzero(gap < 0.0)
+    if inside.size:
+        i = int(inside[0])
+        raise PresetError([f"world.obstacles.{i}: the circle ({x[i]:g}, {y[i]:g}, r = {r[i]:g}) m reaches into "
+                           f"the start box ({sx0:g} < x < {sx1:g}, {sy0:g} < y < {sy1:g}), where the robots start"])
     return dataclasses.replace(world, circles=circles)
 
 

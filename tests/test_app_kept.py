@@ -129,6 +129,12 @@ def test_an_obstacle_outside_the_world_is_refused_naming_it():
         session_for(sc)
 
 
+def test_an_obstacle_on_the_start_box_is_refused_naming_it():
+    sc = presets_io.load(BASE, ["world.obstacles=[[30.0, 0.0, 1.0], [3.0, 0.0, 5.0]]"])
+    with pytest.raises(PresetError, match=r"^world\.obstacles\.1: .*start box"):
+        world_for(sc.world)
+
+
 def test_an_empty_list_means_no_obstacles_and_unset_means_generated():
     empty = presets_io.load(BASE, ["world.obstacles=[]"])
     assert len(world_for(empty.world).circles) == 0
