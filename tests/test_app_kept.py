@@ -135,6 +135,19 @@ def test_an_obstacle_on_the_start_box_is_refused_naming_it():
         world_for(sc.world)
 
 
+def test_an_edit_a_preset_cannot_hold_is_refused_at_download_naming_it():
+    """An obstacle dropped in the start box (allowed while the robots run) cannot be kept: robots
+    start there. The download says which obstacle, and the session is untouched."""
+    s = session_for(presets_io.load(BASE))
+    sx0, sy0, sx1, sy1 = s.sim.world.start_box
+    s.sim.state.x[0] += (sx1 - sx0) + 3.0  # the robots have left the start box
+    fleet.driver(s).add_obstacle((sx0 + sx1) / 2, (sy0 + sy1) / 2, 0.5)
+    n = len(s.sim.world.circles)
+    with pytest.raises(PresetError, match=rf"world\.obstacles\.{n - 1}: .*start box"):
+        s.preset_toml()
+    assert len(s.sim.world.circles) == n and s.scenario.world.obstacles is None
+
+
 def test_an_empty_list_means_no_obstacles_and_unset_means_generated():
     empty = presets_io.load(BASE, ["world.obstacles=[]"])
     assert len(world_for(empty.world).circles) == 0

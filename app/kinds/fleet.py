@@ -22,7 +22,7 @@ from shoal.engine.kinds.fleet_probe import RobotView, robot_view
 from shoal.engine.robots.dvc import TABLE_4_1
 from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.engine.robots.world import WorldSpec
-from shoal.presets.build import build_fleet, fleet_params_for, kind_of, world_for
+from shoal.presets.build import build_fleet, check_world, fleet_params_for, kind_of, world_for
 from shoal.presets.io import PresetError, kept_fields
 from shoal.presets.models import Scenario
 
@@ -224,7 +224,7 @@ class FleetDriver(BaseDriver):
         """The obstacles as edited by hand in ``world.obstacles`` (unchanged without edits)."""
         if not self.edits or scenario.world is None:
             return scenario
-        return kept_fields(scenario, "world", obstacles=self.sim.world.circles.tolist())
+        return check_world(kept_fields(scenario, "world", obstacles=self.sim.world.circles.tolist()))
 
 
 # ---------------------------------------------------------------------------- view
