@@ -13,6 +13,8 @@ from shoal.presets import io as presets_io
 from shoal.presets.build import world_for
 from shoal.presets.io import PresetError
 
+APP_PRESET = "course-dvc"  # the shared ``server`` fixture (conftest.py) shows this scene (the ``tab`` test)
+
 
 def reloaded(s):
     """A new session of the preset ``s`` downloads (its TOML text, parsed and validated again)."""
@@ -152,3 +154,21 @@ def test_an_empty_list_means_no_obstacles_and_unset_means_generated():
     empty = presets_io.load(BASE, ["world.obstacles=[]"])
     assert len(world_for(empty.world).circles) == 0
     assert len(world_for(presets_io.load(BASE).world).circles) > 0
+
+
+def test_the_download_button_writes_the_edits_or_says_why_not(tab):
+    s = tab.session
+    d = fleet.driver(s)
+    d.add_obstacle(s.sim.world.bounds[2] - 4.0, 1.5, 1.0)
+    tab.panels.download.value = True  # fires on_click
+    name, content = tab.downloads[-1]
+    again = presets_io.validate(presets_io.parse_text(content.decode()))
+    np.testing.assert_array_equal(np.asarray(again.world.obstacles), s.sim.world.circles)
+    sx0, sy0, sx1, sy1 = s.sim.world.start_box
+    s.sim.state.x[0] += (sx1 - sx0) + 3.0
+    d.add_obstacle((sx0 + sx1) / 2, (sy0 + sy1) / 2, 0.5)
+    before = len(tab.downloads)
+    tab.panels.download.value = True
+    assert len(tab.downloads) == before  # nothing half-written
+    title, body, colour = tab.messages[-1][:3]
+    assert title == "Refused: download preset" and "start box" in body and colour == "red"
