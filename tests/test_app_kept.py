@@ -76,6 +76,7 @@ def test_dragged_source_survives_download_and_load():
     t, text = reloaded(s)
     assert t.scenario.acoustics.source == (12.5, -30.25)
     np.testing.assert_array_equal(t.sim.state.source[0], [12.5, -30.25])
+    assert "source starts at (12.5, -30.2) m (acoustics.source)" in sonar._readout(t)
     # the swarm itself starts as the preset's did: only the source moved
     fresh = session_for(presets_io.load("sonar-xb-pso"))
     np.testing.assert_array_equal(t.sim.state.x, fresh.sim.state.x)

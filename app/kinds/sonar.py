@@ -528,7 +528,9 @@ def _hearing(s: Session, snap: Snapshot) -> str:
 
 def _readout(s: Session) -> str:
     r, ac = s.readout(), s.scenario.acoustics
-    return (f"R_ref = {fmt(r['r_ref'], 'm')} (SNR 0 dB) · source starts at d_s = {fmt(r['d_s'], 'm')} · "
+    start = (f"source starts at ({ac.source[0]:.1f}, {ac.source[1]:.1f}) m (acoustics.source)" if ac.source is not None
+             else f"source starts at d_s = {fmt(r['d_s'], 'm')}")
+    return (f"R_ref = {fmt(r['r_ref'], 'm')} (SNR 0 dB) · {start} · "
             f"λ_c = {fmt(r['lambda'], 'm')} · D = {fmt(r['D'], 'm')} · window ±D/c = "
             f"{r['D'] / ac.c * 1e3:.3g} ms · controller {ac.controller}")
 
