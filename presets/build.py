@@ -3,6 +3,7 @@ function per scene kind, each returning a :class:`~shoal.engine.core.contract.En
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from typing import Any, Protocol
 
@@ -86,13 +87,37 @@ def world_for(w: WorldModel) -> WorldSpec:
     the generator cannot lay it out (the model allows some sizes that do not fit together)."""
     try:
         if w.kind == "obstacle-course":
-            return obstacle_course(seed=w.seed, layers=w.layers, length=w.length, width=w.width,
-                                   start_size=w.start_size)
-        if w.kind == "forest":
-            return forest(seed=w.seed, size=w.width, density=w.density, start_size=w.start_size)
-        return empty_arena(size=w.width, start_size=w.start_size)
+            world = obstacle_course(seed=w.seed, layers=w.layers, length=w.length, width=w.width,
+                                    start_size=w.start_size)
+        elif w.kind == "forest":
+            world = forest(seed=w.seed, size=w.width, density=w.density, start_size=w.start_size)
+        else:
+            world = empty_arena(size=w.width, start_size=w.start_size)
     except ValueError as err:
         raise PresetError([world_error(str(err))]) from None
+    return world if w.obstacles is None else with_obstacles(world, w.obstacles)
+
+
+def with_obstacles(world: WorldSpec, obstacles: list[tuple[float, float, float]]) -> WorldSpec:
+    """``world`` with the circles of ``world.obstacles`` in place of its generated ones; a
+    circle whose centre lies outside the world, or that reaches into the start box (the robots
+    are placed there), is refused by its index."""
+    circles = np.asarray(obstacles, dtype=float).reshape(-1, 3)
+    x, y, r = circles.T
+    x0, y0, x1, y1 = world.bounds
+    outside = np.flatnonzero(~((x0 < x) & (x < x1) & (y0 < y) & (y < y1)))
+    if outside.size:
+        i = int(outside[0])
+        raise PresetError([f"world.obstacles.{i}: centre ({x[i]:g}, {y[i]:g}) m is outside the "
+                           f"world ({x0:g} < x < {x1:g}, {y0:g} < y < {y1:g})"])
+    sx0, sy0, sx1, sy1 = world.start_box
+    gap = np.hypot(x - np.clip(x, sx0, sx1), y - np.clip(y, sy0, sy1)) - r  # surface to the box
+    inside = np.flatnonzero(gap < 0.0)
+    if inside.size:
+        i = int(inside[0])
+        raise PresetError([f"world.obstacles.{i}: the circle ({x[i]:g}, {y[i]:g}, r = {r[i]:g}) m reaches into "
+                           f"the start box ({sx0:g} < x < {sx1:g}, {sy0:g} < y < {sy1:g}), where the robots start"])
+    return dataclasses.replace(world, circles=circles)
 
 
 def check_world(scenario: Scenario) -> Scenario:
@@ -139,6 +164,7 @@ def sonar_params_for(a: Acoustics) -> SonarParams:
         alpha_dvc=a.alpha_dvc, sensing_range=a.sensing_range, robot_radius=a.robot_radius, r_trap=a.r, v_n=a.v_n,
         source_heading=np.deg2rad(a.source_heading_deg),
         source_bearing=None if a.source_bearing_deg is None else float(np.deg2rad(a.source_bearing_deg)),
+        source=None if a.source is None else (float(a.source[0]), float(a.source[1])),
         start=a.start, guard=a.guard, stop_on_converge=a.stop_on_converge,
     )
 

@@ -206,6 +206,13 @@ def file_stem(name: str) -> str:
     return "".join(c if c.isalnum() or c in "-_" else "_" for c in name) or "shoal"
 
 
+def kept_fields(scenario: Scenario, section: str, **fields: Any) -> Scenario:
+    """``scenario`` with ``fields`` set in ``section``, validated (:class:`PresetError` names a bad field)."""
+    data = scenario.model_dump(mode="json")
+    data[section] = {**data[section], **fields}
+    return validate(data)
+
+
 def to_toml(scenario: Scenario) -> str:
     return tomli_w.dumps(scenario.model_dump(mode="json", exclude_none=True))
 

@@ -7,9 +7,17 @@ variants (laws, strategies, selections) and their rules come from the engine's r
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    SerializerFunctionWrapHandler,
+    field_validator,
+    model_serializer,
+    model_validator,
+)
 
 from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.engine.core.objectives import ObjectiveName
@@ -20,10 +28,22 @@ from shoal.engine.slo.selection import SELECTIONS
 DVC_LAWS = tuple(name for name, law in ROBOT_LAWS.items() if law.dvc is not None)
 
 Coefficient = Annotated[float, Field(ge=0.0, le=100.0)]
+Coordinate = Annotated[float, Field(ge=-1e5, le=1e5)]  # m, a place on a scene
+MAX_OBSTACLES = 2000  # circles in world.obstacles (a preset upload is at most 256 KiB)
 
 
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)  # no NaN/inf anywhere
+    # fields a dump leaves out while unset (hand edits: a preset without them dumps as before)
+    omit_unset: ClassVar[tuple[str, ...]] = ()
+
+    @model_serializer(mode="wrap")
+    def _omit_unset(self, handler: SerializerFunctionWrapHandler) -> Any:
+        data = handler(self)
+        for name in self.omit_unset:
+            if data.get(name, 0) is None:
+                del data[name]
+        return data
 
 
 class Sim(_Model):
@@ -113,6 +133,8 @@ class Controller(_Model):
 class WorldModel(_Model):
     """The obstacle world of Chapters 4–5 (pymunk hosts it)."""
 
+    omit_unset = ("obstacles",)
+
     kind: Literal["obstacle-course", "empty", "forest"] = "obstacle-course"
     seed: Annotated[int, Field(ge=0, le=2**31 - 1)] = 0
     layers: Annotated[int, Field(ge=1, le=30, description="obstacle layers (course)")] = 6
@@ -120,6 +142,10 @@ class WorldModel(_Model):
     width: Annotated[float, Field(gt=5.0, le=1000.0, description="course/arena width [m]")] = 30.0
     density: Annotated[float, Field(gt=0.0, le=0.5, description="forest area fraction")] = 0.05
     start_size: Annotated[float, Field(gt=1.0, le=100.0, description="side of the start square [m]")] = 6.0
+    obstacles: Annotated[list[tuple[Coordinate, Coordinate, Annotated[float, Field(gt=0.0, le=100.0)]]] | None, Field(
+        max_length=MAX_OBSTACLES,
+        description="circles [x, y, r] in m that replace the generated obstacles (what a user built in the app); "
+                    "unset = the generator's")] = None
 
 
 class Robot(_Model):
@@ -165,6 +191,8 @@ class Acoustics(_Model):
     ``[robot]`` and ``[sensing]`` sections do not apply (their values are here).
     """
 
+    omit_unset = ("source",)
+
     algorithm: Literal[STRATEGIES.names()] = Field(
         "xb-pso", description="best-location strategy: A-/X-/B-/XB-PSO (Ch. 7) or GT-PSO (Ch. 8)")
     controller: Literal["adapted", "nonomni"] = Field(
@@ -207,6 +235,9 @@ class Acoustics(_Model):
                                                description="direction the source moves [°] (0 = +x)")] = 0.0
     source_bearing_deg: Annotated[float | None, Field(
         ge=-360.0, le=360.0, description="source bearing from the origin [°]; unset = random per run")] = None
+    source: tuple[Coordinate, Coordinate] | None = Field(
+        None, description="where the source starts [m] (placed by hand in the app); unset = d_s from SNR0 on "
+                          "source_bearing_deg")
     start: Literal["origin", "source"] = Field(
         "origin", description="deploy the robots round the origin or round the source")
     stop_on_converge: bool = Field(False, description="freeze a run once its CoM is within d_c of the source")

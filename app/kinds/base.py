@@ -89,6 +89,9 @@ class BaseDriver:
     def export_extra(self) -> dict[str, Any]:
         return {}
 
+    def kept(self, scenario: Scenario) -> Scenario:
+        return scenario
+
     def ghosts(self, selected: int, true_best: Any) -> Ghosts | None:
         """The selected robot's beliefs when the swarm acts on SLO-estimated positions."""
         return host_ghosts(self.sim, selected, true_best)

@@ -5,8 +5,7 @@
   rebuild the fleet (robots back in the start box, world edits dropped); the SLO error set
   and localisation settings retune the running fleet;
 * world edits: add, remove and move obstacles while the robots run (``Fleet.set_world``);
-  they live in the running fleet only, since a preset describes its world by generator
-  parameters;
+  a downloaded preset keeps them in ``world.obstacles`` (``kept``);
 * the selected robot's view: its sectors, hits, force and budget (``robot_view``).
 """
 
@@ -23,8 +22,8 @@ from shoal.engine.kinds.fleet_probe import RobotView, robot_view
 from shoal.engine.robots.dvc import TABLE_4_1
 from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.engine.robots.world import WorldSpec
-from shoal.presets.build import build_fleet, fleet_params_for, kind_of, world_for
-from shoal.presets.io import PresetError
+from shoal.presets.build import build_fleet, check_world, fleet_params_for, kind_of, world_for
+from shoal.presets.io import PresetError, kept_fields
 from shoal.presets.models import Scenario
 
 from ..panel.panel import TRAIL_SLIDER
@@ -169,7 +168,7 @@ class FleetDriver(BaseDriver):
             self._world_changed()
 
     def restore_world(self) -> None:
-        """Drop the edits: the world the scenario generates, robots kept where they are."""
+        """Drop the edits: the world the scenario describes, robots kept where they are."""
         with self.session.lock:
             self.sim.set_world(world_for(self.session.scenario.world))
             self.world_revision += 1
@@ -220,6 +219,12 @@ class FleetDriver(BaseDriver):
     def export_extra(self) -> dict[str, Any]:
         w = self.sim.world
         return {"world": {"name": w.name, "circles": w.circles.tolist(), "edits": self.edits}}
+
+    def kept(self, scenario: Scenario) -> Scenario:
+        """The obstacles as edited by hand in ``world.obstacles`` (unchanged without edits)."""
+        if not self.edits or scenario.world is None:
+            return scenario
+        return check_world(kept_fields(scenario, "world", obstacles=self.sim.world.circles.tolist()))
 
 
 # ---------------------------------------------------------------------------- view
@@ -622,7 +627,7 @@ def _view(panel: PanelAPI, value: Any) -> None:
 
 def _restore(panel: PanelAPI) -> None:
     driver(panel.session).restore_world()
-    panel.notify("World restored", "the generated obstacles are back; the robots carry on", "blue")
+    panel.notify("World restored", "the preset's obstacles are back; the robots carry on", "blue")
 
 
 def _obstacle_radius(panel: PanelAPI, value: Any) -> None:
@@ -767,7 +772,7 @@ def panel(api: PanelAPI) -> KindPanel:
                     Dropdown("click", "click does", CLICK_MODES, act=_keep),
                     Slider("obstacle_radius", "new obstacle radius [m]", 0.2, 3.0, 0.1,
                            read=lambda s: driver(s).obstacle_radius, act=_obstacle_radius),
-                    Button("restore", "Restore world", _restore, hint="drop the edits: the generated world again"),
+                    Button("restore", "Restore world", _restore, hint="drop the edits: the preset's world again"),
                 )),
                 TRAIL_SLIDER,
             )),

@@ -23,7 +23,7 @@ from shoal.engine.acoustics.propagation import snr_db
 from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams
 from shoal.presets.build import build_sonar, kind_of, sonar_params_for
-from shoal.presets.io import PresetError
+from shoal.presets.io import PresetError, kept_fields
 from shoal.presets.models import Scenario
 
 from ..panel.panel import TRAIL_SLIDER
@@ -80,6 +80,13 @@ class SonarDriver(BaseDriver):
     scene_sections = ("arena",)
     sim: AcousticSwarm
 
+    def __init__(self, session: Session) -> None:
+        super().__init__(session)
+        self.source_moved = False  # by hand, since the swarm was built
+
+    def loaded(self) -> None:
+        self.source_moved = False
+
     def build(self, scenario: Scenario) -> AcousticSwarm:
         try:
             return build_sonar(scenario, runs=1)
@@ -113,6 +120,7 @@ class SonarDriver(BaseDriver):
             sw.source0 = sw.source0.copy()
             sw.source0[0] += delta  # a moving source continues from here
             sw.state.source[0] = target
+            self.source_moved = True
             self._refresh_snr()
             self.session.live_edits += 1
             self.session.revision += 1
@@ -174,6 +182,13 @@ class SonarDriver(BaseDriver):
             "snr_sel": float(self.sim.state.snr_db[0, i]), "source_x": float(self.sim.state.source[0, 0]),
             "source_y": float(self.sim.state.source[0, 1]),
         }
+
+    def kept(self, scenario: Scenario) -> Scenario:
+        """The source as moved by hand in ``acoustics.source`` (where it starts: a moving source
+        then follows the same path)."""
+        if not self.source_moved or scenario.acoustics is None:
+            return scenario
+        return kept_fields(scenario, "acoustics", source=self.sim.source0[0].tolist())
 
     def export_extra(self) -> dict[str, Any]:
         s = self.sim.state
@@ -513,7 +528,9 @@ def _hearing(s: Session, snap: Snapshot) -> str:
 
 def _readout(s: Session) -> str:
     r, ac = s.readout(), s.scenario.acoustics
-    return (f"R_ref = {fmt(r['r_ref'], 'm')} (SNR 0 dB) · source starts at d_s = {fmt(r['d_s'], 'm')} · "
+    start = (f"source starts at ({ac.source[0]:.1f}, {ac.source[1]:.1f}) m (acoustics.source)" if ac.source is not None
+             else f"source starts at d_s = {fmt(r['d_s'], 'm')}")
+    return (f"R_ref = {fmt(r['r_ref'], 'm')} (SNR 0 dB) · {start} · "
             f"λ_c = {fmt(r['lambda'], 'm')} · D = {fmt(r['D'], 'm')} · window ±D/c = "
             f"{r['D'] / ac.c * 1e3:.3g} ms · controller {ac.controller}")
 

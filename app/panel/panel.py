@@ -226,7 +226,12 @@ class Panel:
 
         @self.download.on_click
         def _(event: Any) -> None:
-            self.send_file(f"{self.stem()}.toml", self.session.preset_toml())
+            try:
+                content = self.session.preset_toml()
+            except PresetError as err:
+                self.refuse(err, "download preset")
+                return
+            self.send_file(f"{self.stem()}.toml", content)
 
         @self.upload.on_upload
         def _(event: Any) -> None:

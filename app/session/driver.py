@@ -70,3 +70,8 @@ class Driver(Protocol):
         """More top-level entries for the JSON export."""
         ...
 
+    def kept(self, scenario: Scenario) -> Scenario:
+        """``scenario`` with what the user built by hand (obstacles, the source) in its fields, so a
+        downloaded preset brings it back; :class:`PresetError` naming the field if they do not fit."""
+        ...
+

@@ -191,6 +191,8 @@ class Session:
         """The scenario with ``changes`` (dotted path → value) applied, validated; nothing is changed."""
         with self.lock:
             data = copy.deepcopy(self.scenario.model_dump(mode="json"))
+        if data.get("world") and any(k.startswith("world.") and k != "world.obstacles" for k in changes):
+            data["world"].pop("obstacles", None)  # a new generator setting lays its world out afresh
         for key, value in changes.items():
             presets_io.set_dotted(data, key, value)
         return check_app_limits(presets_io.validate(data))
@@ -546,6 +548,11 @@ class Session:
                "trajectories": trajectories}
         return json.dumps(doc, separators=(",", ":")).encode()
 
-    def preset_toml(self) -> bytes:
+    def kept_scenario(self) -> Scenario:
+        """The scenario with the hand edits of the running scene in its fields (``Driver.kept``)."""
         with self.lock:
-            return presets_io.to_toml(self.scenario).encode()
+            return self.driver.kept(self.scenario)
+
+    def preset_toml(self) -> bytes:
+        """The preset a user downloads: the scenario with the hand edits kept."""
+        return presets_io.to_toml(self.kept_scenario()).encode()

@@ -103,6 +103,7 @@ class SonarParams:
     v_n: float = 0.0  # source speed / U [8.8]
     source_heading: float = 0.0  # rad, direction the source moves (thesis: +x)
     source_bearing: float | None = None  # rad from the origin; None = uniform random
+    source: tuple[float, float] | None = None  # m, where the source starts (placed by hand); None = d_s on a bearing
     start: Start = "origin"
     guard: bool = False  # DVC forward guard (ours, not in the thesis): v ≤ α·sf_1/Δt
     stop_on_converge: bool = False
@@ -215,8 +216,8 @@ class SonarInfo:
 
 
 # SonarParams fields that shape the start (the source, the deployment) or the kind of swarm.
-_FIXED = frozenset({"algorithm", "controller", "mode", "snr0_db", "d0", "start", "source_bearing", "full_lag",
-                    "stop_on_converge"})
+_FIXED = frozenset({"algorithm", "controller", "mode", "snr0_db", "d0", "start", "source_bearing", "source",
+                    "full_lag", "stop_on_converge"})
 
 
 class AcousticSwarm:
@@ -310,6 +311,8 @@ class AcousticSwarm:
             heading[r] = 2.0 * np.pi * g.random(N)
             bearing0[r] = 2.0 * np.pi * g.random() if p.source_bearing is None else p.source_bearing
         self.source0 = p.d_s * np.stack([np.cos(bearing0), np.sin(bearing0)], axis=-1)  # d_s on a bearing
+        if p.source is not None:  # placed by hand (the bearing is still drawn: the same draws follow)
+            self.source0[:] = p.source
         if p.start == "source":
             x = x + self.source0[:, None, :]
         f_hat, y = initial_memory(x)
