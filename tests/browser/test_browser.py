@@ -207,16 +207,23 @@ def test_space_arrow_and_r_drive_the_playback_but_not_inside_a_box(server, page,
     hostile values are refused in tests/test_trust_inputs.py.)"""
     session = server.sessions[client_id]
     dismiss_toasts(page)
+    page.get_by_role("button", name="Reset", exact=True).click()  # (the run may have reached its last step)
+    wait_until(lambda: session.sim.state.k < 100, what="a fresh run")
     if not session.playing:
         page.get_by_role("button", name="Play", exact=True).click()
         wait_until(lambda: session.playing, what="playing")
     page.evaluate("document.activeElement && document.activeElement.blur()")
     page.keyboard.press(" ")
     wait_until(lambda: not session.playing, what="space pauses")
-    with session.lock:  # (the step the ticker had in hand is done)
-        k = session.sim.state.k
+
+    def still() -> bool:  # (a step the ticker began before the pause may still land)
+        k0 = session.sim.state.k
+        time.sleep(0.5)
+        return session.sim.state.k == k0
+    wait_until(still, what="the run to stand still")
+    k = session.sim.state.k
     page.keyboard.press("ArrowRight")
-    wait_until(lambda: session.sim.state.k == k + 1, what="→ steps once")
+    wait_until(lambda: session.sim.state.k == k + 1, what=f"→ steps once (from step {k})")
     page.keyboard.press("r")
     wait_until(lambda: session.sim.state.k == 0, what="r resets")
     assert not session.playing

@@ -129,17 +129,22 @@ def scrub(pg, fraction: float) -> None:
 def pause(pg, run: Run) -> None:
     """Stop the player (a click on its bar pauses it; the clock of a busy page may still add the
     time it lost before the pause lands, so later clicks are the ones that go exactly where told)."""
-    scrub(pg, 0.05)
-    shown_step(pg, run)
+    def paused() -> bool:  # (a click the page took while it was still laying out is clicked again)
+        scrub(pg, 0.05)
+        try:
+            return shown_step(pg, run, timeout=5.0) >= 0
+        except AssertionError:
+            return False
+    wait_until(paused, timeout=60.0, what="the player paused")
 
 
-def shown_step(pg, run: Run) -> int:
+def shown_step(pg, run: Run, timeout: float = 20.0) -> int:
     """The step drawn now, once two reads a moment apart agree (the player applies a frame at once)."""
     def settled():
         a = run.step_of(pg.evaluate(ROBOTS_JS))
         time.sleep(0.3)
         return (a,) if run.step_of(pg.evaluate(ROBOTS_JS)) == a else None
-    return wait_until(settled, timeout=20, what="a still frame")[0]
+    return wait_until(settled, timeout=timeout, what="a still frame")[0]
 
 
 def to_pixels(pg, run: Run, x: np.ndarray) -> np.ndarray:
