@@ -49,7 +49,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parents[0] / "tests"))
 sys.path.insert(0, str(HERE.parents[0] / "tests" / "browser"))
-from bench_common import fmt, rss_mib, table  # noqa: E402
+from bench_common import fmt, rss_mib, table, wait_for  # noqa: E402
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 LONG = "sim.steps=10000000"
@@ -154,15 +154,6 @@ class TickLog:
             draw(snap)
 
         tab.tick, tab.arena.draw = counted_tick, counted_draw
-
-
-def wait_for(cond: Any, timeout: float, what: str) -> None:
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if cond():
-            return
-        time.sleep(0.05)
-    raise TimeoutError(f"timed out waiting for {what}")
 
 
 def one_more_tab(server: Any) -> tuple[float, float]:

@@ -33,7 +33,7 @@ from typing import Any
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parents[0] / "tests"))
-from bench_common import fmt, rss_mib, table  # noqa: E402
+from bench_common import fmt, rss_mib, table, wait_for  # noqa: E402
 
 LONG = "sim.steps=10000000"
 
@@ -79,15 +79,6 @@ def run_clients(port: int, orders: Any, done: Any) -> None:
 
 
 # ------------------------------------------------------------------ the server (this process)
-def wait_for(cond: Any, timeout: float, what: str) -> None:
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if cond():
-            return
-        time.sleep(0.05)
-    raise TimeoutError(f"timed out waiting for {what}")
-
-
 def settled_rss() -> float:
     """RSS after a full collection and a moment for viser's threads to finish their teardown."""
     time.sleep(1.0)

@@ -11,7 +11,7 @@ hidden when they have nothing to show.
 from __future__ import annotations
 
 import itertools
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -117,16 +117,9 @@ class Canvas:
         pts = self.to_view(xy, z) if len(xy) else self.to_view(np.zeros((1, 2)), z)
         if per_point and not len(xy):
             colors = np.zeros((1, 3), np.uint8)
-        node = self.nodes.get(key)
-        if node is None:
-            self.nodes[key] = self.scene.add_point_cloud(
-                self.name(key), pts, colors=colors, point_size=size, point_shape=shape, precision="float32",
-                point_shading="flat")
-        else:
-            node.points = pts
-            if per_point:
-                node.colors = colors
-        self.nodes[key].visible = bool(len(xy))
+        self._put(key, pts, colors if per_point else None, bool(len(xy)), lambda: self.scene.add_point_cloud(
+            self.name(key), pts, colors=colors, point_size=size, point_shape=shape, precision="float32",
+            point_shading="flat"))
 
     def lines(self, key: str, segs: np.ndarray, color: Colour | np.ndarray, px: float, z: float) -> None:
         """One segment list (S, 2, 2) in world metres: ``px`` screen pixels thick, ``color`` one
@@ -135,15 +128,20 @@ class Canvas:
         pts = self.to_view(segs, z) if len(segs) else np.zeros((1, 2, 3), np.float32)
         per_segment = isinstance(color, np.ndarray) and color.ndim == 3
         colors = color if not per_segment or len(segs) else np.zeros((1, 2, 3), np.uint8)
+        self._put(key, pts, colors if per_segment else None, bool(len(segs)), lambda: self.scene.add_line_segments(
+            self.name(key), pts, colors=colors, thickness=px, thickness_units="screen"))
+
+    def _put(self, key: str, pts: np.ndarray, colors: np.ndarray | None, shown: bool,
+             create: Callable[[], Any]) -> None:
+        """Create node ``key`` the first time, else send its new points (and ``colors`` when given)."""
         node = self.nodes.get(key)
         if node is None:
-            self.nodes[key] = self.scene.add_line_segments(self.name(key), pts, colors=colors, thickness=px,
-                                                           thickness_units="screen")
+            self.nodes[key] = create()
         else:
             node.points = pts
-            if per_segment:
+            if colors is not None:
                 node.colors = colors
-        self.nodes[key].visible = bool(len(segs))
+        self.nodes[key].visible = shown
 
     def label(self, key: str, text: str, xy: np.ndarray | None, z: float = 0.0, **style: Any) -> None:
         """A text label at world ``xy`` (hidden when None or not finite); ``style``: viser's
