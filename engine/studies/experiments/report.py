@@ -119,14 +119,12 @@ WHY: dict[str, str] = {
     "slo-weight": "Fig. 4.9 is not discussed in the thesis; we read its neighbourhood as knn 5.",
     "slo-pso": "The thesis does not give the swarm size, start area, quality thresholds or the number of runs "
                "behind Table 4.4 (medians such as 117.5 cannot come from 31 whole numbers); we use 20 particles, a "
-               "[-50, 50]² start area, our own quality thresholds and 11 runs per case by default (this pass re-ran "
-               "3 per case, so every median is noisier). Error-free Akcan and RTS do not get stuck on Ackley in our "
-               "runs: both recover from wrong mirror estimates once the ranges are exact. Line (x0²) needs no "
+               "[-50, 50]² start area, our own quality thresholds and 31 runs per case, as in the thesis' other "
+               "experiments. Error-free Akcan and RTS do not get stuck on Ackley in our runs: both recover from "
+               "wrong mirror estimates once the ranges are exact. Line (x0²) needs no "
                "contraction along x1, so the swarm stays spread out, localisation stays good and even runs with "
                "errors reach very small values, unlike the thesis' Low/High columns. With High errors the relative "
-               "error rises after generation 4, but by less than the factor of two our check asks for. With 3 runs "
-               "error-free CSS ends at 5e-94 on Sphere, just above the 1e-100 of our check (Akcan and RTS 3e-113 "
-               "and 6e-113).",
+               "error rises after generation 4, but by less than the factor of two our check asks for.",
 }
 
 
