@@ -8,11 +8,13 @@ import numpy as np
 import pytest
 
 import shoal.engine.slo.beliefs as beliefs_module
+import shoal.engine.slo.metrics as metrics_module
 import shoal.engine.slo.neighbourhoods as neighbourhoods_module
 from shoal.engine.kinds.slo_swarm import SLOSwarm
-from shoal.engine.slo import kernels, select_kernels, selection
+from shoal.engine.slo import kernels, metric_kernels, select_kernels, selection
 from shoal.engine.slo.candidates import Candidates, candidates
-from shoal.engine.slo.metrics import dead_reckoning_share, pair_distances, pair_errors, round_trip_errors, stats
+from shoal.engine.slo.metrics import (STATS, dead_reckoning_share, pair_distances, pair_errors,
+                                      round_trip_errors, stats)
 from shoal.engine.slo.selection import css
 
 CANDIDATE_FIELDS = ("points", "mask", "flag", "cos_alpha", "thinness")
@@ -54,6 +56,45 @@ def numpy_nearest(dist, k):
     if k:
         np.put_along_axis(adj, np.argsort(dist, axis=-1, kind="stable")[..., :k], True, axis=-1)
     return adj
+
+
+def numpy_stats(values, keys=STATS):
+    """The numpy reference of :func:`metrics.stats`."""
+    flat = values.reshape(values.shape[0], -1)
+    good = np.isfinite(flat)
+    n = good.sum(axis=1)
+    empty = n == 0
+    out = {"count": n}
+    if {"mean", "std", "sem"} & set(keys):
+        safe = np.where(good, flat, 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean = safe.sum(axis=1) / n
+            var = np.where(good, (safe - mean[:, None]) ** 2, 0.0).sum(axis=1) / n
+            std = np.sqrt(var)
+            sem = std / np.sqrt(n)
+        out |= {"mean": np.where(empty, np.nan, mean), "std": np.where(empty, np.nan, std),
+                "sem": np.where(empty, np.nan, sem)}
+    if "median" in keys:
+        ordered = np.sort(np.where(good, flat, np.inf), axis=1)
+        lo, hi = np.maximum((n - 1) // 2, 0), np.maximum(n // 2, 0)
+        rows = np.arange(flat.shape[0])
+        out["median"] = np.where(n > 0, 0.5 * (ordered[rows, lo] + ordered[rows, hi]), np.nan)
+    return {k: out[k] for k in keys}
+
+
+def numpy_distance_errors(x, est, valid):
+    """The numpy reference of :func:`metrics.distance_errors`."""
+    truth = x[:, None, :, :] - x[:, :, None, :]
+    e_abs = np.linalg.norm(est - truth, axis=-1)
+    dist = np.linalg.norm(truth, axis=-1)
+    e_rel = np.divide(e_abs, dist, out=np.full_like(e_abs, np.nan), where=dist > 0)
+    return np.where(valid, e_abs, np.nan), np.where(valid, e_rel, np.nan)
+
+
+def numpy_pair_distances(x):
+    """The numpy reference of :func:`metrics.pair_distances`."""
+    i, j = np.triu_indices(x.shape[1], k=1)
+    return np.linalg.norm(x[:, j] - x[:, i], axis=-1)
 
 
 def _pairs(rng, R, n):
@@ -105,6 +146,49 @@ def test_compiled_distances_and_nearest_equal_numpy():
             np.testing.assert_array_equal(kernels.nearest(d, k), numpy_nearest(d, k))
 
 
+def test_pairwise_sum_is_numpys():
+    """numpy's add.reduce along a contiguous row, to the bit, at every length up to two blocks and
+    beyond (values of mixed magnitude and sign, so the order of the additions shows)."""
+    rng = np.random.default_rng(11)
+    for n in [*range(0, 300), 399, 400, 1000, 4097]:
+        a = rng.normal(size=(2, n)) * 10.0 ** rng.uniform(-8, 8, (2, n))
+        want = a.sum(axis=1)
+        for r in range(2):
+            assert 0.0 + metric_kernels.pairwise_sum(a[r], 0, n) == want[r], n
+
+
+def test_compiled_statistics_equal_numpy():
+    """Count, mean, std, SEM and median per row, NaN and ±inf ignored, rows with no finite value,
+    ties, odd and even counts, and the pair metrics they are taken of."""
+    rng = np.random.default_rng(12)
+    for trial in range(80):
+        R, m = int(rng.integers(1, 5)), int(rng.integers(1, 420))
+        v = rng.exponential(3.0, (R, m)) if trial % 3 else rng.integers(0, 6, (R, m)).astype(float)
+        v[rng.random(v.shape) < rng.uniform(0, 0.6)] = np.nan
+        v[rng.random(v.shape) < 0.05] = np.inf
+        v[rng.random(v.shape) < 0.02] = -np.inf
+        v[0, : m // 2 if trial % 4 else m] = np.nan  # a row with no value at all, now and then
+        layout = (v, np.asfortranarray(v), v[:, ::-1])[trial % 3]  # numpy sums in the order of the layout
+        for keys in (STATS, ("mean",), ("median",), ("count",), ("median", "sem")):
+            got, want = stats(layout, keys), numpy_stats(layout, keys)
+            assert list(got) == list(want)
+            for k in keys:
+                assert got[k].dtype == want[k].dtype
+                np.testing.assert_array_equal(got[k], want[k], err_msg=f"{k} {trial}")
+    for trial in range(20):
+        R, n = int(rng.integers(1, 4)), int(rng.integers(2, 22))
+        x = rng.normal(0.0, 10.0, (R, n, 2))
+        x[:, 1] = x[:, 0] if trial % 2 else x[:, 1]  # coincident particles
+        est = x[:, None, :, :] - x[:, :, None, :] + rng.normal(0.0, 1.0, (R, n, n, 2))
+        est[rng.random((R, n, n)) < 0.05] = np.nan
+        valid = rng.random((R, n, n)) < 0.6
+        for got, want in zip(metric_kernels.distance_errors(x, est, valid), numpy_distance_errors(x, est, valid)):
+            np.testing.assert_array_equal(got, want)
+        np.testing.assert_array_equal(pair_distances(x), numpy_pair_distances(x))
+        for k, v in stats(pair_distances(x)).items():
+            np.testing.assert_array_equal(v, numpy_stats(numpy_pair_distances(x))[k], err_msg=k)
+
+
 @pytest.mark.parametrize("kw", [
     dict(selection="css", errors="low"),
     dict(selection="css", errors="high", entry_policy="geometric_random", neighbourhood="radius"),
@@ -125,6 +209,9 @@ def test_whole_runs_equal_the_numpy_localiser(kw, monkeypatch):
     monkeypatch.setattr(neighbourhoods_module.kernels, "nearest", numpy_nearest)
     monkeypatch.setattr(select_kernels, "rts", numpy_rts)
     monkeypatch.setattr(select_kernels, "akcan", numpy_akcan)
+    monkeypatch.setattr(metrics_module, "stats", numpy_stats)
+    monkeypatch.setattr(metrics_module, "distance_errors", numpy_distance_errors)
+    monkeypatch.setattr(metrics_module, "pair_distances", numpy_pair_distances)
     reference = SLOSwarm(runs=3, seed=5, **kw)
     rows = [reference.info().series()] + [reference.step().series() for _ in range(12)]
     for got, want in zip(compiled_rows, rows):
