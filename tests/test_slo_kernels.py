@@ -13,8 +13,7 @@ import shoal.engine.slo.neighbourhoods as neighbourhoods_module
 from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.engine.slo import kernels, metric_kernels, select_kernels, selection
 from shoal.engine.slo.candidates import Candidates, candidates
-from shoal.engine.slo.metrics import (STATS, dead_reckoning_share, pair_distances, pair_errors,
-                                      round_trip_errors, stats)
+from shoal.engine.slo.metrics import STATS, dead_reckoning_share, pair_distances, pair_errors, round_trip_errors, stats
 from shoal.engine.slo.selection import css
 
 CANDIDATE_FIELDS = ("points", "mask", "flag", "cos_alpha", "thinness")
