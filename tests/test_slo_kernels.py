@@ -14,7 +14,7 @@ from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.engine.slo import kernels, metric_kernels, select_kernels, selection
 from shoal.engine.slo.candidates import Candidates, candidates
 from shoal.engine.slo.metrics import STATS, dead_reckoning_share, pair_distances, pair_errors, round_trip_errors, stats
-from shoal.engine.slo.selection import css
+from shoal.engine.slo.selection import Kind, css
 
 CANDIDATE_FIELDS = ("points", "mask", "flag", "cos_alpha", "thinness")
 
@@ -96,6 +96,12 @@ def numpy_pair_distances(x):
     return np.linalg.norm(x[:, j] - x[:, i], axis=-1)
 
 
+def numpy_carry(adjacency, new, kind, prev, v, dead_reckoning):
+    """The numpy reference of :func:`kernels.carry`."""
+    carried = prev + (v[:, None, :, :] - v[:, :, None, :]) if dead_reckoning else prev
+    return np.where(adjacency[..., None], new, carried), np.where(adjacency, kind, Kind.NONE).astype(np.int8)
+
+
 def _pairs(rng, R, n):
     """Ranges, displacements and previous estimates with every singular case mixed in."""
     d0 = rng.uniform(0.0, 60.0, (R, n, n))
@@ -130,6 +136,24 @@ def test_compiled_pair_step_equals_candidates_and_css(literal, delta_cos, delta_
             np.testing.assert_array_equal(getattr(got.candidates, name), getattr(want.candidates, name),
                                           err_msg=name)
         assert kernels.localise(d0, d1, v, prev, **kw, candidates=False).candidates is None
+
+
+def test_compiled_carry_equals_numpy():
+    """Neighbours take the selected estimate and kind, the others their previous estimate,
+    dead-reckoned or kept (non-finite values and odometry failures mixed in)."""
+    rng = np.random.default_rng(4)
+    for trial in range(10):
+        R, n = int(rng.integers(1, 4)), int(rng.integers(2, 14))
+        adjacency = rng.random((R, n, n)) < 0.4
+        new, prev = rng.normal(0, 10, (R, n, n, 2)), rng.normal(0, 10, (R, n, n, 2))
+        prev[rng.random((R, n, n)) < 0.05] = np.nan
+        v = rng.normal(0, 2, (R, n, 2)) * (rng.random((R, n, 1)) > 0.1)
+        kind = rng.integers(0, 6, (R, n, n)).astype(np.int8)
+        for dead_reckoning in (True, False):
+            for got, want in zip(kernels.carry(adjacency, new, kind, prev, v, dead_reckoning),
+                                 numpy_carry(adjacency, new, kind, prev, v, dead_reckoning)):
+                assert got.dtype == want.dtype
+                np.testing.assert_array_equal(got, want)
 
 
 def test_compiled_distances_and_nearest_equal_numpy():
@@ -208,6 +232,7 @@ def test_whole_runs_equal_the_numpy_localiser(kw, monkeypatch):
     monkeypatch.setattr(neighbourhoods_module.kernels, "nearest", numpy_nearest)
     monkeypatch.setattr(select_kernels, "rts", numpy_rts)
     monkeypatch.setattr(select_kernels, "akcan", numpy_akcan)
+    monkeypatch.setattr(beliefs_module, "carry", numpy_carry)
     monkeypatch.setattr(metrics_module, "stats", numpy_stats)
     monkeypatch.setattr(metrics_module, "distance_errors", numpy_distance_errors)
     monkeypatch.setattr(metrics_module, "pair_distances", numpy_pair_distances)

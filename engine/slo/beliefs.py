@@ -15,7 +15,7 @@ import numpy as np
 
 from ..core.rng import Streams
 from .candidates import Candidates, Flag
-from .kernels import localise, pair_candidates
+from .kernels import carry, localise, pair_candidates
 from .neighbourhoods import distances
 from .selection import SELECTIONS, Kind, RTSTriangle
 from .sensors import ErrorModel, measure_odometry, measure_ranges, permanent_errors, permanent_normals
@@ -162,12 +162,10 @@ class Localiser:
             new, kind, triangle, round_trip = SELECTIONS[p.selection].select(loc.candidates, adjacency, ranges, base,
                                                                              p)
         # non-neighbours: dead reckoning x3 = x̂(t−1) + v*_j − v*_i [3.4], or the stale estimate
-        carried = b.est + (v_meas[:, None, :, :] - v_meas[:, :, None, :]) if p.entry_policy == "dead_reckoning" \
-            else b.est
-        est = np.where(adjacency[..., None], new, carried)
+        est, kind = carry(adjacency, new, kind, b.est, v_meas, p.entry_policy == "dead_reckoning")
         return Beliefs(
-            est=est, valid=adjacency.copy(), adjacency=adjacency.copy(), ranges=ranges,
-            kind=np.where(adjacency, kind, Kind.NONE).astype(np.int8), flag=loc.flag, odometry=v_meas,
+            est=est, valid=adjacency.copy(), adjacency=adjacency.copy(), ranges=ranges, kind=kind, flag=loc.flag,
+            odometry=v_meas,
             triangle=triangle, round_trip=round_trip, pairs=pairs,
         )
 

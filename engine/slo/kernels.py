@@ -174,3 +174,33 @@ def nearest(dist: np.ndarray, k: int) -> np.ndarray:
             for q in range(m):
                 adj[r, i, best[q]] = True
     return adj
+
+
+@kernel
+def _carry(adjacency: np.ndarray, new: np.ndarray, kind: np.ndarray, prev: np.ndarray, v: np.ndarray,
+           dead_reckoning: bool, est: np.ndarray, kind_out: np.ndarray) -> None:
+    R, n = adjacency.shape[0], adjacency.shape[1]
+    for r in range(R):
+        for i in range(n):
+            for j in range(n):
+                if adjacency[r, i, j]:
+                    est[r, i, j, 0], est[r, i, j, 1], kind_out[r, i, j] = new[r, i, j, 0], new[r, i, j, 1], kind[r, i, j]
+                    continue
+                kind_out[r, i, j] = Kind.NONE
+                if dead_reckoning:  # [3.4]
+                    est[r, i, j, 0] = prev[r, i, j, 0] + (v[r, j, 0] - v[r, i, 0])
+                    est[r, i, j, 1] = prev[r, i, j, 1] + (v[r, j, 1] - v[r, i, 1])
+                else:
+                    est[r, i, j, 0], est[r, i, j, 1] = prev[r, i, j, 0], prev[r, i, j, 1]
+
+
+def carry(adjacency: np.ndarray, new: np.ndarray, kind: np.ndarray, prev: np.ndarray, v: np.ndarray,
+          dead_reckoning: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The step's beliefs: the selected estimate ``new`` and its ``kind`` for a neighbour; for
+    any other pair the previous estimate ``prev``, dead-reckoned by v*_j − v*_i [3.4] or kept,
+    and kind NONE. (R, N, N, 2) and (R, N, N) int8."""
+    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
+    est, kind_out = np.empty(new.shape), np.empty(adjacency.shape, np.int8)
+    _carry(np.ascontiguousarray(adjacency, dtype=bool), f64(new), np.ascontiguousarray(kind, dtype=np.int8),
+           f64(prev), f64(v), bool(dead_reckoning), est, kind_out)
+    return est, kind_out
