@@ -142,7 +142,7 @@ def test_compiled_carry_equals_numpy():
     """Neighbours take the selected estimate and kind, the others their previous estimate,
     dead-reckoned or kept (non-finite values and odometry failures mixed in)."""
     rng = np.random.default_rng(4)
-    for trial in range(10):
+    for _ in range(10):
         R, n = int(rng.integers(1, 4)), int(rng.integers(2, 14))
         adjacency = rng.random((R, n, n)) < 0.4
         new, prev = rng.normal(0, 10, (R, n, n, 2)), rng.normal(0, 10, (R, n, n, 2))

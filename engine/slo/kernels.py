@@ -184,7 +184,8 @@ def _carry(adjacency: np.ndarray, new: np.ndarray, kind: np.ndarray, prev: np.nd
         for i in range(n):
             for j in range(n):
                 if adjacency[r, i, j]:
-                    est[r, i, j, 0], est[r, i, j, 1], kind_out[r, i, j] = new[r, i, j, 0], new[r, i, j, 1], kind[r, i, j]
+                    est[r, i, j, 0], est[r, i, j, 1] = new[r, i, j, 0], new[r, i, j, 1]
+                    kind_out[r, i, j] = kind[r, i, j]
                     continue
                 kind_out[r, i, j] = Kind.NONE
                 if dead_reckoning:  # [3.4]
