@@ -15,6 +15,7 @@ from shoal.engine.slo import kernels, metric_kernels, select_kernels, selection
 from shoal.engine.slo.candidates import Candidates, candidates
 from shoal.engine.slo.metrics import STATS, dead_reckoning_share, pair_distances, pair_errors, round_trip_errors, stats
 from shoal.engine.slo.selection import Kind, css
+from shoal.engine.slo.sensors import draw_permanent, error_model, measure_odometry, measure_ranges
 
 CANDIDATE_FIELDS = ("points", "mask", "flag", "cos_alpha", "thinness")
 
@@ -102,6 +103,40 @@ def numpy_carry(adjacency, new, kind, prev, v, dead_reckoning):
     return np.where(adjacency[..., None], new, carried), np.where(adjacency, kind, Kind.NONE).astype(np.int8)
 
 
+def numpy_measure_ranges(dist, model, perm, rngs, max_range=np.inf):
+    """The numpy reference of :func:`sensors.measure_ranges`."""
+    R, n, _ = dist.shape
+    fail, z = np.empty((R, n, n)), np.empty((R, 2, n, n))
+    for r, g in enumerate(rngs):
+        g.random(out=fail[r])
+        g.standard_normal(out=z[r])
+    e_m = 1.0 + model.sigma_m * z[:, 0] + perm.range_m[:, :, None]
+    e_a = model.sigma_a * z[:, 1] + perm.range_a[:, :, None]
+    finite = np.isfinite(dist) & (dist <= max_range)
+    d = np.where(finite, dist, 0.0)
+    reading = np.maximum(d * e_m + e_a, 0.0)
+    out = np.where((fail < model.p_fail) | ~finite, 0.0, reading)
+    idx = np.arange(n)
+    out[:, idx, idx] = 0.0
+    return out
+
+
+def numpy_measure_odometry(v, model, perm, rngs):
+    """The numpy reference of :func:`sensors.measure_odometry`."""
+    R, n = v.shape[:2]
+    fail, z = np.empty((R, n)), np.empty((R, 5, n))
+    for r, g in enumerate(rngs):
+        g.random(out=fail[r])
+        g.standard_normal(out=z[r])
+    e_m = 1.0 + model.sigma_m * np.stack([z[:, 0], z[:, 1]], axis=-1) + perm.odo_m
+    e_a = model.sigma_a * np.stack([z[:, 2], z[:, 3]], axis=-1) + perm.odo_a
+    w = v * e_m + e_a
+    theta = model.sigma_r * z[:, 4] + perm.odo_r
+    c, s = np.cos(theta), np.sin(theta)
+    rotated = np.stack([c * w[..., 0] - s * w[..., 1], s * w[..., 0] + c * w[..., 1]], axis=-1)
+    return np.where((fail < model.p_fail)[..., None], 0.0, rotated)
+
+
 def _pairs(rng, R, n):
     """Ranges, displacements and previous estimates with every singular case mixed in."""
     d0 = rng.uniform(0.0, 60.0, (R, n, n))
@@ -136,6 +171,27 @@ def test_compiled_pair_step_equals_candidates_and_css(literal, delta_cos, delta_
             np.testing.assert_array_equal(getattr(got.candidates, name), getattr(want.candidates, name),
                                           err_msg=name)
         assert kernels.localise(d0, d1, v, prev, **kw, candidates=False).candidates is None
+
+
+@pytest.mark.parametrize("level", ["none", "low", "high"])
+def test_compiled_sensors_equal_numpy(level):
+    """Ranges and odometry of every error level, from the same streams, to the bit: failures,
+    negative readings clamped, infinite and out-of-reach distances, the generators left alike."""
+    rng = np.random.default_rng(5)
+    model = error_model(level).with_values(range_sigma_a=3.0 if level == "high" else 0.05)  # negative readings
+    for trial in range(6):
+        R, n = int(rng.integers(1, 4)), int(rng.integers(2, 14))
+        perm = draw_permanent(model, [np.random.default_rng(trial)] * R, n)
+        dist = kernels.distances(rng.normal(0.0, 20.0, (R, n, 2)))
+        dist[rng.random(dist.shape) < 0.05] = np.nan
+        v = rng.normal(0.0, 2.0, (R, n, 2))
+        reach = (np.inf, 15.0)[trial % 2]
+        ours, theirs = ([np.random.default_rng([trial, r]) for r in range(R)] for _ in range(2))
+        np.testing.assert_array_equal(measure_ranges(dist, model.range, perm, ours, reach),
+                                      numpy_measure_ranges(dist, model.range, perm, theirs, reach))
+        np.testing.assert_array_equal(measure_odometry(v, model.odometry, perm, ours),
+                                      numpy_measure_odometry(v, model.odometry, perm, theirs))
+        assert [g.random() for g in ours] == [g.random() for g in theirs]
 
 
 def test_compiled_carry_equals_numpy():
@@ -233,6 +289,8 @@ def test_whole_runs_equal_the_numpy_localiser(kw, monkeypatch):
     monkeypatch.setattr(select_kernels, "rts", numpy_rts)
     monkeypatch.setattr(select_kernels, "akcan", numpy_akcan)
     monkeypatch.setattr(beliefs_module, "carry", numpy_carry)
+    monkeypatch.setattr(beliefs_module, "measure_ranges", numpy_measure_ranges)
+    monkeypatch.setattr(beliefs_module, "measure_odometry", numpy_measure_odometry)
     monkeypatch.setattr(metrics_module, "stats", numpy_stats)
     monkeypatch.setattr(metrics_module, "distance_errors", numpy_distance_errors)
     monkeypatch.setattr(metrics_module, "pair_distances", numpy_pair_distances)

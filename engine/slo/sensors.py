@@ -13,6 +13,8 @@ from typing import Literal, Sequence
 
 import numpy as np
 
+from . import sensor_kernels
+
 ErrorLevel = Literal["none", "low", "high"]
 
 
@@ -145,16 +147,9 @@ def measure_ranges(
     for r, g in enumerate(rngs):  # each run's stream, drawn in place
         g.random(out=fail[r])
         g.standard_normal(out=z[r])
-    e_m = 1.0 + model.sigma_m * z[:, 0] + perm.range_m[:, :, None]  # [4.2]
-    e_a = model.sigma_a * z[:, 1] + perm.range_a[:, :, None]  # [4.3]
-    finite = np.isfinite(dist) & (dist <= max_range)
-    d = np.where(finite, dist, 0.0)
-    reading = np.maximum(d * e_m + e_a, 0.0)  # [4.1]; see docs/readings.md, "Negative ranges"
-    failed = (fail < model.p_fail) | ~finite
-    out = np.where(failed, 0.0, reading)
-    idx = np.arange(n)
-    out[:, idx, idx] = 0.0
-    return out
+    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
+    return sensor_kernels.ranges(f64(dist), fail, z, float(model.sigma_m), float(model.sigma_a), f64(perm.range_m),
+                                 f64(perm.range_a), float(model.p_fail), float(max_range))  # [4.1]–[4.3], compiled
 
 
 def measure_odometry(
@@ -167,10 +162,7 @@ def measure_odometry(
     for r, g in enumerate(rngs):
         g.random(out=fail[r])
         g.standard_normal(out=z[r])
-    e_m = 1.0 + model.sigma_m * np.stack([z[:, 0], z[:, 1]], axis=-1) + perm.odo_m
-    e_a = model.sigma_a * np.stack([z[:, 2], z[:, 3]], axis=-1) + perm.odo_a
-    w = v * e_m + e_a
     theta = model.sigma_r * z[:, 4] + perm.odo_r
-    c, s = np.cos(theta), np.sin(theta)
-    rotated = np.stack([c * w[..., 0] - s * w[..., 1], s * w[..., 0] + c * w[..., 1]], axis=-1)  # [4.4]
-    return np.where((fail < model.p_fail)[..., None], 0.0, rotated)
+    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
+    return sensor_kernels.odometry(f64(v), fail, z, float(model.sigma_m), float(model.sigma_a), f64(perm.odo_m),
+                                   f64(perm.odo_a), np.cos(theta), np.sin(theta), float(model.p_fail))  # [4.4]
