@@ -13,6 +13,7 @@ from typing import Callable, Literal
 
 import numpy as np
 
+from ..core.raw_draws import RawDraws
 from ..core.rng import Streams
 from .candidates import Candidates, Flag
 from .kernels import carry, localise, pair_candidates
@@ -96,12 +97,25 @@ def random_estimates(rngs: list[np.random.Generator], n: int, low: float, high: 
 
 
 class Localiser:
-    """Sensors plus estimator for ``n`` robots in every run; keeps the permanent errors."""
+    """Sensors plus estimator for ``n`` robots in every run; keeps the permanent errors.
+
+    The range and odometry streams are the localiser's own: it takes their draws several steps
+    ahead (:class:`~shoal.engine.core.raw_draws.RawDraws`, the same numbers); :meth:`settle`
+    puts the generators back where one call a step would have left them."""
+
+    AHEAD = 8  # steps of sensor draws fetched at a time
 
     def __init__(self, params: LocaliserParams, errors: ErrorModel, streams: Streams, n: int) -> None:
         self.params, self.errors, self.streams, self.n = params, errors, streams, n
         self._z = permanent_normals(streams["permanent"], n)
         self.permanent = permanent_errors(errors, self._z)
+        self._range_draws = RawDraws(streams["range"], self.AHEAD * 3 * n * n)  # U + 2 N a pair [4.1]–[4.3]
+        self._odometry_draws = RawDraws(streams["odometry"], max(1024, self.AHEAD * 6 * n))  # U + 5 N a robot [4.4]
+
+    def settle(self) -> None:
+        """Step the range and odometry generators back over the draws fetched but not used."""
+        self._range_draws.settle()
+        self._odometry_draws.settle()
 
     def retune(self, params: LocaliserParams | None = None, errors: ErrorModel | None = None) -> None:
         """Change the localisation choices or the sensor errors mid-run; beliefs are kept and
@@ -123,8 +137,7 @@ class Localiser:
         self.permanent = permanent_errors(self.errors, z)
 
     def _ranges(self, x: np.ndarray, adjacency: np.ndarray) -> np.ndarray:
-        d = measure_ranges(distances(x), self.errors.range, self.permanent, self.streams["range"],
-                           self.params.max_range)
+        d = measure_ranges(distances(x), self.errors.range, self.permanent, self._range_draws, self.params.max_range)
         return d if self.params.measure_all_ranges else np.where(adjacency, d, 0.0)
 
     def start(self, x: np.ndarray, adjacency: np.ndarray, initial: np.ndarray) -> Beliefs:
@@ -142,7 +155,7 @@ class Localiser:
         """One localisation step at true positions ``x`` after the moves from ``x_prev``."""
         p = self.params
         ranges = self._ranges(x, adjacency)
-        v_meas = measure_odometry(x - x_prev, self.errors.odometry, self.permanent, self.streams["odometry"])
+        v_meas = measure_odometry(x - x_prev, self.errors.odometry, self.permanent, self._odometry_draws)
         entry = coin = None
         if p.entry_policy == "geometric_random":
             entry = adjacency & ~b.adjacency

@@ -13,6 +13,7 @@ from typing import Literal, Sequence
 
 import numpy as np
 
+from ..core.raw_draws import RawDraws
 from . import sensor_kernels
 
 ErrorLevel = Literal["none", "low", "high"]
@@ -134,9 +135,21 @@ def permanent_errors(model: ErrorModel, z: np.ndarray) -> PermanentErrors:
     )
 
 
+Draws = Sequence[np.random.Generator] | RawDraws  # one generator per run, or their draws in blocks
+
+
+def _draw(rngs: Draws, fail: np.ndarray, z: np.ndarray) -> None:
+    """fail[r] ~ U(0,1), then z[r] ~ N(0,1), from run r's stream (in blocks: the same numbers)."""
+    if isinstance(rngs, RawDraws):
+        rngs.fill(fail, z)
+        return
+    for r, g in enumerate(rngs):  # each run's stream, drawn in place
+        g.random(out=fail[r])
+        g.standard_normal(out=z[r])
+
+
 def measure_ranges(
-    dist: np.ndarray, model: RangeErrors, perm: PermanentErrors, rngs: Sequence[np.random.Generator],
-    max_range: float = np.inf,
+    dist: np.ndarray, model: RangeErrors, perm: PermanentErrors, rngs: Draws, max_range: float = np.inf,
 ) -> np.ndarray:
     """d*_ij for every ordered pair (R, N, N) from true distances (diagonal ignored).
 
@@ -144,24 +157,18 @@ def measure_ranges(
     readings are clamped to 0 (docs/readings.md, "Negative ranges"); 0 means failure; beyond ``max_range`` reads 0."""
     R, n, _ = dist.shape
     fail, z = np.empty((R, n, n)), np.empty((R, 2, n, n))
-    for r, g in enumerate(rngs):  # each run's stream, drawn in place
-        g.random(out=fail[r])
-        g.standard_normal(out=z[r])
+    _draw(rngs, fail, z)
     f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
     return sensor_kernels.ranges(f64(dist), fail, z, float(model.sigma_m), float(model.sigma_a), f64(perm.range_m),
                                  f64(perm.range_a), float(model.p_fail), float(max_range))  # [4.1]–[4.3], compiled
 
 
-def measure_odometry(
-    v: np.ndarray, model: OdometryErrors, perm: PermanentErrors, rngs: Sequence[np.random.Generator]
-) -> np.ndarray:
+def measure_odometry(v: np.ndarray, model: OdometryErrors, perm: PermanentErrors, rngs: Draws) -> np.ndarray:
     """v*_i (R, N, 2) from true displacements: per-axis errors, then the rotation R(θ) [4.4];
     a failure gives (0, 0)."""
     R, n = v.shape[:2]
     fail, z = np.empty((R, n)), np.empty((R, 5, n))
-    for r, g in enumerate(rngs):
-        g.random(out=fail[r])
-        g.standard_normal(out=z[r])
+    _draw(rngs, fail, z)
     theta = model.sigma_r * z[:, 4] + perm.odo_r
     f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
     return sensor_kernels.odometry(f64(v), fail, z, float(model.sigma_m), float(model.sigma_a), f64(perm.odo_m),
