@@ -22,15 +22,17 @@ def test_fills_are_the_generators_own_draws(block):
     raw, ref = RawDraws(_gens(R), block), _gens(R)
     rng = np.random.default_rng(1)
     for _ in range(40):
-        nu, nn = int(rng.integers(0, 50)), int(rng.integers(0, 400))
-        u, z = np.empty((R, nu)), np.empty((R, 2, nn))
-        raw.fill(u, z)
+        nu, nn, nv = int(rng.integers(0, 50)), int(rng.integers(0, 400)), int(rng.integers(0, 9))
+        u, z, w = np.empty((R, nu)), np.empty((R, 2, nn)), np.empty((R, nv))
+        raw.fill(u, z, w, normal=(False, True, False))
         for r, g in enumerate(ref):
-            want_u, want_z = np.empty(nu), np.empty((2, nn))
+            want_u, want_z, want_w = np.empty(nu), np.empty((2, nn)), np.empty(nv)
             g.random(out=want_u)
             g.standard_normal(out=want_z)
+            g.random(out=want_w)
             np.testing.assert_array_equal(u[r], want_u)
             np.testing.assert_array_equal(z[r], want_z)
+            np.testing.assert_array_equal(w[r], want_w)
     raw.settle()
     for a, b in zip(raw.rngs, ref):
         assert a.bit_generator.state == b.bit_generator.state
@@ -41,7 +43,7 @@ def test_the_slow_paths_of_the_ziggurat():
     """A million normals cross the wedge and the tail paths (exp and log1p) often: still numpy's."""
     raw, ref = RawDraws(_gens(1, 7), 1 << 16), _gens(1, 7)
     z = np.empty((1, 1_000_000))
-    raw.fill(np.empty((1, 0)), z)
+    raw.fill(z, normal=(True,))
     want = ref[0].standard_normal(1_000_000)
     np.testing.assert_array_equal(z[0], want)
     assert (np.abs(want) > 3.6541528853610088).any()  # the tail beyond the ziggurat's r was drawn
@@ -50,4 +52,4 @@ def test_the_slow_paths_of_the_ziggurat():
 def test_a_strided_array_is_refused():
     raw = RawDraws(_gens(2), 64)
     with pytest.raises(ValueError, match="C-contiguous"):
-        raw.fill(np.empty((4, 2))[::2], np.empty((2, 3)))
+        raw.fill(np.empty((4, 2))[::2], np.empty((2, 3)), normal=(False, True))

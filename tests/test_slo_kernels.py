@@ -7,11 +7,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import shoal.engine.kinds.slo_swarm as slo_swarm_module
 import shoal.engine.slo.beliefs as beliefs_module
 import shoal.engine.slo.metrics as metrics_module
 import shoal.engine.slo.neighbourhoods as neighbourhoods_module
 from shoal.engine.core.raw_draws import RawDraws
 from shoal.engine.kinds.slo_swarm import SLOSwarm
+from shoal.engine.pso import spso2011
 from shoal.engine.slo import kernels, metric_kernels, select_kernels, selection
 from shoal.engine.slo.candidates import Candidates, candidates
 from shoal.engine.slo.metrics import STATS, dead_reckoning_share, pair_distances, pair_errors, round_trip_errors, stats
@@ -110,6 +112,11 @@ def _generators(rngs):
         rngs.settle()
         return rngs.rngs
     return rngs
+
+
+def numpy_draw(rngs, n):
+    """SPSO's draws of a generation from one generator call each, the reference of draws taken ahead."""
+    return spso2011.draw(_generators(rngs), n)
 
 
 def numpy_measure_ranges(dist, model, perm, rngs, max_range=np.inf):
@@ -304,6 +311,7 @@ def test_whole_runs_equal_the_numpy_localiser(kw, monkeypatch):
     monkeypatch.setattr(select_kernels, "rts", numpy_rts)
     monkeypatch.setattr(select_kernels, "akcan", numpy_akcan)
     monkeypatch.setattr(beliefs_module, "carry", numpy_carry)
+    monkeypatch.setattr(slo_swarm_module, "draw", numpy_draw)
     monkeypatch.setattr(beliefs_module, "measure_ranges", numpy_measure_ranges)
     monkeypatch.setattr(beliefs_module, "measure_odometry", numpy_measure_odometry)
     monkeypatch.setattr(metrics_module, "stats", numpy_stats)
@@ -315,8 +323,8 @@ def test_whole_runs_equal_the_numpy_localiser(kw, monkeypatch):
         assert got.keys() == want.keys()
         for name in got:
             np.testing.assert_array_equal(got[name], want[name], err_msg=name)
-    compiled.localiser.settle()  # the sensor draws taken ahead: the streams stand where the reference's do
-    for name in ("range", "odometry"):
+    compiled.settle()  # the draws taken ahead: the streams stand where the reference's do
+    for name in ("range", "odometry", "pso"):
         for g, h in zip(compiled.streams[name], reference.streams[name]):
             assert g.bit_generator.state == h.bit_generator.state
     a, b = compiled.state, reference.state

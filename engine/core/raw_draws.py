@@ -63,22 +63,30 @@ def _normal(buf: np.ndarray, r: int, p: int, end: int) -> tuple[float, int]:
 
 
 @kernel
-def _fill(buf: np.ndarray, pos: np.ndarray, end: np.ndarray, start: int, uniform: np.ndarray,
-          normal: np.ndarray) -> int:
-    """Runs ``start`` … in turn: uniform[r] then normal[r] from run r's outputs; the first run
-    whose block ran out (its position kept), or −1 when all are done."""
-    R, nu, nn = uniform.shape[0], uniform.shape[1], normal.shape[1]
+def _fill(buf: np.ndarray, pos: np.ndarray, end: np.ndarray, start: int, parts: tuple, normal: np.ndarray) -> int:
+    """Runs ``start`` … in turn: each of ``parts`` (R, k) in order, row r from run r's outputs,
+    N(0,1) where ``normal`` else U(0,1); the first run whose block ran out (its position
+    kept), or −1 when all are done."""
+    R, total = parts[0].shape[0], 0
+    for s in range(len(parts)):
+        total += parts[s].shape[1]
     for r in range(start, R):
         p, e = pos[r], end[r]
-        if e - p < nu + nn:
+        if e - p < total:
             return r
-        for q in range(nu):
-            uniform[r, q] = float(buf[r, p + q] >> S11) * TO_DOUBLE
-        p += nu
-        for q in range(nn):
-            normal[r, q], p = _normal(buf, r, p, e)
-            if p < 0:
-                return r
+        for s in range(len(parts)):
+            a = parts[s]
+            if normal[s]:
+                for q in range(a.shape[1]):
+                    a[r, q], p = _normal(buf, r, p, e)
+                    if p < 0:
+                        return r
+            else:
+                if e - p < a.shape[1]:  # the normals before took more than one output each
+                    return r
+                for q in range(a.shape[1]):
+                    a[r, q] = float(buf[r, p + q] >> S11) * TO_DOUBLE
+                p += a.shape[1]
         pos[r] = p
     return -1
 
@@ -93,17 +101,18 @@ class RawDraws:
         self.buf = np.empty((R, 0), np.uint64)
         self.pos, self.end = np.zeros(R, np.int64), np.zeros(R, np.int64)
 
-    def fill(self, uniform: np.ndarray, normal: np.ndarray) -> None:
-        """uniform[r] (U(0,1)) then normal[r] (N(0,1)) of each run r, as
-        ``rngs[r].random(out=uniform[r])`` then ``rngs[r].standard_normal(out=normal[r])``."""
-        if not (uniform.flags.c_contiguous and normal.flags.c_contiguous):
-            raise ValueError("RawDraws.fill: the arrays are filled in place and must be C-contiguous")
+    def fill(self, *arrays: np.ndarray, normal: Sequence[bool]) -> None:
+        """Each run r draws ``arrays[0][r]``, ``arrays[1][r]``, … in turn, N(0,1) where ``normal``
+        says so, else U(0,1): as ``rngs[r].random(out=a[r])`` or ``rngs[r].standard_normal(out=a[r])``
+        one after another. The arrays (R, …) are filled in place."""
+        if not all(a.flags.c_contiguous and a.dtype == np.float64 for a in arrays):
+            raise ValueError("RawDraws.fill: the arrays are filled in place and must be C-contiguous float64")
         R = len(self.rngs)
-        u, z = uniform.reshape(R, -1), normal.reshape(R, -1)
-        start = _fill(self.buf, self.pos, self.end, 0, u, z)
+        parts, kinds = tuple(a.reshape(R, -1) for a in arrays), np.array(normal, dtype=bool)
+        start = _fill(self.buf, self.pos, self.end, 0, parts, kinds)
         while start >= 0:
-            self._refill(u.shape[1] + z.shape[1])
-            start = _fill(self.buf, self.pos, self.end, start, u, z)
+            self._refill(sum(a.shape[1] for a in parts))
+            start = _fill(self.buf, self.pos, self.end, start, parts, kinds)
 
     def _refill(self, least: int) -> None:
         """Every run: its unused outputs first, then at least ``least`` and ``block`` new ones."""

@@ -19,6 +19,7 @@ from typing import Any, ClassVar, Iterable, Literal
 import numpy as np
 
 from ..core.contract import check_live
+from ..core.raw_draws import RawDraws
 from ..core.rng import component_generators
 from ..pso.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
 from ..slo import metrics
@@ -358,6 +359,7 @@ class SLOSwarm:
         u = np.stack([g.uniform(lo, hi, (n, 2)) - g.uniform(lo, hi, (n, 2)) for g in init])  # RandomMovement()
         est = random_estimates(init, n, lo, hi) if cfg.initial_estimates == "random" else relative_truth(x)
         self.localiser = Localiser(cfg.localiser_params(), self.errors, self.streams, n)
+        self._pso_draws = RawDraws(self.streams["pso"], Localiser.AHEAD * 7 * n)  # taken ahead: the same numbers
         adjacency = self.rule.adjacency(x, self.streams["topology"])
         beliefs = self.localiser.start(x, adjacency, est)
         shape = (self.runs, n)
@@ -368,6 +370,12 @@ class SLOSwarm:
         )
         self._met = np.full(self.runs, np.inf)
         self._last = self._record()
+
+    def settle(self) -> None:
+        """Put the generators whose draws are taken several generations ahead (sensors, PSO)
+        back where one call a generation leaves them, before anything else draws from them."""
+        self.localiser.settle()
+        self._pso_draws.settle()
 
     def info(self) -> SLOInfo:
         """Metrics of the current generation."""
@@ -405,7 +413,7 @@ class SLOSwarm:
         L = np.where(self_best[..., None], 0.0, to_j)  # step 4
         if cfg.local_best == "pbest":  # best neighbour pbest, x̂_ij* + P_j* (see SLOConfig.local_best)
             L = np.where(self_best[..., None], s.P, to_j + np.take_along_axis(s.P, j[..., None], axis=1))
-        return self.spso.local_velocity(s.u, s.P, L, draw(self.streams["pso"], n), self_best)  # steps 5–7
+        return self.spso.local_velocity(s.u, s.P, L, draw(self._pso_draws, n), self_best)  # steps 5–7
 
     def _walk_command(self) -> np.ndarray:
         """Random walk (Mai §4.5, p. 41): speed ~ U(0, walk_speed), direction ~ U(0, 2π)."""

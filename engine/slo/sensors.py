@@ -141,7 +141,7 @@ Draws = Sequence[np.random.Generator] | RawDraws  # one generator per run, or th
 def _draw(rngs: Draws, fail: np.ndarray, z: np.ndarray) -> None:
     """fail[r] ~ U(0,1), then z[r] ~ N(0,1), from run r's stream (in blocks: the same numbers)."""
     if isinstance(rngs, RawDraws):
-        rngs.fill(fail, z)
+        rngs.fill(fail, z, normal=(False, True))
         return
     for r, g in enumerate(rngs):  # each run's stream, drawn in place
         g.random(out=fail[r])
