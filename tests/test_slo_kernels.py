@@ -13,7 +13,8 @@ import shoal.engine.slo.metrics as metrics_module
 import shoal.engine.slo.neighbourhoods as neighbourhoods_module
 from shoal.engine.core.raw_draws import RawDraws
 from shoal.engine.kinds.slo_swarm import SLOSwarm
-from shoal.engine.pso import spso2011
+from shoal.engine.pso import spso2011, spso_kernels
+from shoal.engine.pso.spso2011 import SPSO2011, SPSODraws
 from shoal.engine.slo import kernels, metric_kernels, select_kernels, selection
 from shoal.engine.slo.candidates import Candidates, candidates
 from shoal.engine.slo.metrics import STATS, dead_reckoning_share, pair_distances, pair_errors, round_trip_errors, stats
@@ -112,6 +113,23 @@ def _generators(rngs):
         rngs.settle()
         return rngs.rngs
     return rngs
+
+
+def numpy_local_best(f, fP, P, adjacency, est, pbest):
+    """The numpy reference of :func:`kernels.local_best` (steps 2–4 of Alg. 1)."""
+    better = f < fP
+    P = np.where(better[..., None], 0.0, P)
+    fP = np.where(better, f, fP)
+    n = f.shape[1]
+    score = fP if pbest else f
+    ranked = np.where(adjacency | np.eye(n, dtype=bool), score[:, None, :], np.inf)
+    self_best = score <= ranked.min(axis=-1)
+    j = np.where(self_best, np.arange(n), np.argmin(ranked, axis=-1))
+    to_j = np.take_along_axis(est, j[..., None, None], axis=2)[:, :, 0, :]
+    L = np.where(self_best[..., None], 0.0, to_j)
+    if pbest:
+        L = np.where(self_best[..., None], P, to_j + np.take_along_axis(P, j[..., None], axis=1))
+    return P, fP, self_best, L
 
 
 def numpy_draw(rngs, n):
@@ -216,6 +234,42 @@ def test_compiled_sensors_equal_numpy(level):
         assert [g.random() for g in ours] == [g.random() for g in theirs]
 
 
+def test_compiled_local_best_equals_numpy():
+    """Personal bests, best informants and local bests: ties (to the particle, then the first),
+    NaN and infinite fitness, lone particles, both local-best modes."""
+    rng = np.random.default_rng(6)
+    for trial in range(40):
+        R, n = int(rng.integers(1, 4)), int(rng.integers(2, 12))
+        f = rng.integers(0, 4, (R, n)).astype(float) if trial % 2 else rng.exponential(5.0, (R, n))
+        fP = np.where(rng.random((R, n)) < 0.3, np.inf, rng.exponential(5.0, (R, n)))
+        f[rng.random((R, n)) < 0.1] = np.nan
+        fP[rng.random((R, n)) < 0.05] = np.nan
+        P, est = rng.normal(0, 5, (R, n, 2)), rng.normal(0, 5, (R, n, n, 2))
+        adjacency = rng.random((R, n, n)) < (0.1, 0.5, 1.0)[trial % 3]
+        for pbest in (False, True):
+            got, want = kernels.local_best(f, fP, P, adjacency, est, pbest), numpy_local_best(f, fP, P, adjacency,
+                                                                                               est, pbest)
+            for name, a, b in zip(("P", "fP", "self_best", "L"), got, want):
+                assert a.dtype == b.dtype
+                np.testing.assert_array_equal(a, b, err_msg=f"{name} {trial} {pbest}")
+
+
+@pytest.mark.parametrize("law", [SPSO2011(), SPSO2011(c3=0.5, c4=-2.0, radial="uniform_area"),
+                                 SPSO2011(spso_self_best_halving=True, c4=1.5)], ids=["thesis", "area", "halving"])
+def test_compiled_local_velocity_equals_numpy(law):
+    """[3.10]–[3.11] to the bit: degenerate directions, negative radii (clamped), own bests."""
+    rng = np.random.default_rng(8)
+    R, n = 3, 11
+    v, p, l = (rng.normal(0, 5, (R, n, 2)) for _ in range(3))
+    d = SPSODraws(rng.random((R, n, 2)), rng.random((R, n, 2)), rng.normal(size=(R, n, 2)), rng.random((R, n)))
+    d.normal[0, :3] = 0.0  # no direction
+    p[1, :2] = l[1, :2] = 0.0  # G = 0: radius c4
+    own = rng.random((R, n)) < 0.3
+    for self_best in (own, None):
+        np.testing.assert_array_equal(spso_kernels.local_velocity(law, v, p, l, d, self_best),
+                                      law.local_velocity(v, p, l, d, self_best))
+
+
 def test_compiled_carry_equals_numpy():
     """Neighbours take the selected estimate and kind, the others their previous estimate,
     dead-reckoned or kept (non-finite values and odometry failures mixed in)."""
@@ -292,13 +346,15 @@ def test_compiled_statistics_equal_numpy():
 
 @pytest.mark.parametrize("kw", [
     dict(selection="css", errors="low"),
+    dict(selection="css", errors="low", local_best="pbest", pbest_shift="measured", fitness_noise=5.0),
     dict(selection="css", errors="high", entry_policy="geometric_random", neighbourhood="radius"),
     dict(selection="rts", errors="high", neighbourhood="random"),
     dict(selection="akcan", errors="low", particles=9),
     dict(selection="akcan", errors="high", neighbourhood="random"),
     dict(selection="rts", errors="low", rts_triangle="best", rts_prefer_geometric=True),
     dict(selection="perfect", errors="none", motion="random_walk"),
-], ids=["css", "css-entry-radius", "rts", "akcan", "akcan-random", "rts-best-geometric", "perfect-walk"])
+], ids=["css", "css-pbest-noise", "css-entry-radius", "rts", "akcan", "akcan-random", "rts-best-geometric",
+        "perfect-walk"])
 def test_whole_runs_equal_the_numpy_localiser(kw, monkeypatch):
     kw = {"particles": 12, **kw}
     compiled = SLOSwarm(runs=3, seed=5, **kw)
@@ -312,6 +368,8 @@ def test_whole_runs_equal_the_numpy_localiser(kw, monkeypatch):
     monkeypatch.setattr(select_kernels, "akcan", numpy_akcan)
     monkeypatch.setattr(beliefs_module, "carry", numpy_carry)
     monkeypatch.setattr(slo_swarm_module, "draw", numpy_draw)
+    monkeypatch.setattr(slo_swarm_module, "local_best", numpy_local_best)
+    monkeypatch.setattr(slo_swarm_module, "local_velocity", lambda law, *a: law.local_velocity(*a))
     monkeypatch.setattr(beliefs_module, "measure_ranges", numpy_measure_ranges)
     monkeypatch.setattr(beliefs_module, "measure_odometry", numpy_measure_odometry)
     monkeypatch.setattr(metrics_module, "stats", numpy_stats)

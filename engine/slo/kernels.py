@@ -205,3 +205,50 @@ def carry(adjacency: np.ndarray, new: np.ndarray, kind: np.ndarray, prev: np.nda
     _carry(np.ascontiguousarray(adjacency, dtype=bool), f64(new), np.ascontiguousarray(kind, dtype=np.int8),
            f64(prev), f64(v), bool(dead_reckoning), est, kind_out)
     return est, kind_out
+
+
+@kernel
+def _local_best(f: np.ndarray, fP: np.ndarray, P: np.ndarray, adjacency: np.ndarray, est: np.ndarray,
+                pbest: bool, P_out: np.ndarray, fP_out: np.ndarray, self_best: np.ndarray, L: np.ndarray) -> None:
+    R, n = f.shape[0], f.shape[1]
+    for r in range(R):
+        for i in range(n):  # step 2: the pbest moves to the particle itself
+            better = f[r, i] < fP[r, i]
+            P_out[r, i, 0], P_out[r, i, 1] = (0.0, 0.0) if better else (P[r, i, 0], P[r, i, 1])
+            fP_out[r, i] = f[r, i] if better else fP[r, i]
+        score = fP_out[r] if pbest else f[r]
+        for i in range(n):  # step 3: numpy's min and argmin over the informants (NaN first)
+            best, low = 0, score[0] if (adjacency[r, i, 0] or i == 0) else np.inf
+            for j in range(1, n):
+                if low != low:
+                    break
+                v = score[j] if (adjacency[r, i, j] or i == j) else np.inf
+                if v != v or v < low:
+                    best, low = j, v
+            own = score[i] <= low  # ties go to the particle itself
+            self_best[r, i] = own
+            jj = i if own else best
+            if pbest:  # x̂_ij* + P_j*, or the own P
+                if own:
+                    L[r, i, 0], L[r, i, 1] = P_out[r, i, 0], P_out[r, i, 1]
+                else:
+                    L[r, i, 0], L[r, i, 1] = est[r, i, jj, 0] + P_out[r, jj, 0], est[r, i, jj, 1] + P_out[r, jj, 1]
+            elif own:
+                L[r, i, 0], L[r, i, 1] = 0.0, 0.0
+            else:
+                L[r, i, 0], L[r, i, 1] = est[r, i, jj, 0], est[r, i, jj, 1]
+
+
+def local_best(f: np.ndarray, fP: np.ndarray, P: np.ndarray, adjacency: np.ndarray, est: np.ndarray,
+               pbest: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Steps 2–4 of Alg. 1 for every particle of every run: the personal bests moved to the
+    particles that sense a better fitness ``f`` (R, N) than ``fP``, then each particle's best
+    informant (its neighbours and itself; ties to itself) by ``f``, or by the personal bests
+    with ``pbest``, and the local best L relative to the particle: 0 (own P with ``pbest``)
+    when it is its own best, else x̂_ij* (+ P_j*). Returns P, fP, self_best, L."""
+    R, n = f.shape
+    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
+    P_out, fP_out, self_best, L = np.empty((R, n, 2)), np.empty((R, n)), np.empty((R, n), np.bool_), np.empty((R, n, 2))
+    _local_best(f64(f), f64(fP), f64(P), np.ascontiguousarray(adjacency, dtype=bool), f64(est), bool(pbest), P_out,
+                fP_out, self_best, L)
+    return P_out, fP_out, self_best, L
