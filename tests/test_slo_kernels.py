@@ -95,6 +95,13 @@ def numpy_distance_errors(x, est, valid):
     return np.where(valid, e_abs, np.nan), np.where(valid, e_rel, np.nan)
 
 
+def numpy_dead_reckoning_share(kind, valid):
+    """The numpy reference of :func:`metrics.dead_reckoning_share`."""
+    n = valid.sum(axis=(1, 2))
+    dr = (valid & (kind == Kind.X3)).sum(axis=(1, 2))
+    return np.divide(dr, n, out=np.full(n.shape, np.nan), where=n > 0)
+
+
 def numpy_pair_distances(x):
     """The numpy reference of :func:`metrics.pair_distances`."""
     i, j = np.triu_indices(x.shape[1], k=1)
@@ -340,6 +347,9 @@ def test_compiled_statistics_equal_numpy():
         for got, want in zip(metric_kernels.distance_errors(x, est, valid), numpy_distance_errors(x, est, valid)):
             np.testing.assert_array_equal(got, want)
         np.testing.assert_array_equal(pair_distances(x), numpy_pair_distances(x))
+        kind = rng.integers(0, 6, (R, n, n)).astype(np.int8)
+        valid = valid & (trial % 5 > 0)  # now and then no valid pair at all
+        np.testing.assert_array_equal(dead_reckoning_share(kind, valid), numpy_dead_reckoning_share(kind, valid))
         for k, v in stats(pair_distances(x)).items():
             np.testing.assert_array_equal(v, numpy_stats(numpy_pair_distances(x))[k], err_msg=k)
 
@@ -375,6 +385,7 @@ def test_whole_runs_equal_the_numpy_localiser(kw, monkeypatch):
     monkeypatch.setattr(metrics_module, "stats", numpy_stats)
     monkeypatch.setattr(metrics_module, "distance_errors", numpy_distance_errors)
     monkeypatch.setattr(metrics_module, "pair_distances", numpy_pair_distances)
+    monkeypatch.setattr(metrics_module, "dead_reckoning_share", numpy_dead_reckoning_share)
     reference = SLOSwarm(runs=3, seed=5, **kw)
     rows = [reference.info().series()] + [reference.step().series() for _ in range(12)]
     for got, want in zip(compiled_rows, rows):

@@ -93,27 +93,32 @@ def _pairwise(a: np.ndarray, lo: int, n: int, stack: tuple[np.ndarray, np.ndarra
 
 @kernel
 def _select(buf: np.ndarray, m: int, k: int) -> float:
-    """The k-th smallest of buf[:m] (no NaN), reordering buf (Hoare's selection)."""
-    lo, hi = 0, m - 1
-    while lo < hi:
-        pivot = buf[(lo + hi) // 2]
-        i, j = lo, hi
-        while i <= j:
-            while buf[i] < pivot:
-                i += 1
-            while buf[j] > pivot:
-                j -= 1
-            if i <= j:
-                buf[i], buf[j] = buf[j], buf[i]
-                i += 1
-                j -= 1
-        if k <= j:
-            hi = j
-        elif k >= i:
-            lo = i
-        else:
-            break
-    return buf[k]
+    """The k-th smallest of buf[:m] (no NaN), reordering buf so that every value after
+    position k is at least it: quickselect with branch-free partitions (the values below the
+    pivot to the front, then those equal to it), so unpredictable data costs no mispredictions."""
+    lo, hi = 0, m
+    while hi - lo > 1:
+        a, b, c = buf[lo], buf[(lo + hi) // 2], buf[hi - 1]
+        pivot = max(min(a, b), min(max(a, b), c))  # median of three
+        s = lo
+        for q in range(lo, hi):
+            v = buf[q]
+            buf[q] = buf[s]
+            buf[s] = v
+            s += v < pivot
+        if k < s:
+            hi = s
+            continue
+        e = s
+        for q in range(s, hi):
+            v = buf[q]
+            buf[q] = buf[e]
+            buf[e] = v
+            e += v == pivot
+        if k < e:
+            return pivot
+        lo = e
+    return buf[lo]
 
 
 @kernel
@@ -136,14 +141,12 @@ def _stats(flat: np.ndarray, pairwise: bool, moments: int, median: bool, count: 
     safe, buf, stack = np.empty(m), np.empty(m), _stack()
     for r in range(R):
         n = 0
-        for q in range(m):
+        for q in range(m):  # branch-free: which values are finite is not predictable
             v = flat[r, q]
-            if math.isfinite(v):
-                safe[q] = v
-                buf[n] = v
-                n += 1
-            else:
-                safe[q] = 0.0
+            finite = math.isfinite(v)
+            safe[q] = v if finite else 0.0
+            buf[n] = v
+            n += finite
         count[r] = n
         if moments:
             if n == 0:
@@ -198,11 +201,10 @@ def distance_errors(x: np.ndarray, est: np.ndarray, valid: np.ndarray) -> tuple[
                 dx, dy = est[r, i, j, 0] - tx, est[r, i, j, 1] - ty
                 ea = math.sqrt(dx * dx + dy * dy)
                 dist = math.sqrt(tx * tx + ty * ty)
-                if valid[r, i, j]:
-                    e_abs[r, i, j] = ea
-                    e_rel[r, i, j] = ea / dist if dist > 0.0 else np.nan
-                else:
-                    e_abs[r, i, j] = e_rel[r, i, j] = np.nan
+                er = ea / dist if dist > 0.0 else np.nan
+                ok = valid[r, i, j]  # selected, not branched on: which pairs are valid is not predictable
+                e_abs[r, i, j] = ea if ok else np.nan
+                e_rel[r, i, j] = er if ok else np.nan
     return e_abs, e_rel
 
 
@@ -220,3 +222,18 @@ def pair_distances(x: np.ndarray) -> np.ndarray:
                 d[r, q] = math.sqrt(dx * dx + dy * dy)
                 q += 1
     return d
+
+
+@kernel
+def dead_reckoning_share(kind: np.ndarray, valid: np.ndarray, x3: int) -> np.ndarray:
+    """Share of the valid estimates of each run whose kind is ``x3``, (R,); NaN for none."""
+    R = kind.shape[0]
+    out = np.empty(R)
+    for r in range(R):
+        n, dr = 0, 0
+        for q in range(kind[r].size):
+            ok = valid[r].flat[q]
+            n += ok
+            dr += ok and kind[r].flat[q] == x3
+        out[r] = dr / n if n > 0 else np.nan
+    return out

@@ -65,10 +65,9 @@ def pair_distances(x: np.ndarray) -> np.ndarray:
 
 
 def dead_reckoning_share(kind: np.ndarray, valid: np.ndarray) -> np.ndarray:
-    """Share of this step's estimates that are pure dead reckoning x3, (R,)."""
-    n = valid.sum(axis=(1, 2))
-    dr = (valid & (kind == Kind.X3)).sum(axis=(1, 2))
-    return np.divide(dr, n, out=np.full(n.shape, np.nan), where=n > 0)
+    """Share of this step's estimates that are pure dead reckoning x3, (R,) (compiled)."""
+    return metric_kernels.dead_reckoning_share(np.ascontiguousarray(kind, dtype=np.int8),
+                                               np.ascontiguousarray(valid, dtype=bool), int(Kind.X3))
 
 
 def round_trip_errors(est: np.ndarray, adjacency: np.ndarray) -> np.ndarray:
