@@ -201,10 +201,11 @@ def distance_errors(x: np.ndarray, est: np.ndarray, valid: np.ndarray) -> tuple[
                 dx, dy = est[r, i, j, 0] - tx, est[r, i, j, 1] - ty
                 ea = math.sqrt(dx * dx + dy * dy)
                 dist = math.sqrt(tx * tx + ty * ty)
-                er = ea / dist if dist > 0.0 else np.nan
-                ok = valid[r, i, j]  # selected, not branched on: which pairs are valid is not predictable
-                e_abs[r, i, j] = ea if ok else np.nan
-                e_rel[r, i, j] = er if ok else np.nan
+                if valid[r, i, j]:
+                    e_abs[r, i, j] = ea
+                    e_rel[r, i, j] = ea / dist if dist > 0.0 else np.nan
+                else:
+                    e_abs[r, i, j] = e_rel[r, i, j] = np.nan
     return e_abs, e_rel
 
 
