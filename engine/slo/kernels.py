@@ -44,12 +44,12 @@ def _pairs(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, delt
                     c = 2.0
                 cos_ok = not 1.0 - abs(c) <= delta_cos  # [3.5]
                 geometric = ok and thin_ok and cos_ok
-                cc = min(max(c, -1.0), 1.0)
-                sn = math.sqrt(1.0 - cc * cc)
-                ux, uy = vx / sv, vy / sv
-                ax, ay = (s1 * cc) * ux, (s1 * cc) * uy
-                bx, by = (s1 * sn) * uy, (s1 * sn) * -ux
                 if geometric:  # [3.2], [3.3]
+                    cc = min(max(c, -1.0), 1.0)
+                    sn = math.sqrt(1.0 - cc * cc)
+                    ux, uy = vx / sv, vy / sv
+                    ax, ay = (s1 * cc) * ux, (s1 * cc) * uy
+                    bx, by = (s1 * sn) * uy, (s1 * sn) * -ux
                     x1x, x1y, x2x, x2y = ax + bx, ay + by, ax - bx, ay - by
                 else:
                     x1x, x1y, x2x, x2y = x3x, x3y, x3x, x3y
@@ -68,16 +68,18 @@ def _pairs(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, delt
                     flag[r, i, j] = Flag.GEOMETRIC
                 else:
                     flag[r, i, j] = Flag.MITIGATED_COS
-                # [3.7]: the geometric candidate closest to x3, blended with it by w
+                if not geometric:
+                    est[r, i, j, 0], est[r, i, j, 1], kind[r, i, j] = x3x, x3y, Kind.X3
+                    continue
+                # [3.7]: the geometric candidate closest to x3, blended with it by w; ‖e1‖ ≤ ‖e2‖ compared
+                # as numpy's square roots (a root is monotone: they are needed only when e1² > e2²)
                 e1x, e1y, e2x, e2y = x1x - x3x, x1y - x3y, x2x - x3x, x2y - x3y
-                pick1 = math.sqrt(e1x * e1x + e1y * e1y) <= math.sqrt(e2x * e2x + e2y * e2y)
+                q1, q2 = e1x * e1x + e1y * e1y, e2x * e2x + e2y * e2y
+                pick1 = q1 <= q2 or math.sqrt(q1) <= math.sqrt(q2)
                 new = use_entry and entry[r, i, j]
                 if new:
                     pick1 = coin[r, i, j]
                 xcx, xcy = (x1x, x1y) if pick1 else (x2x, x2y)
-                if not geometric:
-                    est[r, i, j, 0], est[r, i, j, 1], kind[r, i, j] = x3x, x3y, Kind.X3
-                    continue
                 if new:
                     est[r, i, j, 0], est[r, i, j, 1] = xcx, xcy
                 else:
