@@ -11,7 +11,7 @@ import shoal.engine.kinds.slo_swarm as slo_swarm_module
 import shoal.engine.slo.beliefs as beliefs_module
 import shoal.engine.slo.metrics as metrics_module
 import shoal.engine.slo.neighbourhoods as neighbourhoods_module
-from shoal.engine.core.raw_draws import RawDraws
+from shoal.engine.core.compiled_draws import CompiledDraws
 from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.engine.pso import spso2011, spso_kernels
 from shoal.engine.pso.spso2011 import SPSO2011, SPSODraws
@@ -115,11 +115,8 @@ def numpy_carry(adjacency, new, kind, prev, v, dead_reckoning):
 
 
 def _generators(rngs):
-    """The generators behind draws taken in blocks, put back where one call a step leaves them."""
-    if isinstance(rngs, RawDraws):
-        rngs.settle()
-        return rngs.rngs
-    return rngs
+    """The generators behind compiled draws."""
+    return rngs.rngs if isinstance(rngs, CompiledDraws) else rngs
 
 
 def numpy_local_best(f, fP, P, adjacency, est, pbest):
@@ -140,7 +137,7 @@ def numpy_local_best(f, fP, P, adjacency, est, pbest):
 
 
 def numpy_draw(rngs, n):
-    """SPSO's draws of a generation from one generator call each, the reference of draws taken ahead."""
+    """SPSO's draws of a generation from one generator call each, the reference of compiled draws."""
     return spso2011.draw(_generators(rngs), n)
 
 
@@ -230,14 +227,12 @@ def test_compiled_sensors_equal_numpy(level):
         v = rng.normal(0.0, 2.0, (R, n, 2))
         reach = (np.inf, 15.0)[trial % 2]
         ours, theirs = ([np.random.default_rng([trial, r]) for r in range(R)] for _ in range(2))
-        draws = RawDraws(ours, 50) if trial % 3 else ours  # in blocks (running out mid-step), or a call a run
+        draws = CompiledDraws(ours) if trial % 3 else ours  # compiled, or a call a run
         for _ in range(3):
             np.testing.assert_array_equal(measure_ranges(dist, model.range, perm, draws, reach),
                                           numpy_measure_ranges(dist, model.range, perm, theirs, reach))
             np.testing.assert_array_equal(measure_odometry(v, model.odometry, perm, draws),
                                           numpy_measure_odometry(v, model.odometry, perm, theirs))
-        if isinstance(draws, RawDraws):
-            draws.settle()
         assert [g.random() for g in ours] == [g.random() for g in theirs]
 
 
@@ -392,7 +387,6 @@ def test_whole_runs_equal_the_numpy_localiser(kw, monkeypatch):
         assert got.keys() == want.keys()
         for name in got:
             np.testing.assert_array_equal(got[name], want[name], err_msg=name)
-    compiled.settle()  # the draws taken ahead: the streams stand where the reference's do
     for name in ("range", "odometry", "pso"):
         for g, h in zip(compiled.streams[name], reference.streams[name]):
             assert g.bit_generator.state == h.bit_generator.state

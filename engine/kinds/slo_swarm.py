@@ -18,8 +18,8 @@ from typing import Any, ClassVar, Iterable, Literal
 
 import numpy as np
 
+from ..core.compiled_draws import CompiledDraws
 from ..core.contract import check_live
-from ..core.raw_draws import RawDraws
 from ..core.rng import component_generators
 from ..pso.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
 from ..pso.spso_kernels import local_velocity
@@ -361,7 +361,7 @@ class SLOSwarm:
         u = np.stack([g.uniform(lo, hi, (n, 2)) - g.uniform(lo, hi, (n, 2)) for g in init])  # RandomMovement()
         est = random_estimates(init, n, lo, hi) if cfg.initial_estimates == "random" else relative_truth(x)
         self.localiser = Localiser(cfg.localiser_params(), self.errors, self.streams, n)
-        self._pso_draws = RawDraws(self.streams["pso"], Localiser.AHEAD * 7 * n)  # taken ahead: the same numbers
+        self._pso_draws = CompiledDraws(self.streams["pso"])  # compiled, the same numbers
         adjacency = self.rule.adjacency(x, self.streams["topology"])
         beliefs = self.localiser.start(x, adjacency, est)
         shape = (self.runs, n)
@@ -372,12 +372,6 @@ class SLOSwarm:
         )
         self._met = np.full(self.runs, np.inf)
         self._last = self._record()
-
-    def settle(self) -> None:
-        """Put the generators whose draws are taken several generations ahead (sensors, PSO)
-        back where one call a generation leaves them, before anything else draws from them."""
-        self.localiser.settle()
-        self._pso_draws.settle()
 
     def info(self) -> SLOInfo:
         """Metrics of the current generation."""

@@ -13,7 +13,7 @@ from typing import Callable, Literal
 
 import numpy as np
 
-from ..core.raw_draws import RawDraws
+from ..core.compiled_draws import CompiledDraws
 from ..core.rng import Streams
 from .candidates import Candidates, Flag
 from .kernels import carry, localise, pair_candidates
@@ -97,25 +97,15 @@ def random_estimates(rngs: list[np.random.Generator], n: int, low: float, high: 
 
 
 class Localiser:
-    """Sensors plus estimator for ``n`` robots in every run; keeps the permanent errors.
-
-    The range and odometry streams are the localiser's own: it takes their draws several steps
-    ahead (:class:`~shoal.engine.core.raw_draws.RawDraws`, the same numbers); :meth:`settle`
-    puts the generators back where one call a step would have left them."""
-
-    AHEAD = 8  # steps of sensor draws fetched at a time
+    """Sensors plus estimator for ``n`` robots in every run; keeps the permanent errors. The
+    sensor draws are made compiled (:class:`~shoal.engine.core.compiled_draws.CompiledDraws`),
+    from the same streams, the same numbers."""
 
     def __init__(self, params: LocaliserParams, errors: ErrorModel, streams: Streams, n: int) -> None:
         self.params, self.errors, self.streams, self.n = params, errors, streams, n
         self._z = permanent_normals(streams["permanent"], n)
         self.permanent = permanent_errors(errors, self._z)
-        self._range_draws = RawDraws(streams["range"], self.AHEAD * 3 * n * n)  # U + 2 N a pair [4.1]–[4.3]
-        self._odometry_draws = RawDraws(streams["odometry"], max(1024, self.AHEAD * 6 * n))  # U + 5 N a robot [4.4]
-
-    def settle(self) -> None:
-        """Step the range and odometry generators back over the draws fetched but not used."""
-        self._range_draws.settle()
-        self._odometry_draws.settle()
+        self._range_draws, self._odometry_draws = CompiledDraws(streams["range"]), CompiledDraws(streams["odometry"])
 
     def retune(self, params: LocaliserParams | None = None, errors: ErrorModel | None = None) -> None:
         """Change the localisation choices or the sensor errors mid-run; beliefs are kept and

@@ -13,7 +13,7 @@ from typing import Literal, Sequence
 
 import numpy as np
 
-from ..core.raw_draws import RawDraws
+from ..core.compiled_draws import CompiledDraws
 from . import sensor_kernels
 
 ErrorLevel = Literal["none", "low", "high"]
@@ -135,12 +135,12 @@ def permanent_errors(model: ErrorModel, z: np.ndarray) -> PermanentErrors:
     )
 
 
-Draws = Sequence[np.random.Generator] | RawDraws  # one generator per run, or their draws in blocks
+Draws = Sequence[np.random.Generator] | CompiledDraws  # one generator per run, drawn by numpy or compiled
 
 
 def _draw(rngs: Draws, fail: np.ndarray, z: np.ndarray) -> None:
-    """fail[r] ~ U(0,1), then z[r] ~ N(0,1), from run r's stream (in blocks: the same numbers)."""
-    if isinstance(rngs, RawDraws):
+    """fail[r] ~ U(0,1), then z[r] ~ N(0,1), from run r's stream (compiled: the same numbers)."""
+    if isinstance(rngs, CompiledDraws):
         rngs.fill(fail, z, normal=(False, True))
         return
     for r, g in enumerate(rngs):  # each run's stream, drawn in place
