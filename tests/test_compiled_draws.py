@@ -3,10 +3,14 @@ normal parts in any order), the ziggurat's rare slow paths, and the generators' 
 
 from __future__ import annotations
 
+import copy
+import pickle
+
 import numpy as np
 import pytest
 
 from shoal.engine.core.compiled_draws import CompiledDraws
+from shoal.engine.kinds.slo_swarm import SLOSwarm
 
 
 def _gens(R, seed=0):
@@ -51,3 +55,19 @@ def test_a_strided_array_and_mixed_generators_are_refused():
         CompiledDraws(_gens(2)).fill(np.empty((4, 2))[::2], np.empty((2, 3)), normal=(False, True))
     with pytest.raises(ValueError, match="one bit-generator kind"):
         CompiledDraws([np.random.Generator(np.random.PCG64(1)), np.random.Generator(np.random.MT19937(1))])
+
+
+def test_a_copied_or_unpickled_swarm_draws_from_its_own_generators():
+    """The C state addresses are the generators' own: a deep copy or an unpickled SLO swarm goes on
+    exactly as the original, and leaves the original's streams alone."""
+    a = SLOSwarm(runs=2, seed=3, particles=6, errors="high")
+    a.step()
+    for b in (copy.deepcopy(a), pickle.loads(pickle.dumps(a))):
+        before = [g.bit_generator.state for g in a.streams["range"]]
+        for _ in range(3):
+            b.step()
+        assert [g.bit_generator.state for g in a.streams["range"]] == before
+    for _ in range(3):
+        a.step()
+    np.testing.assert_array_equal(a.state.est, b.state.est)
+    np.testing.assert_array_equal(a.state.x, b.state.x)

@@ -77,7 +77,14 @@ class CompiledDraws:
     """Draws of every run of ``rngs``, one generator a run, all of one bit-generator kind."""
 
     def __init__(self, rngs: Sequence[np.random.Generator]) -> None:
-        self.rngs = list(rngs)
+        self.__setstate__({"rngs": list(rngs)})
+
+    def __getstate__(self) -> dict:
+        """Only the generators: a copy or an unpickled object finds its own generators' C state."""
+        return {"rngs": self.rngs}
+
+    def __setstate__(self, state: dict) -> None:
+        self.rngs = state["rngs"]
         interfaces = [g.bit_generator.ctypes for g in self.rngs]
         addresses = {ctypes.cast(c.next_uint64, ctypes.c_void_p).value for c in interfaces}
         if len(addresses) > 1:
