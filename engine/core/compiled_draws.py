@@ -14,7 +14,6 @@ fills every run's arrays.
 
 from __future__ import annotations
 
-import ctypes
 import math
 from typing import Sequence
 
@@ -74,7 +73,7 @@ def _fill(next_u64, states: np.ndarray, parts: tuple, normal: np.ndarray) -> Non
 
 
 class CompiledDraws:
-    """Draws of every run of ``rngs``, one generator a run, all of one bit-generator kind."""
+    """Draws of every run of ``rngs``, one PCG64 generator a run (Shoal's streams)."""
 
     def __init__(self, rngs: Sequence[np.random.Generator]) -> None:
         self.__setstate__({"rngs": list(rngs)})
@@ -85,11 +84,10 @@ class CompiledDraws:
 
     def __setstate__(self, state: dict) -> None:
         self.rngs = state["rngs"]
+        if not all(type(g.bit_generator) is np.random.PCG64 for g in self.rngs):
+            raise ValueError("CompiledDraws: the generators must be PCG64 (a double is its output's top 53 bits)")
         interfaces = [g.bit_generator.ctypes for g in self.rngs]
-        addresses = {ctypes.cast(c.next_uint64, ctypes.c_void_p).value for c in interfaces}
-        if len(addresses) > 1:
-            raise ValueError("CompiledDraws: the generators must share one bit-generator kind")
-        self._next = interfaces[0].next_uint64 if interfaces else None
+        self._next = interfaces[0].next_uint64 if interfaces else None  # PCG64's one C function
         self._states = np.array([c.state_address for c in interfaces], dtype=np.uintp)
 
     def fill(self, *arrays: np.ndarray, normal: Sequence[bool]) -> None:
