@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from ..core.compiled import kernel
+from ..core.compiled import f64, kernel
 from .spso2011 import SPSO2011, SPSODraws
 
 
@@ -41,7 +41,6 @@ def _local_velocity(v: np.ndarray, p: np.ndarray, l: np.ndarray, u1: np.ndarray,
 def local_velocity(law: SPSO2011, v: np.ndarray, p: np.ndarray, l: np.ndarray, d: SPSODraws,
                    self_best: np.ndarray | None = None) -> np.ndarray:
     """:meth:`SPSO2011.local_velocity` compiled: V' = ω·V + H(G, c3·‖G‖ + c4), (R, N, 2)."""
-    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
     own = np.zeros(v.shape[:2], bool) if self_best is None else np.ascontiguousarray(self_best, dtype=bool)
     return _local_velocity(f64(v), f64(p), f64(l), f64(d.u1), f64(d.u2), f64(d.normal), f64(d.rho), own,
                            float(law.inertia), float(law.c1), float(law.c2), float(law.c3), float(law.c4),

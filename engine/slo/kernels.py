@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..core.compiled import kernel
+from ..core.compiled import f64, kernel
 from .candidates import Candidates, Flag
 from .selection import Kind
 
@@ -107,7 +107,6 @@ def localise(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, *,
     ``candidates(d0, d1, v_rel, prev, …)`` and ``css(…)``; the candidate sets (a megabyte for
     31 swarms of 20) only with ``candidates``."""
     R, n = d0.shape[:2]
-    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
     shape = (R, n, n) if candidates else (1, 1, 1)
     points, mask = np.empty(shape + (3, 2)), np.empty(shape + (3,), bool)
     cos_alpha, thinness = np.empty(shape), np.empty(shape)
@@ -202,7 +201,6 @@ def carry(adjacency: np.ndarray, new: np.ndarray, kind: np.ndarray, prev: np.nda
     """The step's beliefs: the selected estimate ``new`` and its ``kind`` for a neighbour; for
     any other pair the previous estimate ``prev``, dead-reckoned by v*_j − v*_i [3.4] or kept,
     and kind NONE. (R, N, N, 2) and (R, N, N) int8."""
-    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
     est, kind_out = np.empty(new.shape), np.empty(adjacency.shape, np.int8)
     _carry(np.ascontiguousarray(adjacency, dtype=bool), f64(new), np.ascontiguousarray(kind, dtype=np.int8),
            f64(prev), f64(v), bool(dead_reckoning), est, kind_out)
@@ -249,7 +247,6 @@ def local_best(f: np.ndarray, fP: np.ndarray, P: np.ndarray, adjacency: np.ndarr
     with ``pbest``, and the local best L relative to the particle: 0 (own P with ``pbest``)
     when it is its own best, else x̂_ij* (+ P_j*). Returns P, fP, self_best, L."""
     R, n = f.shape
-    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
     P_out, fP_out, self_best, L = np.empty((R, n, 2)), np.empty((R, n)), np.empty((R, n), np.bool_), np.empty((R, n, 2))
     _local_best(f64(f), f64(fP), f64(P), np.ascontiguousarray(adjacency, dtype=bool), f64(est), bool(pbest), P_out,
                 fP_out, self_best, L)

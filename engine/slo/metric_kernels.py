@@ -16,7 +16,7 @@ from typing import Collection
 
 import numpy as np
 
-from ..core.compiled import kernel
+from ..core.compiled import f64, kernel
 
 BLOCK = 128  # numpy's pairwise-summation block
 
@@ -183,7 +183,7 @@ def stats(flat: np.ndarray, keys: Collection[str]) -> dict[str, np.ndarray]:
     count = np.empty(R, np.int64)
     mean, std, sem, med = np.empty(R), np.empty(R), np.empty(R), np.empty(R)
     moments = 2 if {"std", "sem"} & set(keys) else int("mean" in keys)
-    _stats(np.ascontiguousarray(flat, dtype=float), pairwise, moments, "median" in keys, count, mean, std, sem, med)
+    _stats(f64(flat), pairwise, moments, "median" in keys, count, mean, std, sem, med)
     out = {"count": count, "mean": mean, "std": std, "sem": sem, "median": med}
     return {k: out[k] for k in keys}
 

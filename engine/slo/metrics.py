@@ -14,6 +14,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..core.compiled import f64
 from ..core.vectors import norm
 from . import metric_kernels
 from .selection import Kind, first_triangle
@@ -31,7 +32,6 @@ def _truth(x: np.ndarray) -> np.ndarray:
 def distance_errors(x: np.ndarray, est: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """e_abs and e_rel of every ordered pair (R, N, N), NaN outside ``valid``; e_rel is also
     NaN for coincident particles (compiled, :func:`~.metric_kernels.distance_errors`)."""
-    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
     return metric_kernels.distance_errors(f64(x), f64(est), np.ascontiguousarray(valid, dtype=bool))
 
 
@@ -61,7 +61,7 @@ def stats(values: np.ndarray, keys: Sequence[str] = STATS) -> dict[str, np.ndarr
 
 def pair_distances(x: np.ndarray) -> np.ndarray:
     """‖x_j − x_i‖ over all unordered pairs i < j, (R, N(N−1)/2) (compiled)."""
-    return metric_kernels.pair_distances(np.ascontiguousarray(x, dtype=float))
+    return metric_kernels.pair_distances(f64(x))
 
 
 def dead_reckoning_share(kind: np.ndarray, valid: np.ndarray) -> np.ndarray:

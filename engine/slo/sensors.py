@@ -13,6 +13,7 @@ from typing import Literal, Sequence
 
 import numpy as np
 
+from ..core.compiled import f64
 from ..core.compiled_draws import CompiledDraws
 from . import sensor_kernels
 
@@ -158,7 +159,6 @@ def measure_ranges(
     R, n, _ = dist.shape
     fail, z = np.empty((R, n, n)), np.empty((R, 2, n, n))
     _draw(rngs, fail, z)
-    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
     return sensor_kernels.ranges(f64(dist), fail, z, float(model.sigma_m), float(model.sigma_a), f64(perm.range_m),
                                  f64(perm.range_a), float(model.p_fail), float(max_range))  # [4.1]–[4.3], compiled
 
@@ -170,6 +170,5 @@ def measure_odometry(v: np.ndarray, model: OdometryErrors, perm: PermanentErrors
     fail, z = np.empty((R, n)), np.empty((R, 5, n))
     _draw(rngs, fail, z)
     theta = model.sigma_r * z[:, 4] + perm.odo_r
-    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
     return sensor_kernels.odometry(f64(v), fail, z, float(model.sigma_m), float(model.sigma_a), f64(perm.odo_m),
                                    f64(perm.odo_a), np.cos(theta), np.sin(theta), float(model.p_fail))  # [4.4]
