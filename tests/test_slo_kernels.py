@@ -1,6 +1,8 @@
-"""The compiled SLO pair step and neighbour search against their numpy references, bit for
-bit (random and singular pairs, whole seeded runs of every selection), and the metrics and
-candidate sets worked out when read equal to those worked out at once."""
+"""The compiled SLO kernels against their numpy references (the ``numpy_*`` functions below),
+bit for bit: the pair step, neighbour search, sensors, carried estimates, PSO local best and
+SPSO update, metrics and their statistics (random and singular inputs, whole seeded runs of
+every selection with every kernel swapped for its reference, the generators' states included),
+and the metrics and candidate sets worked out when read equal to those worked out at once."""
 
 from __future__ import annotations
 
