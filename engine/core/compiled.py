@@ -5,6 +5,12 @@ repeat numpy's or pymunk's operations to the bit."""
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 kernel = njit(cache=True, error_model="numpy", nogil=True)
+
+
+def f64(a: np.ndarray) -> np.ndarray:
+    """``a`` as a C-contiguous float64 array, as the kernels take their float inputs (no copy if it is one)."""
+    return np.ascontiguousarray(a, dtype=float)

@@ -18,13 +18,16 @@ from typing import Any, ClassVar, Iterable, Literal
 
 import numpy as np
 
+from ..core.compiled_draws import CompiledDraws
 from ..core.contract import check_live
 from ..core.rng import component_generators
 from ..pso.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
+from ..pso.spso_kernels import local_velocity
 from ..slo import metrics
 from ..slo.beliefs import Beliefs, EntryPolicy, Localiser, LocaliserParams, Selection, random_estimates, relative_truth
 from ..slo.candidates import Candidates
 from ..slo.formation import AttractionRepulsion
+from ..slo.kernels import local_best
 from ..slo.neighbourhoods import Neighbourhood, NeighbourhoodKind
 from ..slo.objectives import QUALITY_THRESHOLDS, Fitness, slo_objective
 from ..slo.selection import RTSTriangle
@@ -358,6 +361,7 @@ class SLOSwarm:
         u = np.stack([g.uniform(lo, hi, (n, 2)) - g.uniform(lo, hi, (n, 2)) for g in init])  # RandomMovement()
         est = random_estimates(init, n, lo, hi) if cfg.initial_estimates == "random" else relative_truth(x)
         self.localiser = Localiser(cfg.localiser_params(), self.errors, self.streams, n)
+        self._pso_draws = CompiledDraws(self.streams["pso"])  # compiled, the same numbers
         adjacency = self.rule.adjacency(x, self.streams["topology"])
         beliefs = self.localiser.start(x, adjacency, est)
         shape = (self.runs, n)
@@ -391,21 +395,10 @@ class SLOSwarm:
         """The PSO part of Alg. 1 (Mai §3.6, p. 32) for every particle: pbest update, local best, [3.10]–[3.11]."""
         s, cfg = self.state, self.config
         f = self._sensed_fitness()
-        better = f < s.fP  # step 2: the pbest moves to the particle itself
-        s.P = np.where(better[..., None], 0.0, s.P)
-        s.fP = np.where(better, f, s.fP)
+        # steps 2–4, compiled: pbest update, best informant, local best (see SLOConfig.local_best)
+        s.P, s.fP, self_best, L = local_best(f, s.fP, s.P, s.adjacency, s.est, cfg.local_best == "pbest")
         n = f.shape[1]
-        eye = np.eye(n, dtype=bool)
-        informants = s.adjacency | eye
-        score = f if cfg.local_best == "current" else s.fP
-        ranked = np.where(informants, score[:, None, :], np.inf)
-        self_best = score <= ranked.min(axis=-1)  # ties go to the particle itself
-        j = np.where(self_best, np.arange(n), np.argmin(ranked, axis=-1))  # step 3
-        to_j = np.take_along_axis(s.est, j[..., None, None], axis=2)[:, :, 0, :]
-        L = np.where(self_best[..., None], 0.0, to_j)  # step 4
-        if cfg.local_best == "pbest":  # best neighbour pbest, x̂_ij* + P_j* (see SLOConfig.local_best)
-            L = np.where(self_best[..., None], s.P, to_j + np.take_along_axis(s.P, j[..., None], axis=1))
-        return self.spso.local_velocity(s.u, s.P, L, draw(self.streams["pso"], n), self_best)  # steps 5–7
+        return local_velocity(self.spso, s.u, s.P, L, draw(self._pso_draws, n), self_best)  # steps 5–7, compiled
 
     def _walk_command(self) -> np.ndarray:
         """Random walk (Mai §4.5, p. 41): speed ~ U(0, walk_speed), direction ~ U(0, 2π)."""

@@ -13,6 +13,8 @@ from typing import Literal, Sequence
 
 import numpy as np
 
+from ..core.compiled_draws import CompiledDraws
+
 OMEGA_SPSO = 1.0 / (2.0 * np.log(2.0))  # SPSO 2011 default; docs/readings.md, "Inertia weight ω"
 C_SPSO = 0.5 + np.log(2.0)  # [Tab. 4.1] c1 = c2
 
@@ -29,11 +31,15 @@ class SPSODraws:
     rho: np.ndarray  # (...)
 
 
-def draw(rngs: Sequence[np.random.Generator], n: int) -> SPSODraws:
+def draw(rngs: Sequence[np.random.Generator] | CompiledDraws, n: int) -> SPSODraws:
     """Fresh draws for ``n`` particles of every run, (R, n, …): per particle per step
-    (docs/readings.md, "How often errors are drawn")."""
-    R = len(rngs)
+    (docs/readings.md, "How often errors are drawn"); from each run's generator, by numpy or
+    compiled (:class:`~shoal.engine.core.compiled_draws.CompiledDraws`, the same numbers)."""
+    R = len(rngs.rngs) if isinstance(rngs, CompiledDraws) else len(rngs)
     d = SPSODraws(np.empty((R, n, 2)), np.empty((R, n, 2)), np.empty((R, n, 2)), np.empty((R, n)))
+    if isinstance(rngs, CompiledDraws):
+        rngs.fill(d.u1, d.u2, d.normal, d.rho, normal=(False, False, True, False))
+        return d
     for r, g in enumerate(rngs):  # each run's stream, drawn in place
         g.random(out=d.u1[r])
         g.random(out=d.u2[r])

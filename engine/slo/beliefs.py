@@ -13,9 +13,10 @@ from typing import Callable, Literal
 
 import numpy as np
 
+from ..core.compiled_draws import CompiledDraws
 from ..core.rng import Streams
 from .candidates import Candidates, Flag
-from .kernels import localise, pair_candidates
+from .kernels import carry, localise, pair_candidates
 from .neighbourhoods import distances
 from .selection import SELECTIONS, Kind, RTSTriangle
 from .sensors import ErrorModel, measure_odometry, measure_ranges, permanent_errors, permanent_normals
@@ -96,12 +97,15 @@ def random_estimates(rngs: list[np.random.Generator], n: int, low: float, high: 
 
 
 class Localiser:
-    """Sensors plus estimator for ``n`` robots in every run; keeps the permanent errors."""
+    """Sensors plus estimator for ``n`` robots in every run; keeps the permanent errors. The
+    sensor draws are made compiled (:class:`~shoal.engine.core.compiled_draws.CompiledDraws`),
+    from the same streams, the same numbers."""
 
     def __init__(self, params: LocaliserParams, errors: ErrorModel, streams: Streams, n: int) -> None:
         self.params, self.errors, self.streams, self.n = params, errors, streams, n
         self._z = permanent_normals(streams["permanent"], n)
         self.permanent = permanent_errors(errors, self._z)
+        self._range_draws, self._odometry_draws = CompiledDraws(streams["range"]), CompiledDraws(streams["odometry"])
 
     def retune(self, params: LocaliserParams | None = None, errors: ErrorModel | None = None) -> None:
         """Change the localisation choices or the sensor errors mid-run; beliefs are kept and
@@ -123,8 +127,7 @@ class Localiser:
         self.permanent = permanent_errors(self.errors, z)
 
     def _ranges(self, x: np.ndarray, adjacency: np.ndarray) -> np.ndarray:
-        d = measure_ranges(distances(x), self.errors.range, self.permanent, self.streams["range"],
-                           self.params.max_range)
+        d = measure_ranges(distances(x), self.errors.range, self.permanent, self._range_draws, self.params.max_range)
         return d if self.params.measure_all_ranges else np.where(adjacency, d, 0.0)
 
     def start(self, x: np.ndarray, adjacency: np.ndarray, initial: np.ndarray) -> Beliefs:
@@ -142,7 +145,7 @@ class Localiser:
         """One localisation step at true positions ``x`` after the moves from ``x_prev``."""
         p = self.params
         ranges = self._ranges(x, adjacency)
-        v_meas = measure_odometry(x - x_prev, self.errors.odometry, self.permanent, self.streams["odometry"])
+        v_meas = measure_odometry(x - x_prev, self.errors.odometry, self.permanent, self._odometry_draws)
         entry = coin = None
         if p.entry_policy == "geometric_random":
             entry = adjacency & ~b.adjacency
@@ -162,12 +165,10 @@ class Localiser:
             new, kind, triangle, round_trip = SELECTIONS[p.selection].select(loc.candidates, adjacency, ranges, base,
                                                                              p)
         # non-neighbours: dead reckoning x3 = x̂(t−1) + v*_j − v*_i [3.4], or the stale estimate
-        carried = b.est + (v_meas[:, None, :, :] - v_meas[:, :, None, :]) if p.entry_policy == "dead_reckoning" \
-            else b.est
-        est = np.where(adjacency[..., None], new, carried)
+        est, kind = carry(adjacency, new, kind, b.est, v_meas, p.entry_policy == "dead_reckoning")
         return Beliefs(
-            est=est, valid=adjacency.copy(), adjacency=adjacency.copy(), ranges=ranges,
-            kind=np.where(adjacency, kind, Kind.NONE).astype(np.int8), flag=loc.flag, odometry=v_meas,
+            est=est, valid=adjacency.copy(), adjacency=adjacency.copy(), ranges=ranges, kind=kind, flag=loc.flag,
+            odometry=v_meas,
             triangle=triangle, round_trip=round_trip, pairs=pairs,
         )
 

@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..core.compiled import kernel
+from ..core.compiled import f64, kernel
 from .candidates import Candidates, Flag
 from .selection import Kind
 
@@ -44,12 +44,12 @@ def _pairs(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, delt
                     c = 2.0
                 cos_ok = not 1.0 - abs(c) <= delta_cos  # [3.5]
                 geometric = ok and thin_ok and cos_ok
-                cc = min(max(c, -1.0), 1.0)
-                sn = math.sqrt(1.0 - cc * cc)
-                ux, uy = vx / sv, vy / sv
-                ax, ay = (s1 * cc) * ux, (s1 * cc) * uy
-                bx, by = (s1 * sn) * uy, (s1 * sn) * -ux
                 if geometric:  # [3.2], [3.3]
+                    cc = min(max(c, -1.0), 1.0)
+                    sn = math.sqrt(1.0 - cc * cc)
+                    ux, uy = vx / sv, vy / sv
+                    ax, ay = (s1 * cc) * ux, (s1 * cc) * uy
+                    bx, by = (s1 * sn) * uy, (s1 * sn) * -ux
                     x1x, x1y, x2x, x2y = ax + bx, ay + by, ax - bx, ay - by
                 else:
                     x1x, x1y, x2x, x2y = x3x, x3y, x3x, x3y
@@ -68,16 +68,18 @@ def _pairs(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, delt
                     flag[r, i, j] = Flag.GEOMETRIC
                 else:
                     flag[r, i, j] = Flag.MITIGATED_COS
-                # [3.7]: the geometric candidate closest to x3, blended with it by w
+                if not geometric:
+                    est[r, i, j, 0], est[r, i, j, 1], kind[r, i, j] = x3x, x3y, Kind.X3
+                    continue
+                # [3.7]: the geometric candidate closest to x3, blended with it by w; ‖e1‖ ≤ ‖e2‖ compared
+                # as numpy's square roots (a root is monotone: they are needed only when e1² > e2²)
                 e1x, e1y, e2x, e2y = x1x - x3x, x1y - x3y, x2x - x3x, x2y - x3y
-                pick1 = math.sqrt(e1x * e1x + e1y * e1y) <= math.sqrt(e2x * e2x + e2y * e2y)
+                q1, q2 = e1x * e1x + e1y * e1y, e2x * e2x + e2y * e2y
+                pick1 = q1 <= q2 or math.sqrt(q1) <= math.sqrt(q2)
                 new = use_entry and entry[r, i, j]
                 if new:
                     pick1 = coin[r, i, j]
                 xcx, xcy = (x1x, x1y) if pick1 else (x2x, x2y)
-                if not geometric:
-                    est[r, i, j, 0], est[r, i, j, 1], kind[r, i, j] = x3x, x3y, Kind.X3
-                    continue
                 if new:
                     est[r, i, j, 0], est[r, i, j, 1] = xcx, xcy
                 else:
@@ -105,7 +107,6 @@ def localise(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, *,
     ``candidates(d0, d1, v_rel, prev, …)`` and ``css(…)``; the candidate sets (a megabyte for
     31 swarms of 20) only with ``candidates``."""
     R, n = d0.shape[:2]
-    f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
     shape = (R, n, n) if candidates else (1, 1, 1)
     points, mask = np.empty(shape + (3, 2)), np.empty(shape + (3,), bool)
     cos_alpha, thinness = np.empty(shape), np.empty(shape)
@@ -174,3 +175,79 @@ def nearest(dist: np.ndarray, k: int) -> np.ndarray:
             for q in range(m):
                 adj[r, i, best[q]] = True
     return adj
+
+
+@kernel
+def _carry(adjacency: np.ndarray, new: np.ndarray, kind: np.ndarray, prev: np.ndarray, v: np.ndarray,
+           dead_reckoning: bool, est: np.ndarray, kind_out: np.ndarray) -> None:
+    R, n = adjacency.shape[0], adjacency.shape[1]
+    for r in range(R):
+        for i in range(n):
+            for j in range(n):
+                if adjacency[r, i, j]:
+                    est[r, i, j, 0], est[r, i, j, 1] = new[r, i, j, 0], new[r, i, j, 1]
+                    kind_out[r, i, j] = kind[r, i, j]
+                    continue
+                kind_out[r, i, j] = Kind.NONE
+                if dead_reckoning:  # [3.4]
+                    est[r, i, j, 0] = prev[r, i, j, 0] + (v[r, j, 0] - v[r, i, 0])
+                    est[r, i, j, 1] = prev[r, i, j, 1] + (v[r, j, 1] - v[r, i, 1])
+                else:
+                    est[r, i, j, 0], est[r, i, j, 1] = prev[r, i, j, 0], prev[r, i, j, 1]
+
+
+def carry(adjacency: np.ndarray, new: np.ndarray, kind: np.ndarray, prev: np.ndarray, v: np.ndarray,
+          dead_reckoning: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The step's beliefs: the selected estimate ``new`` and its ``kind`` for a neighbour; for
+    any other pair the previous estimate ``prev``, dead-reckoned by v*_j − v*_i [3.4] or kept,
+    and kind NONE. (R, N, N, 2) and (R, N, N) int8."""
+    est, kind_out = np.empty(new.shape), np.empty(adjacency.shape, np.int8)
+    _carry(np.ascontiguousarray(adjacency, dtype=bool), f64(new), np.ascontiguousarray(kind, dtype=np.int8),
+           f64(prev), f64(v), bool(dead_reckoning), est, kind_out)
+    return est, kind_out
+
+
+@kernel
+def _local_best(f: np.ndarray, fP: np.ndarray, P: np.ndarray, adjacency: np.ndarray, est: np.ndarray,
+                pbest: bool, P_out: np.ndarray, fP_out: np.ndarray, self_best: np.ndarray, L: np.ndarray) -> None:
+    R, n = f.shape[0], f.shape[1]
+    for r in range(R):
+        for i in range(n):  # step 2: the pbest moves to the particle itself
+            better = f[r, i] < fP[r, i]
+            P_out[r, i, 0], P_out[r, i, 1] = (0.0, 0.0) if better else (P[r, i, 0], P[r, i, 1])
+            fP_out[r, i] = f[r, i] if better else fP[r, i]
+        score = fP_out[r] if pbest else f[r]
+        for i in range(n):  # step 3: numpy's min and argmin over the informants (NaN first)
+            best, low = 0, score[0] if (adjacency[r, i, 0] or i == 0) else np.inf
+            for j in range(1, n):
+                if low != low:
+                    break
+                v = score[j] if (adjacency[r, i, j] or i == j) else np.inf
+                if v != v or v < low:
+                    best, low = j, v
+            own = score[i] <= low  # ties go to the particle itself
+            self_best[r, i] = own
+            jj = i if own else best
+            if pbest:  # x̂_ij* + P_j*, or the own P
+                if own:
+                    L[r, i, 0], L[r, i, 1] = P_out[r, i, 0], P_out[r, i, 1]
+                else:
+                    L[r, i, 0], L[r, i, 1] = est[r, i, jj, 0] + P_out[r, jj, 0], est[r, i, jj, 1] + P_out[r, jj, 1]
+            elif own:
+                L[r, i, 0], L[r, i, 1] = 0.0, 0.0
+            else:
+                L[r, i, 0], L[r, i, 1] = est[r, i, jj, 0], est[r, i, jj, 1]
+
+
+def local_best(f: np.ndarray, fP: np.ndarray, P: np.ndarray, adjacency: np.ndarray, est: np.ndarray,
+               pbest: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Steps 2–4 of Alg. 1 for every particle of every run: the personal bests moved to the
+    particles that sense a better fitness ``f`` (R, N) than ``fP``, then each particle's best
+    informant (its neighbours and itself; ties to itself) by ``f``, or by the personal bests
+    with ``pbest``, and the local best L relative to the particle: 0 (own P with ``pbest``)
+    when it is its own best, else x̂_ij* (+ P_j*). Returns P, fP, self_best, L."""
+    R, n = f.shape
+    P_out, fP_out, self_best, L = np.empty((R, n, 2)), np.empty((R, n)), np.empty((R, n), np.bool_), np.empty((R, n, 2))
+    _local_best(f64(f), f64(fP), f64(P), np.ascontiguousarray(adjacency, dtype=bool), f64(est), bool(pbest), P_out,
+                fP_out, self_best, L)
+    return P_out, fP_out, self_best, L

@@ -14,7 +14,9 @@ from typing import Sequence
 
 import numpy as np
 
+from ..core.compiled import f64
 from ..core.vectors import norm
+from . import metric_kernels
 from .selection import Kind, first_triangle
 
 
@@ -29,12 +31,8 @@ def _truth(x: np.ndarray) -> np.ndarray:
 
 def distance_errors(x: np.ndarray, est: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """e_abs and e_rel of every ordered pair (R, N, N), NaN outside ``valid``; e_rel is also
-    NaN for coincident particles."""
-    truth = _truth(x)
-    e_abs = norm(est - truth)
-    dist = norm(truth)
-    e_rel = np.divide(e_abs, dist, out=np.full_like(e_abs, np.nan), where=dist > 0)
-    return np.where(valid, e_abs, np.nan), np.where(valid, e_rel, np.nan)
+    NaN for coincident particles (compiled, :func:`~.metric_kernels.distance_errors`)."""
+    return metric_kernels.distance_errors(f64(x), f64(est), np.ascontiguousarray(valid, dtype=bool))
 
 
 def angular_errors(x: np.ndarray, est: np.ndarray, valid: np.ndarray) -> np.ndarray:
@@ -56,40 +54,20 @@ STATS = ("mean", "std", "sem", "median", "count")
 
 def stats(values: np.ndarray, keys: Sequence[str] = STATS) -> dict[str, np.ndarray]:
     """Mean, std, SEM, median and count per run over all trailing axes, ignoring NaN; only
-    the ``keys`` asked for are worked out."""
-    flat = values.reshape(values.shape[0], -1)
-    good = np.isfinite(flat)
-    n = good.sum(axis=1)
-    empty = n == 0
-    out: dict[str, np.ndarray] = {"count": n}
-    if {"mean", "std", "sem"} & set(keys):
-        safe = np.where(good, flat, 0.0)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            mean = safe.sum(axis=1) / n
-            var = np.where(good, (safe - mean[:, None]) ** 2, 0.0).sum(axis=1) / n
-            std = np.sqrt(var)
-            sem = std / np.sqrt(n)
-        out |= {"mean": np.where(empty, np.nan, mean), "std": np.where(empty, np.nan, std),
-                "sem": np.where(empty, np.nan, sem)}
-    if "median" in keys:
-        ordered = np.sort(np.where(good, flat, np.inf), axis=1)
-        lo, hi = np.maximum((n - 1) // 2, 0), np.maximum(n // 2, 0)
-        rows = np.arange(flat.shape[0])
-        out["median"] = np.where(n > 0, 0.5 * (ordered[rows, lo] + ordered[rows, hi]), np.nan)
-    return {k: out[k] for k in keys}
+    the ``keys`` asked for are worked out (compiled, :func:`~.metric_kernels.stats`: numpy's
+    pairwise sums and order statistics, so numpy's bits)."""
+    return metric_kernels.stats(values.reshape(values.shape[0], -1), keys)
 
 
 def pair_distances(x: np.ndarray) -> np.ndarray:
-    """‖x_j − x_i‖ over all unordered pairs i < j, (R, N(N−1)/2)."""
-    i, j = np.triu_indices(x.shape[1], k=1)
-    return norm(x[:, j] - x[:, i])
+    """‖x_j − x_i‖ over all unordered pairs i < j, (R, N(N−1)/2) (compiled)."""
+    return metric_kernels.pair_distances(f64(x))
 
 
 def dead_reckoning_share(kind: np.ndarray, valid: np.ndarray) -> np.ndarray:
-    """Share of this step's estimates that are pure dead reckoning x3, (R,)."""
-    n = valid.sum(axis=(1, 2))
-    dr = (valid & (kind == Kind.X3)).sum(axis=(1, 2))
-    return np.divide(dr, n, out=np.full(n.shape, np.nan), where=n > 0)
+    """Share of this step's estimates that are pure dead reckoning x3, (R,) (compiled)."""
+    return metric_kernels.dead_reckoning_share(np.ascontiguousarray(kind, dtype=np.int8),
+                                               np.ascontiguousarray(valid, dtype=bool), int(Kind.X3))
 
 
 def round_trip_errors(est: np.ndarray, adjacency: np.ndarray) -> np.ndarray:

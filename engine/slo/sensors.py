@@ -13,6 +13,10 @@ from typing import Literal, Sequence
 
 import numpy as np
 
+from ..core.compiled import f64
+from ..core.compiled_draws import CompiledDraws
+from . import sensor_kernels
+
 ErrorLevel = Literal["none", "low", "high"]
 
 
@@ -132,9 +136,21 @@ def permanent_errors(model: ErrorModel, z: np.ndarray) -> PermanentErrors:
     )
 
 
+Draws = Sequence[np.random.Generator] | CompiledDraws  # one generator per run, drawn by numpy or compiled
+
+
+def _draw(rngs: Draws, fail: np.ndarray, z: np.ndarray) -> None:
+    """fail[r] ~ U(0,1), then z[r] ~ N(0,1), from run r's stream (compiled: the same numbers)."""
+    if isinstance(rngs, CompiledDraws):
+        rngs.fill(fail, z, normal=(False, True))
+        return
+    for r, g in enumerate(rngs):  # each run's stream, drawn in place
+        g.random(out=fail[r])
+        g.standard_normal(out=z[r])
+
+
 def measure_ranges(
-    dist: np.ndarray, model: RangeErrors, perm: PermanentErrors, rngs: Sequence[np.random.Generator],
-    max_range: float = np.inf,
+    dist: np.ndarray, model: RangeErrors, perm: PermanentErrors, rngs: Draws, max_range: float = np.inf,
 ) -> np.ndarray:
     """d*_ij for every ordered pair (R, N, N) from true distances (diagonal ignored).
 
@@ -142,35 +158,17 @@ def measure_ranges(
     readings are clamped to 0 (docs/readings.md, "Negative ranges"); 0 means failure; beyond ``max_range`` reads 0."""
     R, n, _ = dist.shape
     fail, z = np.empty((R, n, n)), np.empty((R, 2, n, n))
-    for r, g in enumerate(rngs):  # each run's stream, drawn in place
-        g.random(out=fail[r])
-        g.standard_normal(out=z[r])
-    e_m = 1.0 + model.sigma_m * z[:, 0] + perm.range_m[:, :, None]  # [4.2]
-    e_a = model.sigma_a * z[:, 1] + perm.range_a[:, :, None]  # [4.3]
-    finite = np.isfinite(dist) & (dist <= max_range)
-    d = np.where(finite, dist, 0.0)
-    reading = np.maximum(d * e_m + e_a, 0.0)  # [4.1]; see docs/readings.md, "Negative ranges"
-    failed = (fail < model.p_fail) | ~finite
-    out = np.where(failed, 0.0, reading)
-    idx = np.arange(n)
-    out[:, idx, idx] = 0.0
-    return out
+    _draw(rngs, fail, z)
+    return sensor_kernels.ranges(f64(dist), fail, z, float(model.sigma_m), float(model.sigma_a), f64(perm.range_m),
+                                 f64(perm.range_a), float(model.p_fail), float(max_range))  # [4.1]–[4.3], compiled
 
 
-def measure_odometry(
-    v: np.ndarray, model: OdometryErrors, perm: PermanentErrors, rngs: Sequence[np.random.Generator]
-) -> np.ndarray:
+def measure_odometry(v: np.ndarray, model: OdometryErrors, perm: PermanentErrors, rngs: Draws) -> np.ndarray:
     """v*_i (R, N, 2) from true displacements: per-axis errors, then the rotation R(θ) [4.4];
     a failure gives (0, 0)."""
     R, n = v.shape[:2]
     fail, z = np.empty((R, n)), np.empty((R, 5, n))
-    for r, g in enumerate(rngs):
-        g.random(out=fail[r])
-        g.standard_normal(out=z[r])
-    e_m = 1.0 + model.sigma_m * np.stack([z[:, 0], z[:, 1]], axis=-1) + perm.odo_m
-    e_a = model.sigma_a * np.stack([z[:, 2], z[:, 3]], axis=-1) + perm.odo_a
-    w = v * e_m + e_a
+    _draw(rngs, fail, z)
     theta = model.sigma_r * z[:, 4] + perm.odo_r
-    c, s = np.cos(theta), np.sin(theta)
-    rotated = np.stack([c * w[..., 0] - s * w[..., 1], s * w[..., 0] + c * w[..., 1]], axis=-1)  # [4.4]
-    return np.where((fail < model.p_fail)[..., None], 0.0, rotated)
+    return sensor_kernels.odometry(f64(v), fail, z, float(model.sigma_m), float(model.sigma_a), f64(perm.odo_m),
+                                   f64(perm.odo_a), np.cos(theta), np.sin(theta), float(model.p_fail))  # [4.4]

@@ -1,0 +1,101 @@
+"""U(0,1) and standard-normal draws of many runs in one compiled call, taken from each run's
+own generator: the same numbers, and the generators left in the same state, as the runs'
+``Generator.random`` and ``Generator.standard_normal`` calls one after another.
+
+A ``Generator`` turns its bit generator's 64-bit outputs into doubles in stream order: a U(0,1)
+double is one output (its top 53 bits), a normal is numpy's 256-step ziggurat, one output
+almost always and a few more in its rare slow paths. :class:`CompiledDraws` calls each bit
+generator's C function for the next output through its ``ctypes`` interface (numpy's own
+stream, its state stepped in place) and repeats both conversions compiled; the ziggurat tables
+are numba's copy of numpy's. ``tests/test_compiled_draws.py`` compares the draws and the
+generators' states with numpy's own calls. What a run saves is a Python call a draw: one call
+fills every run's arrays.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
+
+from .compiled import kernel
+
+TO_DOUBLE = 1.0 / 9007199254740992.0  # 2⁻⁵³
+FF, ONE, MANTISSA = np.uint64(0xFF), np.uint64(1), np.uint64(0x000FFFFFFFFFFFFF)
+S11, S8 = np.uint64(11), np.uint64(8)
+
+
+@kernel
+def _double(next_u64, state: int) -> float:  # next_u64: a C function pointer
+    """numpy's next_double: the top 53 bits of the next output."""
+    return float(next_u64(state) >> S11) * TO_DOUBLE
+
+
+@kernel
+def _normal(next_u64, state: int) -> float:
+    """numpy's ``random_standard_normal`` (the ziggurat) on the generator at ``state``."""
+    while True:
+        u = next_u64(state)
+        idx = int(u & FF)
+        u >>= S8
+        rabs = (u >> ONE) & MANTISSA
+        x = float(rabs) * wi_double[idx]
+        if u & ONE:
+            x = -x
+        if rabs < ki_double[idx]:
+            return x
+        if idx == 0:  # the tail
+            while True:
+                xx = -ziggurat_nor_inv_r * math.log1p(-_double(next_u64, state))
+                yy = -math.log1p(-_double(next_u64, state))
+                if yy + yy > xx * xx:
+                    return -(ziggurat_nor_r + xx) if (rabs >> S8) & ONE else ziggurat_nor_r + xx
+        elif (fi_double[idx - 1] - fi_double[idx]) * _double(next_u64, state) + fi_double[idx] < math.exp(-0.5 * x * x):
+            return x
+
+
+@kernel
+def _fill(next_u64, states: np.ndarray, parts: tuple, normal: np.ndarray) -> None:
+    """Each run r in turn draws row r of each of ``parts`` (R, k) in order, N(0,1) where
+    ``normal`` else U(0,1)."""
+    for r in range(states.shape[0]):
+        state = states[r]
+        for s in range(len(parts)):
+            a = parts[s]
+            if normal[s]:
+                for q in range(a.shape[1]):
+                    a[r, q] = _normal(next_u64, state)
+            else:
+                for q in range(a.shape[1]):
+                    a[r, q] = _double(next_u64, state)
+
+
+class CompiledDraws:
+    """Draws of every run of ``rngs``, one PCG64 generator a run (Shoal's streams)."""
+
+    def __init__(self, rngs: Sequence[np.random.Generator]) -> None:
+        self.__setstate__({"rngs": list(rngs)})
+
+    def __getstate__(self) -> dict:
+        """Only the generators: a copy or an unpickled object finds its own generators' C state."""
+        return {"rngs": self.rngs}
+
+    def __setstate__(self, state: dict) -> None:
+        self.rngs = state["rngs"]
+        if not all(type(g.bit_generator) is np.random.PCG64 for g in self.rngs):
+            raise ValueError("CompiledDraws: the generators must be PCG64 (a double is its output's top 53 bits)")
+        interfaces = [g.bit_generator.ctypes for g in self.rngs]
+        self._next = interfaces[0].next_uint64 if interfaces else None  # PCG64's one C function
+        self._states = np.array([c.state_address for c in interfaces], dtype=np.uintp)
+
+    def fill(self, *arrays: np.ndarray, normal: Sequence[bool]) -> None:
+        """Each run r draws ``arrays[0][r]``, ``arrays[1][r]``, … in turn, N(0,1) where ``normal``
+        says so, else U(0,1): as ``rngs[r].random(out=a[r])`` or ``rngs[r].standard_normal(out=a[r])``
+        one after another. The arrays (R, …) are filled in place."""
+        if not all(a.flags.c_contiguous and a.dtype == np.float64 for a in arrays):
+            raise ValueError("CompiledDraws.fill: the arrays are filled in place and must be C-contiguous float64")
+        if self.rngs:
+            R = len(self.rngs)
+            _fill(self._next, self._states, tuple(a.reshape(R, -1) for a in arrays), np.array(normal, dtype=bool))
