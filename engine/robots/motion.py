@@ -14,7 +14,7 @@ import numpy as np
 import pymunk
 
 from .laws import arc_pose_update, mecanum_limit, to_world, wrap_angle
-from .world import OBSTACLE, ROBOT, RunSpace
+from .world import DISABLED, OBSTACLE, ROBOT, RunSpace
 
 Drive = Literal["holonomic", "mecanum", "differential"]
 
@@ -111,6 +111,15 @@ class Physics:
     Contacts come from pymunk's collision callback: a contact whose overlap exceeds
     ``tolerance`` metres in some substep is a collision, and a collided body becomes
     kinematic with zero velocity, i.e. it stays where it stopped.
+
+    Holonomic and mecanum bodies are read and written a whole space at a time
+    (:meth:`RunSpace.bodies`, :meth:`RunSpace.set_velocities`) and tracked in numpy over
+    all runs at once, with the same operations in the same order as one body at a time
+    (``tests/test_physics.py`` holds the per-body version and requires equal bits); the
+    differential drive still goes body by body. A disabled robot's shape takes the collision
+    type ``DISABLED``, which has a callback only against live robots: a disabled robot resting
+    against an obstacle or another disabled robot costs no Python call per substep (those
+    contacts could only name robots that are disabled already).
     """
 
     def __init__(self, drive: Drive = "holonomic", v_max: float = 3.0, a_max: float = 10.0, substeps: int = 10,
@@ -134,8 +143,8 @@ class Physics:
                 if i is not None:
                     hits.add(i)
 
-        sp.space.on_collision(ROBOT, OBSTACLE, pre_solve=pre_solve)
-        sp.space.on_collision(ROBOT, ROBOT, pre_solve=pre_solve)
+        for other in (OBSTACLE, ROBOT, DISABLED):
+            sp.space.on_collision(ROBOT, other, pre_solve=pre_solve)
         self._hooked.add(id(sp))
 
     def move(
@@ -145,60 +154,59 @@ class Physics:
         h = dt / self.substeps
         dv_max = self.a_max * h
         R, N = active.shape
-        new_x, new_heading, velocity = np.empty_like(x), np.empty_like(heading), np.zeros_like(x)
-        hit = np.zeros((R, N), dtype=bool)
-        live = [np.flatnonzero(active[r]).tolist() for r in range(R)]
+        live = np.array(active, dtype=bool)
         for sp in spaces:
             self._hook(sp)
             sp.contacts.clear()  # type: ignore[attr-defined]
+        dynamic = np.stack([sp.dynamic for sp in spaces])
         angles = np.zeros((R, N))
+        used: bytes | None = None  # the angles ``want`` was last computed from
         for _ in range(self.substeps):  # the runs are independent: every run's substep, then the next
+            state = np.stack([sp.bodies() for sp in spaces])  # (R, N, 6): x, y, angle, vx, vy, w
             if self.drive != "holonomic":
+                angles = np.where(live, state[..., 2], angles)
+            if used != angles.tobytes():  # elementwise in the angles: the same angles, the same want
+                want = command_velocity(self.drive, command, angles, self.v_max)  # one call for all
+                used = angles.tobytes()
+            if self.drive == "differential":
                 for r, sp in enumerate(spaces):
-                    bodies = sp.robot_bodies
-                    angles[r, live[r]] = [bodies[i].angle for i in live[r]]
-            want = command_velocity(self.drive, command, angles, self.v_max)  # elementwise: one call for all
+                    idx = np.flatnonzero(live[r]).tolist()
+                    if idx:
+                        self._track_differential(sp, idx, want[r, idx], command[r], h, dv_max)
+            else:
+                velocity, spin = self._track(state[..., 3:5], state[..., 5], want, live & dynamic, dv_max)
             for r, sp in enumerate(spaces):
-                if live[r]:
-                    if self.drive == "differential":
-                        self._track_differential(sp, live[r], want[r, live[r]], command[r], h, dv_max)
-                    else:
-                        self._track(sp, live[r], want[r, live[r]].tolist(), dv_max)
+                if self.drive != "differential":
+                    sp.set_velocities(velocity[r], spin[r])
                 sp.space.step(h)
                 if sp.contacts:  # type: ignore[attr-defined]
                     for i in list(sp.contacts):  # type: ignore[attr-defined]
                         self._disable(sp, i)
-                    live[r] = [i for i in live[r] if i not in sp.contacts]  # type: ignore[attr-defined]
+                        live[r, i] = False
+                        dynamic[r, i] = sp.dynamic[i]
+        hit = np.zeros((R, N), dtype=bool)
         for r, sp in enumerate(spaces):
             hit[r, list(sp.contacts)] = True  # type: ignore[attr-defined]
-            hit[r] &= active[r]
-            new_x[r] = sp.positions()
-            new_heading[r] = [b.angle for b in sp.robot_bodies]
-            velocity[r] = [tuple(b.velocity) for b in sp.robot_bodies]
-        return Moved(new_x, wrap_angle(new_heading), velocity, hit)
+        hit &= active
+        state = np.stack([sp.bodies() for sp in spaces])
+        return Moved(state[..., 0:2].copy(), wrap_angle(state[..., 2]), state[..., 3:5].copy(), hit)
 
     @staticmethod
-    def _track(sp: RunSpace, live: list[int], want: list[list[float]], dv_max: float) -> None:
-        """Each dynamic body's velocity one step of at most ``dv_max`` toward ``want`` (plain
-        floats: this runs for every body at every substep)."""
-        dynamic = pymunk.Body.DYNAMIC
-        for (wx, wy), i in zip(want, live):
-            body = sp.robot_bodies[i]
-            if body.body_type != dynamic:
-                continue
-            vx, vy = body.velocity
-            body.angular_velocity = 0.0
-            dx, dy = wx - vx, wy - vy
-            norm = float(np.hypot(dx, dy))
-            if norm > dv_max:
-                k = dv_max / norm
-                dx, dy = dx * k, dy * k
-            body.velocity = (vx + dx, vy + dy)
+    def _track(velocity: np.ndarray, spin: np.ndarray, want: np.ndarray, track: np.ndarray,
+               dv_max: float) -> tuple[np.ndarray, np.ndarray]:
+        """Each tracked body's velocity one step of at most ``dv_max`` toward ``want`` and no
+        spin; the others keep theirs. (R, N, 2) and (R, N) in, new ones out."""
+        d = want - velocity
+        norm = np.hypot(d[..., 0], d[..., 1])
+        over = norm > dv_max
+        k = np.divide(dv_max, norm, out=np.ones_like(norm), where=over)
+        d = np.where(over[..., None], d * k[..., None], d)
+        return np.where(track[..., None], velocity + d, velocity), np.where(track, 0.0, spin)
 
     def _track_differential(self, sp: RunSpace, live: list[int], want: np.ndarray, command: np.ndarray, h: float,
                             dv_max: float) -> None:
-        """:meth:`_track` for a differential drive: no skid (only the forward part of the
-        velocity is kept) and the turn rate tracks the commanded one."""
+        """:meth:`_track` for a differential drive, body by body: no skid (only the forward
+        part of the velocity is kept) and the turn rate tracks the commanded one."""
         for j, i in enumerate(live):
             body = sp.robot_bodies[i]
             if body.body_type != pymunk.Body.DYNAMIC:
@@ -216,8 +224,4 @@ class Physics:
 
     @staticmethod
     def _disable(sp: RunSpace, i: int) -> None:
-        body = sp.robot_bodies[i]
-        if body.body_type == pymunk.Body.DYNAMIC:
-            body.body_type = pymunk.Body.KINEMATIC
-            body.velocity = (0.0, 0.0)
-            body.angular_velocity = 0.0
+        sp.disable(i)
