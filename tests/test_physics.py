@@ -17,7 +17,7 @@ import pytest
 from shoal.engine.kinds.fleet import Fleet, FleetParams, spawn_positions
 from shoal.engine.robots.laws import wrap_angle
 from shoal.engine.robots.motion import Moved, Physics, command_velocity
-from shoal.engine.robots.world import DISABLED, OBSTACLE, ROBOT, RunSpace, obstacle_course
+from shoal.engine.robots.world import DISABLED, OBSTACLE, ROBOT, RunSpace, forest, obstacle_course
 
 
 class ReferencePhysics(Physics):
@@ -182,3 +182,33 @@ def test_a_physics_fleet_runs_as_with_the_per_body_reference():
         for name in ("x", "heading", "u", "cmd", "status"):
             assert _bits(getattr(a.state, name)) == _bits(getattr(b.state, name))
     assert (a.state.status != 0).any()
+
+
+# ---------------------------------------------------------------------- compiled queries
+CASES = [  # (law, dvc, drive, world, collisions): both sensing frames, every drive, constant and DVC coefficients
+    ("rpso", False, "mecanum", "course", True),
+    ("adapted-rpso", True, "mecanum", "course", False),  # DVC: collision-free
+    ("adapted-rpso", False, "holonomic", "forest", True),
+    ("nonomni", True, "differential", "course", True),  # with inertia, the robot frame collides too
+]
+
+
+@pytest.mark.parametrize("law, dvc, drive, world, collisions", CASES)
+def test_physics_senses_and_counts_contacts_as_pymunks_queries_bit_for_bit(law, dvc, drive, world, collisions):
+    # the compiled sensing and contact check (the default) against pymunk's queries
+    # (compiled=False) over seeded runs with collisions, tick after tick
+    params = FleetParams(law=law, dvc=dvc, omega=0.1, c=(0.4296, 0.4296, 0.2148), motion="physics", drive=drive)
+    spec = obstacle_course(1) if world == "course" else forest(2, size=20.0, density=0.15, min_gap=0.8)
+    a, b = (Fleet(world=spec, robots=8, runs=3, seed=9, params=params, compiled=c) for c in (True, False))
+    readings = 0
+    for _ in range(80):
+        a.step()
+        b.step()
+        for name in ("x", "heading", "u", "cmd", "status", "force", "omega", "c"):
+            assert _bits(getattr(a.state, name)) == _bits(getattr(b.state, name)), name
+        if a.state.reading is not None:
+            readings += int(a.state.reading.hit.sum())
+            for name in ("gap", "point", "centre", "hit"):
+                assert _bits(getattr(a.state.reading, name)) == _bits(getattr(b.state.reading, name)), name
+    assert readings > 0  # bodies were seen
+    assert (a.state.status != 0).any() == collisions
