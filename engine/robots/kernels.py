@@ -12,7 +12,9 @@ for a swarm of constant density.
 
 The numpy tick stays the reference (and the path of physics mode, where pymunk steps the
 bodies, and of worlds with polygons); ``tests/test_kernels.py`` runs both on seeded scenes with
-collisions in every kinematic mode and requires equal bits. Where they may part, in cases
+collisions in every kinematic mode and requires equal bits. Physics mode senses and checks
+contacts with the same queries (:func:`sense_bodies`, :func:`touching_bodies`;
+``tests/test_physics.py``). Where they may part, in cases
 that need equality to the last bit: sensing breaks an exact tie between two bodies' gaps in
 one sector by its own candidate order (pymunk by its tree's), and takes a bearing with the C
 library's atan2, which differs from numpy's in the last bit now and then, so a body within
