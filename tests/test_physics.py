@@ -68,7 +68,7 @@ class ReferencePhysics(Physics):
                 sp.space.step(h)
                 if sp.contacts:
                     for i in list(sp.contacts):
-                        self._disable(sp, i)
+                        _disable(sp, i)
                     live[r] = [i for i in live[r] if i not in sp.contacts]
         for r, sp in enumerate(spaces):
             hit[r, list(sp.contacts)] = True
@@ -94,13 +94,15 @@ class ReferencePhysics(Physics):
                 dx, dy = dx * k, dy * k
             body.velocity = (vx + dx, vy + dy)
 
-    @staticmethod
-    def _disable(sp: RunSpace, i: int) -> None:
-        body = sp.robot_bodies[i]
-        if body.body_type == pymunk.Body.DYNAMIC:
-            body.body_type = pymunk.Body.KINEMATIC
-            body.velocity = (0.0, 0.0)
-            body.angular_velocity = 0.0
+
+
+def _disable(sp: RunSpace, i: int) -> None:
+    """The previous disabling: the body only (its shape keeps the collision type ROBOT)."""
+    body = sp.robot_bodies[i]
+    if body.body_type == pymunk.Body.DYNAMIC:
+        body.body_type = pymunk.Body.KINEMATIC
+        body.velocity = (0.0, 0.0)
+        body.angular_velocity = 0.0
 
 
 def _bits(a: np.ndarray) -> bytes:

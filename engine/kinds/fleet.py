@@ -259,7 +259,7 @@ class Fleet:
                 for i, b in enumerate(sp.robot_bodies):
                     b.angle = float(s.heading[r, i])
                     if s.status[r, i] != ACTIVE:
-                        Physics._disable(sp, i)
+                        sp.disable(i)
 
     def _motion(self) -> Kinematic | Physics:
         p = self.params

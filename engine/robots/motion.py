@@ -181,7 +181,7 @@ class Physics:
                 sp.space.step(h)
                 if sp.contacts:  # type: ignore[attr-defined]
                     for i in list(sp.contacts):  # type: ignore[attr-defined]
-                        self._disable(sp, i)
+                        sp.disable(i)
                         live[r, i] = False
                         dynamic[r, i] = sp.dynamic[i]
         hit = np.zeros((R, N), dtype=bool)
@@ -221,7 +221,3 @@ class Physics:
             if norm > dv_max:
                 dv *= dv_max / norm
             body.velocity = tuple(vel + dv)
-
-    @staticmethod
-    def _disable(sp: RunSpace, i: int) -> None:
-        sp.disable(i)
