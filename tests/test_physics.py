@@ -78,6 +78,23 @@ class ReferencePhysics(Physics):
             velocity[r] = [tuple(b.velocity) for b in sp.robot_bodies]
         return Moved(new_x, wrap_angle(new_heading), velocity, hit)
 
+    def _track_differential(self, sp: RunSpace, live: list[int], want: np.ndarray, command: np.ndarray, h: float,
+                            dv_max: float) -> None:
+        for j, i in enumerate(live):
+            body = sp.robot_bodies[i]
+            if body.body_type != pymunk.Body.DYNAMIC:
+                continue
+            vel = np.array(body.velocity)
+            fwd = np.array([np.cos(body.angle), np.sin(body.angle)])
+            vel = fwd * float(vel @ fwd)
+            w_err = float(command[i, 1]) - body.angular_velocity
+            body.angular_velocity += float(np.clip(w_err, -self.a_max * h * 4, self.a_max * h * 4))
+            dv = want[j] - vel
+            norm = float(np.hypot(*dv))
+            if norm > dv_max:
+                dv *= dv_max / norm
+            body.velocity = tuple(vel + dv)
+
     @staticmethod
     def _track_bodies(sp: RunSpace, live: list[int], want: list[list[float]], dv_max: float) -> None:
         dynamic = pymunk.Body.DYNAMIC

@@ -112,11 +112,10 @@ class Physics:
     ``tolerance`` metres in some substep is a collision, and a collided body becomes
     kinematic with zero velocity, i.e. it stays where it stopped.
 
-    Holonomic and mecanum bodies are read and written a whole space at a time
-    (:meth:`RunSpace.bodies`, :meth:`RunSpace.set_velocities`) and tracked in numpy over
-    all runs at once, with the same operations in the same order as one body at a time
-    (``tests/test_physics.py`` holds the per-body version and requires equal bits); the
-    differential drive still goes body by body. A disabled robot's shape takes the collision
+    The bodies are read and written a whole space at a time (:meth:`RunSpace.bodies`,
+    :meth:`RunSpace.set_velocities`) and tracked in numpy over all runs at once, with the same
+    operations in the same order as one body at a time (``tests/test_physics.py`` holds the
+    per-body version and requires equal bits). A disabled robot's shape takes the collision
     type ``DISABLED``, which has a callback only against live robots: a disabled robot resting
     against an obstacle or another disabled robot costs no Python call per substep (those
     contacts could only name robots that are disabled already).
@@ -168,16 +167,9 @@ class Physics:
             if used != angles.tobytes():  # elementwise in the angles: the same angles, the same want
                 want = command_velocity(self.drive, command, angles, self.v_max)  # one call for all
                 used = angles.tobytes()
-            if self.drive == "differential":
-                for r, sp in enumerate(spaces):
-                    idx = np.flatnonzero(live[r]).tolist()
-                    if idx:
-                        self._track_differential(sp, idx, want[r, idx], command[r], h, dv_max)
-            else:
-                velocity, spin = self._track(state[..., 3:5], state[..., 5], want, live & dynamic, dv_max)
+            velocity, spin = self._track(state, want, command, live & dynamic, h, dv_max)
             for r, sp in enumerate(spaces):
-                if self.drive != "differential":
-                    sp.set_velocities(velocity[r], spin[r])
+                sp.set_velocities(velocity[r], spin[r])
                 sp.space.step(h)
                 if sp.contacts:  # type: ignore[attr-defined]
                     for i in list(sp.contacts):  # type: ignore[attr-defined]
@@ -191,33 +183,24 @@ class Physics:
         state = np.stack([sp.bodies() for sp in spaces])
         return Moved(state[..., 0:2].copy(), wrap_angle(state[..., 2]), state[..., 3:5].copy(), hit)
 
-    @staticmethod
-    def _track(velocity: np.ndarray, spin: np.ndarray, want: np.ndarray, track: np.ndarray,
+    def _track(self, state: np.ndarray, want: np.ndarray, command: np.ndarray, track: np.ndarray, h: float,
                dv_max: float) -> tuple[np.ndarray, np.ndarray]:
-        """Each tracked body's velocity one step of at most ``dv_max`` toward ``want`` and no
-        spin; the others keep theirs. (R, N, 2) and (R, N) in, new ones out."""
-        d = want - velocity
+        """The velocities (R, N, 2) and angular velocities (R, N) the bodies get this substep
+        (``state``: :meth:`RunSpace.bodies` of every run). A tracked body's velocity moves one
+        step of at most ``dv_max`` toward ``want``; holonomic and mecanum bodies do not spin, a
+        differential one keeps only the forward part of its velocity (no skid) and turns toward
+        the commanded rate. The others keep theirs."""
+        velocity, spin = state[..., 3:5], state[..., 5]
+        if self.drive == "differential":
+            fwd = np.stack([np.cos(state[..., 2]), np.sin(state[..., 2])], axis=-1)
+            along = velocity[..., 0] * fwd[..., 0] + velocity[..., 1] * fwd[..., 1]
+            start = fwd * along[..., None]
+            to_spin = spin + np.clip(command[..., 1] - spin, -self.a_max * h * 4, self.a_max * h * 4)
+        else:
+            start, to_spin = velocity, np.zeros_like(spin)
+        d = want - start
         norm = np.hypot(d[..., 0], d[..., 1])
         over = norm > dv_max
         k = np.divide(dv_max, norm, out=np.ones_like(norm), where=over)
         d = np.where(over[..., None], d * k[..., None], d)
-        return np.where(track[..., None], velocity + d, velocity), np.where(track, 0.0, spin)
-
-    def _track_differential(self, sp: RunSpace, live: list[int], want: np.ndarray, command: np.ndarray, h: float,
-                            dv_max: float) -> None:
-        """:meth:`_track` for a differential drive, body by body: no skid (only the forward
-        part of the velocity is kept) and the turn rate tracks the commanded one."""
-        for j, i in enumerate(live):
-            body = sp.robot_bodies[i]
-            if body.body_type != pymunk.Body.DYNAMIC:
-                continue
-            vel = np.array(body.velocity)
-            fwd = np.array([np.cos(body.angle), np.sin(body.angle)])
-            vel = fwd * float(vel @ fwd)
-            w_err = float(command[i, 1]) - body.angular_velocity
-            body.angular_velocity += float(np.clip(w_err, -self.a_max * h * 4, self.a_max * h * 4))
-            dv = want[j] - vel
-            norm = float(np.hypot(*dv))
-            if norm > dv_max:
-                dv *= dv_max / norm
-            body.velocity = tuple(vel + dv)
+        return np.where(track[..., None], start + d, velocity), np.where(track, to_spin, spin)
