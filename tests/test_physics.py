@@ -141,7 +141,6 @@ def test_batched_bodies_move_as_the_per_body_reference_bit_for_bit(drive):
     new, ref = Physics(drive, 3.0, 10.0, tolerance=1e-3), ReferencePhysics(drive, 3.0, 10.0, tolerance=1e-3)
     heading = np.zeros((runs, robots))
     active = np.ones((runs, robots), bool)
-    collided = 0
     for _ in range(ticks):
         command = rng.uniform(-0.2, 0.6, (runs, robots, 2))  # mostly towards the obstacles
         if drive == "differential":
@@ -159,9 +158,8 @@ def test_batched_bodies_move_as_the_per_body_reference_bit_for_bit(drive):
     assert 0 < collided < runs * robots  # the scenes had collisions, and robots still moving at the end
 
 
-def test_a_disabled_robot_is_kinematic_still_and_only_live_robots_call_back():
-    sp, x = _scene(5, 1, 2)
-    sp = sp[0]
+def test_a_disabled_robot_is_kinematic_still_and_of_the_disabled_collision_type():
+    sp = _scene(5, 1, 2)[0][0]
     sp.robot_bodies[0].velocity = (1.0, 2.0)
     sp.disable(0)
     body = sp.robot_bodies[0]
@@ -173,8 +171,7 @@ def test_a_disabled_robot_is_kinematic_still_and_only_live_robots_call_back():
 
 
 def test_set_velocities_leaves_every_other_body_as_it_was():
-    sp, _ = _scene(2, 1, 4)
-    sp = sp[0]
+    sp = _scene(2, 1, 4)[0][0]
     sp.robot_bodies[1].velocity = (0.5, -0.25)
     sp.disable(2)
     before = sp.bodies().copy()
@@ -188,8 +185,8 @@ def test_set_velocities_leaves_every_other_body_as_it_was():
 
 
 def test_a_physics_fleet_runs_as_with_the_per_body_reference():
-    # the whole fleet tick (sensing on pymunk queries, the law, the move, collisions) over a run
-    # long enough for collisions: the reference as the fleet's motion model gives the same bits
+    # the whole fleet tick (sensing, the law, the move, collisions) over a run long enough for
+    # collisions: the reference as the fleet's motion model gives the same bits
     params = FleetParams(law="rpso", dvc=False, omega=0.1, c=(0.4296, 0.4296, 0.2148), motion="physics",
                          drive="mecanum")
     world = obstacle_course(0)
