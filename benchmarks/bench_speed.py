@@ -16,7 +16,8 @@ Times are this thread's CPU time (robust while other jobs share the machine), me
 - fleet: Chapter 4 omni DVC, sequential update, kinematic, on the 80 m × 40 m course with the
   robots packed in a 14 m square (the slowest phase; ``bench_fleet_step.py``); 1000 robots in
   a 2√N m square of a course 10 m wider (``bench_scaling.py``); batched: 100 runs of 10 robots;
-  physics: 200 robots (mecanum, pymunk);
+  physics: 200 robots (mecanum, pymunk), and fig4-6's physics batches: 25 runs of 6 robots
+  (Adapted RPSO + DVC, mecanum) on the default course, per run and tick;
 - standard PSO [2.1]/[2.2] with a global best, D = 10, 30 particles, Sphere
   (``bench_pso_compare.py`` part b): one seed per call, and 20 seeds in one call;
 - SLO-PSO on Sphere, Low errors, CSS, knn 5, 20 particles × 31 runs: one generation, and one
@@ -80,6 +81,15 @@ def _fleet(robots: int, runs: int, packed: bool, **params: Any):
     return Fleet(world=world, robots=robots, params=FleetParams(**params), runs=runs, seed=0)
 
 
+def _physics_batch():
+    """fig4-6's physics chunks: 25 runs of 6 robots on the default course, mecanum, DVC."""
+    Fleet = _first("shoal.engine.kinds.fleet:Fleet", "shoal.engine.fleet:Fleet")
+    FleetParams = _first("shoal.engine.kinds.fleet:FleetParams", "shoal.engine.fleet:FleetParams")
+    course = _first("shoal.engine.robots.world:obstacle_course", "shoal.engine.world:obstacle_course")
+    return Fleet(world=course(seed=0), robots=6, params=FleetParams(motion="physics", drive="mecanum"), runs=25,
+                 seed=0)
+
+
 def _pso(runs: int):
     import numpy as np
 
@@ -138,6 +148,7 @@ def measures(quick: bool, slow: bool) -> dict[str, Callable[[], float]]:
         "fleet_100": lambda: _median_ms(_fleet(100, 1, packed=True).step, 10 if slow else 200),
         "fleet_batched": lambda: _median_ms(_fleet(10, 100, packed=False).step, few),
         "physics_200": lambda: _median_ms(_fleet(200, 1, packed=False, motion="physics", drive="mecanum").step, few),
+        "physics_batched": lambda: _median_ms(_physics_batch().step, 5 if quick else 20, warmup=5),
         "fleet_1000": lambda: _median_ms(_fleet(1000, 1, packed=False).step, few),
         "slo": lambda: _median_ms(_slo().step, 30 if quick else 100, warmup=3),
         "slo_kept": lambda: _median_ms(_kept(_slo()), 30 if quick else 100, warmup=3),
@@ -249,6 +260,8 @@ def main() -> None:
         row("batched fleets, 100 runs × 10 robots, per robot-step", "fleet_batched", " µs", 1e3 / 1000,
             f"≤ 5 µs (VMAS {VMAS_US} µs, quoted)"),
         row("fleet tick, 200 robots, pymunk physics (mecanum)", "physics_200", " ms", 1, "20 updates/s in the app"),
+        row("physics fleets, 25 runs × 6 robots (fig4-6's batches), per run-tick", "physics_batched", " µs", 1e3 / 25,
+            "fig4-6 ≤ 60 s"),
         row("SLO generation, 20 particles × 31 runs", "slo", " ms", 1, "≥ 4× faster"),
         row("SLO generation + the six kept series", "slo_kept", " ms", 1, "≥ 4× faster"),
         row("SLO generation + kept series, RTS selection", "slo_rts_kept", " ms", 1, "(slo-pso)"),

@@ -259,7 +259,7 @@ class Fleet:
                 for i, b in enumerate(sp.robot_bodies):
                     b.angle = float(s.heading[r, i])
                     if s.status[r, i] != ACTIVE:
-                        Physics._disable(sp, i)
+                        sp.disable(i)
 
     def _motion(self) -> Kinematic | Physics:
         p = self.params
@@ -359,6 +359,10 @@ class Fleet:
         """Robots overlapping a body by more than the contact tolerance after a move: the
         movers and whatever they overlap (only a mover can have made a new contact)."""
         out = np.zeros_like(moved)
+        if self._compiled_queries():
+            world, grid = self._kernel_world()
+            kernels.touching_bodies(self._body_positions(), moved, self._kernel_params(), world, grid, out)
+            return out & (self.state.status == ACTIVE)
         for r, sp in enumerate(self.spaces):
             for i in np.flatnonzero(moved[r]):
                 bodies = sp.contacts_of(i, -self.params.contact_tolerance)
@@ -366,6 +370,51 @@ class Fleet:
                     out[r, i] = True
                     out[r, [j for j in bodies if j is not None]] = True
         return out & (self.state.status == ACTIVE)
+
+    def _sense(self, m: np.ndarray) -> SectorReading:
+        """The six-sector reading of the robots ``m`` where they stand, the others where their
+        bodies are: pymunk's queries (:func:`sense`), or their compiled twins in physics mode."""
+        p, s = self.params, self.state
+        if self._compiled_queries():
+            x = self._body_positions()
+            if np.array_equal(x[m].view(np.uint64), s.x[m].view(np.uint64)):  # always, between ticks
+                R, N = m.shape
+                reading = SectorReading(gap=np.full((R, N, SECTORS), float(p.sensing_range)),
+                                        point=np.full((R, N, SECTORS, 2), np.nan),
+                                        centre=np.full((R, N, SECTORS, 2), np.nan), hit=np.zeros((R, N, SECTORS), bool))
+                turn = np.array(s.heading, dtype=float) if p.body_frame else np.zeros((R, N))
+                world, grid = self._kernel_world()
+                kernels.sense_bodies(x, turn, m, self._kernel_params(), world, grid, reading.gap, reading.point,
+                                     reading.centre, reading.hit)
+                return reading
+        return sense(self.spaces, s.x, s.heading, sensing_range=p.sensing_range, robot_frame=p.body_frame, active=m)
+
+    def _compiled_queries(self) -> bool:
+        """Physics mode senses and checks contacts through :func:`kernels.sense_bodies` and
+        :func:`kernels.touching_bodies` (pymunk's bits: ``tests/test_physics.py``) in worlds of
+        circles and walls, unless the fleet was made with ``compiled=False``."""
+        p = self.params
+        return (self.compiled and p.motion == "physics" and not self.world.polygons
+                and p.law in kernels.LAWS and p.drive in kernels.DRIVES)
+
+    def _body_positions(self) -> np.ndarray:
+        """(R, N, 2) where every robot's body is in its run's space."""
+        return np.stack([sp.bodies()[:, :2] for sp in self.spaces])
+
+    def _kernel_world(self) -> tuple[kernels.WorldArrays, kernels.Grid]:
+        """The world's static bodies and the uniform grid the kernels read (built once per world)."""
+        if self._world_arrays is None:
+            grid = kernels.make_grid(self.world.bounds, self.params.sensing_range + 2.0 * self.params.robot_radius)
+            w = self.world
+            self._world_arrays = (kernels.world_arrays(w.circles, w.walls, w.wall_radius, grid), grid)
+        return self._world_arrays
+
+    def _kernel_params(self) -> kernels.TickParams:
+        """These parameters as the kernels read them, built again after a retune (or a change in place)."""
+        p = self.params
+        if self._tick_params[0] != p:
+            self._tick_params = (replace(p), p.tick_params())
+        return self._tick_params[1]  # type: ignore[return-value]
 
     def _groups(self, active: np.ndarray) -> list[np.ndarray]:
         """Which robots decide and move together.
@@ -423,8 +472,7 @@ class Fleet:
             if not m.any():
                 continue
             sensed = True
-            reading = sense(self.spaces, s.x, s.heading, sensing_range=p.sensing_range,
-                            robot_frame=p.body_frame, active=m)
+            reading = self._sense(m)
             gap = reading.gap
             if p.s_min > 0:  # Rossides §5.4 (p. 125): keep a clearance s_min by treating it as contact distance
                 gap = np.maximum(gap - p.s_min, 0.0)
@@ -454,19 +502,13 @@ class Fleet:
 
     def _compiled_phase_b(self, r: np.ndarray, out: kernels.Outputs) -> bool:
         """Phase B by :func:`kernels.phase_b`, which updates the state's arrays in place."""
-        p, s = self.params, self.state
-        if self._world_arrays is None:
-            grid = kernels.make_grid(self.world.bounds, p.sensing_range + 2.0 * p.robot_radius)
-            w = self.world
-            self._world_arrays = (kernels.world_arrays(w.circles, w.walls, w.wall_radius, grid), grid)
-        world, grid = self._world_arrays
+        s = self.state
+        world, grid = self._kernel_world()
         g_p, g_g = (np.ascontiguousarray(a, dtype=float) for a in self._attractors())
         draws = np.ascontiguousarray(r if r.ndim == 4 else r[..., None])
         s.x, s.heading, s.u, s.cmd = (np.array(a, dtype=float) for a in (s.x, s.heading, s.u, s.cmd))
         s.status = np.array(s.status, dtype=np.int8)
-        if self._tick_params[0] != p:  # built again after a retune (or a change in place)
-            self._tick_params = (replace(p), p.tick_params())
-        sensed = kernels.phase_b(s.x, s.heading, s.u, s.cmd, s.status, g_p, g_g, draws, self._tick_params[1], world,
+        sensed = kernels.phase_b(s.x, s.heading, s.u, s.cmd, s.status, g_p, g_g, draws, self._kernel_params(), world,
                                  grid, out)
         self._stale = True
         return bool(sensed)

@@ -12,7 +12,9 @@ for a swarm of constant density.
 
 The numpy tick stays the reference (and the path of physics mode, where pymunk steps the
 bodies, and of worlds with polygons); ``tests/test_kernels.py`` runs both on seeded scenes with
-collisions in every kinematic mode and requires equal bits. Where they may part, in cases
+collisions in every kinematic mode and requires equal bits. Physics mode senses and checks
+contacts with the same queries (:func:`sense_bodies`, :func:`touching_bodies`;
+``tests/test_physics.py``). Where they may part, in cases
 that need equality to the last bit: sensing breaks an exact tie between two bodies' gaps in
 one sector by its own candidate order (pymunk by its tree's), and takes a bearing with the C
 library's atan2, which differs from numpy's in the last bit now and then, so a body within
@@ -697,6 +699,51 @@ def phase_b(x: np.ndarray, heading: np.ndarray, u: np.ndarray, cmd: np.ndarray, 
                 if touched[j]:
                     status[r, j] = COLLIDED
     return sensed
+
+
+# ----------------------------------------------------------------------------- physics mode
+@kernel
+def _robot_grid(xr: np.ndarray, g: Grid, head: np.ndarray, nxt: np.ndarray, prv: np.ndarray,
+                cell: np.ndarray) -> None:
+    head[:] = -1
+    for i in range(xr.shape[0]):
+        _grid_insert(i, _grid_cell(xr[i, 0], xr[i, 1], g), head, nxt, prv, cell)
+
+
+@kernel
+def sense_bodies(x: np.ndarray, turn: np.ndarray, active: np.ndarray, p: TickParams, w: WorldArrays, g: Grid,
+                 gap: np.ndarray, point: np.ndarray, centre: np.ndarray, hit: np.ndarray) -> None:
+    """:func:`shoal.engine.robots.sensing.sense` of the robots with ``active`` (R, N), every
+    robot's body at ``x`` (R, N, 2); ``turn`` (R, N) is what bearings are measured from (the
+    heading in the robot frame, else 0). Fills the reading (``SectorReading``'s arrays) of the
+    active robots only. For physics mode, where pymunk moves the bodies between readings."""
+    R, N = active.shape
+    head = np.empty(g.nx * g.ny, np.int64)
+    nxt, prv, cell = np.empty(N, np.int64), np.empty(N, np.int64), np.empty(N, np.int64)
+    ostamp = np.zeros(w.circles.shape[0] + 1, np.int64)
+    for r in range(R):
+        _robot_grid(x[r], g, head, nxt, prv, cell)
+        for i in range(N):
+            if active[r, i]:
+                _sense(i, x[r], turn[r, i], p, w, g, head, nxt, ostamp, gap[r, i], point[r, i], centre[r, i],
+                       hit[r, i])
+
+
+@kernel
+def touching_bodies(x: np.ndarray, moved: np.ndarray, p: TickParams, w: WorldArrays, g: Grid,
+                    touched: np.ndarray) -> None:
+    """``Fleet._touching`` for bodies at ``x`` (R, N, 2): ``touched`` (R, N) marks every robot
+    with ``moved`` that overlaps a body by more than the contact tolerance, and the robots it
+    overlaps (``RunSpace.contacts_of``)."""
+    R, N = moved.shape
+    head = np.empty(g.nx * g.ny, np.int64)
+    nxt, prv, cell = np.empty(N, np.int64), np.empty(N, np.int64), np.empty(N, np.int64)
+    ostamp = np.zeros(w.circles.shape[0] + 1, np.int64)
+    for r in range(R):
+        _robot_grid(x[r], g, head, nxt, prv, cell)
+        for i in range(N):
+            if moved[r, i]:
+                _touching(i, x[r], p, w, g, head, nxt, ostamp, touched[r])
 
 
 # ----------------------------------------------------------------------------- spawning

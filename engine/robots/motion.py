@@ -14,7 +14,7 @@ import numpy as np
 import pymunk
 
 from .laws import arc_pose_update, mecanum_limit, to_world, wrap_angle
-from .world import OBSTACLE, ROBOT, RunSpace
+from .world import DISABLED, OBSTACLE, ROBOT, RunSpace
 
 Drive = Literal["holonomic", "mecanum", "differential"]
 
@@ -111,6 +111,14 @@ class Physics:
     Contacts come from pymunk's collision callback: a contact whose overlap exceeds
     ``tolerance`` metres in some substep is a collision, and a collided body becomes
     kinematic with zero velocity, i.e. it stays where it stopped.
+
+    The bodies are read and written a whole space at a time (:meth:`RunSpace.bodies`,
+    :meth:`RunSpace.set_velocities`) and tracked in numpy over all runs at once, with the same
+    operations in the same order as one body at a time (``tests/test_physics.py`` holds the
+    per-body version and requires equal bits). A disabled robot's shape takes the collision
+    type ``DISABLED``, which has a callback only against live robots: a disabled robot resting
+    against an obstacle or another disabled robot costs no Python call per substep (those
+    contacts could only name robots that are disabled already).
     """
 
     def __init__(self, drive: Drive = "holonomic", v_max: float = 3.0, a_max: float = 10.0, substeps: int = 10,
@@ -134,8 +142,8 @@ class Physics:
                 if i is not None:
                     hits.add(i)
 
-        sp.space.on_collision(ROBOT, OBSTACLE, pre_solve=pre_solve)
-        sp.space.on_collision(ROBOT, ROBOT, pre_solve=pre_solve)
+        for other in (OBSTACLE, ROBOT, DISABLED):
+            sp.space.on_collision(ROBOT, other, pre_solve=pre_solve)
         self._hooked.add(id(sp))
 
     def move(
@@ -145,79 +153,54 @@ class Physics:
         h = dt / self.substeps
         dv_max = self.a_max * h
         R, N = active.shape
-        new_x, new_heading, velocity = np.empty_like(x), np.empty_like(heading), np.zeros_like(x)
-        hit = np.zeros((R, N), dtype=bool)
-        live = [np.flatnonzero(active[r]).tolist() for r in range(R)]
+        live = np.array(active, dtype=bool)
         for sp in spaces:
             self._hook(sp)
             sp.contacts.clear()  # type: ignore[attr-defined]
+        dynamic = np.stack([sp.dynamic for sp in spaces])
         angles = np.zeros((R, N))
+        used: bytes | None = None  # the angles ``want`` was last computed from
         for _ in range(self.substeps):  # the runs are independent: every run's substep, then the next
+            state = np.stack([sp.bodies() for sp in spaces])  # (R, N, 6): x, y, angle, vx, vy, w
             if self.drive != "holonomic":
-                for r, sp in enumerate(spaces):
-                    bodies = sp.robot_bodies
-                    angles[r, live[r]] = [bodies[i].angle for i in live[r]]
-            want = command_velocity(self.drive, command, angles, self.v_max)  # elementwise: one call for all
+                angles = np.where(live, state[..., 2], angles)
+            if used != angles.tobytes():  # elementwise in the angles: the same angles, the same want
+                want = command_velocity(self.drive, command, angles, self.v_max)  # one call for all
+                used = angles.tobytes()
+            velocity, spin = self._track(state, want, command, live & dynamic, h, dv_max)
             for r, sp in enumerate(spaces):
-                if live[r]:
-                    if self.drive == "differential":
-                        self._track_differential(sp, live[r], want[r, live[r]], command[r], h, dv_max)
-                    else:
-                        self._track(sp, live[r], want[r, live[r]].tolist(), dv_max)
+                sp.set_velocities(velocity[r], spin[r])
                 sp.space.step(h)
                 if sp.contacts:  # type: ignore[attr-defined]
                     for i in list(sp.contacts):  # type: ignore[attr-defined]
-                        self._disable(sp, i)
-                    live[r] = [i for i in live[r] if i not in sp.contacts]  # type: ignore[attr-defined]
+                        sp.disable(i)
+                        live[r, i] = False
+                        dynamic[r, i] = sp.dynamic[i]
+        hit = np.zeros((R, N), dtype=bool)
         for r, sp in enumerate(spaces):
             hit[r, list(sp.contacts)] = True  # type: ignore[attr-defined]
-            hit[r] &= active[r]
-            new_x[r] = sp.positions()
-            new_heading[r] = [b.angle for b in sp.robot_bodies]
-            velocity[r] = [tuple(b.velocity) for b in sp.robot_bodies]
-        return Moved(new_x, wrap_angle(new_heading), velocity, hit)
+        hit &= active
+        state = np.stack([sp.bodies() for sp in spaces])
+        return Moved(state[..., 0:2].copy(), wrap_angle(state[..., 2]), state[..., 3:5].copy(), hit)
 
-    @staticmethod
-    def _track(sp: RunSpace, live: list[int], want: list[list[float]], dv_max: float) -> None:
-        """Each dynamic body's velocity one step of at most ``dv_max`` toward ``want`` (plain
-        floats: this runs for every body at every substep)."""
-        dynamic = pymunk.Body.DYNAMIC
-        for (wx, wy), i in zip(want, live):
-            body = sp.robot_bodies[i]
-            if body.body_type != dynamic:
-                continue
-            vx, vy = body.velocity
-            body.angular_velocity = 0.0
-            dx, dy = wx - vx, wy - vy
-            norm = float(np.hypot(dx, dy))
-            if norm > dv_max:
-                k = dv_max / norm
-                dx, dy = dx * k, dy * k
-            body.velocity = (vx + dx, vy + dy)
-
-    def _track_differential(self, sp: RunSpace, live: list[int], want: np.ndarray, command: np.ndarray, h: float,
-                            dv_max: float) -> None:
-        """:meth:`_track` for a differential drive: no skid (only the forward part of the
-        velocity is kept) and the turn rate tracks the commanded one."""
-        for j, i in enumerate(live):
-            body = sp.robot_bodies[i]
-            if body.body_type != pymunk.Body.DYNAMIC:
-                continue
-            vel = np.array(body.velocity)
-            fwd = np.array([np.cos(body.angle), np.sin(body.angle)])
-            vel = fwd * float(vel @ fwd)
-            w_err = float(command[i, 1]) - body.angular_velocity
-            body.angular_velocity += float(np.clip(w_err, -self.a_max * h * 4, self.a_max * h * 4))
-            dv = want[j] - vel
-            norm = float(np.hypot(*dv))
-            if norm > dv_max:
-                dv *= dv_max / norm
-            body.velocity = tuple(vel + dv)
-
-    @staticmethod
-    def _disable(sp: RunSpace, i: int) -> None:
-        body = sp.robot_bodies[i]
-        if body.body_type == pymunk.Body.DYNAMIC:
-            body.body_type = pymunk.Body.KINEMATIC
-            body.velocity = (0.0, 0.0)
-            body.angular_velocity = 0.0
+    def _track(self, state: np.ndarray, want: np.ndarray, command: np.ndarray, track: np.ndarray, h: float,
+               dv_max: float) -> tuple[np.ndarray, np.ndarray]:
+        """The velocities (R, N, 2) and angular velocities (R, N) the bodies get this substep
+        (``state``: :meth:`RunSpace.bodies` of every run). A tracked body's velocity moves one
+        step of at most ``dv_max`` toward ``want``; holonomic and mecanum bodies do not spin, a
+        differential one keeps only the forward part of its velocity (no skid) and turns toward
+        the commanded rate. The others keep theirs."""
+        velocity, spin = state[..., 3:5], state[..., 5]
+        if self.drive == "differential":
+            fwd = np.stack([np.cos(state[..., 2]), np.sin(state[..., 2])], axis=-1)
+            along = velocity[..., 0] * fwd[..., 0] + velocity[..., 1] * fwd[..., 1]
+            start = fwd * along[..., None]
+            to_spin = spin + np.clip(command[..., 1] - spin, -self.a_max * h * 4, self.a_max * h * 4)
+        else:
+            start, to_spin = velocity, np.zeros_like(spin)
+        d = want - start
+        norm = np.hypot(d[..., 0], d[..., 1])
+        over = norm > dv_max
+        k = np.divide(dv_max, norm, out=np.ones_like(norm), where=over)
+        d = np.where(over[..., None], d * k[..., None], d)
+        return np.where(track[..., None], start + d, velocity), np.where(track, to_spin, spin)

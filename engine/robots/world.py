@@ -16,12 +16,14 @@ from typing import Any, Callable, Literal
 
 import numpy as np
 import pymunk
+import pymunk.batch
 
 Box = tuple[float, float, float, float]
 
 # pymunk collision types
 OBSTACLE = 1
 ROBOT = 2
+DISABLED = 3  # a robot's shape once its body is disabled (RunSpace.disable)
 # category bits, for queries that want one kind of body only
 CAT_OBSTACLE = 0b001
 CAT_WALL = 0b010
@@ -336,10 +338,19 @@ def world_from_name(name: str, ignore_unknown: bool = False, **params: Any) -> W
 BodyType = Literal["kinematic", "dynamic"]
 
 
+BODY_FIELDS = (pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.ANGLE | pymunk.batch.BodyFields.VELOCITY
+               | pymunk.batch.BodyFields.ANGULAR_VELOCITY)  # x, y, angle, vx, vy, w in the buffer, body by body
+MOTION_FIELDS = pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
+
+
 class RunSpace:
     """One ``pymunk.Space`` for one Monte-Carlo run: static obstacles and walls, plus one
     circular body per robot. Robot ``i``'s shape has ``ShapeFilter(group=i + 1)``, so a query
-    made with ``self.filters[i]`` skips the robot's own shape."""
+    made with ``self.filters[i]`` skips the robot's own shape.
+
+    The robots' bodies are the space's first ``N`` bodies in pymunk's own order (they are added
+    first and never removed; a body turned kinematic keeps its place), which lets
+    :meth:`bodies` and :meth:`set_velocities` read and write them all in one call."""
 
     def __init__(
         self,
@@ -389,6 +400,9 @@ class RunSpace:
             self.filters.append(pymunk.ShapeFilter(group=i + 1))
         self._robot_index = {s: i for i, s in enumerate(self.robot_shapes)}
         self._keys: dict[pymunk.Shape, int] | None = None
+        self.dynamic = np.full(len(self.robot_bodies), body_type == "dynamic")  # (N,) bool: not disabled
+        self._read, self._write = pymunk.batch.Buffer(), pymunk.batch.Buffer()
+        self._last = np.zeros((0, 6))
 
     @staticmethod
     def _tag(shape: pymunk.Shape, ctype: int, cat: int, group: int = 0) -> None:
@@ -433,7 +447,40 @@ class RunSpace:
 
     def positions(self) -> np.ndarray:
         """(N, 2) robot positions."""
-        return np.array([tuple(b.position) for b in self.robot_bodies], dtype=float).reshape(-1, 2)
+        return self.bodies()[:, :2].copy()
+
+    def bodies(self) -> np.ndarray:
+        """(N, 6) every robot body's x, y, angle, vx, vy and angular velocity, read in one
+        call (``pymunk.batch``); the rows of the space's other bodies are kept for
+        :meth:`set_velocities`."""
+        self._read.clear()
+        pymunk.batch.get_space_bodies(self.space, BODY_FIELDS, self._read)
+        self._last = np.frombuffer(self._read.float_buf(), dtype=float).reshape(-1, 6).copy()
+        return self._last[: self.n_robots]
+
+    def set_velocities(self, velocity: np.ndarray, spin: np.ndarray) -> None:
+        """Give every robot body the velocity (N, 2) and angular velocity (N,) in one call. The
+        call writes every body of the space, so the other bodies get back what the last
+        :meth:`bodies` read of them; a body given its own values is unchanged (the space
+        never sleeps, so waking a body does nothing)."""
+        n = self.n_robots
+        out = self._last[:, 3:6].copy()
+        out[:n, :2], out[:n, 2] = velocity, spin
+        self._write.set_float_buf(out.reshape(-1))
+        pymunk.batch.set_space_bodies(self.space, MOTION_FIELDS, self._write)
+
+    def disable(self, i: int) -> None:
+        """Robot ``i`` stops where it is for good: its body becomes kinematic with no velocity
+        and its shape takes the collision type ``DISABLED``. A body that is not dynamic (a
+        kinematic space's) is left as it is."""
+        if not self.dynamic[i]:
+            return
+        body = self.robot_bodies[i]
+        body.body_type = pymunk.Body.KINEMATIC
+        body.velocity = (0.0, 0.0)
+        body.angular_velocity = 0.0
+        self.robot_shapes[i].collision_type = DISABLED
+        self.dynamic[i] = False
 
     def set_positions(self, x: np.ndarray) -> None:
         """Teleport every robot to ``x`` (N, 2) and reindex its shape for queries."""

@@ -14,7 +14,7 @@ from shoal.presets.models import Scenario
 
 RUN_TICK = {"swarm": 2e-6, "fleet": 30e-6, "sonar": 30e-6, "slo_swarm": 40e-6}  # s per run and tick
 ROBOT_TICK = {"swarm": 0.1e-6, "fleet": 3e-6, "sonar": 10e-6}  # s per robot and tick
-PHYSICS_ROBOT_TICK = 150e-6  # a pymunk fleet: ten substeps of velocity tracking per tick
+PHYSICS_ROBOT_TICK = 15e-6  # a pymunk fleet: ten substeps a tick, every space read and written in one call each
 SURROGATE_ROBOT_TICK = 1e-6  # the acoustic surrogate instead of waveforms
 PAIR_TICK = 0.1e-6  # SLO: every ordered pair is ranged and localised each tick
 
