@@ -169,8 +169,13 @@ class SonarDriver(BaseDriver):
         return {"y": s.y[0].copy(), "yg": s.y_g[0].copy(), "ghosts": self.ghosts(selected, s.y_g[0]),
                 "extras": extras}
 
+    def scene(self) -> dict[str, Any]:
+        return {"source": self.sim.state.source[0][None].copy()}  # one row [x, y]: it may move, or be dragged
+
     def recorded(self, frame: Frame) -> dict[str, Any]:
-        return dict.fromkeys(LIVE_OVERLAYS)
+        """No listen overlays; the source where it was."""
+        source = frame.scene.get("source")
+        return {**dict.fromkeys(LIVE_OVERLAYS), **({"source": np.array(source[0])} if source is not None else {})}
 
     def readout(self) -> dict[str, float]:
         info, p = self.sim.info(), self.sim.params

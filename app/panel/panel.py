@@ -222,7 +222,12 @@ class Panel:
 
         @self.export_json.on_click
         def _(event: Any) -> None:
-            self.send_file(f"{self.stem()}-run.json", self.session.export_json())
+            try:
+                content = self.session.export_json()
+            except PresetError as err:  # hand edits the preset cannot hold (as Download preset says)
+                self.refuse(err, "export JSON")
+                return
+            self.send_file(f"{self.stem()}-run.json", content)
 
         @self.download.on_click
         def _(event: Any) -> None:
