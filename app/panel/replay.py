@@ -130,6 +130,7 @@ class ReplayFolder:
             return
         mark = {True: "✓", False: "✗", None: "·"}[info.verified]
         edits = f" · {info.live_edits} live edit(s) while it ran" if info.live_edits else ""
+        edits += " · with swarm B (teal)" if info.twin is not None else ""
         self.badge.content = (f"**Replay of {info.name}, seed {info.seed}** (shoal {info.shoal}){edits}  \n"
                               f"{mark} {info.check} · Reset runs the preset live")
         self.badge.visible = True
