@@ -44,6 +44,8 @@ MAX_NUMBERS = 12_000_000  # numbers over all arrays once unpacked: a zip bomb st
 MAX_META_BYTES = 1024 * 1024
 MAX_MEMBERS = 32
 MAX_ROWS_SHOWN = 20_000  # rows of one version of a scene part (obstacles drawn at once)
+MAX_SCENE_M = 1e7  # |x|, |y|, r of a scene part (a preset's places are within 1e5 m; float32 views stay finite)
+MAX_FRAMES = 20_000  # frames (a session keeps 5,000; each frame shown becomes objects of its own)
 ROBOTS = ("k", "t", "n", "x", "heading", "status", "metrics")
 TWIN = ("b_n", "b_x", "b_status")
 SCENE_PARTS = {"obstacles": 3, "source": 2}  # part → columns of a row
@@ -74,9 +76,14 @@ class Changes:
     n: np.ndarray  # (W,) int64
     v: np.ndarray  # (Σ n, columns) float64
     offsets: np.ndarray = field(init=False, repr=False)
+    rows: tuple[np.ndarray, ...] = field(init=False, repr=False)  # each version's rows (views into ``v``)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "offsets", _offsets(self.n))
+        offsets = _offsets(self.n)
+        object.__setattr__(self, "offsets", offsets)
+        object.__setattr__(self, "rows", ())
+        if np.all(self.n >= 0) and offsets[-1] == len(self.v):  # (a file's are checked after: then again)
+            object.__setattr__(self, "rows", tuple(self.v[a:b] for a, b in zip(offsets[:-1], offsets[1:])))
 
     @classmethod
     def of(cls, values: Sequence[np.ndarray], columns: int) -> Changes:
@@ -97,9 +104,10 @@ class Changes:
         return int(np.searchsorted(self.i, frame, side="right")) - 1
 
     def at(self, frame: int) -> np.ndarray | None:
-        """The rows at ``frame`` (a view into ``v``), None if nothing was recorded by then."""
+        """The rows at ``frame`` (the same array for every frame of a version), None if nothing
+        was recorded by then."""
         j = self.version(frame)
-        return None if j < 0 else self.v[self.offsets[j]:self.offsets[j + 1]]
+        return None if j < 0 else self.rows[j]
 
 
 def _empty_twin(frames: int, d: int) -> dict[str, np.ndarray]:
@@ -349,8 +357,8 @@ def _check_values(rec: Recording, where: str) -> list[str]:
             errors.append("source_n: the source is one row [x, y]")
         if np.any(c.n > MAX_ROWS_SHOWN):
             errors.append(f"{part}_n: at most {MAX_ROWS_SHOWN:,} rows at once")
-        if not np.all(np.isfinite(c.v)):
-            errors.append(f"{part}_v: must be finite numbers")
+        if not np.all(np.isfinite(c.v)) or np.any(np.abs(c.v) > MAX_SCENE_M):
+            errors.append(f"{part}_v: must be finite numbers within ±{MAX_SCENE_M:.0e} m")
         elif part == "obstacles" and np.any(c.v[:, 2] <= 0):
             errors.append("obstacles_v: every radius (column 3) must be positive")
     return [f"{where}: {e}" for e in errors]
@@ -381,6 +389,9 @@ def from_bytes(content: bytes, filename: str = "replay") -> Recording:
                                    f"{MAX_NUMBERS:,} a replay may hold"])
             if len(headers["meta"][0]) != 1:
                 raise ReplayError([f"{where}: meta: shape {headers['meta'][0]}, expected (bytes,)"])
+            frames = headers["k"][0][0] if len(headers["k"][0]) == 1 else 0
+            if frames > MAX_FRAMES:
+                raise ReplayError([f"{where}: k: {frames:,} frames, more than the {MAX_FRAMES:,} a replay may hold"])
             with np.load(io.BytesIO(content), allow_pickle=False) as npz:
                 meta = _meta(npz["meta"], where)
                 names = ARRAYS[meta["version"]]

@@ -251,6 +251,8 @@ HUGE = 2**62  # counts that overflow int64 when added up
     (dict(obstacles_n=np.array([2])), "obstacles_n"),
     (dict(source_n=np.array([2, 0, 1, 1, 1, 1])), "source_n"),
     (dict(source_v=np.full((6, 2), np.inf)), "source_v"),
+    (dict(source_v=np.full((6, 2), 1e300)), "source_v"),  # finite, but no view could draw it
+    (dict(obstacles_v=np.array([[5.0, 1.0, 1e300]] * 5)), "obstacles_v"),
     (dict(source_v=np.zeros((6, 3))), "source_v"),
 ])
 def test_wrong_shapes_and_values_of_b_and_the_scene_are_named(change, name):
@@ -279,3 +281,12 @@ def test_a_zip_bomb_in_the_new_arrays_is_refused_from_the_headers(member):
                 np.save(head, arr)
             zf.writestr(f"{name}.npy", head.getvalue())
     assert "numbers once unpacked" in refused(buf.getvalue())
+
+
+def test_too_many_frames_are_refused_from_the_headers():
+    """Each frame shown becomes objects of its own: a file of a million one-robot frames (within
+    the number limit) would take gigabytes once loaded."""
+    f = replay.MAX_FRAMES + 1
+    rec = replay.from_frames(recording().meta, list(range(f)), [0.0] * f, [np.zeros((1, 2))] * f, [np.zeros(1)] * f,
+                             [np.zeros(1)] * f, np.zeros((1, 2)))
+    assert "frames, more than the 20,000 a replay may hold" in refused(replay.to_bytes(rec))
