@@ -36,7 +36,9 @@ class ReplayFolder:
             "timeline [step]", min=0, max=1, step=1, initial_value=0,
             hint="drag to see a recorded step (pauses); Play carries on from the live end")
         self.where = gui.add_markdown("")
-        self.export = gui.add_button("Export replay", hint="the recorded steps, preset and seed as one .npz file")
+        self.export = gui.add_button(
+            "Export replay", hint="the recorded steps (swarm B, obstacles and source as they were), preset and seed "
+                                  "as one .npz file")
         self.upload = gui.add_upload_button(
             "Load replay", hint=f"a .npz from Export replay, at most {replay.MAX_REPLAY_BYTES // 2**20} MiB")
         self.share = gui.add_button(
