@@ -14,7 +14,8 @@ without pickle) holding
 
 and, from version 2, what else the arena drew at each frame:
 
-* ``b_n`` (F,) swarm B's robots in each frame (0: none), ``b_x`` (R_B, d), ``b_status`` (R_B,);
+* ``b_n`` (F,) swarm B's robots in each frame (0: none), ``b_x`` (R_B, d_B), ``b_status`` (R_B,)
+  (B may move in another dimension than A: ``sim.d`` is one of the fields B may override);
 * for each part of the scene in :data:`SCENE_PARTS` that can change while a run goes on (a
   fleet's ``obstacles`` [x, y, r], a sonar's ``source`` [x, y]), its changes only:
   ``<part>_i`` (W,) the frame from which each version holds (increasing, the first 0),
@@ -203,7 +204,7 @@ def from_frames(meta: dict[str, Any], k: list[int], t: list[float], xs: list[np.
     if twins is not None and any(b is not None for b in twins):
         kept = [b for b in twins if b is not None]
         twin = {"b_n": np.array([0 if b is None else len(b[0]) for b in twins], np.int64),
-                "b_x": np.concatenate([b[0] for b in kept]).astype(np.float64).reshape(-1, d),
+                "b_x": np.concatenate([b[0] for b in kept]).astype(np.float64),
                 "b_status": np.concatenate([b[1] for b in kept]).astype(np.int8)}
     scene = {}
     for part, columns in SCENE_PARTS.items():
@@ -288,16 +289,14 @@ def _meta(raw: np.ndarray, where: str) -> dict[str, Any]:
     return meta
 
 
-def _ragged(shapes: dict[str, tuple[int, ...]], n: str, rows: str, f: int, d: int | None, others: tuple[str, ...],
-            ) -> list[str]:
+def _ragged(shapes: dict[str, tuple[int, ...]], n: str, rows: str, f: int, others: tuple[str, ...]) -> list[str]:
     """Shape errors of a ragged block: counts ``n`` (F,), ``rows`` (R, d) and ``others`` (R,)."""
     errors = []
     if shapes[n] != (f,):
         errors.append(f"{n}: shape {shapes[n]}, expected ({f},): one count a frame like k")
     r = shapes[rows][0] if len(shapes[rows]) == 2 else -1
-    if len(shapes[rows]) != 2 or not 1 <= shapes[rows][1] <= 3 or (d is not None and shapes[rows][1] != d):
-        errors.append(f"{rows}: shape {shapes[rows]}, expected (rows, d) with d = "
-                      + ("1, 2 or 3" if d is None else f"{d} like x"))
+    if len(shapes[rows]) != 2 or not 1 <= shapes[rows][1] <= 3:
+        errors.append(f"{rows}: shape {shapes[rows]}, expected (rows, d) with d = 1, 2 or 3")
     for name in others:
         if shapes[name] != (r,):
             errors.append(f"{name}: shape {shapes[name]}, expected ({r},) like the rows of {rows}")
@@ -310,13 +309,12 @@ def _check_shapes(shapes: dict[str, tuple[int, ...]], n_metrics: int, version: i
     for name in ("k", "t"):
         if shapes[name] != (f,) or f < 1:
             errors.append(f"{name}: shape {shapes[name]}, expected (F,) with F ≥ 1 frames like k")
-    errors += _ragged(shapes, "n", "x", f, None, ("heading", "status"))
+    errors += _ragged(shapes, "n", "x", f, ("heading", "status"))
     m = shapes["metrics"]
     if len(m) != 2 or m[1] != n_metrics:
         errors.append(f"metrics: shape {m}, expected (steps, {n_metrics}) for the {n_metrics} names in meta")
     if version >= 2:
-        d = shapes["x"][1] if len(shapes["x"]) == 2 else None
-        errors += _ragged(shapes, "b_n", "b_x", f, d, ("b_status",))
+        errors += _ragged(shapes, "b_n", "b_x", f, ("b_status",))
         for part, columns in SCENE_PARTS.items():
             i, n, v = (f"{part}_{a}" for a in "inv")
             w = shapes[i][0] if len(shapes[i]) == 1 else -1

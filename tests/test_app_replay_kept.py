@@ -135,6 +135,21 @@ def test_a_replay_keeps_swarm_b_and_draws_it_in_teal(tab):
     assert not tab.arena.nodes["twin"].visible
 
 
+def test_a_swarm_b_in_another_dimension_is_kept_in_its_own():
+    src = session("default", "sim.robots=6")
+    src.enable_compare({"sim.d": 3})
+    src.step(8)
+    rec = replay.from_bytes(src.export_replay())
+    assert rec.x.shape[1] == 2 and rec.b_x.shape[1] == 3
+    np.testing.assert_array_equal(rec.twin(8)[0], src.twin.frames[8].x)
+    s = session("default", "sim.robots=6")
+    s.enter_replay(rec, (None, "not checked"))
+    s.scrub(8)
+    x, trails = s.shown_snapshot().twin
+    np.testing.assert_array_equal(x, src.twin.frames[8].x)
+    assert trails.shape[-1] == 3
+
+
 def test_a_replay_with_b_overrides_the_preset_cannot_take_is_refused(tab):
     src = session("default")
     src.enable_compare({"sim.robots": 3})

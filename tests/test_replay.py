@@ -230,7 +230,8 @@ HUGE = 2**62  # counts that overflow int64 when added up
 
 @pytest.mark.parametrize("change, name", [
     (dict(b_n=np.zeros(5, np.int64)), "b_n"),
-    (dict(b_x=np.zeros((10, 3))), "b_x"),
+    (dict(b_x=np.zeros((10, 4))), "b_x"),
+    (dict(b_x=np.zeros(20)), "b_x"),
     (dict(b_status=np.zeros(11)), "b_status"),
     (dict(b_n=np.array([0, 2, 2, 2, 2, 3])), "b_n"),
     (dict(b_n=np.array([0, HUGE, HUGE, HUGE, HUGE, 10])), "b_n"),  # adds up to 10 in int64
