@@ -210,3 +210,40 @@ def test_kinds_without_b_or_scene_changes_replay_as_before(name):
     src.step(6)
     rec = replay.from_bytes(src.export_replay())
     assert rec.scene == {} and not len(rec.b_x) and rec.twin_overrides is None
+
+
+# ---------------------------------------------------------------------------- hostile files on the wire
+def test_hostile_version_2_replays_sent_over_the_wire_are_refused_by_name(server):
+    """A page is not limited to files Export replay wrote: version-2 files with a NaN in swarm B,
+    obstacle counts that overflow when added, a negative radius or a source a light-year away,
+    uploaded through Load replay on a raw websocket, are each refused naming the array, and the
+    tab's scene is untouched."""
+    from test_replay import HUGE, arrays_of, full_recording, npz
+
+    from browser.browser_helpers import wait_until
+    from viser_wire import WireClient
+
+    rec = full_recording()
+    bad = {
+        "b_x": dict(b_x=np.full((10, 2), np.nan)),
+        "obstacles_n": dict(obstacles_n=np.array([HUGE, 5 - HUGE])),
+        "obstacles_v": dict(obstacles_v=np.array([[5.0, 1.0, -0.5]] * 5)),
+        "source_v": dict(source_v=np.full((6, 2), 9.5e15)),
+        "b_n": dict(b_n=np.array([0, HUGE, HUGE, HUGE, HUGE, 10])),
+    }
+    client = WireClient(server.port, decode=True)
+    try:
+        wait_until(lambda: client.uuid_of("Load replay") and server.tabs, what="the tab's panels")
+        cid = max(server.tabs)
+        session = server.tabs[cid].session
+        k, scenario = session.k, session.scenario
+        for name, change in bad.items():
+            before = len(client.notifications())
+            client.upload("Load replay", f"{name}.npz", npz(**arrays_of(rec, **change)))
+            wait_until(lambda n=before: len(client.notifications()) > n, what=f"the verdict on {name}")
+            title, body, colour = client.notifications()[-1][:3]
+            assert colour == "red" and f"{name}.npz: {name}:" in body, (title, body)
+        assert server.tabs[cid].session is session and session.replaying is None and session.scenario is scenario
+        assert session.k >= k  # still its own live run
+    finally:
+        client.close()
