@@ -541,8 +541,8 @@ REBUILD_NOTE = ("*Changes on this tab rebuild the fleet: the robots start again 
                 "edits are dropped.*")
 EDIT_HELP = ("Click the arena: **add** an obstacle · **shift-** or **ctrl-click** removes the nearest · **drag** an "
              "obstacle to move it · click a robot to select it.")
-EXPORT_NOTE = (" Obstacles added, removed or moved by hand are not part of the preset (it names its world by "
-               "generator and seed); the JSON export lists the obstacles as they are.")
+EXPORT_NOTE = (" Obstacles added, removed or moved by hand go into the downloaded preset and the JSON export "
+               "(world.obstacles, as they are now); a replay keeps them as they were at each step.")
 
 
 def controller_changes(label: str, sc: Scenario) -> dict[str, Any]:
