@@ -185,6 +185,64 @@ def test_a_loaded_replay_keeps_the_version_that_ran_it():
     assert_robots_as_run(page, {int(k): rec.robots(i)[0] for i, k in enumerate(rec.k)})
 
 
+def view_map(page: str, positions: dict[int, np.ndarray]) -> tuple[float, np.ndarray]:
+    """The page's map from metres to the view (scale, shift), fitted on the robots it draws."""
+    kept = plan(sorted(positions), data_block(page)["run"]["max_frames"]).steps
+    rec = recorded(page)
+    s, c, _ = fit_view_map([positions[k] for k in kept], rec.frames(node(rec, "robots")))
+    return s, c
+
+
+def test_a_loaded_replay_with_swarm_b_is_shared_with_b():
+    src = new_session(presets_io.load("default", ["sim.robots=5", "sim.steps=30"]))
+    src.enable_compare({"controller.law": "standard", "controller.mode": "raw"})
+    src.step(30)
+    rec = replay.from_bytes(src.export_replay())
+    shown = new_session(presets_io.validate(rec.meta["preset"]))
+    shown.enter_replay(rec, (None, "not checked"))
+    page = session_html(shown).decode("utf-8")
+    assert_robots_as_run(page, {f.k: f.x for f in src.frames})
+    assert_robots_as_run(page, {f.k: f.x for f in src.twin.frames}, "twin")
+    assert data_block(page)["twin"] == {"overrides": {"controller.law": "standard", "controller.mode": "raw"}}
+    assert "&nbsp;swarm B" in page[page.index('<p class="legend">'):]
+
+
+def test_a_shared_run_draws_the_obstacles_as_they_were_at_each_step():
+    from shoal.app.kinds import fleet
+
+    src = new_session(presets_io.load("course-dvc", ["sim.steps=20"]))
+    d = fleet.driver(src)
+    src.step(4)
+    n0 = len(src.sim.world.circles)
+    d.add_obstacle(src.sim.world.bounds[2] - 4.0, 1.5, 1.25)
+    src.step(4)
+    d.remove_obstacle_near(*src.sim.world.circles[0, :2], tol=0.0)
+    d.remove_obstacle_near(*src.sim.world.circles[0, :2], tol=0.0)
+    src.step(4)
+    page = session_html(src).decode("utf-8")
+    rec = recorded(page)
+    steps = {t: int(re.match(r"step (\d+)", str(v)).group(1)) for t, v in rec.updates("/shoal_step", "text") if v}
+    edges = [(t, np.asarray(v).reshape(-1, 40, 2, 3)) for t, v in rec.updates(node(rec, "obstacle_edges"), "points")]
+    seen = [(steps.get(t, 0), len(v)) for t, v in edges]  # (the first is drawn before the first step label)
+    assert [n for _, n in seen] == [n0, n0 + 1, n0 - 1] and [k for k, _ in seen[1:]] == [5, 9]
+    s, c = view_map(page, {f.k: f.x for f in src.frames})
+    centres = edges[-1][1][..., :2].mean(axis=(1, 2))
+    np.testing.assert_allclose((centres - c) / s, src.sim.world.circles[:, :2], atol=1e-3)
+
+
+def test_a_shared_run_draws_a_moving_source_where_it_was():
+    src = new_session(presets_io.load("escort-moving", ["sim.steps=15"]))
+    src.step(15)
+    path = {f.k: f.scene["source"][0] for f in src.frames}
+    page = session_html(src).decode("utf-8")
+    rec = recorded(page)
+    s, c = view_map(page, {f.k: f.x for f in src.frames})
+    sources = rec.frames(node(rec, "source"), "batched_positions")
+    drawn = np.array([np.asarray(v).reshape(-1, 3)[0, :2] for v in sources])
+    assert len(drawn) == 16
+    np.testing.assert_allclose((drawn - c) / s, np.array([path[k] for k in range(16)]), atol=1e-3)
+
+
 def test_a_long_history_is_thinned_to_the_budget_and_stays_small():
     s = new_session(presets_io.load("default", ["sim.steps=3000"]))
     s.step(3000)

@@ -78,7 +78,11 @@ class BaseDriver:
         return float(self.sim.dt)
 
     def frame(self, t: float) -> Frame:
-        return frame_of(self.sim.state, t)
+        return frame_of(self.sim.state, t, scene=self.scene())
+
+    def scene(self) -> dict[str, Any]:
+        """The parts of the scene that may change while the run goes on, as drawn now (none)."""
+        return {}
 
     def metrics(self) -> dict[str, float]:
         return {}

@@ -86,6 +86,7 @@ class FleetDriver(BaseDriver):
         self.dropped = 0  # the edits the last rebuild dropped
         self.obstacle_radius = OBSTACLE_RADIUS
         self.follow, self.zoom = "world", 1.0
+        self._recorded: tuple[np.ndarray, WorldSpec] | None = None  # recorded circles → their world
 
     def build(self, scenario: Scenario) -> Fleet:
         return build_fleet(scenario, runs=1)  # (a world the generator cannot lay out: PresetError by field)
@@ -203,9 +204,20 @@ class FleetDriver(BaseDriver):
         return {"y": s.y[0].copy(), "yg": s.yg[0].copy(), "ghosts": self.ghosts(selected, s.yg[0]),
                 "extras": extras}
 
+    def scene(self) -> dict[str, Any]:
+        return {"obstacles": self.sim.world.circles}  # read-only, and the same array until the world changes
+
     def recorded(self, frame: Frame) -> dict[str, Any]:
+        """No velocities or commands; the obstacles as they were (a world of the recorded circles,
+        redrawn when they differ from what was drawn)."""
         zeros = np.zeros_like(frame.x)
-        return {"u": zeros, "cmd": zeros}
+        out: dict[str, Any] = {"u": zeros, "cmd": zeros}
+        circles = frame.scene.get("obstacles")
+        if circles is not None:
+            if self._recorded is None or self._recorded[0] is not circles:
+                self._recorded = (circles, dataclasses.replace(self.sim.world, circles=circles))
+            out.update(world=self._recorded[1], world_revision=("recorded", circles.tobytes()))
+        return out
 
     def readout(self) -> dict[str, float]:
         info = self.sim.info()
@@ -529,8 +541,8 @@ REBUILD_NOTE = ("*Changes on this tab rebuild the fleet: the robots start again 
                 "edits are dropped.*")
 EDIT_HELP = ("Click the arena: **add** an obstacle · **shift-** or **ctrl-click** removes the nearest · **drag** an "
              "obstacle to move it · click a robot to select it.")
-EXPORT_NOTE = (" Obstacles added, removed or moved by hand are not part of the preset (it names its world by "
-               "generator and seed); the JSON export lists the obstacles as they are.")
+EXPORT_NOTE = (" Obstacles added, removed or moved by hand go into the downloaded preset and the JSON export "
+               "(world.obstacles, as they are now); a replay keeps them as they were at each step.")
 
 
 def controller_changes(label: str, sc: Scenario) -> dict[str, Any]:

@@ -169,8 +169,13 @@ class SonarDriver(BaseDriver):
         return {"y": s.y[0].copy(), "yg": s.y_g[0].copy(), "ghosts": self.ghosts(selected, s.y_g[0]),
                 "extras": extras}
 
+    def scene(self) -> dict[str, Any]:
+        return {"source": self.sim.state.source[0][None].copy()}  # one row [x, y]: it may move, or be dragged
+
     def recorded(self, frame: Frame) -> dict[str, Any]:
-        return dict.fromkeys(LIVE_OVERLAYS)
+        """No listen overlays; the source where it was."""
+        source = frame.scene.get("source")
+        return {**dict.fromkeys(LIVE_OVERLAYS), **({"source": np.array(source[0])} if source is not None else {})}
 
     def readout(self) -> dict[str, float]:
         info, p = self.sim.info(), self.sim.params
@@ -410,7 +415,9 @@ CORR = "rgb(40,90,200)"
 MARK = "rgb(220,50,50)"
 REBUILD_NOTE = "*SNR₀, the algorithm and the swarm size rebuild the swarm; the rest applies at the next step.*"
 GLYPHS = "Drag the green source in the arena to move it; click a robot to select it (the legend names the glyphs)."
-EXPORT_NOTE = " The JSON export also lists the source where it is now (it may have been dragged)."
+EXPORT_NOTE = (" A source dragged by hand goes into the downloaded preset (acoustics.source, where it starts); "
+               "the JSON export has that preset and where the source is now; a replay keeps it where it was at "
+               "each step.")
 
 
 def corr_series() -> tuple[dict[str, Any], ...]:

@@ -212,7 +212,8 @@ class Panel:
         gui.add_markdown("Trajectories of the current run (the last steps kept in memory), the scenario "
                          "as a preset file, or load your own preset." + self.part.export_note)
         self.export_csv = gui.add_button("Export CSV", hint="run,step,t,robot,x,y,heading,vx,vy,status")
-        self.export_json = gui.add_button("Export JSON", hint="resolved preset, seed, version, trajectories")
+        self.export_json = gui.add_button("Export JSON",
+                                          hint="the preset as edited (as Download preset), seed, version, trajectories")
         self.download = gui.add_button("Download preset", hint="the current scenario as TOML")
         self.upload = gui.add_upload_button("Upload preset", hint=".toml or .json, at most 256 KiB")
 
@@ -222,7 +223,12 @@ class Panel:
 
         @self.export_json.on_click
         def _(event: Any) -> None:
-            self.send_file(f"{self.stem()}-run.json", self.session.export_json())
+            try:
+                content = self.session.export_json()
+            except PresetError as err:  # hand edits the preset cannot hold (as Download preset says)
+                self.refuse(err, "export JSON")
+                return
+            self.send_file(f"{self.stem()}-run.json", content)
 
         @self.download.on_click
         def _(event: Any) -> None:

@@ -36,7 +36,9 @@ class ReplayFolder:
             "timeline [step]", min=0, max=1, step=1, initial_value=0,
             hint="drag to see a recorded step (pauses); Play carries on from the live end")
         self.where = gui.add_markdown("")
-        self.export = gui.add_button("Export replay", hint="the recorded steps, preset and seed as one .npz file")
+        self.export = gui.add_button(
+            "Export replay", hint="the recorded steps (swarm B, obstacles and source as they were), preset and seed "
+                                  "as one .npz file")
         self.upload = gui.add_upload_button(
             "Load replay", hint=f"a .npz from Export replay, at most {replay.MAX_REPLAY_BYTES // 2**20} MiB")
         self.share = gui.add_button(
@@ -130,6 +132,7 @@ class ReplayFolder:
             return
         mark = {True: "✓", False: "✗", None: "·"}[info.verified]
         edits = f" · {info.live_edits} live edit(s) while it ran" if info.live_edits else ""
+        edits += " · with swarm B (teal)" if info.twin is not None else ""
         self.badge.content = (f"**Replay of {info.name}, seed {info.seed}** (shoal {info.shoal}){edits}  \n"
                               f"{mark} {info.check} · Reset runs the preset live")
         self.badge.visible = True

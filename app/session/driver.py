@@ -47,7 +47,8 @@ class Driver(Protocol):
     def before_step(self) -> None: ...
 
     def frame(self, t: float) -> Frame:
-        """Run 0's robots now."""
+        """Run 0's robots now, and the parts of the scene that may change while it runs
+        (``Frame.scene``: a fleet's obstacles, a sonar's source)."""
         ...
 
     def metrics(self) -> dict[str, float]:
@@ -59,7 +60,8 @@ class Driver(Protocol):
         ...
 
     def recorded(self, frame: Frame) -> dict[str, Any]:
-        """``extras`` to replace for a recorded frame (overlays that are not recorded)."""
+        """``extras`` to replace for a recorded frame: overlays that are not recorded blanked, the
+        parts of the scene as they were then (``frame.scene``)."""
         ...
 
     def readout(self) -> dict[str, float]:

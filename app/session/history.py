@@ -3,9 +3,10 @@ buffer) and one metric row per step; trails and the trajectory export read from 
 
 from __future__ import annotations
 
+import bisect
 from collections import deque
-from dataclasses import dataclass
-from typing import Any, Iterable
+from dataclasses import dataclass, field
+from typing import Any, Iterable, Mapping
 
 import numpy as np
 
@@ -16,7 +17,10 @@ TRAIL_LIMITS = (80, 40)  # at most this many trails of this many points
 
 @dataclass(frozen=True)
 class Frame:
-    """The robots (run 0) after step ``k``: what trails and export need (``a`` only for Ch. 3)."""
+    """The robots (run 0) after step ``k``: what trails and export need (``a`` only for Ch. 3), and
+    the parts of the scene that may change while the run goes on (``scene``: a fleet's obstacles,
+    a sonar's source; see ``replay.SCENE_PARTS``), as the arena drew them then. An unchanged part
+    is the same array from frame to frame: never written to, it costs nothing per frame."""
 
     k: int
     t: float
@@ -25,12 +29,14 @@ class Frame:
     heading: np.ndarray  # (N,)
     status: np.ndarray  # (N,)
     a: np.ndarray | None = None  # (N, d)
+    scene: Mapping[str, np.ndarray] = field(default_factory=dict)
 
 
-def frame_of(state: Any, t: float, *, accelerations: bool = False) -> Frame:
+def frame_of(state: Any, t: float, *, accelerations: bool = False, scene: Mapping[str, np.ndarray] | None = None
+             ) -> Frame:
     """Run 0 of an engine ``state`` (``x``, ``u``, ``heading``, ``status``, ``k``; ``a`` if asked)."""
     return Frame(k=state.k, t=t, x=state.x[0].copy(), u=state.u[0].copy(), heading=state.heading[0].copy(),
-                 status=state.status[0].copy(), a=state.a[0].copy() if accelerations else None)
+                 status=state.status[0].copy(), a=state.a[0].copy() if accelerations else None, scene=scene or {})
 
 
 def trail_array(frames: list[Frame], t_now: float, horizon: float, max_trails: int, max_points: int) -> np.ndarray:
@@ -48,6 +54,17 @@ def trail_array(frames: list[Frame], t_now: float, horizon: float, max_trails: i
         return np.zeros((0, 0, d))
     m = min(min(f.x.shape[0] for f in recent), max_trails)
     return np.stack([f.x[:m] for f in recent], axis=1)
+
+
+def robots_at(frames: list[Frame], k: int, horizon: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """The robots at step ``k`` of ``frames`` and their trails of the last ``horizon`` seconds
+    (None if no frame has step ``k``): how swarm B is drawn beside A."""
+    ks = [f.k for f in frames]
+    i = bisect.bisect_left(ks, k)
+    if i == len(ks) or ks[i] != k:
+        return None
+    f = frames[i]
+    return f.x.copy(), trail_array(frames[: i + 1], f.t, horizon, *TRAIL_LIMITS)
 
 
 def frame_rows(frames: list[Frame]) -> np.ndarray:

@@ -34,11 +34,11 @@ from .. import replay
 from ..limits import check_app_limits
 from ..replay import Recording
 from .driver import Driver
-from .history import TRAIL_LIMITS, Frame, History
+from .history import TRAIL_LIMITS, Frame, History, robots_at
 from .lifecycle import Lifecycle
 from .snapshot import Snapshot
 from .timeline import ReplayInfo, Timeline
-from .twin import Twin
+from .twin import Twin, twin_scenario
 from .upload import parse_upload
 
 
@@ -394,11 +394,26 @@ class Session:
         return compare.metric(name, t) if compare is not None else None
 
     def twin_view(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """Swarm B's robots and trails at the step shown (None without B, or if B has no such step)."""
+        """Swarm B's robots and trails at the step shown (None without B, or if B has no such step);
+        in a replay, B as it was recorded."""
         with self.lock:
+            k = self.timeline.shown_frame().k
+            if self.replaying is not None:
+                frames = self.timeline.twin_frames
+                return robots_at(frames, k, self.scenario.view.trail_seconds) if frames else None
             if self.compare is None:
                 return None
-            return self.compare.at(self.timeline.shown_frame().k)
+            return self.compare.at(k)
+
+    def _twin_record(self) -> tuple[list[Frame], dict[str, Any] | None]:
+        """Swarm B's frames to record and its overrides (none without B): the live B's, or those of
+        the replay shown (the lock held)."""
+        if self.replaying is not None:
+            return list(self.timeline.twin_frames), self.replaying.twin
+        if self.compare is None:
+            return [], None
+        with self.compare.b.lock:
+            return list(self.compare.b.history.frames), dict(self.compare.overrides)
 
     # ------------------------------------------------------------------ history
     def clock(self) -> float:
@@ -485,26 +500,35 @@ class Session:
             return shown
 
     def recording(self) -> Recording:
-        """The recorded history (frames and metrics) with the preset and seed that made it."""
+        """The recorded history (frames, the scene as it was at each, metrics, swarm B's frames)
+        with the preset and seed that made it."""
         with self.lock:
             frames = list(self.history.frames)
             metrics = self.history.metric_table()
             shown = self.replaying
             version, edits = (shown.shoal, shown.live_edits) if shown else (shoal.__version__, self.live_edits)
+            b_frames, overrides = self._twin_record()
+            b = {f.k: f for f in b_frames}
+            twins = [(b[f.k].x, b[f.k].status) if f.k in b else None for f in frames]
             meta = replay.make_meta(shoal=version, preset=self.scenario.model_dump(mode="json"),
                                     name=self.scenario.name, seed=int(self.scenario.sim.seed), kind=self.kind.name,
-                                    metrics=self.history.names, live_edits=edits)
+                                    metrics=self.history.names, live_edits=edits,
+                                    twin=overrides if any(tw is not None for tw in twins) else None)
         return replay.from_frames(meta, [f.k for f in frames], [f.t for f in frames], [f.x for f in frames],
-                                  [f.heading for f in frames], [f.status for f in frames], metrics)
+                                  [f.heading for f in frames], [f.status for f in frames], metrics, twins=twins,
+                                  scenes=[f.scene for f in frames])
 
     def export_replay(self) -> bytes:
         return replay.to_bytes(self.recording())
 
     def check_replay(self, rec: Recording) -> None:
-        """Refuse a recording this session cannot show (raises :class:`ReplayError`)."""
+        """Refuse a recording this session cannot show (raises :class:`ReplayError`, or
+        :class:`PresetError` naming B's field for overrides of swarm B the preset cannot take)."""
         d, expect = rec.x.shape[1], self.history.frames[-1].x.shape[-1]
         if d != expect:
             raise replay.ReplayError([f"x: positions have {d} columns but the preset's robots move in {expect}-D"])
+        if rec.twin_overrides is not None:
+            twin_scenario(self.scenario, rec.twin_overrides)
 
     def enter_replay(self, rec: Recording, check: tuple[bool | None, str]) -> None:
         """Show ``rec`` (already checked against this session's scenario) instead of the engine."""
@@ -535,8 +559,11 @@ class Session:
         return buf.getvalue().encode()
 
     def export_json(self) -> bytes:
+        """The run as JSON: the preset as the user built it (:meth:`kept_scenario`, what *Download
+        preset* writes; :class:`PresetError` if it cannot hold the edits), seed, version, the kind's
+        entries and the trajectories."""
         with self.lock:
-            preset = self.scenario.model_dump(mode="json")
+            preset = self.kept_scenario().model_dump(mode="json")
             seed = self.sim.seed
             extra = self.driver.export_extra()
         rows = self.trajectory_rows()

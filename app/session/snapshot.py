@@ -17,8 +17,9 @@ from .beliefs import Ghosts
 class Snapshot:
     """Run 0 at step ``k``: robots, trails, bests and the kind's own drawing data.
 
-    A recorded frame (scrubbed or replayed, ``live`` False) has robots and trails only: bests,
-    beliefs and whatever the kind blanks in ``extras`` are not recorded.
+    A recorded frame (scrubbed or replayed, ``live`` False) has robots, trails, swarm B and the
+    scene parts of its step (the driver's ``recorded``: obstacles, a source); bests, beliefs and
+    whatever the kind blanks in ``extras`` are not recorded.
     """
 
     scenario: Scenario  # the scene it belongs to (static drawing: arena, objective)

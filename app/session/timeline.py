@@ -2,8 +2,9 @@
 
 * **Scrub**: a cursor on a recorded step (``cursor``; None shows the live end). The session
   pauses and shows that frame: the robots, the trails up to then and the plots cut there.
-* **Replay**: a loaded :class:`~shoal.app.replay.Recording` replaces the history; the engine
-  does not advance and Play and Step move the cursor through the recording.
+* **Replay**: a loaded :class:`~shoal.app.replay.Recording` replaces the history (with the
+  scene as it was at each frame, and swarm B's frames when Compare ran); the engine does not
+  advance and Play and Step move the cursor through the recording.
 * :func:`verify_replay` re-simulates the first steps of a recording's preset and seed in a
   fresh session and compares the positions.
 """
@@ -33,6 +34,7 @@ class ReplayInfo:
     verified: bool | None  # None: not checked
     check: str  # the determinism check, in words
     live_edits: int
+    twin: dict[str, Any] | None = None  # swarm B's overrides when it was recorded
 
 
 class Rerun(Protocol):
@@ -68,13 +70,26 @@ def verify_replay(fresh: Rerun, rec: Recording, steps: int = VERIFY_STEPS) -> tu
 
 
 def recorded_frames(rec: Recording) -> list[Frame]:
-    """The frames of a recording (velocities are not recorded: zero)."""
+    """The frames of a recording with the scene as it was (velocities are not recorded: zero)."""
     frames = []
     for i in range(rec.frames):
         x, heading, status = rec.robots(i)
         zeros = np.zeros_like(x)
         frames.append(Frame(k=int(rec.k[i]), t=float(rec.t[i]), x=x.copy(), u=zeros, a=zeros,
-                            heading=heading.copy(), status=status.copy()))
+                            heading=heading.copy(), status=status.copy(), scene=rec.scene_at(i)))
+    return frames
+
+
+def twin_frames(rec: Recording) -> list[Frame]:
+    """Swarm B's recorded frames (none without B): robots and status, nothing else."""
+    frames = []
+    for i in range(rec.frames):
+        b = rec.twin(i)
+        if b is not None:
+            x, status = b
+            zeros = np.zeros_like(x)
+            frames.append(Frame(k=int(rec.k[i]), t=float(rec.t[i]), x=x.copy(), u=zeros, a=zeros,
+                                heading=np.zeros(len(x)), status=status.copy()))
     return frames
 
 
@@ -88,6 +103,7 @@ class Timeline:
     def clear(self) -> None:
         self.cursor: int | None = None
         self.replaying: ReplayInfo | None = None
+        self.twin_frames: list[Frame] = []  # swarm B's frames in the replay shown
 
     @property
     def live(self) -> bool:
@@ -139,8 +155,10 @@ class Timeline:
         self.history.replace(recorded_frames(rec), (tuple(float(v) for v in row) for row in rec.metrics)
                              if metrics_match else ())
         self.cursor = self.history.frames[-1].k
+        self.twin_frames = twin_frames(rec)
         self.replaying = ReplayInfo(name=rec.name, seed=rec.seed, shoal=str(rec.meta["shoal"]), verified=check[0],
-                                    check=check[1], live_edits=int(rec.meta["live_edits"]))
+                                    check=check[1], live_edits=int(rec.meta["live_edits"]),
+                                    twin=rec.twin_overrides if self.twin_frames else None)
 
     def shown_metrics(self, n: int) -> tuple[dict[str, np.ndarray], tuple[float, float]]:
         """The last ``n`` metric rows up to the time shown, and the time span of all ``n`` (the x range)."""

@@ -7,7 +7,6 @@ the preset model; a message about B names B's field (``B: controller.omega …``
 
 from __future__ import annotations
 
-import bisect
 import copy
 import threading
 from typing import Any, Callable, Protocol
@@ -18,7 +17,7 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from .history import TRAIL_LIMITS, History, trail_array
+from .history import History, robots_at
 
 MAX_OVERRIDES = 40
 
@@ -132,9 +131,4 @@ class Twin:
         with self.b.lock:
             frames = list(self.b.history.frames)
             horizon = self.b.scenario.view.trail_seconds
-        ks = [f.k for f in frames]
-        i = bisect.bisect_left(ks, k)
-        if i == len(ks) or ks[i] != k:
-            return None
-        f = frames[i]
-        return f.x.copy(), trail_array(frames[: i + 1], f.t, horizon, *TRAIL_LIMITS)
+        return robots_at(frames, k, horizon)

@@ -6,14 +6,14 @@ The frames come from either
 
 * a seeded run (:func:`run_frames`): a fresh session of the preset steps on and every kept
   step is drawn as the app draws it while playing (bests, rays, sensing sectors, beliefs);
-* a recorded history (:func:`recorded_frames`): the frames of a session's ring buffer (and
-  of swarm B), drawn as the app's timeline shows them when scrubbing: robots, headings,
-  collisions, trails and the static scene. What the app draws only live is not recorded.
+* a recording (:func:`recorded_frames`): a session's ring buffer or a replay file, shown in a
+  replay session and drawn as the app's timeline shows it: robots, headings, collisions,
+  trails, swarm B, the obstacles and the source as they were at that step, and the static
+  scene. What the app draws only live is not recorded.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any, Callable, Iterator
 
 from shoal.presets import io as presets_io
@@ -72,22 +72,9 @@ def replay_session(rec: Recording) -> Session:
     return session
 
 
-def recorded_frames(a: Session, b: Session | None, plan: FramePlan) -> Iterator[Snapshot]:
-    """The recorded frame of every kept step from replay sessions ``a`` and ``b`` (swarm B,
-    drawn where it recorded that step)."""
-    b_steps = {f.k for f in b.frames} if b is not None else set()
+def recorded_frames(session: Session, plan: FramePlan) -> Iterator[Snapshot]:
+    """The recorded frame of every kept step of a replay ``session``, as its timeline shows it:
+    the robots, swarm B where it recorded that step, the obstacles and the source as they were."""
     for k in plan.steps:
-        a.scrub(k)
-        twin = None
-        if b is not None and k in b_steps:
-            b.scrub(k)
-            snap_b = b.shown_snapshot()
-            twin = (snap_b.x, snap_b.trails)
-        yield dataclasses.replace(a.shown_snapshot(), twin=twin)
-
-
-def session_recordings(session: Session) -> tuple[Recording, Recording | None, dict[str, Any]]:
-    """A session's recorded history, swarm B's (None without B) and B's overrides."""
-    with session.lock:
-        twin = session.twin
-        return session.recording(), (twin.recording() if twin is not None else None), dict(session.overrides)
+        session.scrub(k)
+        yield session.shown_snapshot()

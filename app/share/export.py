@@ -15,6 +15,7 @@ from shoal.presets.models import Scenario
 from ..limits import scene_kind
 from ..replay import Recording
 from ..session.snapshot import Snapshot
+from ..session.twin import twin_scenario
 from . import draw, page
 from .frames import MAX_FRAMES, FramePlan, frame_budget, plan, run_plan
 
@@ -60,26 +61,26 @@ def preset_html(scenario: Scenario, *, overrides: dict[str, Any] | None = None, 
     return _page(scenario, draw.run_frames(session, fp, on_steps), info)
 
 
-def recording_html(rec: Recording, twin: Recording | None = None, overrides: dict[str, Any] | None = None,
-                   max_frames: int = MAX_FRAMES) -> str:
-    """The page of a recorded history (and swarm B's), as the app's timeline shows it. Raises
-    :class:`~shoal.presets.io.PresetError` or :class:`~shoal.app.replay.ReplayError` for a
-    recording the app could not show."""
+def recording_html(rec: Recording, max_frames: int = MAX_FRAMES) -> str:
+    """The page of a recording (swarm B's frames too when Compare ran), as the app's timeline
+    shows it. Raises :class:`~shoal.presets.io.PresetError` or :class:`~shoal.app.replay.ReplayError`
+    for a recording the app could not show."""
     a = draw.replay_session(rec)
-    b = draw.replay_session(twin) if twin is not None else None
-    robots = int(rec.n.max()) + (int(twin.n.max()) if twin is not None else 0)
+    overrides = rec.twin_overrides if len(rec.b_x) else None
+    twin = twin_scenario(a.scenario, overrides) if overrides is not None else None
+    robots = int(rec.n.max()) + int(rec.b_n.max())
     limit = frame_budget(robots, max_frames)
     fp = plan(rec.k, limit)
     info = _info(a.scenario, fp, origin="recorded history", shoal_version=str(rec.meta["shoal"]),
-                 max_frames=limit, robots=robots, live_edits=int(rec.meta["live_edits"]),
-                 twin=b.scenario if b is not None else None, overrides=overrides)
-    return _page(a.scenario, draw.recorded_frames(a, b, fp), info)
+                 max_frames=limit, robots=robots, live_edits=int(rec.meta["live_edits"]), twin=twin,
+                 overrides=overrides)
+    return _page(a.scenario, draw.recorded_frames(a, fp), info)
 
 
 def session_html(session: Any, max_frames: int = MAX_FRAMES) -> bytes:
-    """The page of a session's recorded history (swarm B's too when Compare is on), as UTF-8."""
-    rec, twin, overrides = draw.session_recordings(session)
-    return recording_html(rec, twin, overrides if twin is not None else None, max_frames).encode("utf-8")
+    """The page of a session's recorded history (swarm B's too when Compare is on, or in the
+    replay shown), as UTF-8."""
+    return recording_html(session.recording(), max_frames).encode("utf-8")
 
 
 def write_html(path: Path | str, text: str) -> Path:

@@ -4,7 +4,7 @@ One server (``default``, a Chapter 3 swarm) and one page for the module; tests r
 order. The first switches swarm B on from the Compare tab and finds it in the picture (teal
 where B's robots are, apart from A's) and in the plot's legend. The second exports a replay
 from that page, loads it into a second server started on a fleet scene, scrubs the
-timeline and checks the robots drawn there are the recorded ones.
+timeline and checks the robots drawn there are the recorded ones, and swarm B's in teal.
 """
 
 from __future__ import annotations
@@ -190,6 +190,28 @@ def test_a_replay_exported_here_plays_back_in_another_server(server, browser, pa
             hits = seen(page2, pixels, red)
             assert hits >= 0.9 * len(pixels), f"only {hits}/{len(pixels)} recorded robots seen where they were"
             assert tab2.session.sim.state.k == 0  # a replay does not advance the engine
+            # Compare was on when it was exported: swarm B is in the file and drawn in teal where it was
+            last = int(rec.k[-1])
+            x_b = rec.twin(rec.frames - 1)[0]
+            box.fill(str(last))
+            box.press("Enter")
+            wait_until(lambda: tab2.session.cursor == last, what=f"the timeline at step {last}")
+            wait_until(lambda: tab2.arena.drawn_revision == tab2.session.revision, what="the last frame drawn")
+            np.testing.assert_allclose(np.asarray(tab2.arena.nodes["twin"].points)[:, :2],
+                                       tab2.arena.to_view(x_b)[:, :2], atol=1e-5)
+            a = to_pixel(other, cid2, page2, rec.robots(rec.frames - 1)[0])
+            b = to_pixel(other, cid2, page2, x_b)
+            r = radius_px(other, cid2, page2)
+            cb = canvas_box(page2)
+            clear = np.sqrt(((b[:, None] - a[None]) ** 2).sum(-1)).min(axis=1) > 2 * r + 3
+            inside = (b[:, 0] > cb["x"] + 5) & (b[:, 0] < cb["x"] + cb["width"] - 5) & (b[:, 1] > cb["y"] + 5) & (
+                b[:, 1] < cb["y"] + cb["height"] - 5)
+            pixels = np.round(b[clear & inside]).astype(int)
+            assert len(pixels) >= 3, "B should lie apart from A at the last step"
+            dismiss_toasts(page2)
+            hits = seen(page2, pixels, teal)
+            assert hits >= 0.8 * len(pixels), f"only {hits}/{len(pixels)} of B's recorded robots seen in teal"
+            page2.wait_for_selector("text=with swarm B (teal)", timeout=30000)
         finally:
             page2.context.close()
     finally:
