@@ -109,7 +109,8 @@ def robot_updates(payload: bytes) -> int:
     return count
 
 
-def measure(label: str, pkg: Path, preset: Path, seconds: float, warmup: float) -> dict[str, float]:
+def measure(label: str, pkg: Path, preset: Path, seconds: float, warmup: float,
+            shot: Path | None = None) -> dict[str, float]:
     from playwright.sync_api import sync_playwright
 
     counter = FrameCounter()
@@ -126,6 +127,8 @@ def measure(label: str, pkg: Path, preset: Path, seconds: float, warmup: float) 
                 f, b, r = counter.read()
                 return time.monotonic(), f, b, r, stats["steps"], stats["draws"], raf, long
 
+            if shot is not None:
+                page.screenshot(path=str(shot))
             samples = [sample()]
             for _ in range(int(seconds)):
                 page.wait_for_timeout(1000)  # (playwright delivers the frame events while it waits)
@@ -158,6 +161,7 @@ def main() -> None:
     ap.add_argument("--warmup", type=float, default=5.0, help="seconds of play before counting")
     ap.add_argument("--cases", type=int, nargs="*", help="indices of the cases to run (0-based)")
     ap.add_argument("--base", default=None, help="also measure this commit (e.g. main), before this tree")
+    ap.add_argument("--shots", type=Path, default=None, help="a folder for a 1280×800 screenshot of each case and tree")
     args = ap.parse_args()
     cases = [CASES[i] for i in args.cases] if args.cases else CASES[:1] if args.quick else CASES
     seconds = 6.0 if args.quick else args.seconds
@@ -171,8 +175,10 @@ def main() -> None:
             pkgs.append((label, tree_of(rev, Path(tmp) / f"tree{i}")))
         for j, (case, preset, overrides) in enumerate(cases):
             path = write_preset(preset, overrides, Path(tmp) / f"case{j}.toml")
-            for label, pkg in pkgs:
-                m = measure(label, pkg, path, seconds, args.warmup)
+            for t, (label, pkg) in enumerate(pkgs):
+                name = f"case{CASES.index((case, preset, overrides))}-tree{t}.png"
+                shot = None if args.shots is None else args.shots / name
+                m = measure(label, pkg, path, seconds, args.warmup, shot)
                 print(f"  {case} [{label}]: {m}", file=sys.stderr)
                 rows.append([case, label, fmt(m["robot_updates"]), fmt(m["robot_updates_min"]), fmt(m["frames"]),
                              fmt(m["kib"]), fmt(m["raf"]), fmt(m["long"]), fmt(m["raf_paused"]), fmt(m["steps"]),
