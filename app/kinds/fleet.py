@@ -52,6 +52,7 @@ from ..view import shapes
 from ..view.camera import VIEW_HALF
 from ..view.canvas import Canvas
 from ..view.layers import (
+    GRID_KEYS,
     Ghosts,
     GlobalBest,
     Headings,
@@ -62,6 +63,7 @@ from ..view.layers import (
     Static,
     Trails,
     Twin,
+    draw_grid,
     metres,
 )
 from ..view.view import Home
@@ -275,6 +277,9 @@ class Stalled(Static):
 PROBE_NODES = ("selected", "sectors", "sector_edges", "hits", "hit_lines", "force", "reach_attract", "reach_total")
 
 ObstacleDrag = Callable[[int, float, float, str], None]  # (index, x, y, phase) in world metres
+# Segments of an obstacle's outline: within 2 % of its radius (a pixel at 50 px). Every line segment
+# is a few triangles a frame for a software-rendered page; a course has a hundred obstacles or more.
+RIM_SEGMENTS = 16
 
 
 def _radius(canvas: Canvas, snap: Snapshot) -> float:
@@ -286,7 +291,7 @@ class WorldLayer(Static):
     """The course: its grid, the start box, the walls, the obstacle layers and the source."""
 
     name = "world"
-    keys = ("grid", "start", "start_edge", "walls", "layers", "source", "source_label")
+    keys = (*GRID_KEYS, "start", "start_edge", "walls", "layers", "source", "source_label")
     legend = (LegendEntry("■", START, "start box"), LegendEntry("—", LAYER, "layer"),
               LegendEntry("●", SOURCE, "source"))
 
@@ -294,11 +299,7 @@ class WorldLayer(Static):
         world: WorldSpec = snap.extras["world"]
         sc = canvas.scene
         x0, y0, x1, y1 = world.bounds
-        canvas.add("grid", sc.add_grid(
-            canvas.name("grid"), width=(x1 - x0) * canvas.scale, height=(y1 - y0) * canvas.scale, plane="xy",
-            cell_size=1.0 * canvas.scale, section_size=5.0 * canvas.scale, cell_color=GRID_CELL,
-            section_color=GRID_SECTION, position=(0.0, 0.0, Z["grid"]), shadow_opacity=0.0, infinite_grid=False,
-            fade_distance=1e4))
+        draw_grid(canvas, np.array([x0, y0]), np.array([x1, y1]), 1.0, (GRID_CELL, GRID_SECTION), Z["grid"])
         bx0, by0, bx1, by1 = world.start_box
         box = np.array([[bx0, by0], [bx1, by0], [bx1, by1], [bx0, by1]])
         canvas.add("start", sc.add_mesh_simple(
@@ -352,7 +353,7 @@ class Obstacles(Static):
         else:
             node.batched_positions = pos
             node.batched_scales = scales
-        rims = [shapes.circle_segments(c[:2], c[2], 40) for c in circles]
+        rims = [shapes.circle_segments(c[:2], c[2], RIM_SEGMENTS) for c in circles]
         canvas.lines("obstacle_edges", np.concatenate(rims) if rims else np.zeros((0, 2, 2)), OBSTACLE_EDGE, 1.2,
                      Z["obstacles"] + 0.001)
         canvas.drop("polygons")
