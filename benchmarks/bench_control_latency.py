@@ -71,9 +71,11 @@ ACT_CLOCK = """
 """
 STATUS_SAYS = "() => [...document.querySelectorAll('p, div')].some(e => e.childElementCount < 4 && " \
               "e.textContent.includes('{name}') && e.textContent.includes('{word}'))"
-# the readout shows β: a table cell (before) or "β = …" in a line (now)
+# the readout shows β: a table cell (before) or "β = …" in a line (now), the whole number (β = 0.4 must not
+# match the 0.411 of the previous value: that read as a negative time)
 READOUT_SAYS = ("() => [...document.querySelectorAll('td')].some(td => td.textContent.trim() === {text}) || "
-                "[...document.querySelectorAll('p')].some(p => p.textContent.includes('β = ' + {text}))")
+                "[...document.querySelectorAll('p')].some(p => p.textContent.split('β = ').slice(1)"
+                ".some(s => (s.match(/^[-+0-9.e]+/) || [''])[0] === {text}))")
 TITLE_SAYS = "() => [...document.querySelectorAll('text.gtitle')].some(e => e.textContent.includes({text}))"
 
 

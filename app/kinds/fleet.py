@@ -258,6 +258,11 @@ REACH_TOTAL = (240, 140, 20)
 Z = dict(grid=-0.025, start=-0.02, layers=-0.015, sectors=-0.01, trails=-0.005, obstacles=0.0,
          pbests=0.004, source=0.006, gbest=0.008, robots=0.01, headings=0.012, probe=0.014, hits=0.016)
 
+# A stalled robot's ring is a few pixels across, redrawn with every update for hundreds of robots
+# in a packed fleet: an octagon (each segment is a few triangles a frame for a software renderer).
+STALLED_RING_SEGMENTS = 8
+
+
 class Stalled(Static):
     """A ring round each running robot that has barely moved for a while (squeezed between bodies
     it may not approach: the engine's ``stalled``); not on recorded frames."""
@@ -270,7 +275,8 @@ class Stalled(Static):
         stalled = snap.extras.get("stalled")
         x = snap.x[stalled] if stalled is not None else np.zeros((0, 2))
         r = 1.6 * snap.extras["params"].robot_radius
-        segs = (shapes.circle_segments(np.zeros(2), r, 16)[None] + shapes.plane(x)[:, None, None, :]).reshape(-1, 2, 2)
+        ring = shapes.circle_segments(np.zeros(2), r, STALLED_RING_SEGMENTS)
+        segs = (ring[None] + shapes.plane(x)[:, None, None, :]).reshape(-1, 2, 2)
         canvas.lines("stalled", segs, STALLED, 2.5, Z["robots"] + 0.001)
 
 
