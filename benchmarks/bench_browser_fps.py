@@ -118,6 +118,7 @@ def measure(label: str, pkg: Path, preset: Path, seconds: float, warmup: float,
         browser, page = open_page(p, server.port, counter.on_frame)
         try:
             wait_until(lambda: any(d >= 0 for d in server.ask("stats")["drawn"]), timeout=120, what="the first scene")
+            server.ask("reset_run")  # the same stretch of the run for every tree
             server.ask("play")
             page.wait_for_timeout(warmup * 1000)
 

@@ -255,6 +255,7 @@ def measure(label: str, pkg: Path, preset: Path, seconds: float, warmup: float, 
         browser, page = None, None
         try:
             browser, page = open_page(p, server.port, frames.on_frame)
+            server.ask("reset_run")  # the same stretch of the run for every tree
             server.ask("play")
             page.wait_for_timeout(warmup * 1000)
             # 1. counters

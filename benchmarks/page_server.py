@@ -64,9 +64,9 @@ for line in sys.stdin:
                                  "tabs": len(tabs), "drawn": [t.arena.drawn_revision for t in tabs],
                                  "steps": sum(int(t.session.sim.state.k) for t in tabs),
                                  "playing": [bool(t.session.playing) for t in tabs]}), flush=True)
-    elif cmd in ("play", "pause"):
+    elif cmd in ("play", "pause", "reset_run"):
         for t in tabs:
-            getattr(t.session, cmd)()
+            getattr(t.session, "reset" if cmd == "reset_run" else cmd)()
     elif cmd == "stop":
         break
 server.stop()
@@ -132,7 +132,9 @@ class ChildServer:
         return json.loads(line[2:])
 
     def ask(self, cmd: str) -> dict | None:
-        """Send ``cmd`` (reset, stats, play, pause); ``stats`` returns the counters."""
+        """Send ``cmd``: reset (the counters), stats (returns them), play, pause, reset_run (every
+        tab's run back to step 0, playing: both trees then measure the same stretch of the run,
+        whatever a tree spent starting, e.g. compiling its kernels)."""
         assert self.child.stdin is not None
         with self.lock:
             self.child.stdin.write(cmd + "\n")
