@@ -118,8 +118,11 @@ def measure(label: str, pkg: Path, preset: Path, seconds: float, warmup: float,
         browser, page = open_page(p, server.port, counter.on_frame)
         try:
             wait_until(lambda: any(d >= 0 for d in server.ask("stats")["drawn"]), timeout=120, what="the first scene")
-            server.ask("reset_run")  # the same stretch of the run for every tree
-            server.ask("play")
+            server.ask("play")  # a few steps first: a fresh tree compiles its kernels on the first ones
+            start = time.monotonic()
+            while server.ask("stats")["steps"] < 5 and time.monotonic() - start < 300:
+                page.wait_for_timeout(500)
+            server.ask("reset_run")  # then the same stretch of the run for every tree
             page.wait_for_timeout(warmup * 1000)
 
             def sample() -> tuple[float, ...]:

@@ -255,8 +255,11 @@ def measure(label: str, pkg: Path, preset: Path, seconds: float, warmup: float, 
         browser, page = None, None
         try:
             browser, page = open_page(p, server.port, frames.on_frame)
-            server.ask("reset_run")  # the same stretch of the run for every tree
-            server.ask("play")
+            server.ask("play")  # a few steps first: a fresh tree compiles its kernels on the first ones
+            start = time.monotonic()
+            while server.ask("stats")["steps"] < 5 and time.monotonic() - start < 300:
+                page.wait_for_timeout(500)
+            server.ask("reset_run")  # then the same stretch of the run for every tree
             page.wait_for_timeout(warmup * 1000)
             # 1. counters
             s0, f0, c0, t0 = server.ask("stats"), frames.read(), page_counters(page), time.monotonic()
