@@ -33,7 +33,7 @@ from .session.session import Session
 from .session.upload import MAX_UPLOAD_BYTES
 from .tab import TabApp
 from .upload_guard import guard_uploads
-from .view.camera import CAMERA_FOV, CAMERA_HEIGHT, home_camera
+from .view.camera import home_camera, top_view
 
 TICK_HZ = 60.0
 PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round
@@ -117,14 +117,7 @@ class ShoalServer:
         gui.configure_theme(control_width="large", show_share_button=False, brand_color=(40, 90, 200))
         gui.main_panel.dock_right()
         gui.set_panel_label("Shoal · PSO for robot swarms")
-        cam = self.viser.initial_camera
-        cam.position = (0.0, 0.0, CAMERA_HEIGHT)
-        cam.look_at = (0.0, 0.0, 0.0)
-        cam.up = (0.0, 1.0, 0.0)
-        cam.fov = CAMERA_FOV
-        cam.near = 1.0
-        cam.far = 4.0 * CAMERA_HEIGHT
-        self.viser.scene.set_up_direction("+z")
+        top_view(self.viser)
 
     # ------------------------------------------------------------------ tabs
     def open_tab(

@@ -1,20 +1,20 @@
-"""Scene updates per second that a real headless Chromium receives from the app, with 100
-robots and their trails.
+"""Scene updates per second that a real headless Chromium receives from the app, and how often
+the page can run its render loop meanwhile, for this tree and (``--base REV``) an earlier commit.
 
-Run: python benchmarks/bench_browser_fps.py [--quick] [--seconds 20]
+Run: python benchmarks/bench_browser_fps.py [--quick] [--seconds 20] [--cases 0 4 5] [--base main]
 
-For each case the app server starts in this process (``start_server`` on a free port) with
-the case's preset written to a temporary TOML file (100 robots, a run long enough never to
-stop), Debian's Chromium opens the page (playwright with ``executable_path``, never a
-downloaded browser) and the swarm plays. Counted over the measuring window:
+For each case and tree the app server runs in a child process (``page_server.ChildServer``: the
+tree's own code) with the case's preset written to a temporary TOML file (a run long enough never
+to stop), Debian's Chromium opens the page (playwright with ``executable_path``, never a
+downloaded browser, and the browser tests' in-view shim) and the scene plays. Counted over the
+measuring window:
 
 - in the browser: viser websocket frames received by the page, and among their messages
   the updates of the robots' point cloud (``SceneNodeUpdateMessage`` for ``…/robots`` with
-  new ``points``), decoded from the frames as the page got them; also the page's
+  new ``points``), decoded from the frames as the page got them; the page's
   ``requestAnimationFrame`` rate (how often the browser could run its render loop), while
-  playing and for 3 s after a pause;
-- on the server: engine steps per second and arena draws per second (the tab's
-  ``arena.draw`` calls).
+  playing and for 3 s after a pause, and its main-thread time in long tasks (> 50 ms);
+- on the server: engine steps per second and arena draws per second (``View.draw`` calls).
 
 "min 1-s" is the lowest count in any whole second of the window. The app draws at most
 ``TabApp.SCENE_HZ`` (30) times a second and only after a step, so the scene rate is
@@ -24,8 +24,6 @@ min(playback steps/s, 30).
 from __future__ import annotations
 
 import argparse
-import contextlib
-import shutil
 import sys
 import tempfile
 import threading
@@ -34,12 +32,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "browser"))
-from bench_common import fmt, table  # noqa: E402
+from bench_common import fmt, load_note, table  # noqa: E402
+from page_server import ChildServer, open_page, page_counters, tree_of, write_preset  # noqa: E402
 
-from browser_helpers import ARGS, VIEWPORT, wait_until  # noqa: E402
+from browser_helpers import wait_until  # noqa: E402
 
-CHROMIUM = shutil.which("chromium")
 LONG = "sim.steps=10000000"
 # (label, preset, overrides)
 CASES = [
@@ -59,11 +56,6 @@ CASES = [
      ["sim.robots=200", "world.length=90", "world.width=38.3", "world.start_size=28.3",
       "view.steps_per_second=20", LONG]),
 ]
-
-COUNT_RAF = """
-window.__shoalRaf = 0;
-(function tick() { window.__shoalRaf += 1; requestAnimationFrame(tick); })();
-"""
 
 
 @dataclass
@@ -117,67 +109,41 @@ def robot_updates(payload: bytes) -> int:
     return count
 
 
-def write_preset(preset: str, overrides: list[str], folder: Path) -> Path:
-    from shoal.presets.io import load, to_toml
-
-    path = folder / f"{preset}-bench.toml"
-    path.write_text(to_toml(load(preset, overrides)), encoding="utf-8")
-    return path
-
-
-def measure(preset: str, overrides: list[str], seconds: float, warmup: float) -> dict[str, float]:
+def measure(label: str, pkg: Path, preset: Path, seconds: float, warmup: float,
+            shot: Path | None = None) -> dict[str, float]:
     from playwright.sync_api import sync_playwright
 
-    from shoal.app.server import start_server
-
-    with tempfile.TemporaryDirectory() as tmp, contextlib.redirect_stdout(sys.stderr):  # viser's banner
-        server = start_server(str(write_preset(preset, overrides, Path(tmp))), port=0)
     counter = FrameCounter()
-    try:
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-            try:
-                page = browser.new_page(viewport=VIEWPORT)
-                page.add_init_script(COUNT_RAF)
-                page.on("websocket", lambda ws: ws.on("framereceived", counter.on_frame))
-                page.goto(f"http://127.0.0.1:{server.port}/")
-                page.wait_for_selector("canvas", timeout=120_000)
-                wait_until(lambda: len(server.tabs) == 1, timeout=120, what="the tab")
-                tab = next(iter(server.tabs.values()))
-                wait_until(lambda: tab.arena.drawn_revision >= 0, timeout=120, what="the first scene")
-                page.wait_for_selector("button:has-text('Play'), button:has-text('Pause')", timeout=120_000)
-                draws = [0]
-                draw = tab.arena.draw
+    with ChildServer(pkg, preset, label) as server, sync_playwright() as p:
+        browser, page = open_page(p, server.port, counter.on_frame)
+        try:
+            wait_until(lambda: any(d >= 0 for d in server.ask("stats")["drawn"]), timeout=120, what="the first scene")
+            server.ask("play")  # a few steps first: a fresh tree compiles its kernels on the first ones
+            start = time.monotonic()
+            while server.ask("stats")["steps"] < 5 and time.monotonic() - start < 300:
+                page.wait_for_timeout(500)
+            server.ask("reset_run")  # then the same stretch of the run for every tree
+            page.wait_for_timeout(warmup * 1000)
 
-                def counted(snap):  # the tab's arena, counted
-                    draws[0] += 1
-                    return draw(snap)
+            def sample() -> tuple[float, ...]:
+                raf, long = page_counters(page)
+                stats = server.ask("stats")
+                f, b, r = counter.read()
+                return time.monotonic(), f, b, r, stats["steps"], stats["draws"], raf, long
 
-                tab.arena.draw = counted
-                if not tab.session.playing:
-                    page.get_by_role("button", name="Play", exact=True).click()
-                wait_until(lambda: tab.session.playing, what="play")
-                page.wait_for_timeout(warmup * 1000)
-
-                def sample() -> tuple[float, ...]:
-                    raf = float(page.evaluate("window.__shoalRaf"))
-                    f, b, r = counter.read()
-                    return time.monotonic(), f, b, r, tab.session.sim.state.k, draws[0], raf
-
-                samples = [sample()]
-                for _ in range(int(seconds)):
-                    page.wait_for_timeout(1000)
-                    samples.append(sample())
-                tab.session.pause()  # the render loop with nothing arriving, for comparison
-                page.wait_for_timeout(1000)
-                raf0, t0 = float(page.evaluate("window.__shoalRaf")), time.monotonic()
-                page.wait_for_timeout(3000)
-                raf_paused = (float(page.evaluate("window.__shoalRaf")) - raf0) / (time.monotonic() - t0)
-            finally:
-                browser.close()
-    finally:
-        with contextlib.redirect_stdout(sys.stderr):
-            server.stop()
+            if shot is not None:
+                page.screenshot(path=str(shot))
+            samples = [sample()]
+            for _ in range(int(seconds)):
+                page.wait_for_timeout(1000)  # (playwright delivers the frame events while it waits)
+                samples.append(sample())
+            server.ask("pause")  # the render loop with nothing arriving, for comparison
+            page.wait_for_timeout(1000)
+            raf0, t0 = page_counters(page)[0], time.monotonic()
+            page.wait_for_timeout(3000)
+            raf_paused = (page_counters(page)[0] - raf0) / (time.monotonic() - t0)
+        finally:
+            browser.close()
     t = [s[0] for s in samples]
     span = t[-1] - t[0]
 
@@ -187,31 +153,43 @@ def measure(preset: str, overrides: list[str], seconds: float, warmup: float) ->
     per_window = [(b[3] - a[3]) / (b[0] - a[0]) for a, b in zip(samples, samples[1:])]
     return {
         "robot_updates": per_s(3), "robot_updates_min": min(per_window), "frames": per_s(1),
-        "kib": per_s(2) / 1024, "steps": per_s(4), "draws": per_s(5), "raf": per_s(6),
-        "raf_paused": raf_paused,
-        "undecoded": counter.undecoded, "seconds": span,
+        "kib": per_s(2) / 1024, "steps": per_s(4), "draws": per_s(5), "raf": per_s(6), "long": per_s(7),
+        "raf_paused": raf_paused, "undecoded": counter.undecoded, "seconds": span,
     }
 
 
 def main() -> None:
-    if CHROMIUM is None:
-        raise SystemExit("bench_browser_fps: needs Debian's chromium on the PATH (apt-get install chromium)")
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="6 s per case instead of --seconds, first case only")
     ap.add_argument("--seconds", type=float, default=20.0, help="measuring window per case")
     ap.add_argument("--warmup", type=float, default=5.0, help="seconds of play before counting")
     ap.add_argument("--cases", type=int, nargs="*", help="indices of the cases to run (0-based)")
+    ap.add_argument("--base", default=None, help="also measure this commit (e.g. main), before this tree")
+    ap.add_argument("--shots", type=Path, default=None, help="a folder for a 1280×800 screenshot of each case and tree")
     args = ap.parse_args()
     cases = [CASES[i] for i in args.cases] if args.cases else CASES[:1] if args.quick else CASES
     seconds = 6.0 if args.quick else args.seconds
+    print(load_note(), file=sys.stderr)
     rows = []
-    for label, preset, overrides in cases:
-        m = measure(preset, overrides, seconds, args.warmup)
-        print(f"  {label}: {m}", file=sys.stderr)
-        rows.append([label, fmt(m["robot_updates"]), fmt(m["robot_updates_min"]), fmt(m["frames"]),
-                     fmt(m["kib"]), fmt(m["raf"]), fmt(m["raf_paused"]), fmt(m["steps"]), fmt(m["draws"])])
-    print(table(["case", "robot updates/s in the browser", "min 1-s", "ws frames/s", "KiB/s", "browser rAF/s",
-                 "rAF/s paused", "server steps/s", "server draws/s"], rows))
+    with tempfile.TemporaryDirectory() as tmp:
+        trees = ([(f"base {args.base}", args.base)] if args.base else []) + [("this tree", None)]
+        pkgs = []
+        for i, (label, rev) in enumerate(trees):
+            (Path(tmp) / f"tree{i}").mkdir()
+            pkgs.append((label, tree_of(rev, Path(tmp) / f"tree{i}")))
+        for j, (case, preset, overrides) in enumerate(cases):
+            path = write_preset(preset, overrides, Path(tmp) / f"case{j}.toml")
+            for t, (label, pkg) in enumerate(pkgs):
+                name = f"case{CASES.index((case, preset, overrides))}-tree{t}.png"
+                shot = None if args.shots is None else args.shots / name
+                m = measure(label, pkg, path, seconds, args.warmup, shot)
+                print(f"  {case} [{label}]: {m}", file=sys.stderr)
+                rows.append([case, label, fmt(m["robot_updates"]), fmt(m["robot_updates_min"]), fmt(m["frames"]),
+                             fmt(m["kib"]), fmt(m["raf"]), fmt(m["long"]), fmt(m["raf_paused"]), fmt(m["steps"]),
+                             fmt(m["draws"])])
+    print(table(["case", "tree", "robot updates/s in the browser", "min 1-s", "ws frames/s", "KiB/s",
+                 "browser rAF/s", "long tasks ms/s", "rAF/s paused", "server steps/s", "server draws/s"], rows))
+    print(f"\nafter the run: {load_note()}")
 
 
 if __name__ == "__main__":

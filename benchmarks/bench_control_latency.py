@@ -17,20 +17,20 @@ event the page dispatched to the moment the page's DOM shows the feedback:
 
 The Pause path is split where the time goes: the page's click → the server's handler starts
 (``Panel.press``, server clock) → the first websocket frame carrying "paused" reaches the page
-(playwright's frame event) → the DOM shows it. Meanwhile the traffic the page receives while
-playing (frames/s, KiB/s), the page's long tasks (ms of main-thread work in tasks > 50 ms per
-second) and the server's tick (ms per tick of the tab, median/p95) are recorded. Nothing here
-is asserted; the machine is shared, so run both trees in one go and compare.
+(playwright's frame event, stamped when the script sees it) → the DOM shows it. Before that, over
+5 s of play: the traffic the page receives (frames/s, KiB/s: playwright's websocket events, which
+it delivers only while the script is inside a playwright call, so the window is a playwright
+wait), the page's requestAnimationFrame rate and long tasks (ms of main-thread work in tasks
+> 50 ms per second, counted in the page) and the server's tick (ms per tick of the tab,
+median/p95). The server of each tree is ``page_server.ChildServer``. Nothing here is asserted;
+the machine is shared, so run both trees in one go and compare.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
-import shutil
 import statistics
-import subprocess
 import sys
 import tempfile
 import threading
@@ -43,46 +43,10 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(ROOT / "tests" / "browser"))
 sys.path.insert(0, str(ROOT / "tests"))
 from bench_common import load_note, table  # noqa: E402
+from page_server import ChildServer, open_page, page_counters, tree_of  # noqa: E402
 
-from browser_helpers import ARGS, VIEWPORT, dismiss_toasts, number_box  # noqa: E402
+from browser_helpers import dismiss_toasts, number_box  # noqa: E402
 from viser_wire import decode_frame  # noqa: E402
-
-CHROMIUM = shutil.which("chromium")
-SUBPACKAGES = {"app": "app", "engine": "engine", "presets": "presets", "static": "static"}
-
-# The child process: the tree's app server, instrumented from outside (the same wrappers for
-# every tree: TabApp._tick and Panel.press exist on both sides of this work).
-SERVER = r"""
-import json, sys, threading, time
-from shoal.app import tab as tab_mod
-from shoal.app.panel import panel as panel_mod
-from shoal.app.server import start_server
-
-ticks, presses = [], []
-_tick = tab_mod.TabApp._tick
-def timed_tick(self, now, plots=True):
-    t0 = time.perf_counter()
-    _tick(self, now, plots)
-    ticks.append((time.perf_counter() - t0) * 1e3)
-tab_mod.TabApp._tick = timed_tick
-_press = panel_mod.Panel.press
-def timed_press(self, what):
-    presses.append((what, time.time() * 1e3))
-    return _press(self, what)
-panel_mod.Panel.press = timed_press
-
-server = start_server(sys.argv[1], port=0)
-print("@@" + json.dumps({"port": server.port}), flush=True)
-for line in sys.stdin:
-    cmd = line.strip()
-    if cmd == "reset":
-        ticks.clear(); presses.clear()
-    elif cmd == "stats":
-        print("@@" + json.dumps({"ticks": list(ticks), "presses": list(presses)}), flush=True)
-    elif cmd == "stop":
-        break
-server.stop()
-"""
 
 WAITER = """
 ([pred]) => {
@@ -103,34 +67,16 @@ ACT_CLOCK = """
   for (const type of ["click", "keydown", "input"]) {  // a number box sends its value as it is typed
     document.addEventListener(type, () => { if (window.__act === null) window.__act = now(); }, true);
   }
-  window.__long = 0;
-  new PerformanceObserver((list) => { for (const e of list.getEntries()) window.__long += e.duration; })
-    .observe({type: "longtask", buffered: false});
 })();
 """
 STATUS_SAYS = "() => [...document.querySelectorAll('p, div')].some(e => e.childElementCount < 4 && " \
               "e.textContent.includes('{name}') && e.textContent.includes('{word}'))"
-# the readout shows β: a table cell (before) or "β = …" in a line (now)
+# the readout shows β: a table cell (before) or "β = …" in a line (now), the whole number (β = 0.4 must not
+# match the 0.411 of the previous value: that read as a negative time)
 READOUT_SAYS = ("() => [...document.querySelectorAll('td')].some(td => td.textContent.trim() === {text}) || "
-                "[...document.querySelectorAll('p')].some(p => p.textContent.includes('β = ' + {text}))")
+                "[...document.querySelectorAll('p')].some(p => p.textContent.split('β = ').slice(1)"
+                ".some(s => (s.match(/^[-+0-9.e]+/) || [''])[0] === {text}))")
 TITLE_SAYS = "() => [...document.querySelectorAll('text.gtitle')].some(e => e.textContent.includes({text}))"
-
-
-def tree_of(rev: str | None, tmp: Path) -> Path:
-    """A folder holding a ``shoal`` package of the working tree (None) or of commit ``rev``."""
-    src = ROOT
-    if rev is not None:
-        src = tmp / "src"
-        src.mkdir()
-        archive = subprocess.run(["git", "-C", str(ROOT), "archive", rev], check=True, capture_output=True).stdout
-        subprocess.run(["tar", "-x", "-C", str(src)], input=archive, check=True)
-    pkg = tmp / "pkg" / "shoal"
-    pkg.mkdir(parents=True)
-    for item in (src / "shoal").iterdir():
-        (pkg / item.name).symlink_to(item)
-    for name, folder in SUBPACKAGES.items():
-        (pkg / name).symlink_to(src / folder)
-    return tmp / "pkg"
 
 
 class Traffic:
@@ -187,44 +133,25 @@ def summary(values: list[float]) -> str:
 def measure(label: str, pkg: Path, preset: Path, reps: int, warmup: float) -> dict[str, str]:
     from playwright.sync_api import sync_playwright
 
-    env = {**os.environ, "PYTHONPATH": str(pkg)}
-    child = subprocess.Popen([sys.executable, "-c", SERVER, str(preset)], cwd=str(pkg), env=env, text=True,
-                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
-    assert child.stdin is not None and child.stdout is not None
-
-    def answer() -> dict:
-        while not (line := child.stdout.readline()).startswith("@@"):  # viser's banner, its messages
-            if not line:
-                raise RuntimeError(f"the {label} server stopped")
-        return json.loads(line[2:])
-
-    def ask(cmd: str) -> dict | None:
-        child.stdin.write(cmd + "\n")
-        child.stdin.flush()
-        return answer() if cmd == "stats" else None
-
-    port = answer()["port"]
     traffic = Traffic()
     out: dict[str, list[float]] = {k: [] for k in ("pause", "play", "server", "wire", "client", "typed", "title")}
-    try:
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-            page = browser.new_page(viewport=VIEWPORT)
-            page.on("websocket", lambda ws: ws.on("framereceived", traffic.on_frame))
-            page.goto(f"http://127.0.0.1:{port}/")
+    with ChildServer(pkg, preset, label) as server, sync_playwright() as p:
+        ask = server.ask
+        browser, page = open_page(p, server.port, traffic.on_frame)
+        try:
             page.wait_for_selector("text=playback", timeout=120_000)
             page.evaluate(ACT_CLOCK)
-            time.sleep(warmup)
+            page.wait_for_timeout(warmup * 1000)
             dismiss_toasts(page)
             name = preset.stem
-            f0, b0 = traffic.read()
-            long0 = page.evaluate("window.__long")
+            # Traffic while playing. Playwright delivers frame events only while it is called, so the
+            # window is a playwright wait (a plain sleep counted only the frames of the next call).
             ask("reset")
-            t0 = time.time()
-            time.sleep(5.0)
-            seconds = time.time() - t0
+            f0, b0 = traffic.read()
+            (raf0, long0), t0 = page_counters(page), time.monotonic()
+            page.wait_for_timeout(5000)
+            (raf1, long1), seconds = page_counters(page), time.monotonic() - t0
             f1, b1 = traffic.read()
-            long1 = page.evaluate("window.__long")
             ticks = ask("stats")["ticks"]
             for _ in range(reps):
                 traffic.expect("paused")
@@ -240,13 +167,13 @@ def measure(label: str, pkg: Path, preset: Path, reps: int, warmup: float) -> di
                 act, seen = feedback(page, lambda: page.get_by_role("button", name="Play", exact=True).click(),
                                      STATUS_SAYS.format(name=name, word="playing"))
                 out["play"].append(seen - act)
-                time.sleep(1.0)
+                page.wait_for_timeout(1000)
             for i in range(reps):
                 u = 7.0 + 0.5 * i
                 box = number_box(page, "U [m/s]")
                 if page.get_by_role("tab", name="Controller").count():
                     page.get_by_role("tab", name="Controller").click()
-                    time.sleep(0.5)
+                    page.wait_for_timeout(500)
 
                 def type_u(box=box, u=u) -> None:
                     box.fill(f"{u:g}")
@@ -255,7 +182,7 @@ def measure(label: str, pkg: Path, preset: Path, reps: int, warmup: float) -> di
                 beta = f"{30.0 * 0.1 / u:.4g}"  # the readout's β = A+Δt/U
                 act, seen = feedback(page, type_u, READOUT_SAYS.format(text=json.dumps(beta)))
                 out["typed"].append(seen - act)
-                time.sleep(1.0)
+                page.wait_for_timeout(1000)
                 omega = 1.0 - 30.0 * 0.1 / (u + 0.3)  # ω = 1 − β after U → u + 0.3 (on the slider's 0.1 grid)
                 text = json.dumps(f"({omega:.3g}, ")
                 on_controller = page.locator("text.gtitle").filter(has_text="(ω, ĉ)").count() > 0 and \
@@ -269,14 +196,9 @@ def measure(label: str, pkg: Path, preset: Path, reps: int, warmup: float) -> di
 
                 act, seen = feedback(page, type_and_look, TITLE_SAYS.format(text=text))
                 out["title"].append(seen - act)
-                time.sleep(1.0)
+                page.wait_for_timeout(1000)
+        finally:
             browser.close()
-    finally:
-        try:
-            ask("stop")
-            child.wait(timeout=20)
-        except Exception:
-            child.kill()
     ticks = sorted(ticks) or [0.0]
     return {
         "tree": label,
@@ -290,6 +212,7 @@ def measure(label: str, pkg: Path, preset: Path, reps: int, warmup: float) -> di
         "frames/s": f"{(f1 - f0) / seconds:.1f}",
         "KiB/s": f"{(b1 - b0) / seconds / 1024:.0f}",
         "long tasks ms/s": f"{(long1 - long0) / seconds:.0f}",
+        "page rAF/s": f"{(raf1 - raf0) / seconds:.1f}",
         "tick ms p50 / p95": f"{ticks[len(ticks) // 2]:.1f} / {ticks[int(0.95 * (len(ticks) - 1))]:.1f}",
     }
 

@@ -116,10 +116,11 @@ def test_stalled_robots_are_ringed_counted_in_the_status_and_plotted(tab):
     tab.tick(3.0)
     rings = np.asarray(tab.arena.nodes["stalled"].points, dtype=float)[:, :, :2].reshape(-1, 2)
     centres = tab.arena.to_view(s.sim.state.x[0, :3])[:, :2]
-    assert tab.arena.nodes["stalled"].visible and len(rings) == 3 * 16 * 2
+    n = fleet_kind.STALLED_RING_SEGMENTS
+    assert tab.arena.nodes["stalled"].visible and len(rings) == 3 * n * 2
     for c in centres:  # each ring goes round its robot
         near = rings[np.hypot(*(rings - c).T) < 2.0 * s.sim.params.robot_radius * tab.arena.scale]
-        assert len(near) >= 32
+        assert len(near) >= 2 * n
     assert "&nbsp;stalled" in tab.panels.view_gui.legend.content
     assert f"{int(s.sim.info().stalled[0])} stalled" in tab.panels.status.content
     s.sim.state.slow[0] = 0

@@ -188,3 +188,27 @@ def test_chapter_3_and_slo_objectives_are_drawn_with_a_colour_bar(scene, preset,
         low, high = (float(view.nodes[k].text) for k in ("bar_low", "bar_high"))
         assert low < high
         assert "objective (light: low cost)" in _labels(view)
+
+
+@pytest.mark.parametrize("preset", KINDS)
+def test_every_grid_line_lies_in_the_arena_on_the_cell_pitch_with_every_fifth_a_section(scene, preset):
+    """The ground grid is a few dozen line segments (a grid plane's shader runs on every pixel of
+    the ground, most of a frame in a software-rendered page): whole cells from the middle of
+    the scene, sections every fifth, each line spanning the arena or course and no further."""
+    session, view = _view(scene, preset)
+    view.draw(session.snapshot())
+    cells, sections = (np.asarray(view.nodes[k].points, dtype=float)[..., :2] / view.scale
+                       for k in ("grid", "grid_sections"))
+    lines = np.concatenate([cells, sections])
+    lo, hi = lines.reshape(-1, 2).min(axis=0), lines.reshape(-1, 2).max(axis=0)
+    assert len(lines) <= 600 and len(sections) >= 2
+    vertical = lines[:, 0, 0] == lines[:, 1, 0]
+    at = np.where(vertical, lines[:, 0, 0], lines[:, 0, 1])  # where each line crosses its axis (from the middle)
+    pitch = np.min(np.diff(np.unique(np.round(at[vertical], 9))))
+    steps = at / pitch
+    np.testing.assert_allclose(steps, np.round(steps), atol=1e-3)  # (float32 on the wire)
+    is_section = np.arange(len(lines)) >= len(cells)
+    assert np.all((np.round(steps).astype(int) % 5 == 0) == is_section)
+    spans = np.where(vertical[:, None], lines[:, :, 1], lines[:, :, 0])  # each line runs edge to edge
+    edge_lo, edge_hi = np.where(vertical[:, None], lo[1], lo[0]), np.where(vertical[:, None], hi[1], hi[0])
+    np.testing.assert_allclose(np.sort(spans, axis=1), np.column_stack([edge_lo, edge_hi]), atol=1e-4 * np.max(hi - lo))

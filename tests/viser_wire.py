@@ -59,6 +59,7 @@ class WireClient:
         self.texts: list[str] = []
         self.gui: list[dict[str, Any]] = []  # (decode=True) every GUI message received
         self.downloads: list[str] = []  # (decode=True) names of the files the server sent
+        self.last: dict[str, dict[str, Any]] = {}  # (decode=True) the last message of each type
         self.closed = threading.Event()
         self._lock = threading.Lock()
         sock = socket.create_connection(("127.0.0.1", port)) if host else None
@@ -80,9 +81,11 @@ class WireClient:
                 gui: list[dict[str, Any]] = []
                 files: list[str] = []
                 robots = 0
+                last: dict[str, dict[str, Any]] = {}
                 if self.decode:
                     for m in decode_frame(payload):
                         kind = m.get("type", "")
+                        last[kind] = m
                         if kind.startswith(("Gui", "Notification")):
                             texts += _texts(m)
                             gui.append(m)
@@ -98,6 +101,7 @@ class WireClient:
                     self.gui += gui
                     self.downloads += files
                     self.robot_updates += robots
+                    self.last.update(last)
         except ConnectionClosed:
             pass
         finally:

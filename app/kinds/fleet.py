@@ -52,6 +52,7 @@ from ..view import shapes
 from ..view.camera import VIEW_HALF
 from ..view.canvas import Canvas
 from ..view.layers import (
+    GRID_KEYS,
     Ghosts,
     GlobalBest,
     Headings,
@@ -62,6 +63,7 @@ from ..view.layers import (
     Static,
     Trails,
     Twin,
+    draw_grid,
     metres,
 )
 from ..view.view import Home
@@ -268,6 +270,11 @@ REACH_TOTAL = (240, 140, 20)
 Z = dict(grid=-0.025, start=-0.02, layers=-0.015, sectors=-0.01, trails=-0.005, obstacles=0.0,
          pbests=0.004, source=0.006, gbest=0.008, robots=0.01, headings=0.012, probe=0.014, hits=0.016)
 
+# A stalled robot's ring is a few pixels across, redrawn with every update for hundreds of robots
+# in a packed fleet: an octagon (each segment is a few triangles a frame for a software renderer).
+STALLED_RING_SEGMENTS = 8
+
+
 class Stalled(Static):
     """A ring round each running robot that has barely moved for a while (squeezed between bodies
     it may not approach: the engine's ``stalled``); not on recorded frames."""
@@ -280,13 +287,17 @@ class Stalled(Static):
         stalled = snap.extras.get("stalled")
         x = snap.x[stalled] if stalled is not None else np.zeros((0, 2))
         r = 1.6 * snap.extras["params"].robot_radius
-        segs = (shapes.circle_segments(np.zeros(2), r, 16)[None] + shapes.plane(x)[:, None, None, :]).reshape(-1, 2, 2)
+        ring = shapes.circle_segments(np.zeros(2), r, STALLED_RING_SEGMENTS)
+        segs = (ring[None] + shapes.plane(x)[:, None, None, :]).reshape(-1, 2, 2)
         canvas.lines("stalled", segs, STALLED, 2.5, Z["robots"] + 0.001)
 
 
 PROBE_NODES = ("selected", "sectors", "sector_edges", "hits", "hit_lines", "force", "reach_attract", "reach_total")
 
 ObstacleDrag = Callable[[int, float, float, str], None]  # (index, x, y, phase) in world metres
+# Segments of an obstacle's outline: within 2 % of its radius (a pixel at 50 px). Every line segment
+# is a few triangles a frame for a software-rendered page; a course has a hundred obstacles or more.
+RIM_SEGMENTS = 16
 
 
 def _radius(canvas: Canvas, snap: Snapshot) -> float:
@@ -298,7 +309,7 @@ class WorldLayer(Static):
     """The course: its grid, the start box, the walls, the obstacle layers and the source."""
 
     name = "world"
-    keys = ("grid", "start", "start_edge", "walls", "layers", "source", "source_label")
+    keys = (*GRID_KEYS, "start", "start_edge", "walls", "layers", "source", "source_label")
     legend = (LegendEntry("■", START, "start box"), LegendEntry("—", LAYER, "layer"),
               LegendEntry("●", SOURCE, "source"))
 
@@ -306,11 +317,7 @@ class WorldLayer(Static):
         world: WorldSpec = snap.extras["world"]
         sc = canvas.scene
         x0, y0, x1, y1 = world.bounds
-        canvas.add("grid", sc.add_grid(
-            canvas.name("grid"), width=(x1 - x0) * canvas.scale, height=(y1 - y0) * canvas.scale, plane="xy",
-            cell_size=1.0 * canvas.scale, section_size=5.0 * canvas.scale, cell_color=GRID_CELL,
-            section_color=GRID_SECTION, position=(0.0, 0.0, Z["grid"]), shadow_opacity=0.0, infinite_grid=False,
-            fade_distance=1e4))
+        draw_grid(canvas, np.array([x0, y0]), np.array([x1, y1]), 1.0, (GRID_CELL, GRID_SECTION), Z["grid"])
         bx0, by0, bx1, by1 = world.start_box
         box = np.array([[bx0, by0], [bx1, by0], [bx1, by1], [bx0, by1]])
         canvas.add("start", sc.add_mesh_simple(
@@ -364,7 +371,7 @@ class Obstacles(Static):
         else:
             node.batched_positions = pos
             node.batched_scales = scales
-        rims = [shapes.circle_segments(c[:2], c[2], 40) for c in circles]
+        rims = [shapes.circle_segments(c[:2], c[2], RIM_SEGMENTS) for c in circles]
         canvas.lines("obstacle_edges", np.concatenate(rims) if rims else np.zeros((0, 2, 2)), OBSTACLE_EDGE, 1.2,
                      Z["obstacles"] + 0.001)
         canvas.drop("polygons")

@@ -166,7 +166,7 @@ def layers(panels: Any) -> tuple[Layer, ...]:
     with their headings, trails and bests; swarm B and the selected robot's beliefs."""
     return (
         Ground(cell=lambda half: half / 10, cell_colour=(225, 225, 225), section_colour=(185, 185, 185), z=-0.02,
-               border=ARENA, border_px=2.5, border_z=0.0, fade=100.0),
+               border=ARENA, border_px=2.5, border_z=0.0),
         Landscape(landscape, z=-0.04),
         Optimum(),
         Trails(TRAIL, 1.5, 0.0),

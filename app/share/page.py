@@ -21,7 +21,7 @@ from typing import Any, Iterator
 
 from ..panel.view_row import legend_html
 from ..session.twin import literal
-from ..view.camera import CAMERA_FOV, CAMERA_HEIGHT, VIEW_HALF
+from ..view.camera import VIEW_HALF, top_view
 from ..view.layers import LegendEntry
 from .frames import MAX_FRAMES, MAX_ROBOT_FRAMES
 
@@ -60,10 +60,7 @@ def recording_scene() -> Iterator[tuple[Any, Any]]:
             with _quiet():
                 server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
             try:
-                cam = server.initial_camera
-                cam.position, cam.look_at, cam.up = (0.0, 0.0, CAMERA_HEIGHT), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0)
-                cam.fov, cam.near, cam.far = CAMERA_FOV, 1.0, 4.0 * CAMERA_HEIGHT
-                server.scene.set_up_direction("+z")
+                top_view(server)
                 yield server.scene, server.get_scene_serializer()
             finally:
                 with _quiet():

@@ -19,6 +19,18 @@ def camera_height(aspect: float) -> float:
     return CAMERA_HEIGHT * max(1.0, 1.0 / aspect)
 
 
+def top_view(server: Any) -> None:
+    """Set up a viser server (``ViserServer``) for a flat arena seen from above: the initial camera
+    straight down, +z up, and the default lights without shadows. Nothing in a flat arena casts a
+    shadow, but viser's lights cast them by default: three cascaded shadow maps drawn every frame
+    and sampled by every pixel of the ground grid, most of a frame in a software-rendered page."""
+    cam = server.initial_camera
+    cam.position, cam.look_at, cam.up = (0.0, 0.0, CAMERA_HEIGHT), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0)
+    cam.fov, cam.near, cam.far = CAMERA_FOV, 1.0, 4.0 * CAMERA_HEIGHT
+    server.scene.set_up_direction("+z")
+    server.scene.configure_default_lights(enabled=True, cast_shadow=False)
+
+
 def home_camera(camera: Any) -> None:
     """Put a client's camera (viser ``CameraHandle``) back straight above the middle of the
     screen at the height that shows the arena (undoes a user's orbit, pan and zoom)."""

@@ -19,7 +19,7 @@ from shoal.presets.models import Scenario
 
 from ..session.snapshot import Snapshot
 from .canvas import Canvas, Colour
-from .shapes import circle_segments, plane, polyline, trail_segments
+from .shapes import circle_segments, grid_segments, plane, polyline, trail_segments
 
 Size = Union[float, Callable[[Canvas, Snapshot], float]]
 
@@ -79,26 +79,36 @@ class Static:
 
 
 # ---------------------------------------------------------------------------- ground
+GRID_KEYS = ("grid", "grid_sections")
+
+
+def draw_grid(canvas: Canvas, lo: np.ndarray, hi: np.ndarray, cell: float, colours: tuple[Colour, Colour],
+              z: float) -> None:
+    """A grid over the world box ``lo``–``hi`` (m): 1-pixel lines every ``cell`` metres from the
+    canvas' centre in ``colours[0]``, every fifth (a section) 1.5 pixels in ``colours[1]``
+    (nodes :data:`GRID_KEYS`). A few dozen line segments: viser's grid plane runs a shader on
+    every pixel of the ground, a large part of a frame in a software-rendered page."""
+    cells, sections = grid_segments(lo, hi, canvas.centre, cell)
+    canvas.lines(GRID_KEYS[0], cells, colours[0], 1.0, z)
+    canvas.lines(GRID_KEYS[1], sections, colours[1], 1.5, z)
+
+
 class Ground(Static):
     """The arena square around its centre: a grid and a border."""
 
     name = "ground"
-    keys = ("grid", "arena")
+    keys = (*GRID_KEYS, "arena")
 
     def __init__(self, *, cell: Callable[[float], float], cell_colour: Colour, section_colour: Colour, z: float,
-                 border: Colour, border_px: float, border_z: float, fade: float = 1e4) -> None:
+                 border: Colour, border_px: float, border_z: float) -> None:
         """``cell``: half size (m) → grid cell (m); sections are 5 cells."""
         self.cell, self.cell_colour, self.section_colour, self.z = cell, cell_colour, section_colour, z
-        self.border, self.border_px, self.border_z, self.fade = border, border_px, border_z, fade
+        self.border, self.border_px, self.border_z = border, border_px, border_z
 
     def build(self, canvas: Canvas, snap: Snapshot) -> None:
         half = float(snap.scenario.arena.half_size)
-        side, cell = 2 * half * canvas.scale, self.cell(half) * canvas.scale
-        canvas.add("grid", canvas.scene.add_grid(
-            canvas.name("grid"), width=side, height=side, plane="xy", cell_size=float(cell),
-            section_size=float(5 * cell), cell_color=self.cell_colour, section_color=self.section_colour,
-            position=(0.0, 0.0, self.z), shadow_opacity=0.0, infinite_grid=False, fade_distance=self.fade))
         c = canvas.centre
+        draw_grid(canvas, c - half, c + half, self.cell(half), (self.cell_colour, self.section_colour), self.z)
         box = c + half * np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
         canvas.lines("arena", polyline(box, closed=True), self.border, self.border_px, self.border_z)
 

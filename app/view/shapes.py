@@ -72,6 +72,26 @@ def trail_segments(trails: np.ndarray) -> np.ndarray:
     return np.stack([xy[:, :-1], xy[:, 1:]], axis=2).reshape(-1, 2, 2)
 
 
+def grid_segments(lo: np.ndarray, hi: np.ndarray, origin: np.ndarray, cell: float,
+                  every: int = 5) -> tuple[np.ndarray, np.ndarray]:
+    """The lines of a grid over the box ``lo``–``hi`` at ``origin`` + k ``cell`` (k whole), as
+    (S, 2, 2) segments: (the cell lines, the section lines: every ``every``-th, k = 0 among them)."""
+    lo, hi, origin = (np.asarray(v, dtype=float) for v in (lo, hi, origin))
+    cells: list[np.ndarray] = []
+    sections: list[np.ndarray] = []
+    for axis in (0, 1):
+        first, last = (lo[axis] - origin[axis]) / cell, (hi[axis] - origin[axis]) / cell
+        k = np.arange(np.ceil(first - 1e-9), np.floor(last + 1e-9) + 1)
+        at = origin[axis] + k * cell
+        seg = np.zeros((len(at), 2, 2))
+        seg[:, :, axis] = at[:, None]
+        seg[:, 0, 1 - axis], seg[:, 1, 1 - axis] = lo[1 - axis], hi[1 - axis]
+        section = np.round(k).astype(int) % every == 0
+        cells.append(seg[~section])
+        sections.append(seg[section])
+    return np.concatenate(cells), np.concatenate(sections)
+
+
 def circle_segments(centre: np.ndarray, radius: float, n: int = 64) -> np.ndarray:
     """(n, 2, 2) segments of a circle."""
     ang = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
