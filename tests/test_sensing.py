@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from shoal.engine.robots.sensing import (
@@ -180,8 +180,9 @@ def _expected(circles: np.ndarray, robots: np.ndarray, rr: float, rng_: float) -
         gap = np.maximum(dist - bodies[:, 2] - rr, 0.0)
         deg = np.degrees(np.arctan2(d[:, 1], d[:, 0]))
         near_border = np.min(np.abs(((deg + 180.0) % 60.0 + 30.0) % 60.0 - 30.0)) if len(deg) else 99
-        # centres closer than 1e-5 m: pymunk's gradient there is a fixed direction, not the bearing
-        if len(deg) and (dist.min() < 1e-5 or near_border < 1e-6 or np.min(np.abs(gap - rng_)) < 1e-6):
+        # centres 1e-5 m apart or closer: pymunk's gradient there is a fixed direction, not the
+        # bearing (its test is d > 1e-5, so exactly 1e-5 falls back too)
+        if len(deg) and (dist.min() <= 1e-5 or near_border < 1e-6 or np.min(np.abs(gap - rng_)) < 1e-6):
             ok = False
         k = (np.floor((deg + 180.0) / 60.0).astype(int)) % 6
         for g, s in zip(gap, k):
@@ -192,6 +193,8 @@ def _expected(circles: np.ndarray, robots: np.ndarray, rr: float, rng_: float) -
 
 @settings(max_examples=60, deadline=None)
 @given(st.lists(circle, max_size=8), st.lists(point, min_size=1, max_size=5), st.floats(0.5, 4.0))
+@example([(0.0, 0.0, 1.0)], [(0.0, -1e-05)], 1.0)  # a centre exactly 1e-5 m from an obstacle's: skipped
+@example([(0.0, 0.0, 1.0)], [(0.0, -2e-05)], 1.0)  # inside, just beyond it: the bearing to the centre
 def test_gaps_match_brute_force_geometry(circles, robots, rng_):
     circles = np.array(circles, dtype=float).reshape(-1, 3)
     robots = np.array(robots, dtype=float)
