@@ -222,7 +222,8 @@ def test_a_shared_run_draws_the_obstacles_as_they_were_at_each_step():
     page = session_html(src).decode("utf-8")
     rec = recorded(page)
     steps = {t: int(re.match(r"step (\d+)", str(v)).group(1)) for t, v in rec.updates("/shoal_step", "text") if v}
-    edges = [(t, np.asarray(v).reshape(-1, 40, 2, 3)) for t, v in rec.updates(node(rec, "obstacle_edges"), "points")]
+    edges = [(t, np.asarray(v).reshape(-1, fleet.RIM_SEGMENTS, 2, 3))
+             for t, v in rec.updates(node(rec, "obstacle_edges"), "points")]
     seen = [(steps.get(t, 0), len(v)) for t, v in edges]  # (the first is drawn before the first step label)
     assert [n for _, n in seen] == [n0, n0 + 1, n0 - 1] and [k for k, _ in seen[1:]] == [5, 9]
     s, c = view_map(page, {f.k: f.x for f in src.frames})
@@ -447,3 +448,20 @@ def test_a_tab_that_floods_share_gets_refusals_and_the_other_tabs_go_on():
         flood.close()
         other.close()
         srv.stop()
+
+
+def test_a_shared_page_offers_the_preset_with_the_hand_edits():
+    """The Share page's preset is the one Download preset writes: an obstacle added by hand is
+    in it, and the page of a run without edits offers the preset as loaded."""
+    from shoal.app.kinds import fleet
+
+    src = new_session(presets_io.load("course-dvc", ["sim.steps=10"]))
+    src.step(3)
+    plain = data_block(session_html(src).decode("utf-8"))
+    assert plain["preset"]["world"].get("obstacles") is None
+    fleet.driver(src).add_obstacle(src.sim.world.bounds[2] - 4.0, 1.5, 1.25)
+    src.step(3)
+    page = session_html(src).decode("utf-8")
+    edited = data_block(page)["preset"]["world"]["obstacles"]
+    assert [src.sim.world.bounds[2] - 4.0, 1.5, 1.25] in edited
+    assert html_lib.escape(presets_io.to_toml(src.kept_scenario())) in page  # the TOML shown and downloaded

@@ -10,6 +10,7 @@ from typing import Any, Callable, Iterable
 import shoal
 from shoal.engine.core.atomic import atomic_write_text
 from shoal.presets import io as presets_io
+from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from ..limits import scene_kind
@@ -61,10 +62,12 @@ def preset_html(scenario: Scenario, *, overrides: dict[str, Any] | None = None, 
     return _page(scenario, draw.run_frames(session, fp, on_steps), info)
 
 
-def recording_html(rec: Recording, max_frames: int = MAX_FRAMES) -> str:
+def recording_html(rec: Recording, max_frames: int = MAX_FRAMES, kept: Scenario | None = None) -> str:
     """The page of a recording (swarm B's frames too when Compare ran), as the app's timeline
-    shows it. Raises :class:`~shoal.presets.io.PresetError` or :class:`~shoal.app.replay.ReplayError`
-    for a recording the app could not show."""
+    shows it; its preset to download is ``kept`` (the preset with the hand edits, as Download
+    preset writes it) when given, else the recording's. Raises
+    :class:`~shoal.presets.io.PresetError` or :class:`~shoal.app.replay.ReplayError` for a
+    recording the app could not show."""
     a = draw.replay_session(rec)
     overrides = rec.twin_overrides if len(rec.b_x) else None
     twin = twin_scenario(a.scenario, overrides) if overrides is not None else None
@@ -74,13 +77,23 @@ def recording_html(rec: Recording, max_frames: int = MAX_FRAMES) -> str:
     info = _info(a.scenario, fp, origin="recorded history", shoal_version=str(rec.meta["shoal"]),
                  max_frames=limit, robots=robots, live_edits=int(rec.meta["live_edits"]), twin=twin,
                  overrides=overrides)
+    if kept is not None:
+        info = dataclasses.replace(info, preset=kept.model_dump(mode="json"), preset_toml=presets_io.to_toml(kept))
     return _page(a.scenario, draw.recorded_frames(a, fp), info)
 
 
 def session_html(session: Any, max_frames: int = MAX_FRAMES) -> bytes:
     """The page of a session's recorded history (swarm B's too when Compare is on, or in the
-    replay shown), as UTF-8."""
-    return recording_html(session.recording(), max_frames).encode("utf-8")
+    replay shown), as UTF-8. Its preset is the one Download preset writes, hand edits kept
+    (a replay shown keeps its file's preset; edits a preset cannot hold, such as an obstacle
+    in the start box, stay in the frames only, as in a replay)."""
+    kept = None
+    if not session.replaying:
+        try:
+            kept = session.kept_scenario()
+        except PresetError:
+            kept = None
+    return recording_html(session.recording(), max_frames, kept).encode("utf-8")
 
 
 def write_html(path: Path | str, text: str) -> Path:
