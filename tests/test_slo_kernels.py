@@ -13,6 +13,7 @@ import shoal.engine.kinds.slo_swarm as slo_swarm_module
 import shoal.engine.slo.beliefs as beliefs_module
 import shoal.engine.slo.metrics as metrics_module
 import shoal.engine.slo.neighbourhoods as neighbourhoods_module
+from shoal.engine.core import sums
 from shoal.engine.core.compiled_draws import CompiledDraws
 from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.engine.pso import spso2011, spso_kernels
@@ -313,7 +314,11 @@ def test_pairwise_sum_is_numpys():
         a = rng.normal(size=(2, n)) * 10.0 ** rng.uniform(-8, 8, (2, n))
         want = a.sum(axis=1)
         for r in range(2):
-            assert 0.0 + metric_kernels.pairwise_sum(a[r], 0, n) == want[r], n
+            assert 0.0 + sums.pairwise_sum(a[r], 0, n) == want[r], n
+    for n in range(1, 20):  # negative zeros: numpy's sum is +0, a block's own sum keeps −0
+        z = np.full(n, -0.0)
+        assert np.signbit(sums.pairwise_sum(z, 0, n)) and not np.signbit(0.0 + sums.pairwise_sum(z, 0, n))
+        assert not np.signbit(z.sum())
 
 
 def test_compiled_statistics_equal_numpy():

@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from ..core.compiled import kernel
+from ..core.sums import BLOCK, block_sum
 
 # objectives evaluated in the kernel, by their Objective names; a code is the index
 OBJECTIVES = ("source-distance", "linear", "sphere", "rastrigin", "rosenbrock", "griewank")
@@ -25,29 +26,7 @@ GIVEN = -1  # the caller passes f (numpy)
 TWO_PI = 2 * np.pi
 
 
-MAX_TERMS = 128
-
-
-@kernel
-def _block(a: np.ndarray, lo: int, n: int) -> float:
-    """numpy's sum of up to 128 terms: one pass below 8, else 8 interleaved accumulators."""
-    if n < 8:
-        res = -0.0
-        for i in range(lo, lo + n):
-            res += a[i]
-        return res
-    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
-    i = 8
-    while i < n - n % 8:
-        r0, r1, r2, r3 = r0 + a[lo + i], r1 + a[lo + i + 1], r2 + a[lo + i + 2], r3 + a[lo + i + 3]
-        r4, r5, r6, r7 = r4 + a[lo + i + 4], r5 + a[lo + i + 5], r6 + a[lo + i + 6], r7 + a[lo + i + 7]
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += a[lo + i]
-        i += 1
-    return res
+MAX_TERMS = BLOCK
 
 
 @kernel
@@ -55,7 +34,7 @@ def numpy_sum(a: np.ndarray, n: int) -> float:
     """``np.sum`` of the first ``n`` ≤ :data:`MAX_TERMS` entries of a contiguous 1-D array, to the
     bit: +0 plus numpy's pairwise sum, which up to 128 terms is one block of 8 accumulators
     (longer rows are halved first; the compiled step leaves dimensions beyond 128 to numpy)."""
-    return 0.0 + _block(a, 0, n)
+    return 0.0 + block_sum(a, 0, n)
 
 
 @kernel
@@ -75,7 +54,7 @@ def objective(code: int, x: np.ndarray, r: int, source: np.ndarray, scale: float
             for k in range(d):
                 t = x[r, i, k] - source[k]
                 buf[k] = t * t
-            f[r, i] = math.sqrt(0.0 + _block(buf, 0, d))
+            f[r, i] = math.sqrt(0.0 + block_sum(buf, 0, d))
             continue
         for k in range(d):  # the benchmarks see (x − source)/scale (skipping − 0 and / 1 changes no bit they use)
             z = x[r, i, k] - source[k] if shift else x[r, i, k]
@@ -83,12 +62,12 @@ def objective(code: int, x: np.ndarray, r: int, source: np.ndarray, scale: float
         if code == SPHERE:
             for k in range(d):
                 buf[k] = buf[k] * buf[k]
-            f[r, i] = 0.0 + _block(buf, 0, d)
+            f[r, i] = 0.0 + block_sum(buf, 0, d)
         elif code == RASTRIGIN:
             for k in range(d):
                 z = buf[k]
                 buf[k] = z * z - 10.0 * math.cos(TWO_PI * z)
-            f[r, i] = 10.0 * d + (0.0 + _block(buf, 0, d))
+            f[r, i] = 10.0 * d + (0.0 + block_sum(buf, 0, d))
         elif code == ROSENBROCK:
             if d < 2:
                 t = 1.0 - buf[0]
@@ -97,14 +76,14 @@ def objective(code: int, x: np.ndarray, r: int, source: np.ndarray, scale: float
             for k in range(d - 1):
                 q, p = buf[k + 1] - buf[k] * buf[k], 1.0 - buf[k]
                 buf[k] = 100.0 * (q * q) + p * p
-            f[r, i] = 0.0 + _block(buf, 0, d - 1)
+            f[r, i] = 0.0 + block_sum(buf, 0, d - 1)
         else:  # GRIEWANK
             prod = 1.0
             for k in range(d):
                 prod *= math.cos(buf[k] / math.sqrt(k + 1.0))
             for k in range(d):
                 buf[k] = buf[k] * buf[k]
-            f[r, i] = 1.0 + (0.0 + _block(buf, 0, d)) / 4000.0 - prod
+            f[r, i] = 1.0 + (0.0 + block_sum(buf, 0, d)) / 4000.0 - prod
 
 
 @kernel
@@ -201,7 +180,7 @@ def swarm_step(x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: 
                 turned[r, i] = True
                 for k in range(turn.shape[2]):
                     turn[r, i, k] = new[1, r, i, k]
-            top = _maximum(top, math.sqrt(0.0 + _block(buf, 0, d)))
+            top = _maximum(top, math.sqrt(0.0 + block_sum(buf, 0, d)))
         speeds[0, r], speeds[1, r] = top, big
         if not before:  # the velocity saw last tick's bests
             _bests(r, x, f, y, f_y, yg, best, maximise)

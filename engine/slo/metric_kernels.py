@@ -3,8 +3,7 @@ their per-run statistics, in numpy's arithmetic.
 
 The numpy versions (``tests/test_slo_kernels.py`` keeps them as references) spend most of a
 generation's metric time in call overhead on small arrays. Here a sum is numpy's pairwise
-summation (blocks of up to 128 values in eight interleaved partial sums, larger rows halved
-on a multiple of eight, added to the reduction's initial +0), and a median the mean of the two
+summation (``core/sums.py``, added to the reduction's initial +0), and a median the mean of the two
 middle order statistics of the finite values, found by selection instead of a full sort: the
 same values, so the same bits.
 """
@@ -17,78 +16,7 @@ from typing import Collection
 import numpy as np
 
 from ..core.compiled import f64, kernel
-
-BLOCK = 128  # numpy's pairwise-summation block
-
-
-@kernel
-def _block(a: np.ndarray, lo: int, n: int) -> float:
-    """numpy's pairwise sum of a block, n ≤ 128: eight interleaved partial sums, then the rest."""
-    if n < 8:
-        res = 0.0
-        for i in range(lo, lo + n):
-            res += a[i]
-        return res
-    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
-    i = 8
-    while i < n - n % 8:
-        p = lo + i
-        r0 += a[p]
-        r1 += a[p + 1]
-        r2 += a[p + 2]
-        r3 += a[p + 3]
-        r4 += a[p + 4]
-        r5 += a[p + 5]
-        r6 += a[p + 6]
-        r7 += a[p + 7]
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += a[lo + i]
-        i += 1
-    return res
-
-
-@kernel
-def _stack() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Room for :func:`pairwise_sum`'s walk of any length up to 2⁶⁰."""
-    return np.empty(192, np.int64), np.empty(192, np.int64), np.empty(192, np.bool_), np.empty(192)
-
-
-@kernel
-def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
-    """numpy's pairwise sum of a[lo : lo + n] (``np.add.reduce`` along a contiguous axis)."""
-    return _pairwise(a, lo, n, _stack())
-
-
-@kernel
-def _pairwise(a: np.ndarray, lo: int, n: int, stack: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]) -> float:
-    """:func:`pairwise_sum` with its stack given: a run longer than a block is halved on a
-    multiple of eight and the halves' sums added, recursively (walked here with a stack:
-    numba's cache does not keep recursive kernels safely)."""
-    if n <= BLOCK:
-        return _block(a, lo, n)
-    los, ns, split, sums = stack
-    top, k = 1, 0
-    los[0], ns[0], split[0] = lo, n, False
-    while top > 0:
-        top -= 1
-        l, m = los[top], ns[top]
-        if m <= BLOCK:
-            sums[k] = _block(a, l, m)
-            k += 1
-        elif split[top]:  # both halves summed: add them, left + right
-            k -= 1
-            sums[k - 1] = sums[k - 1] + sums[k]
-        else:
-            m2 = m // 2
-            m2 -= m2 % 8
-            split[top] = True
-            los[top + 1], ns[top + 1], split[top + 1] = l + m2, m - m2, False  # right, summed second
-            los[top + 2], ns[top + 2], split[top + 2] = l, m2, False  # left, summed first
-            top += 3
-    return sums[0]
+from ..core.sums import pairwise_stack, pairwise_sum_in
 
 
 @kernel
@@ -126,7 +54,7 @@ def _sum(a: np.ndarray, n: int, pairwise: bool, stack: tuple[np.ndarray, np.ndar
     """numpy's sum of a[:n] along a reduced axis: pairwise when the axis is the contiguous one, else
     one value after another (numpy then runs its loop along the other axis)."""
     if pairwise:
-        return 0.0 + _pairwise(a, 0, n, stack)
+        return 0.0 + pairwise_sum_in(a, 0, n, stack)
     res = 0.0
     for i in range(n):
         res += a[i]
@@ -138,7 +66,7 @@ def _stats(flat: np.ndarray, pairwise: bool, moments: int, median: bool, count: 
            std: np.ndarray, sem: np.ndarray, med: np.ndarray) -> None:
     """``moments`` 1: the mean, 2: also std and SEM."""
     R, m = flat.shape[0], flat.shape[1]
-    safe, buf, stack = np.empty(m), np.empty(m), _stack()
+    safe, buf, stack = np.empty(m), np.empty(m), pairwise_stack()
     for r in range(R):
         n = 0
         for q in range(m):  # branch-free: which values are finite is not predictable
