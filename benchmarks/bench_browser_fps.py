@@ -33,11 +33,20 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_common import fmt, load_note, table  # noqa: E402
-from page_server import ChildServer, open_page, page_counters, tree_of, write_preset  # noqa: E402
+from page_server import (  # noqa: E402
+    FLEET_1000,
+    LONG,
+    PHYSICS_200,
+    ChildServer,
+    open_page,
+    page_counters,
+    same_stretch,
+    tree_of,
+    write_preset,
+)
 
 from browser_helpers import wait_until  # noqa: E402
 
-LONG = "sim.steps=10000000"
 # (label, preset, overrides)
 CASES = [
     ("Ch. 3 swarm, 100 robots + trails, playback 20 steps/s (preset rate)", "default",
@@ -50,11 +59,9 @@ CASES = [
     ("for comparison: Ch. 3 swarm, 100 robots, NO trails, playback 60 steps/s", "default",
      ["sim.robots=100", "view.steps_per_second=60", "view.trail_seconds=0", LONG]),
     ("Ch. 4 fleet, 1000 robots + trails, obstacles, kinematic (compiled tick), 20 steps/s", "course-dvc",
-     ["sim.robots=1000", "world.length=160", "world.width=73.2", "world.start_size=63.2",
-      "view.steps_per_second=20", LONG]),
+     FLEET_1000),
     ("Ch. 4 fleet, 200 robots + trails, obstacles, pymunk physics, 20 steps/s", "course-physics",
-     ["sim.robots=200", "world.length=90", "world.width=38.3", "world.start_size=28.3",
-      "view.steps_per_second=20", LONG]),
+     PHYSICS_200),
 ]
 
 
@@ -118,12 +125,7 @@ def measure(label: str, pkg: Path, preset: Path, seconds: float, warmup: float,
         browser, page = open_page(p, server.port, counter.on_frame)
         try:
             wait_until(lambda: any(d >= 0 for d in server.ask("stats")["drawn"]), timeout=120, what="the first scene")
-            server.ask("play")  # a few steps first: a fresh tree compiles its kernels on the first ones
-            start = time.monotonic()
-            while server.ask("stats")["steps"] < 5 and time.monotonic() - start < 300:
-                page.wait_for_timeout(500)
-            server.ask("reset_run")  # then the same stretch of the run for every tree
-            page.wait_for_timeout(warmup * 1000)
+            same_stretch(server, page, warmup)
 
             def sample() -> tuple[float, ...]:
                 raf, long = page_counters(page)

@@ -36,18 +36,25 @@ from typing import Any
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from bench_common import load_note, table  # noqa: E402
-from page_server import ChildServer, open_page, page_counters, tree_of, write_preset  # noqa: E402
+from page_server import (  # noqa: E402
+    FLEET_1000,
+    LONG,
+    PHYSICS_200,
+    ChildServer,
+    open_page,
+    page_counters,
+    same_stretch,
+    tree_of,
+    write_preset,
+)
 
-LONG = "sim.steps=10000000"
 # (label, preset, overrides): the two scenes (bench_browser_fps.py cases 0 and 4)
 CASES = [
     ("Ch. 3 swarm `default`, 100 robots + trails, 20 steps/s", "default", ["sim.robots=100", LONG]),
     ("Ch. 4 fleet `course-dvc`, 1000 robots + trails, kinematic, 20 steps/s", "course-dvc",
-     ["sim.robots=1000", "world.length=160", "world.width=73.2", "world.start_size=63.2",
-      "view.steps_per_second=20", LONG]),
+     FLEET_1000),
     ("Ch. 4 fleet `course-physics`, 200 robots + trails, pymunk physics, 20 steps/s", "course-physics",
-     ["sim.robots=200", "world.length=90", "world.width=38.3", "world.start_size=28.3",
-      "view.steps_per_second=20", LONG]),
+     PHYSICS_200),
 ]
 
 TRACE_CATEGORIES = ["devtools.timeline", "disabled-by-default-devtools.timeline", "toplevel", "v8.execute",
@@ -255,12 +262,7 @@ def measure(label: str, pkg: Path, preset: Path, seconds: float, warmup: float, 
         browser, page = None, None
         try:
             browser, page = open_page(p, server.port, frames.on_frame)
-            server.ask("play")  # a few steps first: a fresh tree compiles its kernels on the first ones
-            start = time.monotonic()
-            while server.ask("stats")["steps"] < 5 and time.monotonic() - start < 300:
-                page.wait_for_timeout(500)
-            server.ask("reset_run")  # then the same stretch of the run for every tree
-            page.wait_for_timeout(warmup * 1000)
+            same_stretch(server, page, warmup)
             # 1. counters
             s0, f0, c0, t0 = server.ask("stats"), frames.read(), page_counters(page), time.monotonic()
             page.wait_for_timeout(seconds * 1000)

@@ -16,6 +16,7 @@ import shutil
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 from typing import Any, Callable
 
@@ -180,3 +181,22 @@ def page_counters(page: Any) -> tuple[float, float]:
     """(rAF callbacks, long-task ms) counted by the page so far."""
     raf, long = page.evaluate("[window.__shoalRaf, window.__shoalLong]")
     return float(raf), float(long)
+
+
+LONG = "sim.steps=10000000"  # a run that never ends while measured
+FLEET_1000 = ["sim.robots=1000", "world.length=160", "world.width=73.2", "world.start_size=63.2",
+              "view.steps_per_second=20", LONG]  # course-dvc at the packing of 100 robots on its course
+PHYSICS_200 = ["sim.robots=200", "world.length=90", "world.width=38.3", "world.start_size=28.3",
+               "view.steps_per_second=20", LONG]  # course-physics, the same
+
+
+def same_stretch(server: ChildServer, page: Any, warmup: float) -> None:
+    """Play a few steps (a fresh tree compiles its kernels on the first ones), then start the
+    run again and play ``warmup`` seconds: every tree measures the same stretch of its run."""
+    server.ask("play")
+    start = time.monotonic()
+    while server.ask("stats")["steps"] < 5 and time.monotonic() - start < 300:
+        page.wait_for_timeout(500)
+    server.ask("reset_run")
+    page.wait_for_timeout(warmup * 1000)
+
