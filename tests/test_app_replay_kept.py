@@ -247,3 +247,20 @@ def test_hostile_version_2_replays_sent_over_the_wire_are_refused_by_name(server
         assert session.k >= k  # still its own live run
     finally:
         client.close()
+
+
+def test_the_status_line_names_the_recorded_step_shown(tab):
+    """Scrubbing or replaying, the status line gives the step the arena shows (not the engine's
+    live step) and says the live numbers are not recorded; back at the live end it is the kind's."""
+    src = session("default", "sim.steps=30")
+    src.step(12)
+    s = loaded(tab, src)
+    s.scrub(7)
+    tab.panels.refresh_status()
+    text = tab.panels.status.content
+    assert "replay · step 7 of 12" in text and "not recorded" in text
+    live = session("default", "sim.steps=30")
+    assert live.shown_step() is None
+    live.step(5)
+    live.scrub(2)
+    assert live.shown_step()[0] == 2 and live.shown_step()[2] == 5

@@ -569,9 +569,18 @@ class Panel:
         return self.part.compare(self.session)
 
     def refresh_status(self) -> None:
+        """The status line: the kind's numbers of the live run, or (scrubbing, replaying) the
+        recorded step shown, whose numbers are not recorded."""
         s = self.session
         state = PLAYING if s.playing else ("■ finished: Play runs it again" if s.finished else "paused")
-        self.status.content = self.part.status(s, s.readout(), state)
+        shown = s.shown_step()
+        if shown is None:
+            self.status.content = self.part.status(s, s.readout(), state)
+            return
+        k, t, last = shown
+        what = "replay" if s.replaying is not None else "recorded history"
+        self.status.content = (f"**{s.scenario.name}** · {state} · {what} · step {k} of {last} · t = {t:.4g} s"
+                               " · the live run's numbers are not recorded")
 
     def refresh_readout(self) -> None:
         """Readouts that follow the scenario (derived numbers beside the controls)."""

@@ -273,6 +273,15 @@ class Session:
         with self.lock:
             return self.lifecycle.finished(self.k, self.scenario.sim.steps)
 
+    def shown_step(self) -> tuple[int, float, int] | None:
+        """(step, time, last recorded step) of the frame the arena shows while scrubbing or
+        replaying; None at the live end."""
+        with self.lock:
+            if self.timeline.live:
+                return None
+            f = self.history.frames[self.timeline.shown_index()]
+            return int(f.k), float(f.t), int(self.history.frames[-1].k)
+
     def progress(self, unit: str = "step") -> str:
         """The status line's ``step k/N`` (never beyond N over N)."""
         with self.lock:
