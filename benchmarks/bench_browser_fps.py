@@ -33,36 +33,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_common import fmt, load_note, table  # noqa: E402
-from page_server import (  # noqa: E402
-    FLEET_1000,
-    LONG,
-    PHYSICS_200,
-    ChildServer,
-    open_page,
-    page_counters,
-    same_stretch,
-    tree_of,
-    write_preset,
-)
+from page_server import CASES, ChildServer, open_page, page_counters, same_stretch, tree_of, write_preset  # noqa: E402
 
 from browser_helpers import wait_until  # noqa: E402
-
-# (label, preset, overrides)
-CASES = [
-    ("Ch. 3 swarm, 100 robots + trails, playback 20 steps/s (preset rate)", "default",
-     ["sim.robots=100", LONG]),
-    ("Ch. 3 swarm, 100 robots + trails, playback 60 steps/s", "default",
-     ["sim.robots=100", "view.steps_per_second=60", LONG]),
-    ("Ch. 4 fleet, 100 robots + trails, obstacles, pymunk physics, 20 steps/s", "course-physics",
-     ["sim.robots=100", "world.length=80", "world.width=40", "world.start_size=14",
-      "view.steps_per_second=20", LONG]),
-    ("for comparison: Ch. 3 swarm, 100 robots, NO trails, playback 60 steps/s", "default",
-     ["sim.robots=100", "view.steps_per_second=60", "view.trail_seconds=0", LONG]),
-    ("Ch. 4 fleet, 1000 robots + trails, obstacles, kinematic (compiled tick), 20 steps/s", "course-dvc",
-     FLEET_1000),
-    ("Ch. 4 fleet, 200 robots + trails, obstacles, pymunk physics, 20 steps/s", "course-physics",
-     PHYSICS_200),
-]
 
 
 @dataclass

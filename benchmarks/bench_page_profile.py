@@ -36,26 +36,11 @@ from typing import Any
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from bench_common import load_note, table  # noqa: E402
-from page_server import (  # noqa: E402
-    FLEET_1000,
-    LONG,
-    PHYSICS_200,
-    ChildServer,
-    open_page,
-    page_counters,
-    same_stretch,
-    tree_of,
-    write_preset,
-)
+from page_server import CASES as PAGE_CASES  # noqa: E402
+from page_server import ChildServer, open_page, page_counters, same_stretch, tree_of, write_preset  # noqa: E402
 
-# (label, preset, overrides): the two scenes (bench_browser_fps.py cases 0 and 4)
-CASES = [
-    ("Ch. 3 swarm `default`, 100 robots + trails, 20 steps/s", "default", ["sim.robots=100", LONG]),
-    ("Ch. 4 fleet `course-dvc`, 1000 robots + trails, kinematic, 20 steps/s", "course-dvc",
-     FLEET_1000),
-    ("Ch. 4 fleet `course-physics`, 200 robots + trails, pymunk physics, 20 steps/s", "course-physics",
-     PHYSICS_200),
-]
+# the scenes: cases 0 (100 robots), 4 (1000 robots) and 5 (200 physics robots) of page_server
+CASES = [PAGE_CASES[i] for i in (0, 4, 5)]
 
 TRACE_CATEGORIES = ["devtools.timeline", "disabled-by-default-devtools.timeline", "toplevel", "v8.execute",
                     "blink", "gpu", "cc", "disabled-by-default-v8.gc"]

@@ -184,10 +184,25 @@ def page_counters(page: Any) -> tuple[float, float]:
 
 
 LONG = "sim.steps=10000000"  # a run that never ends while measured
-FLEET_1000 = ["sim.robots=1000", "world.length=160", "world.width=73.2", "world.start_size=63.2",
-              "view.steps_per_second=20", LONG]  # course-dvc at the packing of 100 robots on its course
-PHYSICS_200 = ["sim.robots=200", "world.length=90", "world.width=38.3", "world.start_size=28.3",
-               "view.steps_per_second=20", LONG]  # course-physics, the same
+# (label, preset, overrides): the browser benchmarks' scenes; the 1000- and 200-robot fleets
+# keep the packing of 100 robots on their course
+CASES = [
+    ("Ch. 3 swarm, 100 robots + trails, playback 20 steps/s (preset rate)", "default",
+     ["sim.robots=100", LONG]),
+    ("Ch. 3 swarm, 100 robots + trails, playback 60 steps/s", "default",
+     ["sim.robots=100", "view.steps_per_second=60", LONG]),
+    ("Ch. 4 fleet, 100 robots + trails, obstacles, pymunk physics, 20 steps/s", "course-physics",
+     ["sim.robots=100", "world.length=80", "world.width=40", "world.start_size=14",
+      "view.steps_per_second=20", LONG]),
+    ("for comparison: Ch. 3 swarm, 100 robots, NO trails, playback 60 steps/s", "default",
+     ["sim.robots=100", "view.steps_per_second=60", "view.trail_seconds=0", LONG]),
+    ("Ch. 4 fleet, 1000 robots + trails, obstacles, kinematic (compiled tick), 20 steps/s", "course-dvc",
+     ["sim.robots=1000", "world.length=160", "world.width=73.2", "world.start_size=63.2",
+      "view.steps_per_second=20", LONG]),
+    ("Ch. 4 fleet, 200 robots + trails, obstacles, pymunk physics, 20 steps/s", "course-physics",
+     ["sim.robots=200", "world.length=90", "world.width=38.3", "world.start_size=28.3",
+      "view.steps_per_second=20", LONG]),
+]
 
 
 def same_stretch(server: ChildServer, page: Any, warmup: float) -> None:
