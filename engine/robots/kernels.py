@@ -603,14 +603,9 @@ def phase_b(x: np.ndarray, heading: np.ndarray, u: np.ndarray, cmd: np.ndarray, 
     ``draws`` (n, R, N, k) its U(0,1) draws (k = 2 per component, 1 per robot). Returns whether
     any robot sensed (False when every robot of every run has collided)."""
     R, N = status.shape
-    cells = g.nx * g.ny
-    head = np.empty(cells, np.int64)
-    nxt = np.empty(N, np.int64)
-    prv = np.empty(N, np.int64)
-    cell = np.empty(N, np.int64)
+    head, nxt, prv, cell, ostamp = _grid_scratch(N, g, w)
     colour = np.zeros(N, np.int64)
     stamp = np.full(N + 1, -1, np.int64)
-    ostamp = np.zeros(w.circles.shape[0] + 1, np.int64)
     order = np.empty(N, np.int64)
     start = np.empty(N + 2, np.int64)
     members = np.empty(N, np.int64)
@@ -703,6 +698,14 @@ def phase_b(x: np.ndarray, heading: np.ndarray, u: np.ndarray, cmd: np.ndarray, 
 
 # ----------------------------------------------------------------------------- physics mode
 @kernel
+def _grid_scratch(N: int, g: Grid, w: WorldArrays) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Scratch of the robot grid for N robots (cell heads, next/previous links, each robot's
+    cell) and the obstacle stamps that keep a circle from being visited twice."""
+    return (np.empty(g.nx * g.ny, np.int64), np.empty(N, np.int64), np.empty(N, np.int64), np.empty(N, np.int64),
+            np.zeros(w.circles.shape[0] + 1, np.int64))
+
+
+@kernel
 def _robot_grid(xr: np.ndarray, g: Grid, head: np.ndarray, nxt: np.ndarray, prv: np.ndarray,
                 cell: np.ndarray) -> None:
     head[:] = -1
@@ -718,9 +721,7 @@ def sense_bodies(x: np.ndarray, turn: np.ndarray, active: np.ndarray, p: TickPar
     heading in the robot frame, else 0). Fills the reading (``SectorReading``'s arrays) of the
     active robots only. For physics mode, where pymunk moves the bodies between readings."""
     R, N = active.shape
-    head = np.empty(g.nx * g.ny, np.int64)
-    nxt, prv, cell = np.empty(N, np.int64), np.empty(N, np.int64), np.empty(N, np.int64)
-    ostamp = np.zeros(w.circles.shape[0] + 1, np.int64)
+    head, nxt, prv, cell, ostamp = _grid_scratch(N, g, w)
     for r in range(R):
         _robot_grid(x[r], g, head, nxt, prv, cell)
         for i in range(N):
@@ -736,9 +737,7 @@ def touching_bodies(x: np.ndarray, moved: np.ndarray, p: TickParams, w: WorldArr
     with ``moved`` that overlaps a body by more than the contact tolerance, and the robots it
     overlaps (``RunSpace.contacts_of``)."""
     R, N = moved.shape
-    head = np.empty(g.nx * g.ny, np.int64)
-    nxt, prv, cell = np.empty(N, np.int64), np.empty(N, np.int64), np.empty(N, np.int64)
-    ostamp = np.zeros(w.circles.shape[0] + 1, np.int64)
+    head, nxt, prv, cell, ostamp = _grid_scratch(N, g, w)
     for r in range(R):
         _robot_grid(x[r], g, head, nxt, prv, cell)
         for i in range(N):
