@@ -23,24 +23,7 @@ from shoal.engine.robots.world import DISABLED, OBSTACLE, ROBOT, RunSpace, fores
 class ReferencePhysics(Physics):
     """The per-body motion model (the previous ``Physics``), kept as the reference."""
 
-    def _hook(self, sp: RunSpace) -> None:
-        if id(sp) in self._hooked:
-            return
-        hits: set[int] = set()
-        sp.contacts = hits  # type: ignore[attr-defined]
-
-        def pre_solve(arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
-            depth = -min((p.distance for p in arbiter.contact_point_set.points), default=0.0)
-            if depth <= self.tolerance:
-                return
-            for shape in arbiter.shapes:
-                i = sp.robot_of(shape)
-                if i is not None:
-                    hits.add(i)
-
-        sp.space.on_collision(ROBOT, OBSTACLE, pre_solve=pre_solve)
-        sp.space.on_collision(ROBOT, ROBOT, pre_solve=pre_solve)
-        self._hooked.add(id(sp))
+    COLLIDES_WITH = (OBSTACLE, ROBOT)  # the previous model's callbacks (no DISABLED type)
 
     def move(self, spaces, x, heading, command, active, dt) -> Moved:
         h = dt / self.substeps

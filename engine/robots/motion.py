@@ -121,6 +121,8 @@ class Physics:
     contacts could only name robots that are disabled already).
     """
 
+    COLLIDES_WITH = (OBSTACLE, ROBOT, DISABLED)  # what a live robot's contacts are checked against
+
     def __init__(self, drive: Drive = "holonomic", v_max: float = 3.0, a_max: float = 10.0, substeps: int = 10,
                  tolerance: float = 0.0) -> None:
         self.drive, self.v_max, self.a_max, self.substeps = drive, v_max, a_max, substeps
@@ -142,7 +144,7 @@ class Physics:
                 if i is not None:
                     hits.add(i)
 
-        for other in (OBSTACLE, ROBOT, DISABLED):
+        for other in self.COLLIDES_WITH:
             sp.space.on_collision(ROBOT, other, pre_solve=pre_solve)
         self._hooked.add(id(sp))
 
