@@ -59,9 +59,8 @@ def trail_array(frames: list[Frame], t_now: float, horizon: float, max_trails: i
 def robots_at(frames: list[Frame], k: int, horizon: float) -> tuple[np.ndarray, np.ndarray] | None:
     """The robots at step ``k`` of ``frames`` and their trails of the last ``horizon`` seconds
     (None if no frame has step ``k``): how swarm B is drawn beside A."""
-    ks = [f.k for f in frames]
-    i = bisect.bisect_left(ks, k)
-    if i == len(ks) or ks[i] != k:
+    i = bisect.bisect_left(frames, k, key=lambda f: f.k)  # (no list of steps per draw)
+    if i == len(frames) or frames[i].k != k:
         return None
     f = frames[i]
     return f.x.copy(), trail_array(frames[: i + 1], f.t, horizon, *TRAIL_LIMITS)
