@@ -28,8 +28,8 @@ def main() -> None:
     args = ap.parse_args()
     from shoal.app.experiment import AxisRequest, ExperimentRequest
     from shoal.app.server import start_server
-    from shoal.engine.studies.sweep import run_sweep
     from shoal.presets.io import load
+    from shoal.studies.sweep import run_sweep
 
     ask = ExperimentRequest((AxisRequest("controller.U", values="6, 8, 10"),
                              AxisRequest("controller.A_plus", values="10, 20, 30")), args.runs, args.steps)

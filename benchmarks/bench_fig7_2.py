@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams
-from shoal.engine.studies.experiments import reproduce
+from shoal.studies.experiments import reproduce
 
 TICK_CASES = [
     ("A-PSO, adapted", SonarParams(algorithm="a-pso"), 100, 10),

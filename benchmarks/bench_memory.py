@@ -123,7 +123,7 @@ class RssSampler:
 
 def batch_memory(runs: int, workers: int, keep: bool) -> list[dict]:
     """RSS after every 1000 finished runs of ``runs`` one-run jobs."""
-    from shoal.engine.studies.experiments.runner import Job, iter_jobs
+    from shoal.studies.experiments.runner import Job, iter_jobs
 
     jobs = [Job(key=("spread", i), preset="default", overrides=("sim.robots=10", f"init.spread={1 + i % 97 / 10}"),
                 seed=i, runs=1, steps=20) for i in range(runs)]
@@ -152,7 +152,7 @@ def sweep_memory(runs: int, workers: int) -> list[dict]:
     """RSS (this process + workers) against runs saved, over a ``runs``-run ``run_sweep``."""
     import tempfile
 
-    from shoal.engine.studies.sweep.run import run_sweep
+    from shoal.studies.sweep.run import run_sweep
 
     cells, per_cell = 100, max(1, runs // 100)
     grid = ["init.spread=" + ",".join(f"{1 + i / 10:g}" for i in range(cells))]
@@ -258,7 +258,7 @@ def main() -> None:
     if not args.skip_batch:
         import matplotlib.pyplot  # noqa: F401  (imported once up front: the sweep plots its medians at the end)
 
-        import shoal.engine.studies.sweep.run  # noqa: F401
+        import shoal.studies.sweep.run  # noqa: F401
 
         rows = []
         for workers in (1, 2):

@@ -80,7 +80,7 @@ def child(target: str, runs: int) -> dict[str, float]:
     the full run count."""
     warm_up()
     try:
-        from shoal.engine.studies.experiments.registry import TARGETS, reproduce
+        from shoal.studies.experiments.registry import TARGETS, reproduce
     except ImportError:  # the previous release's layout
         from shoal.engine.experiments.registry import TARGETS, reproduce
     ticks = count_ticks()
@@ -116,7 +116,7 @@ def main() -> None:
     if args.child:
         print(json.dumps(child(args.child, args.runs)))
         return
-    from shoal.engine.studies.experiments.registry import TARGETS
+    from shoal.studies.experiments.registry import TARGETS
 
     print(f"{load_note()}\n", flush=True)
     rows, total = [], {"before": 0.0, "after": 0.0}

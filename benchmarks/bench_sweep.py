@@ -46,8 +46,8 @@ def main() -> None:
     args = ap.parse_args()
     from distributed import LocalCluster
 
-    from shoal.engine.studies.experiments.schedulers import DaskCluster, LocalPool
-    from shoal.engine.studies.sweep import run_sweep
+    from shoal.studies.experiments.schedulers import DaskCluster, LocalPool
+    from shoal.studies.sweep import run_sweep
 
     root = Path(tempfile.mkdtemp(prefix="bench-sweep-"))
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as lc:

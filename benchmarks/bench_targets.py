@@ -117,7 +117,7 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="one run and half the horizon per target")
     ap.add_argument("--only", nargs="*", help="these targets only")
     args = ap.parse_args()
-    from shoal.engine.studies.experiments.registry import TARGETS, reproduce
+    from shoal.studies.experiments.registry import TARGETS, reproduce
 
     missing = sorted(set(TARGETS) - set(SMALL))
     if missing:

@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT / "tests" / "browser"))
 from browser_helpers import ARENA_IN_VIEW, ARGS, VIEWPORT  # noqa: E402
 
 CHROMIUM = shutil.which("chromium")
-SUBPACKAGES = {"app": "app", "engine": "engine", "presets": "presets", "static": "static"}
+SUBPACKAGES = {"app": "app", "engine": "engine", "presets": "presets", "static": "static"}  # before src/shoal
 
 # The child: the tree's app server with counters; commands on stdin, answers on stdout after "@@".
 SERVER = r"""
@@ -96,7 +96,9 @@ def tree_of(rev: str | None, tmp: Path) -> Path:
         src.mkdir()
         archive = subprocess.run(["git", "-C", str(ROOT), "archive", rev], check=True, capture_output=True).stdout
         subprocess.run(["tar", "-x", "-C", str(src)], input=archive, check=True)
-    pkg = tmp / "pkg" / "shoal"
+    if (src / "src" / "shoal").is_dir():  # the src layout: the package as it is
+        return src / "src"
+    pkg = tmp / "pkg" / "shoal"  # an older tree: its folders mapped as its installer did
     pkg.mkdir(parents=True)
     for item in (src / "shoal").iterdir():
         (pkg / item.name).symlink_to(item)

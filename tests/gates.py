@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import threading
 
-from shoal.engine.studies.sweep import simulate_cell
+from shoal.studies.sweep import simulate_cell
 
 GATES: dict[int, threading.Event] = {}  # cell index → released when set
 STARTED: list[int] = []  # cell indices, in the order their chunks started

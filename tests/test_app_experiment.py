@@ -10,8 +10,8 @@ import pytest
 
 from shoal.app.experiment.panel import AS_RANGE, NONE
 from shoal.app.experiment.service import CANCELLED, FINISHED
-from shoal.engine.studies.sweep import catalogue
 from shoal.presets.io import load
+from shoal.studies.sweep import catalogue
 
 from browser.browser_helpers import wait_until
 
@@ -164,7 +164,7 @@ def test_the_panel_stands_alone_and_its_plot_keeps_up_with_the_cells(server):
 
     from shoal.app.experiment import ExperimentService
     from shoal.app.experiment.panel import ExperimentPanel
-    from shoal.engine.studies.experiments.schedulers import InProcess
+    from shoal.studies.experiments.schedulers import InProcess
 
     import gates as held
 

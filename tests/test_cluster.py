@@ -14,9 +14,9 @@ import pytest
 distributed = pytest.importorskip("distributed")
 cloudpickle = pytest.importorskip("cloudpickle")
 
-from shoal.engine.studies.experiments import reproduce  # noqa: E402
-from shoal.engine.studies.experiments.schedulers import DaskCluster  # noqa: E402
-from shoal.engine.studies.sweep import run_sweep, simulate_cell  # noqa: E402
+from shoal.studies.experiments import reproduce  # noqa: E402
+from shoal.studies.experiments.schedulers import DaskCluster  # noqa: E402
+from shoal.studies.sweep import run_sweep, simulate_cell  # noqa: E402
 
 GRID = ["controller.U=2,4", "controller.A_plus=5,10"]
 

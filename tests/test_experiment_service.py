@@ -13,9 +13,9 @@ import pytest
 
 from shoal.app.experiment import AxisRequest, ExperimentRequest, ExperimentService, Limits, Refused, experiment_pool
 from shoal.app.experiment.service import CANCELLED, FINISHED, QUEUED, RUNNING
-from shoal.engine.studies.experiments.schedulers import InProcess
-from shoal.engine.studies.sweep import run_sweep
 from shoal.presets.io import load, to_toml
+from shoal.studies.experiments.schedulers import InProcess
+from shoal.studies.sweep import run_sweep
 
 from browser.browser_helpers import wait_until
 from gates import GATES, STARTED, gated, reset

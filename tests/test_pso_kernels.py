@@ -148,8 +148,8 @@ def test_draws_taken_ahead_leave_the_stream_as_one_call_a_tick_would():
 def test_a_batch_without_a_callback_runs_headless_to_the_same_series():
     """run_batch without on_step goes through Simulation.run; with a callback, tick by tick:
     the same series to the byte (a physical schedule changes the coefficients mid-run)."""
-    from shoal.engine.studies.experiments.runner import run_batch
     from shoal.presets.io import load
+    from shoal.studies.experiments.runner import run_batch
 
     scenario = load("fig3-5a", ["sim.robots=12"])  # U steps at 34 s and 67 s, Δt = 1 s
     a = run_batch(scenario, runs=3, seed=2, steps=100, track=4)

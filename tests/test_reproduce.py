@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shoal.engine.studies.experiments import TARGETS, chapter3, reproduce, run_batch, run_jobs
-from shoal.engine.studies.experiments.registry import OutputDirError
-from shoal.engine.studies.experiments.runner import Job
 from shoal.presets.io import load
+from shoal.studies.experiments import TARGETS, chapter3, reproduce, run_batch, run_jobs
+from shoal.studies.experiments.registry import OutputDirError
+from shoal.studies.experiments.runner import Job
 
 HEADER = "case,run,seed,swarm_size,U,A_plus,dt,beta,max_speed"
 SMALL = {"sizes": (10, 30)}

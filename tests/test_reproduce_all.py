@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from shoal.engine.studies.experiments.report import REPORT, collect, run_all, write_report
+from shoal.studies.experiments.report import REPORT, collect, run_all, write_report
 
 QUICK = ["fig3-5", "fig3-4"]
 
@@ -22,7 +22,7 @@ def reproduced(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_quick_runs_every_target_at_its_classroom_size_and_says_so(reproduced: Path) -> None:
-    from shoal.engine.studies.experiments import TARGETS
+    from shoal.studies.experiments import TARGETS
 
     assert all("runs" in t.quick and t.quick_runs <= t.default_runs for t in TARGETS.values())
     text = (reproduced / REPORT).read_text(encoding="utf-8")
@@ -92,8 +92,8 @@ def test_cli_report_and_all_refuse_bad_input(reproduced: Path, tmp_path: Path) -
 
 
 def test_information_is_shown_beside_the_checks_but_not_counted() -> None:
-    from shoal.engine.studies.experiments.output import check, info
-    from shoal.engine.studies.experiments.report import Outcome, render
+    from shoal.studies.experiments.output import check, info
+    from shoal.studies.experiments.report import Outcome, render
 
     summary = {"runs": 3, "elapsed_s": 1.0, "checks": [check("median run collision-free", "none", "0", True)],
                "information": [info("every run collision-free", "none", "2 robots in 1 run", False)]}
@@ -106,7 +106,7 @@ def test_information_is_shown_beside_the_checks_but_not_counted() -> None:
 
 
 def test_the_report_gives_each_targets_wall_and_cpu_time_and_their_totals() -> None:
-    from shoal.engine.studies.experiments.report import Outcome, render
+    from shoal.studies.experiments.report import Outcome, render
 
     a = {"runs": 3, "elapsed_s": 12.5, "cpu_s": 20.25, "workers": 2, "checks": []}
     b = {"runs": 31, "elapsed_s": 100.0, "cpu_s": 190.0, "workers": 2, "checks": []}

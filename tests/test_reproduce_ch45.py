@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shoal.engine.studies.experiments import TARGETS, reproduce
-from shoal.engine.studies.experiments import chapter45 as ch
-from shoal.engine.studies.experiments.runner import run_jobs
+from shoal.studies.experiments import TARGETS, reproduce
+from shoal.studies.experiments import chapter45 as ch
+from shoal.studies.experiments.runner import run_jobs
 
 RUNS_HEADER = "case,run,seed,mode,com_fitness_final,layers_passed,collided,operational,stalled"
 CH4 = ["rpso-c3-high", "rpso-c3-equal", "rpso-c3-low", "adapted-c3-high", "adapted-c3-equal", "adapted-c3-low",

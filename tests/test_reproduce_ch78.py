@@ -7,9 +7,9 @@ import json
 
 import pytest
 
-from shoal.engine.studies.experiments import TARGETS, reproduce
-from shoal.engine.studies.experiments.fig8_4 import CASES as STATIONARY
-from shoal.engine.studies.experiments.fig8_5 import CASES as MOVING
+from shoal.studies.experiments import TARGETS, reproduce
+from shoal.studies.experiments.fig8_4 import CASES as STATIONARY
+from shoal.studies.experiments.fig8_5 import CASES as MOVING
 
 CH78 = ("fig7-2", "fig7-4", "fig7-5", "fig8-2", "fig8-4", "fig8-5")
 

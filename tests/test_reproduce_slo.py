@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 import json
 
-from shoal.engine.studies.experiments import TARGETS, reproduce
+from shoal.studies.experiments import TARGETS, reproduce
 
 SLO_TARGETS = ("slo-errors", "slo-mitigation", "slo-neighbourhood", "slo-weight", "slo-pso")
 

@@ -8,9 +8,9 @@ from dataclasses import dataclass
 
 import pytest
 
-from shoal.engine.studies.cost import run_cost
-from shoal.engine.studies.experiments.runner import _chunks
 from shoal.presets.io import load
+from shoal.studies.cost import run_cost
+from shoal.studies.experiments.runner import _chunks
 
 
 @dataclass(frozen=True)

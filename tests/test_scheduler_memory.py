@@ -6,7 +6,7 @@ import weakref
 
 import numpy as np
 
-from shoal.engine.studies.experiments.schedulers import LocalPool
+from shoal.studies.experiments.schedulers import LocalPool
 
 
 def _result(i: int) -> np.ndarray:

@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 
 from shoal.engine.core.recorder import metric_table
-from shoal.engine.studies.sweep import SweepError, run_sweep, simulate_cell
-from shoal.engine.studies.sweep.grid import parse_axis, parse_values
 from shoal.presets.build import build
 from shoal.presets.io import load
+from shoal.studies.sweep import SweepError, run_sweep, simulate_cell
+from shoal.studies.sweep.grid import parse_axis, parse_values
 
 GRID = ["controller.U=2,4", "controller.A_plus=5,10"]
 RUNS, STEPS = 2, 20

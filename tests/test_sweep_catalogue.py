@@ -9,10 +9,10 @@ import math
 
 import pytest
 
-from shoal.engine.studies.sweep import catalogue
-from shoal.engine.studies.sweep.outcomes import CellJob, simulate_cell
 from shoal.presets.build import kind_of
 from shoal.presets.io import PresetError, list_presets, load, set_dotted, validate
+from shoal.studies.sweep import catalogue
+from shoal.studies.sweep.outcomes import CellJob, simulate_cell
 
 PRESETS = list(list_presets())
 NEVER = ("name", "description", "schema_version", "sim.seed", "sim.runs", "world.seed", "slo.swarm")

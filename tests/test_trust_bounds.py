@@ -145,7 +145,7 @@ def test_a_tiny_objective_scale_is_refused_by_the_model():
 
 
 def test_a_sweep_cell_whose_world_cannot_be_laid_out_is_refused_before_anything_runs(tmp_path):
-    from shoal.engine.studies.sweep import SweepError, run_sweep
+    from shoal.studies.sweep import SweepError, run_sweep
 
     try:
         run_sweep("course-dvc", ["world.width=5.5,30"], tmp_path / "s", runs=1, steps=2, progress=False)

@@ -26,8 +26,8 @@ from pathlib import Path
 
 import pytest
 
-from shoal.engine.studies.sweep import SweepError
-from shoal.engine.studies.sweep.store import SweepDir
+from shoal.studies.sweep import SweepError
+from shoal.studies.sweep.store import SweepDir
 
 from browser.browser_helpers import wait_until  # noqa: E402  (tests/ is on sys.path)
 from viser_wire import WireClient

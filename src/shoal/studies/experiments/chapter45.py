@@ -4,7 +4,7 @@ A *case* is a shipped preset plus ``--set``-style overrides, so every case can a
 by hand: ``shoal run course-dvc --set controller.law=rpso ...``. A :class:`FleetJob` is one
 case (in one motion mode) for ``runs`` seeded runs; :func:`simulate_fleet` advances a chunk
 of its runs and records per-step metrics, and :func:`merge` glues chunks back together, so
-:func:`shoal.engine.studies.experiments.runner.run_jobs` can spread the runs over processes with
+:func:`shoal.studies.experiments.runner.run_jobs` can spread the runs over processes with
 results that do not depend on the number of workers.
 
 Run ``i`` of a case uses child ``i`` of ``SeedSequence(seed)`` where ``seed`` is the preset
@@ -18,12 +18,12 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from shoal.engine.kinds.fleet import STALL_SPEED, STALL_STEPS
+from shoal.engine.robots.dvc import TABLE_4_1
 from shoal.presets.build import build_fleet
 from shoal.presets.io import load
 from shoal.presets.models import Robot, Scenario
 
-from ...kinds.fleet import STALL_SPEED, STALL_STEPS
-from ...robots.dvc import TABLE_4_1
 from ..cost import run_cost
 from .output import num
 from .output import percentile_band as band
@@ -91,7 +91,7 @@ class FleetJob:
 
     @property
     def cost(self) -> float:
-        """Estimated CPU seconds of one run (:func:`~shoal.engine.studies.cost.run_cost`)."""
+        """Estimated CPU seconds of one run (:func:`~shoal.studies.cost.run_cost`)."""
         return run_cost(load(self.preset, list(self.overrides)), self.steps)
 
 

@@ -5,7 +5,7 @@ experiments of Mai §4.5, ``slo-pso-sphere`` for the PSO experiment of §4.6), s
 be run by hand with ``shoal run``. An :class:`SLOJob` is one case for ``runs`` seeded runs;
 :func:`simulate_slo` advances a chunk of its runs and keeps per-generation series, and
 :func:`merge` glues chunks back together, so
-:func:`shoal.engine.studies.experiments.runner.run_jobs` spreads runs over processes with results
+:func:`shoal.studies.experiments.runner.run_jobs` spreads runs over processes with results
 that do not depend on the number of workers.
 
 Run ``i`` of every case uses the streams of run ``i`` of the preset seed: the same start
@@ -60,7 +60,7 @@ class SLOJob:
 
     @property
     def cost(self) -> float:
-        """Estimated CPU seconds of one run (:func:`~shoal.engine.studies.cost.run_cost`)."""
+        """Estimated CPU seconds of one run (:func:`~shoal.studies.cost.run_cost`)."""
         return run_cost(load(self.preset, list(self.overrides)), self.generations)
 
 

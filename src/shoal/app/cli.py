@@ -94,7 +94,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from shoal.engine.studies.experiments import TARGETS, OutputDirError, reproduce
+    from shoal.studies.experiments import TARGETS, OutputDirError, reproduce
 
     if args.report:
         return _report(args.report)
@@ -126,7 +126,7 @@ def _cmd_reproduce_on(args: argparse.Namespace) -> int:
     """``reproduce`` with ``--scheduler``: every target's chunks of runs go to the Dask cluster."""
     if not args.scheduler or args.list or args.report:
         return _cmd_reproduce(args)
-    from shoal.engine.studies.experiments.schedulers import SchedulerError, connect, using
+    from shoal.studies.experiments.schedulers import SchedulerError, connect, using
 
     try:
         with connect(args.scheduler) as cluster, using(cluster):
@@ -136,8 +136,8 @@ def _cmd_reproduce_on(args: argparse.Namespace) -> int:
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from shoal.engine.studies.experiments.schedulers import SchedulerError, connect
-    from shoal.engine.studies.sweep import SweepError, run_sweep
+    from shoal.studies.experiments.schedulers import SchedulerError, connect
+    from shoal.studies.sweep import SweepError, run_sweep
 
     if args.workers < 1:
         return _err("--workers must be >= 1")
@@ -180,7 +180,7 @@ def _check_counts(args: argparse.Namespace) -> str | None:
 
 
 def _reproduce_all(args: argparse.Namespace) -> int:
-    from shoal.engine.studies.experiments.report import run_all
+    from shoal.studies.experiments.report import run_all
 
     if args.target:
         return _err("--all takes no TARGET")
@@ -196,7 +196,7 @@ def _reproduce_all(args: argparse.Namespace) -> int:
 
 
 def _report(folder: str) -> int:
-    from shoal.engine.studies.experiments.report import write_report
+    from shoal.studies.experiments.report import write_report
 
     try:
         print(f"wrote {write_report(Path(folder))}")

@@ -9,7 +9,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from ...core.atomic import atomic_output_dir
+from shoal.engine.core.atomic import atomic_output_dir
+
 from .schedulers import Scheduler, current, using
 
 

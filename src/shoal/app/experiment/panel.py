@@ -21,11 +21,11 @@ from typing import Any, Callable, Hashable, Iterator
 
 import numpy as np
 
-from shoal.engine.studies.sweep import catalogue
-from shoal.engine.studies.sweep.catalogue import Field, Outcome
-from shoal.engine.studies.sweep.grid import label
 from shoal.presets.io import PresetError, file_stem, to_toml
 from shoal.presets.models import Scenario
+from shoal.studies.sweep import catalogue
+from shoal.studies.sweep.catalogue import Field, Outcome
+from shoal.studies.sweep.grid import label
 
 from . import figure
 from .request import AxisRequest, ExperimentRequest, Refused

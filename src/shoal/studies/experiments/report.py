@@ -18,8 +18,8 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence
 
 from shoal import __version__
+from shoal.engine.core.atomic import atomic_write_text
 
-from ...core.atomic import atomic_write_text
 from .output import cell, information_table
 from .registry import TARGETS, reproduce
 

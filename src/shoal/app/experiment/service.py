@@ -1,10 +1,10 @@
 """The experiments of a shared ``shoal serve``: sweeps asked for from the page.
 
 An experiment is a sweep of the tab's scene over one or two fields, run by the machinery of
-``shoal sweep`` (the same :class:`~shoal.engine.studies.sweep.plan.SweepPlan`, jobs, seeds and
-chunked runs, :func:`~shoal.engine.studies.experiments.runner.iter_jobs`) on the scheduler the
+``shoal sweep`` (the same :class:`~shoal.studies.sweep.plan.SweepPlan`, jobs, seeds and
+chunked runs, :func:`~shoal.studies.experiments.runner.iter_jobs`) on the scheduler the
 server was given: a local process pool, or a Dask cluster (``shoal serve --scheduler``). Its
-finished cells stay in memory (:class:`~shoal.engine.studies.sweep.table.CellTable`); nothing
+finished cells stay in memory (:class:`~shoal.studies.sweep.table.CellTable`); nothing
 is written on the server.
 
 Fairness on a shared server:
@@ -29,12 +29,12 @@ import threading
 from collections import deque
 from typing import Any, Callable, Hashable
 
-from shoal.engine.studies.experiments.runner import iter_jobs
-from shoal.engine.studies.experiments.schedulers import LocalPool, Scheduler
-from shoal.engine.studies.sweep import outcomes
-from shoal.engine.studies.sweep.plan import SweepPlan
-from shoal.engine.studies.sweep.table import CellTable
 from shoal.presets.models import Scenario
+from shoal.studies.experiments.runner import iter_jobs
+from shoal.studies.experiments.schedulers import LocalPool, Scheduler
+from shoal.studies.sweep import outcomes
+from shoal.studies.sweep.plan import SweepPlan
+from shoal.studies.sweep.table import CellTable
 
 from .request import ExperimentRequest, Limits, Refused, resolve
 

@@ -15,11 +15,11 @@ from typing import Any, Callable, Hashable, Iterator, Sequence
 
 import numpy as np
 
+from shoal.engine.kinds.swarm import Simulation, StepInfo
 from shoal.presets.build import build_simulation
 from shoal.presets.io import load
 from shoal.presets.models import Scenario
 
-from ...kinds.swarm import Simulation, StepInfo
 from ..cost import run_cost
 from . import schedulers
 from .schedulers import Scheduler
@@ -180,7 +180,7 @@ class Job:
 
     @property
     def cost(self) -> float:
-        """Estimated CPU seconds of one run (:func:`~shoal.engine.studies.cost.run_cost`)."""
+        """Estimated CPU seconds of one run (:func:`~shoal.studies.cost.run_cost`)."""
         return run_cost(load(self.preset, list(self.overrides)), self.steps)
 
 

@@ -19,7 +19,8 @@ from typing import Any, Iterable, Iterator, Sequence, TextIO
 import numpy as np
 from filelock import FileLock, Timeout
 
-from ...core.atomic import atomic_text_writer, atomic_write_text
+from shoal.engine.core.atomic import atomic_text_writer, atomic_write_text
+
 from .grid import SweepError
 from .outcomes import INTEGER
 

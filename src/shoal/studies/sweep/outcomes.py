@@ -13,10 +13,10 @@ from typing import Sequence
 
 import numpy as np
 
+from shoal.engine.core.recorder import metric_table
 from shoal.presets.build import build
 from shoal.presets.models import Scenario
 
-from ...core.recorder import metric_table
 from ..cost import run_cost
 
 # first-passage times: a run that never got there has none (NaN/inf), and a median counts it as +inf
@@ -37,7 +37,7 @@ class CellJob:
 
     @property
     def cost(self) -> float:
-        """Estimated CPU seconds of one run (:func:`~shoal.engine.studies.cost.run_cost`)."""
+        """Estimated CPU seconds of one run (:func:`~shoal.studies.cost.run_cost`)."""
         return run_cost(Scenario.model_validate_json(self.scenario), self.steps)
 
 

@@ -17,10 +17,10 @@ from typing import Any
 
 import viser
 
-from shoal.engine.studies.experiments.schedulers import DaskCluster, SchedulerError
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
+from shoal.studies.experiments.schedulers import DaskCluster, SchedulerError
 
 from .experiment import ExperimentService, Limits, experiment_pool
 from .input_guard import guard_inputs

@@ -14,9 +14,9 @@ from typing import Any
 import numpy as np
 import plotly.graph_objects as go
 
-from shoal.engine.studies.experiments.output import png_bytes
-from shoal.engine.studies.sweep.catalogue import Outcome
-from shoal.engine.studies.sweep.plots import heat_figure, line_figure
+from shoal.studies.experiments.output import png_bytes
+from shoal.studies.sweep.catalogue import Outcome
+from shoal.studies.sweep.plots import heat_figure, line_figure
 
 from .service import Experiment
 

@@ -15,7 +15,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ...slo.beliefs import ENTRY_POLICIES
+from shoal.engine.slo.beliefs import ENTRY_POLICIES
+
 from . import slo_common as sc
 from .output import check, checks_table, new_figure, save, write_csv
 from .runner import run_jobs

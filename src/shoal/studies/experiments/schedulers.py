@@ -8,7 +8,7 @@ the items it was running: the local pool starts a fresh pool for the unfinished 
 reschedules them on the surviving workers.
 
 :func:`using` makes a scheduler the default for every
-:func:`~shoal.engine.studies.experiments.runner.run_jobs` call in its block, so a reproduction
+:func:`~shoal.studies.experiments.runner.run_jobs` call in its block, so a reproduction
 target sends its chunks to a cluster without knowing about it.
 """
 

@@ -6,7 +6,7 @@ A :class:`SonarJob` is one case: a shipped preset plus ``--set``-style overrides
 seeded runs of at most ``steps`` ticks. :func:`simulate_sonar` advances a chunk of its runs
 in ONE :class:`~shoal.engine.kinds.sonar.AcousticSwarm` (runs axis), stopping each run once it
 converged when the job asks so (the run is masked out, shapes are kept); :func:`merge`
-glues chunks, so :func:`~shoal.engine.studies.experiments.runner.run_jobs` can spread the runs
+glues chunks, so :func:`~shoal.studies.experiments.runner.run_jobs` can spread the runs
 over processes with results that do not depend on the number of workers.
 
 Run ``i`` of a job uses child ``i`` of ``SeedSequence(seed)``; jobs that should start from
@@ -22,11 +22,11 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.presets.build import build_sonar
 from shoal.presets.io import load
 from shoal.presets.models import Scenario
 
-from ...acoustics.strategies import STRATEGIES
 from ..cost import run_cost
 from .output import num, percentile_band, write_csv
 from .runner import run_jobs
@@ -62,7 +62,7 @@ class SonarJob:
 
     @property
     def cost(self) -> float:
-        """Estimated CPU seconds of one run (:func:`~shoal.engine.studies.cost.run_cost`)."""
+        """Estimated CPU seconds of one run (:func:`~shoal.studies.cost.run_cost`)."""
         return run_cost(self.scenario(), self.steps)
 
     def scenario(self) -> Scenario:

@@ -14,11 +14,11 @@ import math
 from dataclasses import dataclass
 from typing import Any, Sequence
 
-from shoal.engine.studies.sweep import catalogue
-from shoal.engine.studies.sweep.grid import Axis, SweepError, label, parse_values
-from shoal.engine.studies.sweep.plan import SweepPlan
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
+from shoal.studies.sweep import catalogue
+from shoal.studies.sweep.grid import Axis, SweepError, label, parse_values
+from shoal.studies.sweep.plan import SweepPlan
 
 from ..limits import check_app_limits
 
