@@ -56,6 +56,12 @@ def test_sonar_preset_builds_an_acoustic_swarm_and_draws_rays_from_the_robots(ta
     robots = np.asarray(view.nodes["robots"].points)
     np.testing.assert_allclose(robots[:, :2], view.to_view(x)[:, :2], atol=1e-4)
     assert np.asarray(view.nodes["picks"].points).shape[0] >= 1  # selected intersections drawn
+    # the true rays lie over the mirror rays: higher, and made (so drawn) after them
+    height = {key: float(np.asarray(view.nodes[key].points)[0, 0, 2]) for key in view.layer("rays").keys}
+    assert height["rays_true"] > height["rays_mirror"] and height["rays_sel_true"] > height["rays_sel_mirror"]
+    order = list(view.nodes)
+    assert order.index("rays_true") > order.index("rays_mirror")
+    assert order.index("rays_sel_true") > order.index("rays_sel_mirror") > order.index("rays_true")
 
 
 def test_algorithm_and_Q_reach_the_scenario_and_the_swarm(tab):

@@ -292,21 +292,28 @@ def ray_segments(snap: Snapshot) -> tuple[np.ndarray, np.ndarray]:
     return true, mirror
 
 
+# Heights above Z["rays"], true rays over mirror rays, the selected pair over the rest. Nodes at the
+# same depth (within the depth buffer's resolution, about 0.0015 here) are drawn in the order they
+# were made and the later one wins: the mirror rays are made first.
+RAY_Z = dict(mirror=-0.002, true=0.0, sel_mirror=0.002, sel_true=0.004)
+
+
 class Rays(Static):
     """Each robot's pair of bearing rays (green: the one nearer the true source; orange: its
-    mirror), the selected robot's thicker."""
+    mirror), the selected robot's thicker. A true ray lies over every mirror ray: where a robot
+    faces the source the two nearly coincide, and the ray through the source reads green."""
 
     name = "rays"
-    keys = ("rays_true", "rays_mirror", "rays_sel_true", "rays_sel_mirror")
+    keys = ("rays_mirror", "rays_true", "rays_sel_mirror", "rays_sel_true")  # (the order they are drawn in)
     legend = (LegendEntry("—", RAY_TRUE, "bearing ray"), LegendEntry("—", RAY_MIRROR, "mirror ray"))
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         true, mirror = ray_segments(snap)
-        canvas.lines("rays_true", true, RAY_TRUE, 1.2, Z["rays"])
-        canvas.lines("rays_mirror", mirror, RAY_MIRROR, 1.2, Z["rays"])
-        i = snap.selected
-        canvas.lines("rays_sel_true", true[i:i + 1], RAY_TRUE, 3.0, Z["rays"] + 0.001)
-        canvas.lines("rays_sel_mirror", mirror[i:i + 1], RAY_MIRROR, 3.0, Z["rays"] + 0.001)
+        i, z = snap.selected, Z["rays"]
+        canvas.lines("rays_mirror", mirror, RAY_MIRROR, 1.2, z + RAY_Z["mirror"])
+        canvas.lines("rays_true", true, RAY_TRUE, 1.2, z + RAY_Z["true"])
+        canvas.lines("rays_sel_mirror", mirror[i:i + 1], RAY_MIRROR, 3.0, z + RAY_Z["sel_mirror"])
+        canvas.lines("rays_sel_true", true[i:i + 1], RAY_TRUE, 3.0, z + RAY_Z["sel_true"])
 
 
 class Hits(Static):
