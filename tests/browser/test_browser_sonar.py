@@ -29,7 +29,7 @@ def _plot_matches(tab, robot: int) -> bool:
     b = tab.session.sim.state.bearing
     if b is None or tab.session.selected_robot != robot:
         return False
-    x, y, _ = (np.asarray(a) for a in tab.panels.handles["corr"].data)
+    x, y = (np.asarray(a) for a in tab.panels.handles["corr"].data[:2])
     first = np.zeros(len(x), bool)
     first[np.unique(x, return_index=True)[1]] = True  # τ_lag may sit on the grid (sample lag)
     on_grid = first & np.isin(x, b.lags * 1e3)
