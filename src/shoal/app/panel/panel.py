@@ -34,7 +34,7 @@ from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
 from .compare import CompareFolder
 from .keys import PLAYING
-from .plots import PADDING, Chart, Frame, PlotSpec
+from .plots import Chart, Frame, PlotSpec
 from .replay import ReplayFolder
 from .spec import (
     Button,
@@ -294,7 +294,7 @@ class Panel:
         elif isinstance(item, (PlotSpec, Chart)):
             f = self._frame(item)
             h = gui.add_uplot(data=f.data, series=f.series, scales=f.scales, axes=f.axes, title=item.title,
-                              aspect=item.aspect, legend=item.legend, padding=PADDING,
+                              aspect=item.aspect, legend=item.legend, padding=f.padding,
                               visible=item.visible is None or bool(item.visible(s)))
             self._sent[id(h)] = (f.series, f.axes)
         else:
@@ -640,5 +640,7 @@ class Panel:
         if axes != f.axes:
             handle.axes = f.axes
         self._sent[id(handle)] = (f.series, f.axes)
+        if tuple(handle.padding or ()) != f.padding:
+            handle.padding = f.padding
         handle.data = f.data
         handle.scales = f.scales
