@@ -110,3 +110,12 @@ def test_the_last_x_tick_has_room_on_the_right():
                    on_y=(True,))
     assert narrow.padding == plots.PADDING  # "80" fits the usual padding
 
+
+def test_large_text_scales_the_axes_fonts_sizes_and_padding():
+    f = frame((np.array([0.0, 1000.0]), np.array([1.0, 2.0])), ({}, {"label": "y"}), x_range=(0.0, 1000.0),
+              on_y=(True,), x_label="t [s]", y_label="R(τ)")
+    big = plots.scale_text(f, 1.5)
+    assert plots.scale_text(f, 1.0) is f
+    assert all(a["font"].startswith("18px") and a["labelFont"].startswith("bold 18px") for a in big.axes)
+    assert big.axes[0]["size"] == 45 and big.axes[1]["size"] >= 1.5 * f.axes[1]["size"]
+    assert big.padding[1] >= 1.5 * f.padding[1] and big.data is f.data and big.scales is f.scales

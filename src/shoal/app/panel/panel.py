@@ -34,7 +34,7 @@ from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
 from .compare import CompareFolder
 from .keys import PLAYING
-from .plots import Chart, Frame, PlotSpec
+from .plots import Chart, Frame, PlotSpec, scale_text
 from .replay import ReplayFolder
 from .spec import (
     Button,
@@ -51,7 +51,7 @@ from .spec import (
     Text,
     get_path,
 )
-from .view_row import ViewRow
+from .view_row import Display, ViewRow
 
 PLAYBACK = ("Play", "Pause", "Step", "Reset")
 SPEED_SLIDER = Slider("view.steps_per_second", "speed [steps/s]", 1.0, 240.0, 1.0, "playback rate")
@@ -84,7 +84,8 @@ class Services:
     lessons: LessonProgress = field(default_factory=LessonProgress)  # where the Lessons tab is (the tab keeps it)
     experiments: ExperimentService | None = None  # the server's experiments (None: no Experiment tab)
     owner: Hashable = None  # this browser tab's key among the experiments
-    view: Callable[[str], None] | None = None  # the arena's view buttons: "fit" or "follow"
+    view: Callable[[str], None] | None = None  # the arena's view buttons: "fit", "follow" or "display"
+    display: Display | None = None  # how the tab's arena is drawn (the tab keeps it: it outlives a swap of panels)
 
 
 def notes_text(name: str = "ch3") -> str:
@@ -125,6 +126,7 @@ class Panel:
         self._controls: list[tuple[Any, Any]] = []  # (spec, handle) in build order
         self._sent: dict[int, tuple] = {}  # uPlot (series, axes) last sent, by handle (see push_uplot)
         self.controls = 0  # a count of the user's control events (the tab holds the scene a moment after one)
+        self.text_scale = services.display.text_scale if services.display is not None else 1.0  # plots' text
         self.part = kind.panel(self)
         self._build_header()
         self.view_gui = ViewRow(self)
@@ -156,8 +158,9 @@ class Panel:
             "preset", names, initial_value=menu.label_for(sc) or names[0],
             hint="shipped scenes and the presets uploaded in this tab; switching replaces the whole scene")
         self.status = gui.add_markdown("")
+        self.status_note = gui.add_markdown("", visible=False)  # a line about the drawing (the light drawing)
         self.playback = gui.add_button_group("playback", PLAYBACK)
-        self.top += [self.preset, self.status, self.playback, self._build(SPEED_SLIDER)]
+        self.top += [self.preset, self.status, self.status_note, self.playback, self._build(SPEED_SLIDER)]
         self.at_end = gui.add_dropdown(
             "at the end", self._at_end_options(), initial_value=at_end_label(self.session.at_end, sc.sim.steps),
             hint="at the preset's last step the run stops (Play, Step or a changed control start it again), "
@@ -582,6 +585,12 @@ class Panel:
         self.status.content = (f"**{s.scenario.name}** · {state} · {what} · step {k} of {last} · t = {t:.4g} s"
                                " · the live run's numbers are not recorded")
 
+    def show_note(self, text: str) -> None:
+        """The line under the status line ("" hides it)."""
+        if self.status_note.content != text:
+            self.status_note.content = text
+        self.status_note.visible = bool(text)
+
     def refresh_readout(self) -> None:
         """Readouts that follow the scenario (derived numbers beside the controls)."""
         for item, h in self._controls:
@@ -616,14 +625,14 @@ class Panel:
         """What ``item`` shows now: the metrics up to the step shown (with swarm B's curve) or the chart."""
         s = self.session
         if isinstance(item, Chart):
-            return item.render(s)
+            return scale_text(item.render(s), self.text_scale)
         m, span = s.shown_metrics(item.history)
         if not len(m.get("t", ())):
             m = {name: np.zeros(0) for name in s.history.names}
         twin = s.twin_metric(item.twin, np.asarray(m["t"], float)) if item.twin is not None else None
         if twin is not None and len(m["t"]) < 2:
             twin = None
-        return item.render(m, span, s, twin)
+        return scale_text(item.render(m, span, s, twin), self.text_scale)
 
     def refresh_timeline(self) -> None:
         """The Replay folder: timeline and badge (the caller throttles this)."""

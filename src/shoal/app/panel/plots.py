@@ -179,6 +179,29 @@ def frame(data: tuple[np.ndarray, ...], series: tuple[dict[str, Any], ...], *, x
                  axes=(x_axis, view.axis(y_label)) + tuple(more_axes), padding=x_padding(x["range"]))
 
 
+FONT = 'system-ui, -apple-system, "Segoe UI", Roboto, "Helvetica Neue", sans-serif'  # uPlot's own
+
+
+def scale_text(f: Frame, scale: float) -> Frame:
+    """``f`` with its axes' text ``scale`` times uPlot's 12 px (a projector), the axes as much wider."""
+    if scale == 1.0:
+        return f
+    px = round(12 * scale)
+
+    def axis(a: dict[str, Any]) -> dict[str, Any]:
+        out = {**a, "font": f"{px}px {FONT}", "labelFont": f"bold {px}px {FONT}"}
+        for key in ("size", "labelSize"):
+            if key in out:
+                out[key] = int(math.ceil(out[key] * scale))
+        return out
+
+    axes = tuple(axis(a) for a in f.axes)
+    if axes and "size" not in axes[0]:  # the x axis: uPlot's 50 px hold 12 px digits
+        axes = ({**axes[0], "size": int(math.ceil(50 * scale))},) + axes[1:]
+    top, right, bottom, left = f.padding
+    return Frame(f.data, f.series, f.scales, axes, (top, int(math.ceil(right * scale)), bottom, left))
+
+
 @dataclass(frozen=True)
 class Series:
     """One curve: a metric ``column`` (or a function of the columns and the scenario)."""
