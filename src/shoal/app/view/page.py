@@ -64,27 +64,30 @@ PAGE_JS = """
     const d = c.getTarget(new V(), true).sub(c.getPosition(new V(), true)).normalize();
     return -d.y > Math.cos(0.5 * Math.PI / 180);
   };
+  // Set only what differs: each assignment wakes the controls, and viser then draws frames back
+  // to back for a while (an idle page would never rest).
+  const set = (o, key, value) => { if (o[key] !== value) o[key] = value; };
   P.apply = () => {
     const c = P.controls();
     if (!c) return false;
     const A = c.constructor.ACTION;
     if (P.flat) {
-      c.mouseButtons.left = A.TRUCK;
-      c.touches.one = A.TOUCH_TRUCK;
+      set(c.mouseButtons, "left", A.TRUCK);
+      set(c.touches, "one", A.TOUCH_TRUCK);
       if (!P.held && topDown(c)) {  // hold the angles the camera is going to (it may still be easing there)
         const S = c._spherical && c._spherical.constructor;
         const s = S && c.getSpherical ? c.getSpherical(new S(), true) : {theta: c.azimuthAngle, phi: c.polarAngle};
         P.held = [s.theta, s.phi];
       }
       if (P.held) {
-        c.minAzimuthAngle = c.maxAzimuthAngle = P.held[0];
-        c.minPolarAngle = c.maxPolarAngle = P.held[1];
+        set(c, "minAzimuthAngle", P.held[0]); set(c, "maxAzimuthAngle", P.held[0]);
+        set(c, "minPolarAngle", P.held[1]); set(c, "maxPolarAngle", P.held[1]);
       }
     } else {
-      c.mouseButtons.left = A.ROTATE;
-      c.touches.one = A.TOUCH_ROTATE;
-      c.minAzimuthAngle = -Infinity; c.maxAzimuthAngle = Infinity;
-      c.minPolarAngle = 0; c.maxPolarAngle = Math.PI;
+      set(c.mouseButtons, "left", A.ROTATE);
+      set(c.touches, "one", A.TOUCH_ROTATE);
+      set(c, "minAzimuthAngle", -Infinity); set(c, "maxAzimuthAngle", Infinity);
+      set(c, "minPolarAngle", 0); set(c, "maxPolarAngle", Math.PI);
       P.held = null;
     }
     return true;
