@@ -1,4 +1,4 @@
-"""The Display folder of a tab without a browser: the light drawing, the 3-D view and large text
+"""The Display boxes of a tab without a browser: the light drawing, the 3-D view and large text
 reach the arena, the plots and the status area, and outlive a swap of scene kinds; a tipped
 camera is put straight above what it looks at."""
 
@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from shoal.app.panel.view_row import LIGHT_NOTE, TEXT_SCALE
+from shoal.app.panel.view_row import BOXES, DISPLAY_BUTTON, LIGHT_NOTE, TEXT_SCALE
 from shoal.app.view.camera import straighten, tipped
-from shoal.app.view.page import LIGHT_LABEL, SOFTWARE_TOAST, page_script
+from shoal.app.view.page import LIGHT_LABEL, SHOW_BOXES, SOFTWARE_TOAST, page_script
 from shoal.presets.io import load
 
 
@@ -36,7 +36,8 @@ def test_a_camera_looking_straight_down_is_not_tipped_and_a_tipped_one_is_put_st
 
 def test_the_page_script_names_the_box_it_ticks_and_the_toast_it_closes():
     js = page_script()
-    assert "%(" not in js and f'"{LIGHT_LABEL}"' in js and f'"{SOFTWARE_TOAST}"' in js
+    assert "%(" not in js and f'"{LIGHT_LABEL}"' in js and f'"{SOFTWARE_TOAST}"' in js and f'"{SHOW_BOXES}"' in js
+    assert LIGHT_LABEL == BOXES[0][0] and SHOW_BOXES == DISPLAY_BUTTON  # the panel's names, as the script finds them
 
 
 def _box(tab, field):
@@ -46,18 +47,20 @@ def _box(tab, field):
 def test_ticking_light_drawing_draws_the_arena_lightly_and_says_so_in_the_status_area(tab):
     tab.session.step(20)
     tab.tick(1.0)
-    assert not tab.arena.canvas.light and not tab.panels.status_note.visible
+    assert not tab.arena.canvas.light and LIGHT_NOTE not in tab.panels.status.content
     assert tab.arena.canvas.shown("trails") and tab.arena.canvas.shown("headings")
     _box(tab, "light").value = True  # as a click (or the page's own tick on software WebGL) sets it
     assert tab.display.light
     tab.tick(2.0)
-    assert tab.arena.canvas.light and tab.panels.status_note.visible
-    assert tab.panels.status_note.content == LIGHT_NOTE and "Light drawing" in LIGHT_NOTE
+    status = tab.panels.status.content
+    assert tab.arena.canvas.light and status.endswith("<br>" + LIGHT_NOTE) and "Light drawing" in LIGHT_NOTE
+    assert status.startswith("**default**")  # the status line first, the note on a line of its own
     assert tab.arena.canvas.shown("trails_dots") and not tab.arena.canvas.shown("trails")
     assert not tab.arena.canvas.shown("headings")
     _box(tab, "light").value = False
     tab.tick(3.0)
-    assert not tab.arena.canvas.light and not tab.panels.status_note.visible and tab.arena.canvas.shown("trails")
+    assert not tab.arena.canvas.light and LIGHT_NOTE not in tab.panels.status.content
+    assert tab.arena.canvas.shown("trails")
 
 
 def test_large_text_scales_the_arena_labels_and_the_plots_axes(tab):
@@ -81,6 +84,6 @@ def test_the_display_outlives_a_swap_to_another_kind_of_scene(tab):
     tab.replace(load("course-dvc"))
     tab.session.step(3)
     tab.tick(1.0)
-    assert tab.session.kind.name == "fleet" and tab.arena.canvas.light and tab.panels.status_note.visible
+    assert tab.session.kind.name == "fleet" and tab.arena.canvas.light and LIGHT_NOTE in tab.panels.status.content
     assert _box(tab, "light").value and _box(tab, "orbit").value and not _box(tab, "large_text").value
     assert tab.arena.canvas.shown("trails_dots") and not tab.arena.canvas.shown("obstacle_edges")

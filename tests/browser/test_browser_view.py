@@ -21,7 +21,7 @@ pytest.importorskip("playwright.sync_api")
 from shoal.app.panel.view_row import TEXT_SCALE  # noqa: E402
 from shoal.app.view.page import LIGHT_DPR, SOFTWARE_TOAST  # noqa: E402
 
-from browser_helpers import canvas_box, open_folder, root_for, wait_until  # noqa: E402
+from browser_helpers import canvas_box, root_for, wait_until  # noqa: E402
 
 SOFTWARE = ("swiftshader", "llvmpipe", "softpipe", "software")
 ARENA = ("(() => [...document.querySelectorAll('canvas')]"
@@ -56,7 +56,11 @@ class Reports:
 
 
 def tick_box(page, label: str) -> None:
-    open_folder(page, "Display", label)
+    """Click the Display box ``label`` (the view row's *Display* button shows the boxes first)."""
+    box = page.locator("label").filter(has_text=label).first
+    if not box.is_visible():
+        page.get_by_role("button", name="Display", exact=True).click()
+        box.wait_for(state="visible", timeout=10000)
     root_for(page, label).click()
 
 
@@ -77,7 +81,9 @@ def test_a_page_drawn_in_software_gets_the_light_drawing_and_no_toast(server, pa
     assert page.locator(".mantine-Notification-root", has_text=SOFTWARE_TOAST).count() == 0
     note = page.get_by_text("Light drawing", exact=True)
     assert note.is_visible()
-    assert root_for(page, "light drawing").is_checked()
+    box = tab.panels.view_gui.boxes["light"]
+    assert box.value  # ticked through the box (the page showed the boxes a moment for it, and hid them again)
+    wait_until(lambda: not tab.panels.view_gui.showing_boxes, what="the Display boxes hidden again")
     # the arena renders at LIGHT_DPR of its CSS pixels
     wait_until(lambda: abs(page.evaluate(f"{ARENA}.width / {ARENA}.clientWidth") - LIGHT_DPR) < 0.02,
                what="the arena at half resolution")
@@ -138,7 +144,8 @@ def test_large_text_for_a_projector(server, page, cid):
 def test_unticking_light_drawing_gives_viser_its_own_resolution_back(server, page, cid):
     tab = server.tabs[cid]
     tick_box(page, "light drawing")
-    wait_until(lambda: not tab.display.light and not tab.panels.status_note.visible, what="the full drawing")
+    wait_until(lambda: not tab.display.light and "Light drawing" not in tab.panels.status.content,
+               what="the full drawing")
     wait_until(lambda: page.evaluate("window.__shoalPage.viewer().useDevSettings.get().fixedDpr") is None,
                what="viser's adaptive resolution")
     tab.session.step(3)

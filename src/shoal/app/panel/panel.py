@@ -158,9 +158,9 @@ class Panel:
             "preset", names, initial_value=menu.label_for(sc) or names[0],
             hint="shipped scenes and the presets uploaded in this tab; switching replaces the whole scene")
         self.status = gui.add_markdown("")
-        self.status_note = gui.add_markdown("", visible=False)  # a line about the drawing (the light drawing)
+        self.note = ""  # a line under the status line about the drawing (the light drawing)
         self.playback = gui.add_button_group("playback", PLAYBACK)
-        self.top += [self.preset, self.status, self.status_note, self.playback, self._build(SPEED_SLIDER)]
+        self.top += [self.preset, self.status, self.playback, self._build(SPEED_SLIDER)]
         self.at_end = gui.add_dropdown(
             "at the end", self._at_end_options(), initial_value=at_end_label(self.session.at_end, sc.sim.steps),
             hint="at the preset's last step the run stops (Play, Step or a changed control start it again), "
@@ -578,18 +578,22 @@ class Panel:
         state = PLAYING if s.playing else ("■ finished: Play runs it again" if s.finished else "paused")
         shown = s.shown_step()
         if shown is None:
-            self.status.content = self.part.status(s, s.readout(), state)
+            self._status(self.part.status(s, s.readout(), state))
             return
         k, t, last = shown
         what = "replay" if s.replaying is not None else "recorded history"
-        self.status.content = (f"**{s.scenario.name}** · {state} · {what} · step {k} of {last} · t = {t:.4g} s"
-                               " · the live run's numbers are not recorded")
+        self._status(f"**{s.scenario.name}** · {state} · {what} · step {k} of {last} · t = {t:.4g} s"
+                     " · the live run's numbers are not recorded")
+
+    def _status(self, text: str) -> None:
+        """Show the status line, with the drawing's note (if any) on a line of its own below it."""
+        self.status.content = f"{text}<br>{self.note}" if self.note else text
 
     def show_note(self, text: str) -> None:
-        """The line under the status line ("" hides it)."""
-        if self.status_note.content != text:
-            self.status_note.content = text
-        self.status_note.visible = bool(text)
+        """The line under the status line about the drawing ("" for none)."""
+        if text != self.note:
+            self.note = text
+            self.refresh_status()
 
     def refresh_readout(self) -> None:
         """Readouts that follow the scenario (derived numbers beside the controls)."""

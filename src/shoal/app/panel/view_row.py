@@ -1,8 +1,9 @@
 """The arena's row of every panel: *Fit all* (the home view widened to everything that matters
 now: the robots wherever they went, a source; the camera back straight above), *Follow
-swarm* (the swarm's middle stays in the middle of the screen until *Fit all*), the *Display*
-folder (closed at first: light drawing, 3-D view, large text) and the legend of the glyphs on
-screen (the view's layers name them)."""
+swarm* (the swarm's middle stays in the middle of the screen until *Fit all*), *Display*
+(shows or hides its boxes below the row: light drawing, 3-D view, large text; hidden at first,
+so that the kind's first controls fit at 1280×800) and the legend of the glyphs on screen (the
+view's layers name them)."""
 
 from __future__ import annotations
 
@@ -14,9 +15,9 @@ from .spec import Host
 
 VIEW_BUTTONS = {"Fit all": "fit", "Follow swarm": "follow"}
 DISPLAY = "display"  # the action that says a Display box changed
+DISPLAY_BUTTON = "Display"  # shows or hides the Display boxes
 TEXT_SCALE = 1.3  # of the large text
-LIGHT_NOTE = ('<span style="font-size:0.8em">◐ <b>Light drawing</b> for software WebGL (no GPU) · '
-              "change it under Display</span>")
+LIGHT_NOTE = '<span style="font-size:0.8em">◐ <b>Light drawing</b> for software WebGL (no GPU) · view ▸ Display</span>'
 
 
 @dataclass
@@ -73,24 +74,37 @@ class ViewRow:
         self.panel = panel
         act = panel.services.view
         display: Display | None = panel.services.display
-        self.buttons = panel.gui.add_button_group("view", tuple(VIEW_BUTTONS), visible=act is not None,
-                                                  hint="Fit all: everything on screen · Follow swarm: "
-                                                       "keep the swarm in the middle")
+        names = tuple(VIEW_BUTTONS) + ((DISPLAY_BUTTON,) if display is not None else ())
+        self.buttons = panel.gui.add_button_group("view", names, visible=act is not None,
+                                                  hint="Fit all: everything on screen · Follow swarm: keep the swarm "
+                                                       "in the middle · Display: light drawing, 3-D view, large text")
         self.boxes: dict[str, Any] = {}
-        with panel.gui.add_folder("Display", expand_by_default=False, visible=display is not None) as self.folder:
+        if display is not None:
             for label, field, hint in BOXES:
-                box = panel.gui.add_checkbox(label, bool(display is not None and getattr(display, field)), hint=hint)
+                box = panel.gui.add_checkbox(label, bool(getattr(display, field)), hint=hint, visible=False)
                 box.on_update(self._changed(field, box))
                 self.boxes[field] = box
         self.legend = panel.gui.add_markdown("")
         self._entries: tuple[Glyph, ...] = ()
-        panel.top += [self.buttons, self.folder, self.legend]
+        panel.top += [self.buttons, *self.boxes.values(), self.legend]
 
         @self.buttons.on_click
         def _(event: Any) -> None:
+            if event.target.value == DISPLAY_BUTTON:
+                self.show_boxes(not self.showing_boxes)
+                return
             action = VIEW_BUTTONS.get(event.target.value)
             if action is not None and act is not None:
                 act(action)
+
+    @property
+    def showing_boxes(self) -> bool:
+        return any(box.visible for box in self.boxes.values())
+
+    def show_boxes(self, shown: bool) -> None:
+        """Show or hide the Display boxes (the *Display* button)."""
+        for box in self.boxes.values():
+            box.visible = shown
 
     def _changed(self, field: str, box: Any) -> Any:
         def changed(event: Any) -> None:

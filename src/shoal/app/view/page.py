@@ -9,7 +9,7 @@ viser passes no page events to Python, but it runs a script the server sends
 - renders the arena at half its pixels in the light drawing (:func:`set_light`);
 - ticks the *light drawing* box once, when WebGL draws in software (a renderer named SwiftShader,
   llvmpipe, softpipe or "software": the test of viser's own warning), through the box itself, the
-  path of a user's click;
+  path of a user's click (the view row's *Display* button shows the boxes a moment for it);
 - closes viser's "Software WebGL rendering detected" toast whenever it shows (it covered the top
   left of the arena on every load): the status area names the light drawing instead;
 - scales the page's text (:func:`set_text_scale`: Mantine's ``--mantine-scale``) for a projector.
@@ -28,7 +28,8 @@ from typing import Any
 
 from viser import _messages
 
-LIGHT_LABEL = "light drawing"  # the Display folder's box the script ticks
+LIGHT_LABEL = "light drawing"  # the Display box the script ticks …
+SHOW_BOXES = "Display"  # … after showing the boxes with the view row's button
 # Pixels of the arena per CSS pixel in the light drawing: a software rasteriser's frame costs about
 # its pixel count (at 1000 robots: 3.6 frames/s at 1, 6.4 at 0.6, 7.7 at 0.5, on a loaded machine)
 LIGHT_DPR = 0.5
@@ -44,7 +45,7 @@ PAGE_JS = """
   P.held = null;        // [azimuth, polar] of the top view, while held
   P.reported = false;   // the light drawing box was looked at (once per page)
   const SOFTWARE = /swiftshader|llvmpipe|softpipe|software/i;
-  const LIGHT = %(light)s, TOAST = %(toast)s;
+  const LIGHT = %(light)s, SHOW = %(show)s, TOAST = %(toast)s;
 
   const arena = () => [...document.querySelectorAll("canvas")]
     .reduce((a, c) => (!a || c.width * c.height > a.width * a.height) ? c : a, null);
@@ -116,14 +117,20 @@ PAGE_JS = """
     const l = [...document.querySelectorAll("label")].find((e) => e.textContent.trim() === label);
     return l && document.getElementById(l.getAttribute("for"));
   };
+  const button = (name) => [...document.querySelectorAll("button")].find((b) => b.textContent.trim() === name);
   P.report = () => {
     if (P.reported) return;
     if (P.renderer === undefined) P.renderer = renderer();
     if (!SOFTWARE.test(P.renderer)) { P.reported = true; return; }
     const b = box(LIGHT);
-    if (!b) return;
+    if (!b) {  // the boxes hide behind the view row's button: show them a moment (again if nothing came)
+      const d = button(SHOW);
+      if (d && (!P.shownAt || Date.now() - P.shownAt > 4000)) { d.click(); P.shownAt = Date.now(); }
+      return;
+    }
     P.reported = true;
     if (!b.checked) b.click();
+    if (P.shownAt) { const d = button(SHOW); if (d) d.click(); }  // and hide them again
   };
   const dropToast = () => {
     for (const n of document.querySelectorAll(".mantine-Notification-root")) {
@@ -141,8 +148,8 @@ PAGE_JS = """
 
 
 def page_script() -> str:
-    return PAGE_JS % {"light": json.dumps(LIGHT_LABEL), "toast": json.dumps(SOFTWARE_TOAST),
-                      "light_dpr": json.dumps(LIGHT_DPR)}
+    return PAGE_JS % {"light": json.dumps(LIGHT_LABEL), "show": json.dumps(SHOW_BOXES),
+                      "toast": json.dumps(SOFTWARE_TOAST), "light_dpr": json.dumps(LIGHT_DPR)}
 
 
 def run_script(gui: Any, source: str) -> None:
