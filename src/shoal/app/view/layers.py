@@ -34,7 +34,8 @@ GHOST_BEST = (30, 80, 220)
 ERR_LOW = np.array([40, 170, 70], float)
 ERR_HIGH = np.array([230, 40, 40], float)
 EMPTY_POINTS = np.zeros((0, 2))
-TRAIL_DOTS = 16  # dots a trail at most, in the light drawing
+TRAIL_DOTS = 16  # dots a trail at most, in the light drawing …
+TRAIL_DOT_BUDGET = 4000  # … and all trails together at most (1000 robots: 4 dots each), 2 a trail at least
 DOT = 0.07  # scene units: a trail's dot in the light drawing (about 2–3 pixels at the home view)
 
 
@@ -280,10 +281,11 @@ class Headings(Static):
 
 def draw_trails(canvas: Canvas, key: str, trails: np.ndarray, colour: Colour, px: float, z: float) -> None:
     """Trails (M, L, d) as segments ``px`` pixels thick (node ``key``) or, in the light drawing,
-    as :data:`TRAIL_DOTS` dots each (node ``key + "_dots"``)."""
+    as at most :data:`TRAIL_DOTS` dots each, :data:`TRAIL_DOT_BUDGET` in all (node ``key + "_dots"``)."""
     if canvas.light:
         canvas.hide(key)
-        canvas.points(key + "_dots", trail_dots(trails, TRAIL_DOTS), colour, DOT, "circle", z)
+        most = max(2, min(TRAIL_DOTS, TRAIL_DOT_BUDGET // max(len(trails), 1)))
+        canvas.points(key + "_dots", trail_dots(trails, most), colour, DOT, "circle", z)
     else:
         canvas.hide(key + "_dots")
         canvas.lines(key, trail_segments(trails), colour, px, z)
