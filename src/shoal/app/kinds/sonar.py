@@ -501,7 +501,8 @@ def corr_note(s: Session) -> str:
     text = (f"*f_s = {p.fs / 1e3:g} kHz: a dot a sample, {1e3 / p.fs:.3g} ms apart; {n} lags over "
             f"±{1e3 * float(np.max(np.abs(lags))):.3g} ms; dashed: the window ±D/c = ±{1e3 * window:.3g} ms.")
     if p.lag_peak == "sample":
-        text += (f" Only {int(np.ceil(window * p.fs))} samples each side of 0: a coarse curve, and τ_lag is the "
+        inside = int(np.floor(window * p.fs + 1e-9))  # sample lags within the window on each side of 0
+        text += (f" Only {inside} samples each side of 0: a coarse curve, and τ_lag is the "
                  "highest sample (Algorithm 5, no interpolation).*")
     else:
         text += " τ_lag: the top of a parabola through the highest sample and its neighbours.*"
