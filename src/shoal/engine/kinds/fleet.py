@@ -16,6 +16,7 @@ import numpy as np
 
 from ..core.contract import check_live
 from ..core.rng import run_generators
+from ..core.schema import Column, Schema
 from ..robots import kernels
 from ..robots.dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
 from ..robots.laws import ROBOT_LAWS, Inertia, Limits, rotational_energy_factor
@@ -117,6 +118,16 @@ class FleetState:
     a: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
+COLUMNS: Schema = (
+    Column("com_fitness", "m", "float", "CoM fitness [4.17]: the mean x_1 of all robots"),
+    Column("collided", "count", "int", "robots disabled by a collision (an overlap deeper than "
+                                        "robot.contact_tolerance)"),
+    Column("stalled", "count", "int", "operational robots slower than the stall speed for the stall time"),
+    Column("operational", "count", "int", "robots not disabled"),
+    Column("layers_passed", "count", "int", "obstacle layers whose x lies below the CoM"),
+)
+
+
 @dataclass
 class FleetInfo:
     t: float
@@ -179,6 +190,7 @@ class Fleet:
     LIVE: ClassVar[frozenset[str]] = frozenset(
         {"law", "dvc", "dt", "omega", "c", "alpha", "beta", "gamma", "c1_share", "sensing_range", "r_min", "s_min",
          "rotational_energy", "update", "guard", "slo"})
+    COLUMNS: ClassVar[Schema] = COLUMNS
 
     def __init__(self, *, world: WorldSpec, robots: int, params: FleetParams | None = None,
                  runs: int = 1, seed: int = 0, first_run: int = 0, positions: PositionSource | None = None,

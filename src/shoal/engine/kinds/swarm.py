@@ -16,6 +16,7 @@ import numpy as np
 from ..core.contract import check_live
 from ..core.objectives import Objective
 from ..core.rng import BlockDraws, run_generators
+from ..core.schema import Column, Schema
 from ..pso import kernels
 from ..pso.bests import best_index, global_best, update_personal
 from ..pso.coeffs import CoefficientPolicy
@@ -99,6 +100,16 @@ def _set_heading(s: SwarmState, value: np.ndarray) -> None:
 SwarmState.heading = property(_get_heading, _set_heading)  # type: ignore[assignment]
 
 
+COLUMNS: Schema = (
+    Column("max_component", "m/s", "float", "highest velocity component |u_j| in the run (m per tick for standard "
+                                            "PSO, whose update [2.2] has no Δt)"),
+    Column("omega", "", "float", "inertia weight ω in force during the last tick (mean over robots; NaN before the "
+                                 "first)"),
+    Column("c_hat", "m/s", "float", "ĉ = Σ c_n in force during the last tick (no unit for standard PSO; NaN before "
+                                    "the first)"),
+)
+
+
 @dataclass
 class StepInfo:
     """Per-run scalars of one tick, for metrics and plots."""
@@ -150,6 +161,7 @@ class Simulation:
 
     LIVE: ClassVar[frozenset[str]] = frozenset(
         {"policy", "law", "dt", "slo", "robots", "attractors", "pbest_order", "objective"})
+    COLUMNS: ClassVar[Schema] = COLUMNS
 
     def __init__(
         self,
