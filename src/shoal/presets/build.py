@@ -36,13 +36,13 @@ def law_for(c: Controller) -> Law:
     return Law(name=c.law, smooth_width=c.smooth_width)
 
 
-def _xyz(v: tuple[float, float]) -> np.ndarray:
-    """A preset's (x, y) as a point in up to three dimensions (z = 0): any ``sim.d`` takes its first d."""
-    return np.append(np.asarray(v, dtype=float), 0.0)
+def _xyz(v: tuple[float, float], d: int = 3) -> np.ndarray:
+    """A preset's (x, y) as a point in max(d, 3) dimensions (the others 0): any ``sim.d`` takes its first d."""
+    return np.concatenate([np.asarray(v, dtype=float), np.zeros(max(d, 3) - 2)])
 
 
-def objective_for(o: ObjectiveModel) -> Objective:
-    return Objective(name=o.kind, source=_xyz(o.source), scale=o.scale)
+def objective_for(o: ObjectiveModel, d: int = 3) -> Objective:
+    return Objective(name=o.kind, source=_xyz(o.source, d), scale=o.scale)
 
 
 def build_simulation(
@@ -62,13 +62,13 @@ def _simulation_kwargs(scenario: Scenario, *, runs: int | None, seed: int | None
         dt=s.controller.dt,
         law=law_for(s.controller),
         policy=policy_for(s.controller),
-        objective=objective_for(s.objective),
+        objective=objective_for(s.objective, s.sim.d),
         runs=runs or s.sim.runs,
         seed=s.sim.seed if seed is None else seed,
         first_run=first_run,
         attractors=s.bests.attractors,
         pbest_order=s.bests.pbest_order,
-        init_center=_xyz(s.init.center),
+        init_center=_xyz(s.init.center, s.sim.d),
         init_spread=s.init.spread,
         init_speed=s.init.speed,
     )
@@ -267,27 +267,22 @@ class Builder(Protocol):
                  first_run: int = 0) -> Engine: ...
 
 
-# scene kind (the module of engine/kinds) → its build function
-BUILDERS: dict[str, Builder] = {
-    "swarm": build_simulation, "fleet": build_fleet, "sonar": build_sonar, "slo_swarm": build_slo_swarm,
-}
-
-
 def kind_of(scenario: Scenario) -> str:
-    """The scene kind a scenario describes: Mai's SLO swarm (``[slo] swarm = "slo"``), an acoustic
-    swarm (``[acoustics]``, Ch. 7–8), a fleet in a world (``[world]``, Ch. 4–5) or the free-space
-    swarm (Ch. 3); the last three on SLO or true positions as ``[slo]`` says."""
-    if scenario.slo is not None and scenario.slo.swarm == "slo":
-        return "slo_swarm"
-    if scenario.acoustics is not None:
-        return "sonar"
-    return "fleet" if scenario.world is not None else "swarm"
+    """The scene kind a scenario describes (the name of its :class:`~.kinds.SceneKind`): Mai's SLO
+    swarm (``[slo] swarm = "slo"``), an acoustic swarm (``[acoustics]``, Ch. 7–8), a fleet in a
+    world (``[world]``, Ch. 4–5), a plug-in kind (its own section) or the free-space swarm (Ch. 3);
+    the fleet, the acoustic and the free-space swarm on SLO or true positions as ``[slo]`` says."""
+    from .kinds import kind_for  # (the kinds' registry holds this module's build functions)
+
+    return kind_for(scenario).name
 
 
 def build(scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0) -> Engine:
     """The engine of whatever the scenario describes (:func:`kind_of`), for runs ``first_run …
     first_run + runs − 1`` of the seed (default: the preset's)."""
-    return BUILDERS[kind_of(scenario)](scenario, runs=runs, seed=seed, first_run=first_run)
+    from .kinds import kind_for
+
+    return kind_for(scenario).build(scenario, runs=runs, seed=seed, first_run=first_run)
 
 
 def build_slo(scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0) -> Engine:

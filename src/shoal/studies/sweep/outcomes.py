@@ -15,14 +15,19 @@ import numpy as np
 
 from shoal.engine.core.recorder import metric_table
 from shoal.presets.build import build
+from shoal.presets.kinds import integer_columns
 from shoal.presets.models import Scenario
 
 from ..cost import run_cost
 
 # first-passage times: a run that never got there has none (NaN/inf), and a median counts it as +inf
 FIRST_PASSAGE = frozenset({"steps_to_converge", "time_to_converge_s", "quality_met_at"})
-INTEGER = frozenset({"step", "collided", "stalled", "operational", "layers_passed", "converged", "steps_to_converge",
-                     "contacts"})
+
+
+def integer_outcomes() -> frozenset[str]:
+    """The outcomes that are whole numbers: the int metric columns of every kind (their schemas,
+    :mod:`shoal.presets.kinds`) but ``run``, which a cell file writes itself."""
+    return integer_columns() - {"run"}
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ from filelock import FileLock, Timeout
 from shoal.engine.core.atomic import atomic_text_writer, atomic_write_text
 
 from .grid import SweepError
-from .outcomes import INTEGER
+from .outcomes import integer_outcomes
 
 MANIFEST = "sweep.json"
 RESULTS = "results.csv"
@@ -42,7 +42,7 @@ def fmt(name: str, v: float) -> str:
         return ""
     if np.isinf(v):
         return "inf" if v > 0 else "-inf"
-    if name in INTEGER and v == int(v):
+    if v == int(v) and name in integer_outcomes():
         return str(int(v))
     return f"{v + 0.0:.12g}"
 
