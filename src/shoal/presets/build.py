@@ -267,6 +267,73 @@ class Builder(Protocol):
                  first_run: int = 0) -> Engine: ...
 
 
+# ---------------------------------------------------------------- a running engine, retuned
+def swarm_keywords(s: Scenario) -> dict[str, Any]:
+    """The ``Simulation.retune`` keywords of a scenario's controller, swarm size, bests and objective."""
+    c = s.controller
+    return dict(policy=policy_for(c), law=law_for(c), dt=float(c.dt), robots=s.sim.robots,
+                attractors=s.bests.attractors, pbest_order=s.bests.pbest_order,
+                objective=objective_for(s.objective, s.sim.d))
+
+
+def fleet_keywords(s: Scenario) -> dict[str, Any]:
+    """The ``Fleet.retune`` keywords of a scenario (its :class:`FleetParams` in ``Fleet.LIVE``)."""
+    params = fleet_params_for(s)
+    return {k: getattr(params, k) for k in Fleet.LIVE - {"slo"}}
+
+
+def sonar_keywords(s: Scenario) -> dict[str, Any]:
+    """The ``AcousticSwarm.retune`` keywords of a scenario (its :class:`SonarParams` in ``LIVE``)."""
+    assert s.acoustics is not None
+    params = sonar_params_for(s.acoustics)
+    return {k: getattr(params, k) for k in AcousticSwarm.LIVE - {"slo"}}
+
+
+def _same_but(old: Scenario, new: Scenario, *paths: str) -> bool:
+    """Do ``old`` and ``new`` agree on everything but ``paths`` (sections or dotted fields), the
+    view, the name, the description and the horizon?"""
+    dumps = []
+    for sc in (old, new):
+        d = sc.model_dump()
+        for path in (*paths, "view", "name", "description", "sim.steps"):
+            section, _, name = path.partition(".")
+            if name and isinstance(d.get(section), dict):
+                d[section].pop(name, None)
+            elif not name:
+                d.pop(section, None)
+        dumps.append(d)
+    return dumps[0] == dumps[1]
+
+
+def _fixed_same(a: object, b: object, live: frozenset[str]) -> bool:
+    return all(getattr(a, f.name) == getattr(b, f.name) for f in dataclasses.fields(a) if f.name not in live)  # type: ignore[arg-type]
+
+
+def swarm_live(old: Scenario, new: Scenario) -> dict[str, Any] | None:
+    """``retune`` keywords taking a running Chapter 3 swarm from ``old`` to ``new``, or None when
+    something else changed (the start, the dimension, the positions: a new swarm is needed)."""
+    if not _same_but(old, new, "controller", "bests", "objective", "sim.robots"):
+        return None
+    return swarm_keywords(new)
+
+
+def fleet_live(old: Scenario, new: Scenario) -> dict[str, Any] | None:
+    """``retune`` keywords taking a running fleet from ``old`` to ``new`` (None: it needs a new one)."""
+    if not _same_but(old, new, "controller", "robot", "sensing", "init", "objective", "bests") or \
+            not _fixed_same(fleet_params_for(old), fleet_params_for(new), Fleet.LIVE):
+        return None
+    return fleet_keywords(new)
+
+
+def sonar_live(old: Scenario, new: Scenario) -> dict[str, Any] | None:
+    """``retune`` keywords taking a running acoustic swarm from ``old`` to ``new`` (None: a new one)."""
+    if old.acoustics is None or new.acoustics is None or \
+            not _same_but(old, new, "acoustics", "controller", "robot", "sensing", "init", "objective", "bests") or \
+            not _fixed_same(sonar_params_for(old.acoustics), sonar_params_for(new.acoustics), AcousticSwarm.LIVE):
+        return None
+    return sonar_keywords(new)
+
+
 def kind_of(scenario: Scenario) -> str:
     """The scene kind a scenario describes (the name of its :class:`~.kinds.SceneKind`): Mai's SLO
     swarm (``[slo] swarm = "slo"``), an acoustic swarm (``[acoustics]``, Ch. 7–8), a fleet in a

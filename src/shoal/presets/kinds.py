@@ -27,7 +27,17 @@ from shoal.engine.kinds.swarm import Simulation
 from shoal.engine.pso.laws import LAWS
 from shoal.engine.robots.laws import ROBOT_LAWS
 
-from .build import Builder, build_fleet, build_simulation, build_slo_swarm, build_sonar
+from .build import (
+    Builder,
+    build_fleet,
+    build_simulation,
+    build_slo_swarm,
+    build_sonar,
+    fleet_live,
+    slo_live_changes,
+    sonar_live,
+    swarm_live,
+)
 
 if TYPE_CHECKING:
     from .models import Scenario
@@ -67,6 +77,8 @@ class SceneKind:
     laws: Registry[Any] | None = None  # the registry ``controller.law`` names, if the kind reads [controller]
     caps: tuple[Cap, ...] = ()  # robots in a browser tab on a shared server: the first that applies
     app: str | None = None  # the module whose ``KIND`` shows it in the app (None: headless only)
+    live: Callable[[Scenario, Scenario], dict[str, Any] | None] | None = None  # old, new scenario → the
+    # engine's retune keywords, None when the change needs a new engine (no function: never live)
     default_cap: int = 100
 
     @property
@@ -95,15 +107,15 @@ KINDS: Registry[SceneKind] = Registry(
     "scene kind",
     SceneKind("slo_swarm", "Mai's SLO swarm", SLOSwarm, build_slo_swarm, "slo",
               detect=lambda sc: sc.slo is not None and sc.slo.swarm == "slo", caps=(SLO_CAP,),
-              app="shoal.app.kinds.mai"),
+              app="shoal.app.kinds.mai", live=slo_live_changes),
     SceneKind("sonar", "Chapter 7–8 acoustic swarm", AcousticSwarm, build_sonar, "acoustics",
-              caps=(SLO_CAP, Cap("acoustic swarm", 100)), app="shoal.app.kinds.sonar"),
+              caps=(SLO_CAP, Cap("acoustic swarm", 100)), app="shoal.app.kinds.sonar", live=sonar_live),
     SceneKind("fleet", "Chapter 4–5 fleet", Fleet, build_fleet, "world", laws=ROBOT_LAWS,
               caps=(SLO_CAP, Cap("fleet, pymunk physics", 200, lambda sc: sc.robot.motion == "physics"),
                     Cap("fleet", 1000)),
-              app="shoal.app.kinds.fleet"),
+              app="shoal.app.kinds.fleet", live=fleet_live),
     SceneKind("swarm", "Chapter 3 swarm", Simulation, build_simulation, None, dims=(1, 1000), laws=LAWS,
-              caps=(SLO_CAP, Cap("free-space swarm", 2000)), app="shoal.app.kinds.swarm"),
+              caps=(SLO_CAP, Cap("free-space swarm", 2000)), app="shoal.app.kinds.swarm", live=swarm_live),
 )
 # Robots per kind in a tab, where one step still costs a few tens of ms at most: the compiled
 # kinematic fleet tick takes 1000 robots in a few ms, pymunk physics 200 in about 20 ms; the

@@ -18,7 +18,7 @@ from shoal.engine.core.objectives import OBJECTIVES, Objective
 from shoal.engine.kinds.swarm import Simulation
 from shoal.engine.pso import tuning
 from shoal.engine.pso.laws import LAWS
-from shoal.presets.build import build_simulation, kind_of, law_for, objective_for, policy_for, slo_unit
+from shoal.presets.build import build_simulation, kind_of, objective_for, slo_unit, swarm_keywords
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
@@ -82,10 +82,7 @@ class SwarmDriver(BaseDriver):
 
     def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
         slo = slo_retune(old, new)  # errors, selection, neighbourhood…: the running SLO source keeps its beliefs
-        c = new.controller
-        return dict(policy=policy_for(c), law=law_for(c), dt=float(c.dt), robots=new.sim.robots,
-                    attractors=new.bests.attractors, pbest_order=new.bests.pbest_order,
-                    objective=objective_for(new.objective, new.sim.d), **({"slo": slo} if slo else {}))
+        return {**swarm_keywords(new), **({"slo": slo} if slo else {})}
 
     def frame(self, t: float) -> Frame:
         return frame_of(self.sim.state, t, accelerations=True)
