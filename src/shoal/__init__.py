@@ -16,6 +16,7 @@ notes and lessons.
 
 from __future__ import annotations
 
+import importlib
 from typing import Any
 
 __version__ = "0.1.0"
@@ -26,10 +27,8 @@ __all__ = ["__version__", *API]
 
 
 def __getattr__(name: str) -> Any:
-    if name in API:
-        from . import api
-
-        return getattr(api, name)
+    if name in API:  # (loaded on first use: the command and the app import the root for its version only)
+        return getattr(importlib.import_module("shoal.api"), name)
     raise AttributeError(f"module 'shoal' has no attribute {name!r}")
 
 
