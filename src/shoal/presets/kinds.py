@@ -80,6 +80,8 @@ class SceneKind:
     live: Callable[[Scenario, Scenario], dict[str, Any] | None] | None = None  # old, new scenario → the
     # engine's retune keywords, None when the change needs a new engine (no function: never live)
     default_cap: int = 100
+    cost: tuple[float, float] = (30e-6, 3e-6)  # CPU s per run and tick, per robot and tick: a rough price
+    # for sizing batches of runs (studies/cost.py prices the built-in kinds itself)
 
     @property
     def columns(self) -> Schema:
@@ -103,19 +105,19 @@ def section_of(scenario: Scenario, name: str) -> Any:
     return (scenario.model_extra or {}).get(name)
 
 
-KINDS: Registry[SceneKind] = Registry(
+KINDS: Registry[SceneKind] = Registry(  # (the order the app lists them in; a scene matches one kind at most)
     "scene kind",
-    SceneKind("slo_swarm", "Mai's SLO swarm", SLOSwarm, build_slo_swarm, "slo",
-              detect=lambda sc: sc.slo is not None and sc.slo.swarm == "slo", caps=(SLO_CAP,),
-              app="shoal.app.kinds.mai", live=slo_live_changes),
-    SceneKind("sonar", "Chapter 7–8 acoustic swarm", AcousticSwarm, build_sonar, "acoustics",
-              caps=(SLO_CAP, Cap("acoustic swarm", 100)), app="shoal.app.kinds.sonar", live=sonar_live),
+    SceneKind("swarm", "Chapter 3 swarm", Simulation, build_simulation, None, dims=(1, 1000), laws=LAWS,
+              caps=(SLO_CAP, Cap("free-space swarm", 2000)), app="shoal.app.kinds.swarm", live=swarm_live),
     SceneKind("fleet", "Chapter 4–5 fleet", Fleet, build_fleet, "world", laws=ROBOT_LAWS,
               caps=(SLO_CAP, Cap("fleet, pymunk physics", 200, lambda sc: sc.robot.motion == "physics"),
                     Cap("fleet", 1000)),
               app="shoal.app.kinds.fleet", live=fleet_live),
-    SceneKind("swarm", "Chapter 3 swarm", Simulation, build_simulation, None, dims=(1, 1000), laws=LAWS,
-              caps=(SLO_CAP, Cap("free-space swarm", 2000)), app="shoal.app.kinds.swarm", live=swarm_live),
+    SceneKind("sonar", "Chapter 7–8 acoustic swarm", AcousticSwarm, build_sonar, "acoustics",
+              caps=(SLO_CAP, Cap("acoustic swarm", 100)), app="shoal.app.kinds.sonar", live=sonar_live),
+    SceneKind("slo_swarm", "Mai's SLO swarm", SLOSwarm, build_slo_swarm, "slo",
+              detect=lambda sc: sc.slo is not None and sc.slo.swarm == "slo", caps=(SLO_CAP,),
+              app="shoal.app.kinds.mai", live=slo_live_changes),
 )
 # Robots per kind in a tab, where one step still costs a few tens of ms at most: the compiled
 # kinematic fleet tick takes 1000 robots in a few ms, pymunk physics 200 in about 20 ms; the
