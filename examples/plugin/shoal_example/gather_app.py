@@ -40,7 +40,8 @@ class GatherDriver(BaseDriver):
 
 def layers(panels: Any) -> tuple[Layer, ...]:
     return (
-        Ground(cell=lambda half: half / 10, cell_colour=(225, 225, 225), section_colour=(185, 185, 185), z=-0.02),
+        Ground(cell=lambda half: half / 10, cell_colour=(225, 225, 225), section_colour=(185, 185, 185), z=-0.02,
+               border=(40, 40, 40), border_px=2.5, border_z=0.0),
         Trails((80, 120, 255), 1.5, 0.0),
         Headings((20, 90, 40), lambda canvas, snap: 0.35 / canvas.scale, 0.015),
         Robots((40, 160, 80), 0.24, 0.02),

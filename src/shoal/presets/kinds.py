@@ -80,6 +80,8 @@ class SceneKind:
     live: Callable[[Scenario, Scenario], dict[str, Any] | None] | None = None  # old, new scenario → the
     # engine's retune keywords, None when the change needs a new engine (no function: never live)
     default_cap: int = 100
+    reads: dict[str, tuple[str, ...] | None] | None = None  # section → the fields its build reads (None:
+    # all), in the order a sweep offers them; default: its own section and sim.robots, sim.steps
     cost: tuple[float, float] = (30e-6, 3e-6)  # CPU s per run and tick, per robot and tick: a rough price
     # for sizing batches of runs (studies/cost.py prices the built-in kinds itself)
 
@@ -87,6 +89,12 @@ class SceneKind:
     def columns(self) -> Schema:
         """Every metric column, in the order ``metrics.csv`` has them: the common ones, then its own."""
         return common_columns(self.optimises) + tuple(self.engine.COLUMNS)
+
+    def read_fields(self) -> dict[str, tuple[str, ...] | None]:
+        """The fields its build reads, by section (the axes a sweep offers)."""
+        if self.reads is not None:
+            return self.reads
+        return {**({self.section: None} if self.section else {}), "sim": ("robots", "steps")}
 
     def detects(self, scenario: Scenario) -> bool:
         if self.detect is not None:
@@ -108,16 +116,28 @@ def section_of(scenario: Scenario, name: str) -> Any:
 KINDS: Registry[SceneKind] = Registry(  # (the order the app lists them in; a scene matches one kind at most)
     "scene kind",
     SceneKind("swarm", "Chapter 3 swarm", Simulation, build_simulation, None, dims=(1, 1000), laws=LAWS,
-              caps=(SLO_CAP, Cap("free-space swarm", 2000)), app="shoal.app.kinds.swarm", live=swarm_live),
+              caps=(SLO_CAP, Cap("free-space swarm", 2000)), app="shoal.app.kinds.swarm", live=swarm_live,
+              reads={"controller": ("U", "A_plus", "omega", "c1", "c2", "c1_share", "dt", "law", "mode",
+                                    "smooth_width"),
+                     "objective": None, "bests": None, "init": None, "sim": ("robots", "d", "steps")}),
     SceneKind("fleet", "Chapter 4–5 fleet", Fleet, build_fleet, "world", laws=ROBOT_LAWS,
               caps=(SLO_CAP, Cap("fleet, pymunk physics", 200, lambda sc: sc.robot.motion == "physics"),
                     Cap("fleet", 1000)),
-              app="shoal.app.kinds.fleet", live=fleet_live),
+              app="shoal.app.kinds.fleet", live=fleet_live,
+              reads={"controller": ("beta", "alpha", "omega", "c1", "c2", "c3", "gamma", "c1_share", "dt", "law",
+                                    "mode", "r_min", "s_min", "update", "guard", "rotational_energy"),
+                     "robot": None, "sensing": None,
+                     "world": ("kind", "layers", "length", "width", "density", "start_size"),
+                     "sim": ("robots", "steps")}),
     SceneKind("sonar", "Chapter 7–8 acoustic swarm", AcousticSwarm, build_sonar, "acoustics",
               caps=(SLO_CAP, Cap("acoustic swarm", 100)), app="shoal.app.kinds.sonar", live=sonar_live),
     SceneKind("slo_swarm", "Mai's SLO swarm", SLOSwarm, build_slo_swarm, "slo",
               detect=lambda sc: sc.slo is not None and sc.slo.swarm == "slo", caps=(SLO_CAP,),
-              app="shoal.app.kinds.mai", live=slo_live_changes),
+              app="shoal.app.kinds.mai", live=slo_live_changes,
+              reads={"slo": ("errors", "error_values", "selection", "neighbourhood", "neighbourhood_param", "motion",
+                             "objective", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1",
+                             "entry_policy", "walk_speed", "quality_threshold"),
+                     "sim": ("robots", "steps")}),
 )
 # Robots per kind in a tab, where one step still costs a few tens of ms at most: the compiled
 # kinematic fleet tick takes 1000 robots in a few ms, pymunk physics 200 in about 20 ms; the

@@ -7,6 +7,7 @@ variants (laws, strategies, selections) and their rules come from the engine's r
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import (
@@ -33,6 +34,16 @@ def dvc_laws() -> tuple[str, ...]:
     return tuple(name for name, law in ROBOT_LAWS.items() if law.dvc is not None)
 
 
+@dataclass(frozen=True)
+class Registered:
+    """The mark of a field whose value names an entry of ``registries`` (its choices)."""
+
+    registries: tuple[Registry[Any], ...]
+
+    def names(self) -> tuple[str, ...]:
+        return tuple(n for r in self.registries for n in r)
+
+
 def registered(*registries: Registry[Any]) -> Any:
     """A string field whose value must be a name of one of ``registries`` (looked up when a preset
     is validated, so plug-ins' names count; a name is only ever looked up, never imported)."""
@@ -44,7 +55,7 @@ def registered(*registries: Registry[Any]) -> Any:
                              if len(names) > 1 else f"Input should be {names[0]!r}")
         return value
 
-    return Annotated[str, Field(max_length=100), AfterValidator(check)]
+    return Annotated[str, Field(max_length=100), Registered(registries), AfterValidator(check)]
 
 Coefficient = Annotated[float, Field(ge=0.0, le=100.0)]
 Coordinate = Annotated[float, Field(ge=-1e5, le=1e5)]  # m, a place on a scene
