@@ -211,3 +211,33 @@ def test_a_broken_plugin_is_reported_and_shoal_carries_on(tmp_path):
 
 def test_this_process_loaded_no_plugin():
     assert "shoal_example" not in sys.modules and shoal_api.plugins() == []
+
+
+def test_a_strategy_a_selection_and_a_robot_law_register_from_python_too():
+    """Each registry takes a plug-in's entry the same way; here copies of built-in entries under
+    new names, which must run exactly as the originals (the fleet's copy on the numpy tick, which
+    the compiled one equals bit for bit)."""
+    from dataclasses import dataclass, replace
+    from typing import ClassVar
+
+    from shoal.engine.acoustics.strategies import STRATEGIES, XBPSO
+    from shoal.engine.slo.selection import SELECTIONS
+
+    @dataclass(frozen=True)
+    class Mine(XBPSO):
+        name: ClassVar[str] = "xb-mine"
+        label: ClassVar[str] = "XB-PSO (a copy)"
+
+    added = [shoal_api.register(Mine),
+             shoal_api.register(replace(SELECTIONS["rts"], name="rts-mine", label="RTS copy")),
+             shoal_api.register(replace(ROBOT_LAWS["rpso"], name="rpso-mine", label="RPSO copy"))]
+    try:
+        for preset, key, mine, theirs in (("sonar-xb-pso", "acoustics.algorithm", "xb-mine", "xb-pso"),
+                                          ("slo-walk", "slo.selection", "rts-mine", "rts"),
+                                          ("course-rpso", "controller.law", "rpso-mine", "rpso")):
+            a = shoal_api.make(preset, [f"{key}={mine}"], runs=2, seed=3).run(8)
+            b = shoal_api.make(preset, [f"{key}={theirs}"], runs=2, seed=3).run(8)
+            np.testing.assert_array_equal(a.to_numpy(), b.to_numpy(), err_msg=preset)
+    finally:
+        for registry, entry in zip((STRATEGIES, SELECTIONS, ROBOT_LAWS), added):
+            registry.unregister(entry.name)
