@@ -68,7 +68,10 @@ def _objective_name(value: Any) -> Any:
     if not name or name == "<lambda>":
         raise PresetError(["objective: register a lambda first (shoal.register_objective(name, f)) or pass a "
                            "named function"])
-    OBJECTIVES.register(ObjectiveFunction(name, name, value))  # a taken name is refused, not replaced
+    if name in OBJECTIVES:
+        raise ValueError(f"objective: {name!r} names another objective already; register yours under a name of its "
+                         "own (shoal.register_objective(name, f)) and give that name")
+    OBJECTIVES.register(ObjectiveFunction(name, name, value))
     return name
 
 

@@ -7,9 +7,23 @@ from typing import IO
 import numpy as np
 
 from .contract import Info, State
-from .schema import Schema, common_columns, formats
+from .schema import Column, Schema, common_columns, formats
 
-TRAJECTORY_COLUMNS = ("run", "step", "t", "robot", "x", "y", "heading", "vx", "vy", "status")
+TRAJECTORY_SCHEMA: Schema = (
+    Column("run", "", "int", "run index"),
+    Column("step", "", "int", "control ticks since the start (0 = the initial state)"),
+    Column("t", "s", "float", "time of the step"),
+    Column("robot", "", "int", "robot index"),
+    Column("x", "m", "float", "position, first axis"),
+    Column("y", "m", "float", "position, second axis (0 in one dimension)"),
+    Column("heading", "rad", "float", "direction the robot faces (of its motion, for an omnidirectional robot)"),
+    Column("vx", "m/s", "float", "velocity, first axis (m per tick for standard PSO)"),
+    Column("vy", "m/s", "float", "velocity, second axis"),
+    Column("status", "", "int", "0 active; 1 disabled by a collision (a fleet)"),
+    Column("z", "m", "float", "position, third axis (only when sim.d ≥ 3)"),
+    Column("vz", "m/s", "float", "velocity, third axis (only when sim.d ≥ 3)"),
+)
+TRAJECTORY_COLUMNS = tuple(c.name for c in TRAJECTORY_SCHEMA[:10])
 _TRAJ_FMT = ["%d", "%d", "%.6f", "%d", "%.9g", "%.9g", "%.9g", "%.9g", "%.9g", "%d"]
 
 

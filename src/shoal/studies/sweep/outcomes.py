@@ -14,6 +14,7 @@ from typing import Sequence
 import numpy as np
 
 from shoal.engine.core.recorder import metric_table
+from shoal.engine.core.schema import Column, Schema
 from shoal.presets.build import build
 from shoal.presets.kinds import integer_columns
 from shoal.presets.models import Scenario
@@ -22,6 +23,11 @@ from ..cost import run_cost
 
 # first-passage times: a run that never got there has none (NaN/inf), and a median counts it as +inf
 FIRST_PASSAGE = frozenset({"steps_to_converge", "time_to_converge_s", "quality_met_at"})
+# The per-run outcomes a cell adds to its kind's last metric row.
+SWEEP_COLUMNS: Schema = (
+    Column("peak_speed", "m/s", "float", "highest speed of any robot over the run"),
+    Column("time_to_converge_s", "s", "float", "an acoustic swarm's steps_to_converge × Δt (empty if it never did)"),
+)
 
 
 def integer_outcomes() -> frozenset[str]:
