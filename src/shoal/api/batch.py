@@ -33,6 +33,7 @@ def sweep(preset: str | Path | Mapping[str, Any] | Scenario = "default",
 
     >>> table = sweep("course-dvc", {"controller.alpha": [0.5, 0.9]}, runs=4, steps=50)
     """
-    raw = preset.model_dump(mode="json") if isinstance(preset, Scenario) else preset
+    raw = preset.model_dump(mode="json") if isinstance(preset, Scenario) else \
+        dict(preset) if isinstance(preset, Mapping) else preset
     plan = plan_sweep(raw, grid, runs=runs, seed=seed, steps=steps, sets=overrides)
     return as_table(sweep_rows(plan, workers=workers), pandas=pandas)

@@ -50,7 +50,7 @@ def data_dictionary() -> str:
         what = f"`[{kind.section}]`" if kind.section else "no kind section"
         out += [f"### {kind.label} (`{kind.name}`, {what})", ""]
         out += ["Optimises nothing: no `best_fitness`.", ""] if not kind.optimises else []
-        out += [*_table(tuple(kind.engine.COLUMNS)), ""]
+        out += [*_table(kind.columns[len(common_columns(kind.optimises)):]), ""]
     out += [
         "## `shoal run`: `run.json`",
         "",

@@ -182,7 +182,7 @@ class Scene:
             raise ValueError("retune: give preset sections or engine keywords, not both in one call")
         if engine_keywords:
             return self.engine.retune(**engine_keywords)
-        new = scenario_of(self.scenario, **sections)
+        new = scenario_of(self.scenario, (), **sections)
         live = self.kind.live(self.scenario, new) if self.kind.live is not None else None
         if kind_for(new) is not self.kind or live is None:
             raise ValueError(f"{', '.join(sections)}: this change needs a new engine (cannot change mid-run); "

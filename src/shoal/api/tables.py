@@ -33,8 +33,9 @@ def as_table(columns: Mapping[str, Sequence[Any] | np.ndarray], *, pandas: bool 
 
         return pd.DataFrame(arrays)
     n = lengths.pop() if lengths else 0
-    out = np.rec.fromarrays(list(arrays.values()), names=list(arrays)) if arrays else np.recarray((n,), dtype=[])
-    return out
+    if not arrays:
+        return np.recarray((n,), dtype=[])
+    return np.rec.fromarrays(list(arrays.values()), names=list(arrays))  # type: ignore[call-overload]
 
 
 def _array(values: Sequence[Any] | np.ndarray) -> np.ndarray:

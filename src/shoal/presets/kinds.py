@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable
 
-from pydantic import BaseModel
+from pydantic import BaseModel, ValidationError
 
 from shoal.engine.core.registry import Registry
 from shoal.engine.core.schema import Schema, common_columns, integer_names
@@ -67,7 +67,7 @@ class SceneKind:
 
     name: str  # the engine kind (``kind_of``), e.g. "fleet"
     label: str  # in words, for messages: "Chapter 4–5 fleet"
-    engine: type  # its Engine class (:mod:`shoal.engine.core.contract`); its ``COLUMNS`` are the kind's own
+    engine: type[Any]  # its Engine class (:mod:`shoal.engine.core.contract`); its ``COLUMNS`` are the kind's own
     build: Builder  # scenario → engine
     section: str | None  # the preset section that asks for it; None: the default scene (no section)
     detect: Callable[[Scenario], bool] | None = None  # is a scenario this kind? (default: its section is set)
@@ -215,7 +215,7 @@ def check_plugin_sections(extra: dict[str, Any]) -> dict[str, Any]:
         except Exception as err:  # a pydantic ValidationError: one line per field
             from .io import format_errors  # (io imports the models)
 
-            lines = format_errors(err) if hasattr(err, "errors") else [str(err)]
+            lines = format_errors(err) if isinstance(err, ValidationError) else [str(err)]
             raise ValueError("; ".join(f"{name}.{line}" for line in lines)) from None
     return out
 

@@ -8,7 +8,7 @@ variants (laws, strategies, selections) and their rules come from the engine's r
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Annotated, Any, ClassVar, Literal
+from typing import TYPE_CHECKING, Annotated, Any, ClassVar, Literal, TypeAlias
 
 from pydantic import (
     AfterValidator,
@@ -56,6 +56,18 @@ def registered(*registries: Registry[Any]) -> Any:
         return value
 
     return Annotated[str, Field(max_length=100), Registered(registries), AfterValidator(check)]
+
+
+if TYPE_CHECKING:  # (a type checker sees plain strings; pydantic the registries' checks)
+    LawName: TypeAlias = str
+    ObjectiveKind: TypeAlias = str
+    StrategyName: TypeAlias = str
+    SelectionName: TypeAlias = str
+else:
+    LawName = registered(LAWS, ROBOT_LAWS)
+    ObjectiveKind = registered(OBJECTIVES)
+    StrategyName = registered(STRATEGIES)
+    SelectionName = registered(SELECTIONS)
 
 Coefficient = Annotated[float, Field(ge=0.0, le=100.0)]
 Coordinate = Annotated[float, Field(ge=-1e5, le=1e5)]  # m, a place on a scene
@@ -106,7 +118,7 @@ class StepChange(_Model):
 class Controller(_Model):
     """Velocity law and its coefficients, raw (ω, c1, c2) or physical (U, A+, Δt)."""
 
-    law: registered(LAWS, ROBOT_LAWS) = "adapted-sgn"
+    law: LawName = "adapted-sgn"
     mode: Literal["raw", "physical", "dvc"] = "physical"
     dt: Annotated[float, Field(ge=1e-6, le=10.0, description="controller period Δt [s]")] = 0.1
     omega: Annotated[float, Field(ge=-1.0, le=1.2, description="inertia weight ω (raw mode)")] = 0.5
@@ -210,7 +222,7 @@ class Bests(_Model):
 class ObjectiveModel(_Model):
     """What the swarm optimises: the distance to a source, f = x1, or a benchmark."""
 
-    kind: registered(OBJECTIVES) = "source-distance"
+    kind: ObjectiveKind = "source-distance"
     source: tuple[float, float] = (15.0, 5.0)
     # (below 1e-6 m per unit the benchmark functions overflow over the arena: best_fitness = NaN)
     scale: Annotated[float, Field(ge=1e-6, le=1e4, description="benchmark length scale [m per unit]")] = 1.0
@@ -225,7 +237,7 @@ class Acoustics(_Model):
 
     omit_unset = ("source",)
 
-    algorithm: registered(STRATEGIES) = Field(
+    algorithm: StrategyName = Field(
         "xb-pso", description="best-location strategy: A-/X-/B-/XB-PSO (Ch. 7) or GT-PSO (Ch. 8)")
     controller: Literal["adapted", "nonomni"] = Field(
         "adapted",
@@ -335,7 +347,7 @@ class SLO(_Model):
         "pso", description="SLO swarm: SPSO 2011 in each robot's frame or a random walk")
     objective: Literal["ackley", "griewank", "line", "plane", "rastrigin", "rosenbrock", "sphere"] = Field(
         "sphere", description="SLO swarm: 2-D benchmark, minimised (DEAP forms)")
-    selection: registered(SELECTIONS) = Field("css", description="candidate selection [3.7]-[3.9]")
+    selection: SelectionName = Field("css", description="candidate selection [3.7]-[3.9]")
     errors: Literal["none", "low", "high"] = Field("low", description="sensor error set of Tab. 4.3")
     error_values: SLOErrorValues = Field(default_factory=SLOErrorValues,
                                          description="single error parameters replacing the set's")
@@ -406,7 +418,7 @@ class Scenario(_Model):
     description: Annotated[str, Field(max_length=2000)] = ""
     sim: Sim = Field(default_factory=Sim)
     init: Init = Field(default_factory=Init)
-    controller: Controller = Field(default_factory=Controller)
+    controller: Controller = Field(default_factory=Controller)  # type: ignore[arg-type]  # (mypy misreads Field("…") defaults)
     bests: Bests = Field(default_factory=Bests)
     objective: ObjectiveModel = Field(default_factory=ObjectiveModel)
     arena: Arena = Field(default_factory=Arena)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar, Literal, cast
 
 import numpy as np
 
@@ -78,7 +78,8 @@ class FleetParams:
         law = ROBOT_LAWS[self.law]
         coefficients = {None: kernels.CONSTANT, "omni": kernels.DVC_OMNI, "nonomni": kernels.DVC_NONOMNI}[
             law.dvc if self.dvc else None]
-        c = (tuple(float(v) for v in self.c) + (0.0,) * 5)[: law.terms] + (0.0,) * (5 - law.terms)
+        c = cast(tuple[float, float, float, float, float],
+                 (tuple(float(v) for v in self.c) + (0.0,) * 5)[: law.terms] + (0.0,) * (5 - law.terms))
         wm = w_max(self.v_max, self.dt, self.rotational_energy, self.robot_radius) if coefficients else 0.0
         return kernels.TickParams(
             law=kernels.LAWS.index(self.law), coefficients=coefficients, drive=kernels.DRIVES.index(self.drive),
@@ -262,7 +263,7 @@ class Fleet:
 
     def _build_spaces(self) -> None:
         p, s = self.params, self.state
-        body = "dynamic" if p.motion == "physics" else "kinematic"
+        body: Literal["kinematic", "dynamic"] = "dynamic" if p.motion == "physics" else "kinematic"
         self._spaces = [RunSpace(self.world, s.x[r], p.robot_radius, body_type=body) for r in range(self.runs)]
         self._stale = False
         if p.motion == "physics":
@@ -376,7 +377,7 @@ class Fleet:
             kernels.touching_bodies(self._body_positions(), moved, self._kernel_params(), world, grid, out)
             return out & (self.state.status == ACTIVE)
         for r, sp in enumerate(self.spaces):
-            for i in np.flatnonzero(moved[r]):
+            for i in map(int, np.flatnonzero(moved[r])):
                 bodies = sp.contacts_of(i, -self.params.contact_tolerance)
                 if bodies:
                     out[r, i] = True

@@ -245,6 +245,7 @@ class AcousticSwarm:
 
     LIVE: ClassVar[frozenset[str]] = frozenset({f.name for f in fields(SonarParams)} - _FIXED | {"slo"})
     COLUMNS: ClassVar[Schema] = COLUMNS
+    state: SonarState
 
     def __init__(self, params: SonarParams | None = None, *, robots: int = 10, runs: int = 1, seed: int = 0,
                  first_run: int = 0, positions: PositionSource | None = None) -> None:

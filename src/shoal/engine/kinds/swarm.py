@@ -71,7 +71,7 @@ class SwarmState:
 
     def copy(self) -> "SwarmState":
         values = {f.name: getattr(self, f.name) for f in fields(self)}
-        return SwarmState(**{k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in values.items()})
+        return SwarmState(**{k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in values.items()})  # type: ignore[arg-type]
 
     def turns(self) -> Turns:
         """The pending headings of a compiled tick (new ones if the swarm's shape changed)."""
@@ -219,7 +219,8 @@ class Simulation:
         """Start again from step 0 with ``seed`` (or the current seed)."""
         if seed is not None:
             self.seed = int(seed)
-        self._rngs, self._block = run_generators(self.seed, self.first_run, self.runs), None
+        self._rngs = run_generators(self.seed, self.first_run, self.runs)
+        self._block: BlockDraws | None = None
         self._setup: tuple | None = None
         x, u = self._spawn(self._robots)
         self.state = self._fresh_state(x, u)

@@ -9,7 +9,7 @@ random draws are ``(n, runs, robots, d)`` and coefficients ``c`` are ``(n,)`` or
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Literal
+from typing import Any, Callable, Literal
 
 import numpy as np
 from scipy.special import expit
@@ -129,7 +129,7 @@ def _adapted(kind: Squash) -> Velocity:
     return velocity
 
 
-_ADAPTED_RULE = dict(omega_range=(0.0, 1.0), region="adapted", rule="0 <= omega < 1 [3.14]")
+_ADAPTED_RULE: dict[str, Any] = dict(omega_range=(0.0, 1.0), region="adapted", rule="0 <= omega < 1 [3.14]")
 LAWS: Registry[VelocityLaw] = Registry(
     "law",
     VelocityLaw("standard", "Standard PSO", False, _standard),  # [2.1], [2.2]; order-2 region [3.9]

@@ -69,7 +69,7 @@ def _medians(store: SweepDir, axes: Sequence[Axis], n_cells: int) -> tuple[list[
     return names, medians
 
 
-def plan_sweep(preset: str | Path | dict[str, Any], grid: Sequence[str] | Mapping[str, Sequence[Any]], *,
+def plan_sweep(preset: str | Path | Mapping[str, Any], grid: Sequence[str] | Mapping[str, Sequence[Any]], *,
                runs: int | None = None, seed: int | None = None, steps: int | None = None,
                sets: Sequence[str] = ()) -> SweepPlan:
     """The validated cells of a sweep: ``preset`` (a name, a file or a raw preset dict) with
