@@ -135,13 +135,13 @@ def _bounds(metadata: list[Any]) -> dict[str, Any]:
     out: dict[str, Any] = {"lo": -math.inf, "hi": math.inf, "lo_open": False, "hi_open": False}
     for m in metadata:
         if isinstance(m, at.Ge):
-            out.update(lo=float(m.ge), lo_open=False)
+            out.update(lo=float(m.ge), lo_open=False)  # type: ignore[arg-type]  # (the model's bounds are numbers)
         elif isinstance(m, at.Gt):
-            out.update(lo=float(m.gt), lo_open=True)
+            out.update(lo=float(m.gt), lo_open=True)  # type: ignore[arg-type]
         elif isinstance(m, at.Le):
-            out.update(hi=float(m.le), hi_open=False)
+            out.update(hi=float(m.le), hi_open=False)  # type: ignore[arg-type]
         elif isinstance(m, at.Lt):
-            out.update(hi=float(m.lt), hi_open=True)
+            out.update(hi=float(m.lt), hi_open=True)  # type: ignore[arg-type]
     return out
 
 
@@ -207,6 +207,7 @@ def _fields(scenario_json: str) -> tuple[Field, ...]:
     for section, names in reads(scenario).items():
         field = Scenario.model_fields.get(section)
         model = _model_of(field.annotation) if field is not None else plugin_sections()[section]
+        assert model is not None, section  # (every section a kind reads is a model)
         out += _leaves(model, scenario.section(section), section, names, raw)
     return tuple(out)
 

@@ -78,9 +78,9 @@ def simulate_cell(job: CellJob, first_run: int, runs: int) -> CellBatch:
 
     peak = speed()
     info = sim.info()
-    running = getattr(sim, "running", None)
+    running = getattr(sim, "running", None)  # (an acoustic swarm's runs stop at convergence)
     for _ in range(job.steps):
-        if running is not None and not np.any(sim.running):
+        if running is not None and not np.any(sim.running):  # type: ignore[attr-defined]
             break
         info = sim.step()
         peak = np.maximum(peak, speed())

@@ -56,8 +56,8 @@ def _medians(store: SweepDir, axes: Sequence[Axis], n_cells: int) -> tuple[list[
     names: list[str] = []
     medians: dict[str, np.ndarray] = {}
     for i in range(n_cells):
-        header, rows = store.read_cell(i)
-        rows = list(rows)
+        header, cell = store.read_cell(i)
+        rows = list(cell)
         for name in header:
             if name in keys or name in NOT_MEDIANS:
                 continue
@@ -166,7 +166,8 @@ def run_sweep(
                   unit="run", disable=not progress) as bar:
             for key, batch in iter_jobs(jobs, workers=workers, scheduler=scheduler, progress=bar.update,
                                         simulate=simulate, merge=outcomes.merge, desc="sweep"):
-                store.write_cell(key, plan.prefix(key), batch.first_run, scenarios[key].sim.seed, batch.columns)
+                i = int(key)  # type: ignore[call-overload]  # (a cell's key is its index)
+                store.write_cell(i, plan.prefix(i), batch.first_run, scenarios[i].sim.seed, batch.columns)
         indices = list(range(len(scenarios)))
         columns = store.assemble(indices)
         names, medians = _medians(store, axes, len(scenarios))

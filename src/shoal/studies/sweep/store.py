@@ -14,7 +14,7 @@ import csv
 import io
 import json
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Sequence, TextIO
+from typing import IO, Any, Iterable, Iterator, Sequence
 
 import numpy as np
 from filelock import FileLock, Timeout
@@ -61,7 +61,7 @@ def cell_rows(prefix: dict[str, str], first_run: int, seed: int,
     return [*prefix, "run", "seed", *columns], rows
 
 
-def write_tidy(fh: TextIO, columns: Sequence[str], rows: Iterable[dict[str, str]]) -> None:
+def write_tidy(fh: IO[str], columns: Sequence[str], rows: Iterable[dict[str, str]]) -> None:
     """The tidy table (``results.csv``): ``columns`` as header, a missing value left empty."""
     w = csv.DictWriter(fh, columns, restval="", lineterminator="\n")
     w.writeheader()
