@@ -13,6 +13,7 @@ formats and the tests that run every kind derive from it; a plug-in adds a kind 
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable
 
@@ -230,6 +231,12 @@ def metric_columns() -> Schema:
 
 
 def integer_columns() -> frozenset[str]:
-    """Names of the whole-number metric columns of every kind."""
+    """Names of the whole-number metric columns of every kind (worked out again when a kind is
+    registered or replaced: a sweep asks for every value it writes)."""
+    return _integer_columns(KINDS.version)
+
+
+@functools.lru_cache(maxsize=4)
+def _integer_columns(version: int) -> frozenset[str]:
     return integer_names(metric_columns())
 

@@ -37,6 +37,7 @@ class Registry(Mapping[str, V], Generic[V]):
     def __init__(self, what: str, *entries: V) -> None:
         self.what = what
         self._entries: dict[str, V] = {}
+        self._version = 0
         for e in entries:
             self._add(e, replace=False)
 
@@ -51,6 +52,12 @@ class Registry(Mapping[str, V], Generic[V]):
     def __len__(self) -> int:
         load_plugins()
         return len(self._entries)
+
+    @property
+    def version(self) -> int:
+        """Bumped by every change (a cache of something derived from the entries keys on it)."""
+        load_plugins()
+        return self._version
 
     def __repr__(self) -> str:
         return f"Registry({self.what!r}: {', '.join(self._entries)})"
@@ -78,7 +85,9 @@ class Registry(Mapping[str, V], Generic[V]):
 
     def unregister(self, name: str) -> V:
         """Remove and return the entry called ``name`` (a ``KeyError`` if there is none)."""
-        return self._entries.pop(name)
+        entry = self._entries.pop(name)
+        self._version += 1
+        return entry
 
     def _add(self, entry: V, *, replace: bool) -> None:
         name, label = getattr(entry, "name", None), getattr(entry, "label", None)
@@ -87,3 +96,4 @@ class Registry(Mapping[str, V], Generic[V]):
         if name in self._entries and not replace:
             raise ValueError(f"{self.what}: {name!r} is registered already")
         self._entries[name] = entry
+        self._version += 1

@@ -8,6 +8,7 @@ leave the worker: a cell never holds trajectories.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -33,7 +34,12 @@ SWEEP_COLUMNS: Schema = (
 def integer_outcomes() -> frozenset[str]:
     """The outcomes that are whole numbers: the int metric columns of every kind (their schemas,
     :mod:`shoal.presets.kinds`) but ``run``, which a cell file writes itself."""
-    return integer_columns() - {"run"}
+    return _integer_outcomes(integer_columns())
+
+
+@functools.lru_cache(maxsize=4)
+def _integer_outcomes(columns: frozenset[str]) -> frozenset[str]:
+    return columns - {"run"}
 
 
 @dataclass(frozen=True)
