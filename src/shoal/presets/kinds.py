@@ -72,6 +72,7 @@ class SceneKind:
     build: Builder  # scenario → engine
     section: str | None  # the preset section that asks for it; None: the default scene (no section)
     detect: Callable[[Scenario], bool] | None = None  # is a scenario this kind? (default: its section is set)
+    asks: str | None = None  # the field a refusal names when detect says more than "the section is set"
     model: type[BaseModel] | None = None  # a plug-in kind's section model (the built-in ones are Scenario fields)
     optimises: bool = True  # its state has best_fitness and its metric table the column
     dims: tuple[int, int] = (2, 2)  # the sim.d it runs in, lowest and highest
@@ -133,7 +134,7 @@ KINDS: Registry[SceneKind] = Registry(  # (the order the app lists them in; a sc
     SceneKind("sonar", "Chapter 7–8 acoustic swarm", AcousticSwarm, build_sonar, "acoustics",
               caps=(SLO_CAP, Cap("acoustic swarm", 100)), app="shoal.app.kinds.sonar", live=sonar_live),
     SceneKind("slo_swarm", "Mai's SLO swarm", SLOSwarm, build_slo_swarm, "slo",
-              detect=lambda sc: sc.slo is not None and sc.slo.swarm == "slo", caps=(SLO_CAP,),
+              detect=lambda sc: sc.slo is not None and sc.slo.swarm == "slo", asks="slo.swarm", caps=(SLO_CAP,),
               app="shoal.app.kinds.mai", live=slo_live_changes,
               reads={"slo": ("errors", "error_values", "selection", "neighbourhood", "neighbourhood_param", "motion",
                              "objective", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1",
@@ -181,8 +182,9 @@ def check_scene(scenario: Scenario) -> None:
         a, b = found[0], found[1]
         hint = " (slo.swarm = 'host' puts a scene's own swarm on SLO positions)" if "slo" in (a.section, b.section) \
             else ""
-        raise ValueError(f"[{a.section}] and [{b.section}] describe two kinds of scene ({a.label}, {b.label}); "
-                         f"remove one{hint}")
+        field = next((k.asks for k in (a, b) if k.asks), b.section)
+        raise ValueError(f"{field}: [{a.section}] and [{b.section}] describe two kinds of scene ({a.label}, "
+                         f"{b.label}); remove one{hint}")
     kind = found[0] if found else default_kind()
     lo, hi = kind.dims
     d = scenario.sim.d
