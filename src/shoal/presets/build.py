@@ -1,5 +1,6 @@
-"""Turn a validated :class:`Scenario` into engine objects: :data:`BUILDERS` holds one build
-function per scene kind, each returning a :class:`~shoal.engine.core.contract.Engine`."""
+"""Turn a validated :class:`Scenario` into engine objects: one build function per scene kind
+(each returning a :class:`~shoal.engine.core.contract.Engine`; the kinds' registry,
+:mod:`.kinds`, names them), and the keywords that retune a running engine."""
 
 from __future__ import annotations
 
