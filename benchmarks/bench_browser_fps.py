@@ -14,7 +14,9 @@ measuring window:
   new ``points``), decoded from the frames as the page got them; the page's
   ``requestAnimationFrame`` rate (how often the browser could run its render loop), while
   playing and for 3 s after a pause, and its main-thread time in long tasks (> 50 ms);
-- on the server: engine steps per second and arena draws per second (``View.draw`` calls).
+- on the server: engine steps per second and arena draws per second (``View.draw`` calls), and
+  whether the tab drew lightly (the light drawing a page without a GPU turns on by itself; "–"
+  for a tree without it).
 
 "min 1-s" is the lowest count in any whole second of the window. The app draws at most
 ``TabApp.SCENE_HZ`` (30) times a second and only after a step, so the scene rate is
@@ -112,6 +114,7 @@ def measure(label: str, pkg: Path, preset: Path, seconds: float, warmup: float,
             for _ in range(int(seconds)):
                 page.wait_for_timeout(1000)  # (playwright delivers the frame events while it waits)
                 samples.append(sample())
+            light = any(server.ask("stats").get("light") or [False])
             server.ask("pause")  # the render loop with nothing arriving, for comparison
             page.wait_for_timeout(1000)
             raf0, t0 = page_counters(page)[0], time.monotonic()
@@ -129,7 +132,7 @@ def measure(label: str, pkg: Path, preset: Path, seconds: float, warmup: float,
     return {
         "robot_updates": per_s(3), "robot_updates_min": min(per_window), "frames": per_s(1),
         "kib": per_s(2) / 1024, "steps": per_s(4), "draws": per_s(5), "raf": per_s(6), "long": per_s(7),
-        "raf_paused": raf_paused, "undecoded": counter.undecoded, "seconds": span,
+        "raf_paused": raf_paused, "undecoded": counter.undecoded, "seconds": span, "light": light,
     }
 
 
@@ -159,10 +162,10 @@ def main() -> None:
                 shot = None if args.shots is None else args.shots / name
                 m = measure(label, pkg, path, seconds, args.warmup, shot)
                 print(f"  {case} [{label}]: {m}", file=sys.stderr)
-                rows.append([case, label, fmt(m["robot_updates"]), fmt(m["robot_updates_min"]), fmt(m["frames"]),
-                             fmt(m["kib"]), fmt(m["raf"]), fmt(m["long"]), fmt(m["raf_paused"]), fmt(m["steps"]),
-                             fmt(m["draws"])])
-    print(table(["case", "tree", "robot updates/s in the browser", "min 1-s", "ws frames/s", "KiB/s",
+                rows.append([case, label, "on" if m["light"] else "off", fmt(m["robot_updates"]),
+                             fmt(m["robot_updates_min"]), fmt(m["frames"]), fmt(m["kib"]), fmt(m["raf"]),
+                             fmt(m["long"]), fmt(m["raf_paused"]), fmt(m["steps"]), fmt(m["draws"])])
+    print(table(["case", "tree", "light drawing", "robot updates/s in the browser", "min 1-s", "ws frames/s", "KiB/s",
                  "browser rAF/s", "long tasks ms/s", "rAF/s paused", "server steps/s", "server draws/s"], rows))
     print(f"\nafter the run: {load_note()}")
 

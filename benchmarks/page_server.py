@@ -64,7 +64,9 @@ for line in sys.stdin:
         print("@@" + json.dumps({"ticks": list(ticks), "presses": list(presses), "draws": draws[0],
                                  "tabs": len(tabs), "drawn": [t.arena.drawn_revision for t in tabs],
                                  "steps": sum(int(t.session.sim.state.k) for t in tabs),
-                                 "playing": [bool(t.session.playing) for t in tabs]}), flush=True)
+                                 "playing": [bool(t.session.playing) for t in tabs],
+                                 "light": [bool(getattr(getattr(t, "display", None), "light", False))
+                                           for t in tabs]}), flush=True)
     elif cmd in ("play", "pause", "reset_run"):
         for t in tabs:
             getattr(t.session, "reset" if cmd == "reset_run" else cmd)()
@@ -204,6 +206,8 @@ CASES = [
     ("Ch. 4 fleet, 200 robots + trails, obstacles, pymunk physics, 20 steps/s", "course-physics",
      ["sim.robots=200", "world.length=90", "world.width=38.3", "world.start_size=28.3",
       "view.steps_per_second=20", LONG]),
+    ("Ch. 3 swarm, 1000 robots + trails, playback 20 steps/s (preset rate)", "default",
+     ["sim.robots=1000", LONG]),
 ]
 
 

@@ -98,3 +98,24 @@ def _exponent(handle) -> int:
         return 0
     sup = label.split("×10")[1].split()[0]
     return int(sup.translate(str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")))
+
+
+def test_the_last_x_tick_has_room_on_the_right():
+    """"1,000" centred on the right edge of an SLO plot at generation 1000 was cut by the card."""
+    f = frame((np.array([0.0, 1000.0]), np.array([1.0, 2.0])), ({}, {"label": "y"}), x_range=(0.0, 1000.0),
+              on_y=(True,))
+    half = plots.CHAR_PX * len("1,000") / 2
+    assert f.padding[1] >= half + 2 and f.padding[0] == plots.PADDING[0]
+    narrow = frame((np.array([0.0, 90.0]), np.array([1.0, 2.0])), ({}, {"label": "y"}), x_range=(0.0, 90.0),
+                   on_y=(True,))
+    assert narrow.padding == plots.PADDING  # "80" fits the usual padding
+
+
+def test_large_text_scales_the_axes_fonts_sizes_and_padding():
+    f = frame((np.array([0.0, 1000.0]), np.array([1.0, 2.0])), ({}, {"label": "y"}), x_range=(0.0, 1000.0),
+              on_y=(True,), x_label="t [s]", y_label="R(τ)")
+    big = plots.scale_text(f, 1.5)
+    assert plots.scale_text(f, 1.0) is f
+    assert all(a["font"].startswith("18px") and a["labelFont"].startswith("bold 18px") for a in big.axes)
+    assert big.axes[0]["size"] == 45 and big.axes[1]["size"] >= 1.5 * f.axes[1]["size"]
+    assert big.padding[1] >= 1.5 * f.padding[1] and big.data is f.data and big.scales is f.scales

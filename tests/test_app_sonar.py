@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from shoal.app.kinds import sonar
-from shoal.app.kinds.sonar import corr_data, true_ray_index
+from shoal.app.kinds.sonar import corr_data, corr_range, true_ray_index
 from shoal.engine.kinds.sonar import AcousticSwarm
 
 
@@ -56,6 +56,12 @@ def test_sonar_preset_builds_an_acoustic_swarm_and_draws_rays_from_the_robots(ta
     robots = np.asarray(view.nodes["robots"].points)
     np.testing.assert_allclose(robots[:, :2], view.to_view(x)[:, :2], atol=1e-4)
     assert np.asarray(view.nodes["picks"].points).shape[0] >= 1  # selected intersections drawn
+    # the true rays lie over the mirror rays: higher, and made (so drawn) after them
+    height = {key: float(np.asarray(view.nodes[key].points)[0, 0, 2]) for key in view.layer("rays").keys}
+    assert height["rays_true"] > height["rays_mirror"] and height["rays_sel_true"] > height["rays_sel_mirror"]
+    order = list(view.nodes)
+    assert order.index("rays_true") > order.index("rays_mirror")
+    assert order.index("rays_sel_true") > order.index("rays_sel_mirror") > order.index("rays_true")
 
 
 def test_algorithm_and_Q_reach_the_scenario_and_the_swarm(tab):
@@ -127,7 +133,7 @@ def test_the_correlation_plot_shows_the_selected_robots_corr(tab):
         assert s.selected_robot == robot
         tab.tick(float(robot) + 1.0)
         b = s.sim.state.bearing
-        x, y, mark = (np.asarray(a) for a in p.handles["corr"].data)
+        x, y, _, mark, _ = (np.asarray(a) for a in p.handles["corr"].data)
         lags_ms = b.lags * 1e3
         first = np.zeros(len(x), bool)
         first[np.unique(x, return_index=True)[1]] = True  # τ_lag may sit on the grid (sample lag)
@@ -163,10 +169,30 @@ def test_upload_of_an_acoustic_preset(tab):
     assert tab.session.sim.params.algorithm == "x-pso"
 
 
-def test_corr_data_marks_tau_with_a_vertical_line():
+def test_corr_data_marks_tau_and_the_window_without_a_trace_along_the_plot():
     lags = np.linspace(-1e-3, 1e-3, 21)
     corr = np.cos(lags * 3000)
-    x, y, mark = corr_data(lags, corr, 2.5e-4, 0.9)
+    x, line, samples, mark, window = corr_data(lags, corr, 2.5e-4, 0.9, window=5e-4)
+    lo, hi = corr_range(corr, 0.9)
     assert np.all(np.diff(x) >= 0)
-    assert mark.max() == 0.9 and x[np.argmax(mark)] == pytest.approx(0.25)
-    np.testing.assert_allclose(y, np.interp(x / 1e3, lags, corr))
+    np.testing.assert_allclose(line, np.interp(x / 1e3, lags, corr))  # the curve as it was
+    shown = samples >= lo  # the sample dots: the lag grid, nothing else
+    np.testing.assert_allclose(np.sort(x[shown]), lags * 1e3)
+    np.testing.assert_allclose(samples[shown], corr[np.argsort(lags)])
+    # τ_lag: one point at ρ, everything else below the plot (clipped): no trace along its floor
+    assert np.count_nonzero(mark >= lo) == 1 and mark.max() == 0.9 and x[np.argmax(mark)] == pytest.approx(0.25)
+    # the window: its two edges at the top, nothing else on the plot
+    edges = window >= lo
+    assert np.count_nonzero(edges) == 2 and np.all(window[edges] == hi)
+    np.testing.assert_allclose(x[edges], [-0.5, 0.5])
+
+
+def test_corr_note_says_the_sample_rate_and_why_the_curve_is_coarse():
+    from shoal.app.kinds.registry import session_for
+    from shoal.app.kinds.sonar import corr_note
+    from shoal.presets.io import load
+
+    s = session_for(load("sonar-xb-pso"))  # Chapter 7's reading: 4 kHz, the sample lag
+    s.step(1)
+    text = corr_note(s)
+    assert "f_s = 4 kHz" in text and "7 lags" in text and "±D/c = ±0.5 ms" in text and "coarse" in text

@@ -212,3 +212,62 @@ def test_every_grid_line_lies_in_the_arena_on_the_cell_pitch_with_every_fifth_a_
     spans = np.where(vertical[:, None], lines[:, :, 1], lines[:, :, 0])  # each line runs edge to edge
     edge_lo, edge_hi = np.where(vertical[:, None], lo[1], lo[0]), np.where(vertical[:, None], hi[1], hi[0])
     np.testing.assert_allclose(np.sort(spans, axis=1), np.column_stack([edge_lo, edge_hi]), atol=1e-4 * np.max(hi - lo))
+
+
+# ---------------------------------------------------------------------------- the light drawing
+def _segments(view, key: str) -> int:
+    return len(np.asarray(view.nodes[key].points)) if view.canvas.shown(key) else 0
+
+
+@pytest.mark.parametrize("preset", KINDS)
+def test_the_light_drawing_has_no_line_per_robot_and_keeps_the_view(scene, preset):
+    """A page without a GPU fills every line segment's triangles on the CPU: in the light drawing
+    trails are a few dots each, heading strokes and obstacle outlines go, the grid keeps its
+    sections; the robots stay one point cloud and the view stays where it was. (A sonar's rays and
+    Mai's neighbour edges stay lines: they are what those scenes show, for tens of robots.)"""
+    from shoal.app.view.layers import TRAIL_DOTS
+
+    session, view = _view(scene, preset)
+    session.step(30)
+    view.draw(session.snapshot())
+    robots = session.sim.robots
+    assert view.canvas.shown("trails") and not view.canvas.shown("trails_dots")
+    full = {k: _segments(view, k) for k in ("grid", "obstacle_edges") if k in view.nodes}
+    view.follow_swarm()
+    view.draw(session.snapshot())
+    focus, scale = view.focus.copy(), view.scale
+    assert view.restyle(light=True) and not view.restyle(light=True)  # (a second call changes nothing)
+    view.draw(session.snapshot())
+    np.testing.assert_allclose(view.focus, focus)
+    assert view.scale == scale
+    dots = np.asarray(view.nodes["trails_dots"].points)
+    assert not view.canvas.shown("trails") and 0 < len(dots) <= TRAIL_DOTS * robots
+    assert not view.canvas.shown("headings") and "heading" not in _labels(view)
+    assert np.asarray(view.nodes["robots"].points).shape[0] == robots
+    assert _segments(view, "grid") == 0 and _segments(view, "grid_sections") > 0
+    if "obstacle_edges" in full:
+        assert full["obstacle_edges"] > 0 and _segments(view, "obstacle_edges") == 0
+    view.restyle(light=False)
+    view.draw(session.snapshot())
+    assert view.canvas.shown("trails") and not view.canvas.shown("trails_dots")
+
+
+def test_the_light_drawing_of_a_fleet_rings_stalled_robots_with_dots_and_draws_a_layer_as_one_line(scene):
+    session, view = _view(scene, "course-dvc")
+    view.restyle(light=True)
+    session.step(5)
+    snap = session.snapshot()
+    snap.extras["stalled"] = np.arange(len(snap.x)) < 3  # three robots stalled
+    view.draw(snap)
+    assert not view.canvas.shown("stalled") and len(np.asarray(view.nodes["stalled_dots"].points)) == 3
+    world = snap.extras["world"]
+    assert len(np.asarray(view.nodes["layers"].points)) == len(world.layer_x)
+
+
+def test_larger_text_builds_the_labels_again_at_their_new_size(scene):
+    session, view = _view(scene, "default")
+    view.draw(session.snapshot())
+    small = view.nodes["source_label"].font_screen_scale
+    assert view.restyle(text_scale=1.3)
+    view.draw(session.snapshot())
+    assert view.nodes["source_label"].font_screen_scale == pytest.approx(1.3 * small)

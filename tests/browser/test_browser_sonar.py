@@ -29,7 +29,7 @@ def _plot_matches(tab, robot: int) -> bool:
     b = tab.session.sim.state.bearing
     if b is None or tab.session.selected_robot != robot:
         return False
-    x, y, _ = (np.asarray(a) for a in tab.panels.handles["corr"].data)
+    x, y = (np.asarray(a) for a in tab.panels.handles["corr"].data[:2])
     first = np.zeros(len(x), bool)
     first[np.unique(x, return_index=True)[1]] = True  # τ_lag may sit on the grid (sample lag)
     on_grid = first & np.isin(x, b.lags * 1e3)
@@ -62,7 +62,9 @@ def test_switching_to_sonar_draws_rays_and_the_correlation_follows_the_robot(ser
     wait_until(lambda: _plot_matches(tab, 6), what="robot 6's R(τ) plotted")
     assert not np.allclose(np.asarray(tab.panels.handles["corr"].data[1]), before)
     page.get_by_role("tab", name="Plots").click()
-    page.wait_for_selector("text=τ [ms]", timeout=10000)  # the x axis is labelled
+    page.get_by_text("selected robot: R(τ)", exact=False).first.wait_for(timeout=10000)
+    axes = tab.panels.handles["corr"].axes  # (uPlot draws the axes' labels on its canvas)
+    assert axes[0]["label"] == "τ [ms]" and axes[1]["label"] == "R(τ)"
 
 
 def test_dragging_the_source_with_the_mouse_moves_it_in_the_engine(server, page, cid):

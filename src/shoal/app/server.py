@@ -34,6 +34,7 @@ from .session.upload import MAX_UPLOAD_BYTES
 from .tab import TabApp
 from .upload_guard import guard_uploads
 from .view.camera import home_camera, top_view
+from .view.page import install_page
 
 TICK_HZ = 60.0
 PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round
@@ -199,6 +200,7 @@ class ShoalServer:
                       lambda name, why: refuse(f"Refused: uploaded {name}", why))
         tab = self.open_tab(client.client_id, client.gui, client.scene, client)
         install_keys(client.gui)  # space, →, r
+        install_page(client.gui)  # the top view held, light drawing on a page without a GPU, no software-WebGL toast
         tab.session.play()
 
     def _disconnect(self, client: viser.ClientHandle) -> None:

@@ -28,9 +28,11 @@ from .experiment.service import ExperimentService
 from .kinds.registry import app_kind, app_presets, kind_for, session_for
 from .lessons.panel import LessonProgress
 from .panel.panel import Panel, Services
+from .panel.view_row import DISPLAY, Display
 from .preset_menu import PresetMenu
 from .session.session import Session
-from .view.camera import Viewport, home_camera
+from .view import page
+from .view.camera import Viewport, home_camera, straighten, tipped
 
 CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
 
@@ -78,6 +80,9 @@ class TabApp:
         self.control_hold = self.CONTROL_HOLD
         self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
         self.menu = PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included, across swaps
+        self.display = Display()  # how the arena is drawn, across swaps
+        self._page = Display()  # what the page was last told (flat camera, text scale)
+        self._home_when_resized: float | None = None  # the camera's aspect before the panel's width changed
         self._build_kind()
         if camera is not None:
             camera.on_update(self._camera_moved)
@@ -86,9 +91,11 @@ class TabApp:
         kind = app_kind(self.session)
         services = Services(notify=self.notify, send_file=self.send_file, menu=self.menu, make_session=session_for,
                             replace=self.replace, share=share_page, lessons=self.lesson_progress,
-                            experiments=self.experiments, owner=self.owner, view=self.view_action)
+                            experiments=self.experiments, owner=self.owner, view=self.view_action,
+                            display=self.display)
         self.panels = Panel(self.gui, self.session, kind, services)
         self.arena = kind.view(self.scene, self.panels.part)
+        self._show_display()
         if self.camera is not None:
             self._camera_moved(self.camera)
         if self.panels.part.click is not None:
@@ -130,15 +137,49 @@ class TabApp:
 
     def view_action(self, action: str) -> None:
         """The panel's view buttons: "fit" (everything on screen, the camera back home) or "follow"
-        (the swarm's middle stays in the middle)."""
+        (the swarm's middle stays in the middle); "display": a box of the Display folder changed."""
         if action == "fit":
             self.arena.fit_all()
             self._home_camera()
         elif action == "follow":
             self.arena.follow_swarm()
+        elif action == DISPLAY:
+            with self._ticking:
+                self._show_display()
+
+    def _show_display(self) -> None:
+        """Draw the arena as ``display`` says, tell the page (held top view, text size) what changed
+        and show the status area's note."""
+        d = self.display
+        self.arena.restyle(light=d.light, text_scale=d.text_scale)
+        self.panels.show_note(d.note())
+        self.panels.view_gui.sync(d)
+        if self.panels.text_scale != d.text_scale:
+            self.panels.text_scale = d.text_scale
+            self._plot_key = None  # the plots again, at the new size
+        if self.camera is None:
+            return
+        if d.orbit != self._page.orbit:
+            if not d.orbit:
+                self._home_camera()  # back to the top view, which the page then holds
+            page.set_flat(self.gui, not d.orbit)
+        if d.light != self._page.light:
+            page.set_light(self.gui, d.light)
+        if d.large_text != self._page.large_text:
+            with contextlib.suppress(Exception):  # no report yet
+                self._home_when_resized = float(self.camera.aspect)  # the panel's width changes the arena's
+            page.set_text_scale(self.gui, d.text_scale)
+        self._page = Display(d.light, d.orbit, d.large_text)
 
     def _camera_moved(self, camera: Any) -> None:
         with contextlib.suppress(Exception):  # no report yet, or a tab closing
+            if self._home_when_resized is not None and abs(float(camera.aspect) - self._home_when_resized) > 1e-3:
+                self._home_when_resized = None  # the arena took its new width: show all of it again
+                home_camera(camera)
+                return
+            if not self.display.orbit and tipped(camera):  # a page that does not hold the top view itself
+                straighten(camera)
+                return
             self.arena.look(Viewport.of(camera))
 
     def _home_camera(self) -> None:

@@ -280,13 +280,18 @@ class Stalled(Static):
     it may not approach: the engine's ``stalled``); not on recorded frames."""
 
     name = "stalled"
-    keys = ("stalled",)
+    keys = ("stalled", "stalled_dots")
     legend = (LegendEntry("○", STALLED, "stalled robot (barely moving)"),)
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         stalled = snap.extras.get("stalled")
         x = snap.x[stalled] if stalled is not None else np.zeros((0, 2))
         r = 1.6 * snap.extras["params"].robot_radius
+        if canvas.light:  # a disc under the robot, showing round it as a ring
+            canvas.hide("stalled")
+            canvas.points("stalled_dots", x, STALLED, 2 * r * canvas.scale, "circle", Z["robots"] - 0.001)
+            return
+        canvas.hide("stalled_dots")
         ring = shapes.circle_segments(np.zeros(2), r, STALLED_RING_SEGMENTS)
         segs = (ring[None] + shapes.plane(x)[:, None, None, :]).reshape(-1, 2, 2)
         canvas.lines("stalled", segs, STALLED, 2.5, Z["robots"] + 0.001)
@@ -325,7 +330,8 @@ class WorldLayer(Static):
             color=START, opacity=0.18, material="toon3", side="double", cast_shadow=False, receive_shadow=False))
         canvas.lines("start_edge", shapes.polyline(box, closed=True), START, 1.5, Z["start"])
         canvas.lines("walls", np.asarray(world.walls), WALL, 3.0, Z["obstacles"])
-        layers = [shapes.dashed((lx, y0), (lx, y1), 0.6, 0.6) for lx in world.layer_x]
+        layers = [np.array([[(lx, y0), (lx, y1)]]) if canvas.light else shapes.dashed((lx, y0), (lx, y1), 0.6, 0.6)
+                  for lx in world.layer_x]  # the light drawing: one line a layer, not a hundred dashes
         canvas.lines("layers", np.concatenate(layers) if layers else np.zeros((0, 2, 2)), LAYER, 1.2, Z["layers"])
         for i, lx in enumerate(world.layer_x):
             canvas.label(f"layer_label_{i}", f"layer {i + 1}", np.array([lx, y1 + 0.8]))
@@ -371,7 +377,7 @@ class Obstacles(Static):
         else:
             node.batched_positions = pos
             node.batched_scales = scales
-        rims = [shapes.circle_segments(c[:2], c[2], RIM_SEGMENTS) for c in circles]
+        rims = [] if canvas.light else [shapes.circle_segments(c[:2], c[2], RIM_SEGMENTS) for c in circles]
         canvas.lines("obstacle_edges", np.concatenate(rims) if rims else np.zeros((0, 2, 2)), OBSTACLE_EDGE, 1.2,
                      Z["obstacles"] + 0.001)
         canvas.drop("polygons")

@@ -20,6 +20,7 @@ from typing import Any, Callable
 import numpy as np
 
 from shoal.engine.acoustics.propagation import snr_db
+from shoal.engine.acoustics.receiver import lag_samples
 from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams
 from shoal.presets.build import build_sonar, kind_of, sonar_keywords, sonar_params_for
@@ -293,21 +294,28 @@ def ray_segments(snap: Snapshot) -> tuple[np.ndarray, np.ndarray]:
     return true, mirror
 
 
+# Heights above Z["rays"], true rays over mirror rays, the selected pair over the rest. Nodes at the
+# same depth (within the depth buffer's resolution, about 0.0015 here) are drawn in the order they
+# were made and the later one wins: the mirror rays are made first.
+RAY_Z = dict(mirror=-0.002, true=0.0, sel_mirror=0.002, sel_true=0.004)
+
+
 class Rays(Static):
     """Each robot's pair of bearing rays (green: the one nearer the true source; orange: its
-    mirror), the selected robot's thicker."""
+    mirror), the selected robot's thicker. A true ray lies over every mirror ray: where a robot
+    faces the source the two nearly coincide, and the ray through the source reads green."""
 
     name = "rays"
-    keys = ("rays_true", "rays_mirror", "rays_sel_true", "rays_sel_mirror")
+    keys = ("rays_mirror", "rays_true", "rays_sel_mirror", "rays_sel_true")  # (the order they are drawn in)
     legend = (LegendEntry("—", RAY_TRUE, "bearing ray"), LegendEntry("—", RAY_MIRROR, "mirror ray"))
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         true, mirror = ray_segments(snap)
-        canvas.lines("rays_true", true, RAY_TRUE, 1.2, Z["rays"])
-        canvas.lines("rays_mirror", mirror, RAY_MIRROR, 1.2, Z["rays"])
-        i = snap.selected
-        canvas.lines("rays_sel_true", true[i:i + 1], RAY_TRUE, 3.0, Z["rays"] + 0.001)
-        canvas.lines("rays_sel_mirror", mirror[i:i + 1], RAY_MIRROR, 3.0, Z["rays"] + 0.001)
+        i, z = snap.selected, Z["rays"]
+        canvas.lines("rays_mirror", mirror, RAY_MIRROR, 1.2, z + RAY_Z["mirror"])
+        canvas.lines("rays_true", true, RAY_TRUE, 1.2, z + RAY_Z["true"])
+        canvas.lines("rays_sel_mirror", mirror[i:i + 1], RAY_MIRROR, 3.0, z + RAY_Z["sel_mirror"])
+        canvas.lines("rays_sel_true", true[i:i + 1], RAY_TRUE, 3.0, z + RAY_Z["sel_true"])
 
 
 class Hits(Static):
@@ -421,44 +429,85 @@ EXPORT_NOTE = (" A source dragged by hand goes into the downloaded preset (acous
                "each step.")
 
 
+WINDOW = "rgba(120,120,120,0.9)"
+HIDDEN = "rgba(0,0,0,0)"
+
+
 def corr_series() -> tuple[dict[str, Any], ...]:
+    """R(τ) as a line through its samples, the samples as dots, τ_lag as a red line up to a dot at
+    ρ, and the window ±D/c as dashed lines (the legend names them; no hover values: the marker
+    series lie off the plot where they are not drawn)."""
     return (
         {"label": "τ [ms]"},
-        {"label": "R(τ)", "stroke": CORR, "width": 2},
-        {"label": "τ_lag", "stroke": MARK, "width": 2},
+        {"label": "R(τ)", "stroke": CORR, "width": 2, "points": {"show": False}},
+        {"label": "samples", "stroke": HIDDEN, "width": 1,
+         "points": {"show": True, "size": 6, "stroke": CORR, "fill": CORR}},
+        {"label": "τ_lag, ρ", "stroke": MARK, "width": 2, "points": {"show": True, "size": 8, "stroke": MARK,
+                                                                     "fill": MARK}},
+        {"label": "window ±D/c", "stroke": WINDOW, "width": 1, "dash": (4.0, 4.0), "points": {"show": False}},
     )
 
 
-def corr_data(lags: np.ndarray, corr: np.ndarray, tau: float, rho: float) -> tuple[np.ndarray, ...]:
-    """(τ [ms], R(τ), marker): the lag grid with τ_lag inserted three times so that the marker
-    series rises straight up from the floor of the plot to ρ at τ_lag and lies on the floor
-    elsewhere. R(τ) is interpolated at the inserted points (so the curve is unchanged)."""
-    lags = np.asarray(lags, dtype=float)
+def corr_range(corr: np.ndarray, rho: float) -> tuple[float, float]:
+    """The y range of the plot: from 0 (or below, for a negative R) to a little over the peak."""
     corr = np.asarray(corr, dtype=float)
+    corr = corr[np.isfinite(corr)]
+    lo = float(min(corr.min(initial=0.0), 0.0))
+    hi = float(max(corr.max(initial=0.0), rho if np.isfinite(rho) else 0.0))
+    if hi <= lo:
+        hi = lo + 1.0
+    return lo, hi + 0.05 * (hi - lo)
+
+
+def corr_data(lags: np.ndarray, corr: np.ndarray, tau: float, rho: float,
+              window: float | None = None) -> tuple[np.ndarray, ...]:
+    """(τ [ms], R(τ), its samples, τ_lag, the window): on the lag grid with τ_lag and ±``window``
+    (s) inserted, each next to a point a hair before and after it. R(τ) is interpolated at the
+    inserted points (the line is unchanged) and its samples are dots on the grid only; τ_lag rises
+    from below the plot to ρ (a dot there), the window's edges to the top. Where a marker is not
+    drawn it lies far below the plot, which uPlot clips (it draws NaN as a line, not a gap)."""
+    lags, corr = np.asarray(lags, dtype=float), np.asarray(corr, dtype=float)
     if len(lags) < 2:
-        return (np.array([0.0, 1e-6]), np.zeros(2), np.zeros(2))
-    floor = float(min(corr.min(), 0.0))
+        x = np.array([0.0, 1e-6])
+        return (x, np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2))
+    lo, hi = corr_range(corr, rho)
+    off = lo - 10.0 * (hi - lo)  # below the plot: not drawn
     eps = 1e-9 * max(float(lags[-1] - lags[0]), 1e-12)
-    extra = np.array([tau - eps, tau, tau + eps])
+    marks = [(tau, rho, 1)] + ([(-window, hi, 2), (window, hi, 2)] if window is not None else [])
+    extra = np.array([[m - eps, m, m + eps] for m, _, _ in marks]).ravel()
     x = np.concatenate([lags, extra])
     order = np.argsort(x, kind="stable")
     x = x[order]
-    y = np.interp(x, lags, corr)
-    mark = np.full(len(x), floor)
-    is_peak = np.zeros(len(x), bool)
-    is_peak[np.flatnonzero(order == len(lags) + 1)] = True
-    mark[is_peak] = rho
-    return (x * 1e3, y, mark)
+    line = np.interp(x, lags, corr)
+    samples = np.where(order < len(lags), line, off)
+    lag_mark, window_mark = np.full(len(x), off), np.full(len(x), off)
+    for j, (_, top, kind) in enumerate(marks):
+        at = np.flatnonzero(order == len(lags) + 3 * j + 1)  # the mark itself (its neighbours stay off)
+        (lag_mark if kind == 1 else window_mark)[at] = top
+    return (x * 1e3, line, samples, lag_mark, window_mark)
 
 
-def corr_scales(data: tuple[np.ndarray, ...]) -> dict[str, Any]:
-    x, y, mark = data
-    lo = float(min(y.min(), mark.min()))
-    hi = float(max(y.max(), mark.max()))
-    if hi <= lo:
-        hi = lo + 1.0
-    return {"x": {"time": False, "range": (float(x[0]), float(x[-1]))},
-            "y": {"range": (lo, hi + 0.05 * (hi - lo))}}
+def corr_scales(data: tuple[np.ndarray, ...], rho: float) -> dict[str, Any]:
+    x, line = data[0], data[1]
+    return {"x": {"time": False, "range": (float(x[0]), float(x[-1]))}, "y": {"range": corr_range(line, rho)}}
+
+
+def corr_note(s: Session) -> str:
+    """What the R(τ) plot is drawn from: the sample rate, the lags and the window, and why a low
+    rate draws a coarse curve."""
+    p = _params(s.scenario)
+    c = driver(s).correlation()
+    lags = c[0] if c is not None else lag_samples(p.band, p.D) / p.fs
+    n, window = len(lags), p.D / p.c
+    text = (f"*f_s = {p.fs / 1e3:g} kHz: a dot a sample, {1e3 / p.fs:.3g} ms apart; {n} lags over "
+            f"±{1e3 * float(np.max(np.abs(lags))):.3g} ms; dashed: the window ±D/c = ±{1e3 * window:.3g} ms.")
+    if p.lag_peak == "sample":
+        inside = int(np.floor(window * p.fs + 1e-9))  # sample lags within the window on each side of 0
+        text += (f" Only {inside} samples each side of 0: a coarse curve, and τ_lag is the "
+                 "highest sample (Algorithm 5, no interpolation).*")
+    else:
+        text += " τ_lag: the top of a parabola through the highest sample and its neighbours.*"
+    return text
 
 
 def snr_series() -> tuple[dict[str, Any], ...]:
@@ -492,7 +541,15 @@ def snr_scales(snr: np.ndarray) -> dict[str, Any]:
 
 def _corr(s: Session) -> tuple[np.ndarray, ...]:
     c = driver(s).correlation()
-    return corr_data(*c) if c is not None else corr_data(np.zeros(0), np.zeros(0), 0.0, 0.0)
+    if c is None:
+        return corr_data(np.zeros(0), np.zeros(0), 0.0, 0.0)
+    p = _params(s.scenario)
+    return corr_data(*c, window=p.D / p.c)
+
+
+def _corr_scales(s: Session, data: tuple[np.ndarray, ...]) -> dict[str, Any]:
+    c = driver(s).correlation()
+    return corr_scales(data, c[3] if c is not None else 0.0)
 
 
 def _snr(s: Session) -> np.ndarray:
@@ -500,9 +557,10 @@ def _snr(s: Session) -> np.ndarray:
         return s.sim.state.snr_db[0].copy()
 
 
-CORR_PLOT = Chart("corr", "selected robot: R(τ) · red: τ_lag", corr_series(), _corr,
-                  lambda s, data: corr_scales(data), x_label="τ [ms]", aspect=1.8,
+CORR_PLOT = Chart("corr", "selected robot: R(τ) · red: τ_lag and ρ", corr_series(), _corr, _corr_scales,
+                  x_label="τ [ms]", y_label="R(τ)", aspect=1.8, legend={"live": False},
                   visible=lambda s: _two_hydrophones(s))
+CORR_NOTE = Text(compute=corr_note, visible=lambda s: _two_hydrophones(s))
 NO_CORR = Text(text="*R(τ): only the algorithms with two hydrophones (X-, B- and XB-PSO) measure a bearing.*",
                visible=lambda s: not _two_hydrophones(s))
 DIST = PlotSpec("dist", "|CoM − source| [m]",
@@ -624,7 +682,7 @@ def panel(api: PanelAPI) -> KindPanel:
                 TRAIL_SLIDER,
                 Text(text=GLYPHS),
             )),
-            Tab("Plots", (CORR_PLOT, NO_CORR, DIST, SNR_PLOT)),
+            Tab("Plots", (CORR_PLOT, CORR_NOTE, NO_CORR, DIST, SNR_PLOT)),
         ),
         status=_status, compare=_compare, export_note=EXPORT_NOTE, click=_click, drag=drag,
         rebuilt=lambda s, what, changes: ("Swarm rebuilt", f"{what}: the robots start again"))

@@ -34,7 +34,7 @@ from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
 from .compare import CompareFolder
 from .keys import PLAYING
-from .plots import PADDING, Chart, Frame, PlotSpec
+from .plots import Chart, Frame, PlotSpec, scale_text
 from .replay import ReplayFolder
 from .spec import (
     Button,
@@ -51,7 +51,7 @@ from .spec import (
     Text,
     get_path,
 )
-from .view_row import ViewRow
+from .view_row import Display, ViewRow
 
 PLAYBACK = ("Play", "Pause", "Step", "Reset")
 SPEED_SLIDER = Slider("view.steps_per_second", "speed [steps/s]", 1.0, 240.0, 1.0, "playback rate")
@@ -84,7 +84,8 @@ class Services:
     lessons: LessonProgress = field(default_factory=LessonProgress)  # where the Lessons tab is (the tab keeps it)
     experiments: ExperimentService | None = None  # the server's experiments (None: no Experiment tab)
     owner: Hashable = None  # this browser tab's key among the experiments
-    view: Callable[[str], None] | None = None  # the arena's view buttons: "fit" or "follow"
+    view: Callable[[str], None] | None = None  # the arena's view buttons: "fit", "follow" or "display"
+    display: Display | None = None  # how the tab's arena is drawn (the tab keeps it: it outlives a swap of panels)
 
 
 def notes_text(name: str = "ch3") -> str:
@@ -125,6 +126,7 @@ class Panel:
         self._controls: list[tuple[Any, Any]] = []  # (spec, handle) in build order
         self._sent: dict[int, tuple] = {}  # uPlot (series, axes) last sent, by handle (see push_uplot)
         self.controls = 0  # a count of the user's control events (the tab holds the scene a moment after one)
+        self.text_scale = services.display.text_scale if services.display is not None else 1.0  # plots' text
         self.part = kind.panel(self)
         self._build_header()
         self.view_gui = ViewRow(self)
@@ -156,6 +158,7 @@ class Panel:
             "preset", names, initial_value=menu.label_for(sc) or names[0],
             hint="shipped scenes and the presets uploaded in this tab; switching replaces the whole scene")
         self.status = gui.add_markdown("")
+        self.note = ""  # a line under the status line about the drawing (the light drawing)
         self.playback = gui.add_button_group("playback", PLAYBACK)
         self.top += [self.preset, self.status, self.playback, self._build(SPEED_SLIDER)]
         self.at_end = gui.add_dropdown(
@@ -294,7 +297,7 @@ class Panel:
         elif isinstance(item, (PlotSpec, Chart)):
             f = self._frame(item)
             h = gui.add_uplot(data=f.data, series=f.series, scales=f.scales, axes=f.axes, title=item.title,
-                              aspect=item.aspect, legend=item.legend, padding=PADDING,
+                              aspect=item.aspect, legend=item.legend, padding=f.padding,
                               visible=item.visible is None or bool(item.visible(s)))
             self._sent[id(h)] = (f.series, f.axes)
         else:
@@ -575,12 +578,22 @@ class Panel:
         state = PLAYING if s.playing else ("■ finished: Play runs it again" if s.finished else "paused")
         shown = s.shown_step()
         if shown is None:
-            self.status.content = self.part.status(s, s.readout(), state)
+            self._status(self.part.status(s, s.readout(), state))
             return
         k, t, last = shown
         what = "replay" if s.replaying is not None else "recorded history"
-        self.status.content = (f"**{s.scenario.name}** · {state} · {what} · step {k} of {last} · t = {t:.4g} s"
-                               " · the live run's numbers are not recorded")
+        self._status(f"**{s.scenario.name}** · {state} · {what} · step {k} of {last} · t = {t:.4g} s"
+                     " · the live run's numbers are not recorded")
+
+    def _status(self, text: str) -> None:
+        """Show the status line, with the drawing's note (if any) on a line of its own below it."""
+        self.status.content = f"{text}<br>{self.note}" if self.note else text
+
+    def show_note(self, text: str) -> None:
+        """The line under the status line about the drawing ("" for none)."""
+        if text != self.note:
+            self.note = text
+            self.refresh_status()
 
     def refresh_readout(self) -> None:
         """Readouts that follow the scenario (derived numbers beside the controls)."""
@@ -616,14 +629,14 @@ class Panel:
         """What ``item`` shows now: the metrics up to the step shown (with swarm B's curve) or the chart."""
         s = self.session
         if isinstance(item, Chart):
-            return item.render(s)
+            return scale_text(item.render(s), self.text_scale)
         m, span = s.shown_metrics(item.history)
         if not len(m.get("t", ())):
             m = {name: np.zeros(0) for name in s.history.names}
         twin = s.twin_metric(item.twin, np.asarray(m["t"], float)) if item.twin is not None else None
         if twin is not None and len(m["t"]) < 2:
             twin = None
-        return item.render(m, span, s, twin)
+        return scale_text(item.render(m, span, s, twin), self.text_scale)
 
     def refresh_timeline(self) -> None:
         """The Replay folder: timeline and badge (the caller throttles this)."""
@@ -640,5 +653,7 @@ class Panel:
         if axes != f.axes:
             handle.axes = f.axes
         self._sent[id(handle)] = (f.series, f.axes)
+        if tuple(handle.padding or ()) != f.padding:
+            handle.padding = f.padding
         handle.data = f.data
         handle.scales = f.scales

@@ -139,14 +139,28 @@ def y_view(values: list[np.ndarray], fixed: Range = (None, None)) -> YView:
     return YView(lo, hi, exponent)
 
 
+def x_padding(x_range: tuple[float, float]) -> tuple[int, int, int, int]:
+    """:data:`PADDING` with the right side wide enough for half the last x tick's text ("1,000"
+    centred on the right edge of the plot would be cut)."""
+    lo, hi = (float(v) for v in x_range)
+    if not (math.isfinite(lo) and math.isfinite(hi)) or hi <= lo:
+        return PADDING
+    step = tick_step(hi - lo, 5)
+    decimals = len(f"{step:.12f}".rstrip("0").split(".")[1])
+    last = math.floor(hi / step + 1e-9) * step
+    chars = len(f"{last:,.{decimals}f}")
+    return (PADDING[0], max(PADDING[1], int(math.ceil(CHAR_PX * chars / 2)) + 4), PADDING[2], PADDING[3])
+
+
 @dataclass(frozen=True)
 class Frame:
-    """What one chart refresh sends: data, series options, scales and axes."""
+    """What one chart refresh sends: data, series options, scales, axes and the padding round the plot."""
 
     data: tuple[np.ndarray, ...]
     series: tuple[dict[str, Any], ...]
     scales: dict[str, Any]
     axes: tuple[dict[str, Any], ...]
+    padding: tuple[int, int, int, int] = PADDING
 
 
 def frame(data: tuple[np.ndarray, ...], series: tuple[dict[str, Any], ...], *, x_range: tuple[float, float],
@@ -159,9 +173,33 @@ def frame(data: tuple[np.ndarray, ...], series: tuple[dict[str, Any], ...], *, x
         np.asarray(y, dtype=float) * view.factor if y_scale else np.asarray(y, dtype=float)
         for y, y_scale in zip(data[1:], on_y))
     x_axis: dict[str, Any] = {"size": 30, "label": x_label, "labelSize": LABEL_SIZE, "labelGap": 0} if x_label else {}
+    x = x_scale(x_range)
     return Frame(data=scaled, series=series,
-                 scales={"x": x_scale(x_range), "y": {"range": view.range()}, **(more_scales or {})},
-                 axes=(x_axis, view.axis(y_label)) + tuple(more_axes))
+                 scales={"x": x, "y": {"range": view.range()}, **(more_scales or {})},
+                 axes=(x_axis, view.axis(y_label)) + tuple(more_axes), padding=x_padding(x["range"]))
+
+
+FONT = 'system-ui, -apple-system, "Segoe UI", Roboto, "Helvetica Neue", sans-serif'  # uPlot's own
+
+
+def scale_text(f: Frame, scale: float) -> Frame:
+    """``f`` with its axes' text ``scale`` times uPlot's 12 px (a projector), the axes as much wider."""
+    if scale == 1.0:
+        return f
+    px = round(12 * scale)
+
+    def axis(a: dict[str, Any]) -> dict[str, Any]:
+        out = {**a, "font": f"{px}px {FONT}", "labelFont": f"bold {px}px {FONT}"}
+        for key in ("size", "labelSize"):
+            if key in out:
+                out[key] = int(math.ceil(out[key] * scale))
+        return out
+
+    axes = tuple(axis(a) for a in f.axes)
+    if axes and "size" not in axes[0]:  # the x axis: uPlot's 50 px hold 12 px digits
+        axes = ({**axes[0], "size": int(math.ceil(50 * scale))},) + axes[1:]
+    top, right, bottom, left = f.padding
+    return Frame(f.data, f.series, f.scales, axes, (top, int(math.ceil(right * scale)), bottom, left))
 
 
 @dataclass(frozen=True)

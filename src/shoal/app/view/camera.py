@@ -11,12 +11,14 @@ from typing import Any
 VIEW_HALF = 10.0  # the arena's half size in scene units
 CAMERA_FOV = math.radians(8.0)
 CAMERA_HEIGHT = 1.12 * VIEW_HALF / math.tan(CAMERA_FOV / 2)
+WIDE = 1.25  # the home view shows at least ±WIDE·VIEW_HALF across: the colour bar and its labels beside the arena
 
 
 def camera_height(aspect: float) -> float:
-    """Camera height that shows the whole arena (plus a margin) in a canvas of ``aspect`` = width/height."""
+    """Camera height that shows the whole arena (plus a margin, and across it the colour bar
+    beside it) in a canvas of ``aspect`` = width/height."""
     aspect = aspect if math.isfinite(aspect) and aspect > 0 else 1.0
-    return CAMERA_HEIGHT * max(1.0, 1.0 / aspect)
+    return CAMERA_HEIGHT * max(1.0, WIDE / 1.12 / aspect)
 
 
 def top_view(server: Any) -> None:
@@ -36,6 +38,32 @@ def home_camera(camera: Any) -> None:
     screen at the height that shows the arena (undoes a user's orbit, pan and zoom)."""
     camera.position = (0.0, 0.0, camera_height(camera.aspect))
     camera.look_at = (0.0, 0.0, 0.0)
+    camera.up_direction = (0.0, 1.0, 0.0)
+
+
+TIP_TOLERANCE = math.radians(1.0)  # a top view looks this close to straight down
+
+
+def tipped(camera: Any) -> bool:
+    """Does a client's camera (viser ``CameraHandle``) look anywhere but straight down, by more than
+    :data:`TIP_TOLERANCE`? (A camera with no report yet, or at its target, is not tipped.)"""
+    try:
+        position, look_at = (tuple(float(v) for v in p) for p in (camera.position, camera.look_at))
+    except Exception:  # no report yet
+        return False
+    d = [b - a for a, b in zip(position, look_at)]
+    n = math.hypot(*d)
+    if not math.isfinite(n) or n == 0:
+        return False
+    return -d[2] / n < math.cos(TIP_TOLERANCE)
+
+
+def straighten(camera: Any) -> None:
+    """Put a tipped camera straight above the point it looks at, at the same distance, +y up: a
+    user's pan and zoom stay, the tilt goes."""
+    look_at = tuple(float(v) for v in camera.look_at)
+    distance = math.dist(tuple(float(v) for v in camera.position), look_at)
+    camera.position = (look_at[0], look_at[1], look_at[2] + distance)
     camera.up_direction = (0.0, 1.0, 0.0)
 
 

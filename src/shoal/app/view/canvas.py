@@ -6,6 +6,10 @@ point at the root frame's origin; ``focus`` is the world point in the middle of 
 (the camera looks straight down at the scene origin), and moving it moves the root frame.
 Nodes are batched: one point cloud or one segment list per key, created on first use and
 hidden when they have nothing to show.
+
+Two styles of drawing, both read by the layers: ``light`` (a page drawn without a GPU: dots for
+what would be a line per robot, no heading strokes) and ``text_scale`` (the labels' size, a
+projector); a change of either builds the scene again (:meth:`~.view.View.restyle`).
 """
 
 from __future__ import annotations
@@ -37,6 +41,8 @@ class Canvas:
         self.centre = np.zeros(2)
         self.focus = np.zeros(2)
         self.viewport = Viewport()  # what the browser's camera shows (a scale bar follows its zoom)
+        self.light = False  # light drawing: no line per robot (see the module's docstring)
+        self.text_scale = 1.0  # labels' size
 
     # ------------------------------------------------------------------ lifecycle
     def reset(self, centre: np.ndarray, scale: float) -> None:
@@ -150,6 +156,7 @@ class Canvas:
         pos = tuple(float(v) for v in self.to_view(np.asarray(xy, dtype=float), z)) if ok else (0.0, 0.0, 0.0)
         node = self.nodes.get(key)
         if node is None:
+            style["font_screen_scale"] = style.get("font_screen_scale", 1.0) * self.text_scale
             self.nodes[key] = self.scene.add_label(self.name(key), text, position=pos, **style)
         else:
             node.position = pos

@@ -5,6 +5,10 @@ they mean (:class:`LegendEntry`), so a legend can be built from the layers drawn
 A kind's view is a list of these (each with the kind's colours, sizes and heights) plus the
 kind's own layers. Sizes are in scene units; a :data:`Size` may also depend on the canvas and
 the snapshot (markers sized in metres). Heights ``z`` order the layers in the top view.
+
+In the light drawing (``canvas.light``, for a page drawn without a GPU, where every line segment
+is a few triangles a frame for the CPU to fill) a layer draws no line per robot: trails become a
+few dots each, heading strokes are left out; robots are one point cloud either way.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ from shoal.presets.models import Scenario
 
 from ..session.snapshot import Snapshot
 from .canvas import Canvas, Colour
-from .shapes import circle_segments, grid_segments, plane, polyline, trail_segments
+from .shapes import circle_segments, grid_segments, plane, polyline, trail_dots, trail_segments
 
 Size = Union[float, Callable[[Canvas, Snapshot], float]]
 
@@ -30,6 +34,9 @@ GHOST_BEST = (30, 80, 220)
 ERR_LOW = np.array([40, 170, 70], float)
 ERR_HIGH = np.array([230, 40, 40], float)
 EMPTY_POINTS = np.zeros((0, 2))
+TRAIL_DOTS = 16  # dots a trail at most, in the light drawing …
+TRAIL_DOT_BUDGET = 4000  # … and all trails together at most (1000 robots: 4 dots each), 2 a trail at least
+DOT = 0.07  # scene units: a trail's dot in the light drawing (about 2–3 pixels at the home view)
 
 
 @dataclass(frozen=True)
@@ -87,9 +94,10 @@ def draw_grid(canvas: Canvas, lo: np.ndarray, hi: np.ndarray, cell: float, colou
     """A grid over the world box ``lo``–``hi`` (m): 1-pixel lines every ``cell`` metres from the
     canvas' centre in ``colours[0]``, every fifth (a section) 1.5 pixels in ``colours[1]``
     (nodes :data:`GRID_KEYS`). A few dozen line segments: viser's grid plane runs a shader on
-    every pixel of the ground, a large part of a frame in a software-rendered page."""
+    every pixel of the ground, a large part of a frame in a software-rendered page. The light
+    drawing has the sections only."""
     cells, sections = grid_segments(lo, hi, canvas.centre, cell)
-    canvas.lines(GRID_KEYS[0], cells, colours[0], 1.0, z)
+    canvas.lines(GRID_KEYS[0], cells[:0] if canvas.light else cells, colours[0], 1.0, z)
     canvas.lines(GRID_KEYS[1], sections, colours[1], 1.5, z)
 
 
@@ -262,24 +270,39 @@ class Headings(Static):
         self.legend = (LegendEntry("—", colour, "heading"),)
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
+        if canvas.light:
+            canvas.hide(*self.keys)
+            return
         x = plane(snap.x)
         a = self.angle(snap) if self.angle is not None else snap.heading
         tip = x + self.length(canvas, snap) * np.column_stack([np.cos(a), np.sin(a)])
         canvas.lines("headings", np.stack([x, tip], axis=1), self.colour, self.px, self.z)
 
 
+def draw_trails(canvas: Canvas, key: str, trails: np.ndarray, colour: Colour, px: float, z: float) -> None:
+    """Trails (M, L, d) as segments ``px`` pixels thick (node ``key``) or, in the light drawing,
+    as at most :data:`TRAIL_DOTS` dots each, :data:`TRAIL_DOT_BUDGET` in all (node ``key + "_dots"``)."""
+    if canvas.light:
+        canvas.hide(key)
+        most = max(2, min(TRAIL_DOTS, TRAIL_DOT_BUDGET // max(len(trails), 1)))
+        canvas.points(key + "_dots", trail_dots(trails, most), colour, DOT, "circle", z)
+    else:
+        canvas.hide(key + "_dots")
+        canvas.lines(key, trail_segments(trails), colour, px, z)
+
+
 class Trails(Static):
     """Each robot's path over the last ``view.trail_seconds``."""
 
     name = "trails"
-    keys = ("trails",)
+    keys = ("trails", "trails_dots")
 
     def __init__(self, colour: Colour, px: float, z: float) -> None:
         self.colour, self.px, self.z = colour, px, z
         self.legend = (LegendEntry("—", colour, "trail"),)
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
-        canvas.lines("trails", trail_segments(snap.trails), self.colour, self.px, self.z)
+        draw_trails(canvas, "trails", snap.trails, self.colour, self.px, self.z)
 
 
 class PersonalBests(Static):
@@ -338,7 +361,7 @@ class Twin(Static):
     """Swarm B (compare): its robots just under A's and its trails, in teal; hidden without B."""
 
     name = "twin"
-    keys = ("twin", "twin_trails")
+    keys = ("twin", "twin_trails", "twin_trails_dots")
     legend = (LegendEntry("●", TWIN, "swarm B"), LegendEntry("—", TWIN_TRAIL, "swarm B's trail"))
 
     def __init__(self, size: Size, z: tuple[float, float], px: float = 1.2) -> None:
@@ -350,7 +373,7 @@ class Twin(Static):
             return
         x, trails = snap.twin
         canvas.points("twin", x, TWIN, size_of(self.size, canvas, snap), "circle", self.z[0])
-        canvas.lines("twin_trails", trail_segments(trails), TWIN_TRAIL, self.px, self.z[1])
+        draw_trails(canvas, "twin_trails", trails, TWIN_TRAIL, self.px, self.z[1])
 
 
 def error_colors(err: np.ndarray, scale: float) -> np.ndarray:

@@ -139,6 +139,7 @@ class View:
         self._home: Home | None = None  # the scene's home, fitted to what mattered when it was built
         self._base: Home | None = None  # the camera's home it was fitted from
         self._refit = False
+        self._restyle = False  # the drawing style changed: lay the layers again at the same home
         self.following = False  # "follow swarm": the swarm's middle stays in the middle of the screen
 
     # ------------------------------------------------------------------ geometry (clicks, tests)
@@ -192,6 +193,19 @@ class View:
             self.canvas.viewport = viewport
             self.drawn_revision = -1
 
+    def restyle(self, *, light: bool | None = None, text_scale: float | None = None) -> bool:
+        """Draw lightly (``light``: dots, no line per robot) or with labels ``text_scale`` times
+        their size: the scene is built again at the next draw when either changes. True if it does."""
+        c = self.canvas
+        light = c.light if light is None else bool(light)
+        text_scale = c.text_scale if text_scale is None else float(text_scale)
+        if (light, text_scale) == (c.light, c.text_scale):
+            return False
+        c.light, c.text_scale = light, text_scale
+        self._restyle = True  # the next draw lays every layer again, where the view is now
+        self.drawn_revision = -1
+        return True
+
     def follow_swarm(self) -> None:
         self.following = True
         self.drawn_revision = -1
@@ -204,6 +218,11 @@ class View:
     def _build(self, base: Home, snap: Snapshot) -> None:
         home, middle = fitted(base, self.camera.interest(snap))
         self._base, self._refit = base, False
+        self._lay(home, middle, snap)
+
+    def _lay(self, home: Home, middle: np.ndarray, snap: Snapshot) -> None:
+        """Every layer's static nodes at ``home``, world point ``middle`` in the middle of the screen."""
+        self._restyle = False
         self.canvas.reset(np.array(home.centre), home.scale)
         self.camera.reset()
         for layer in self.layers:
@@ -220,6 +239,8 @@ class View:
         base = self.camera.home(snap)
         if base != self._base or self._refit:
             self._build(base, snap)
+        elif self._restyle and self._home is not None:
+            self._lay(self._home, self.canvas.focus.copy(), snap)
         if self.following:
             middle = swarm_middle(snap)
             if middle is not None:

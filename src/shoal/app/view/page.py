@@ -1,0 +1,180 @@
+"""What a tab's page does by itself for the arena, in one script the server sends it on connect.
+
+viser passes no page events to Python, but it runs a script the server sends
+(``RunJavascriptMessage``, as the keyboard shortcuts do). :func:`install_page` sends one that
+
+- keeps the top view flat: the left mouse button and one finger pan instead of orbiting, and the
+  orbit angles are held at the top view's (viser also orbits on the arrow keys, and → steps the
+  run: it tips nothing now); :func:`set_flat` with False gives the orbit back (the 3-D view);
+- renders the arena at half its pixels in the light drawing (:func:`set_light`);
+- ticks the *light drawing* box once, when WebGL draws in software (a renderer named SwiftShader,
+  llvmpipe, softpipe or "software": the test of viser's own warning), through the box itself, the
+  path of a user's click (the view row's *Display* button shows the boxes a moment for it);
+- closes viser's "Software WebGL rendering detected" toast whenever it shows (it covered the top
+  left of the arena on every load): the status area names the light drawing instead;
+- scales the page's text (:func:`set_text_scale`: Mantine's ``--mantine-scale``) for a projector.
+
+The camera controls are reached through the page's React tree (the canvas' fiber up to viser's
+viewer context, ``mutable.current.cameraControl``, a camera-controls instance): viser's client
+internals, hence the upper bound on viser. Where they cannot be found the script leaves the
+camera alone and the server straightens a tipped camera (:func:`shoal.app.view.camera.tipped`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+from typing import Any
+
+from viser import _messages
+
+LIGHT_LABEL = "light drawing"  # the Display box the script ticks …
+SHOW_BOXES = "Display"  # … after showing the boxes with the view row's button
+# Pixels of the arena per CSS pixel in the light drawing: a software rasteriser's frame costs about
+# its pixel count (at 1000 robots: 3.6 frames/s at 1, 6.4 at 0.6, 7.7 at 0.5, on a loaded machine)
+LIGHT_DPR = 0.5
+SOFTWARE_TOAST = "Software WebGL rendering detected"  # viser's toast (BrowserWarning)
+PANEL_WIDTH = 384  # px: the panel of viser's "large" control width (24 em)
+
+PAGE_JS = """
+(() => {
+  const P = window.__shoalPage || (window.__shoalPage = {});
+  if (P.installed) return;
+  P.installed = true;
+  P.flat = true;        // hold the top view
+  P.held = null;        // [azimuth, polar] of the top view, while held
+  P.reported = false;   // the light drawing box was looked at (once per page)
+  const SOFTWARE = /swiftshader|llvmpipe|softpipe|software/i;
+  const LIGHT = %(light)s, SHOW = %(show)s, TOAST = %(toast)s;
+
+  const arena = () => [...document.querySelectorAll("canvas")]
+    .reduce((a, c) => (!a || c.width * c.height > a.width * a.height) ? c : a, null);
+  P.viewer = () => {
+    const c = arena();
+    const key = c && Object.keys(c).find((k) => k.startsWith("__reactFiber"));
+    for (let f = key && c[key]; f; f = f.return) {
+      const v = f.memoizedProps && f.memoizedProps.value;
+      if (v && v.mutable && v.mutable.current && "cameraControl" in v.mutable.current) return v;
+    }
+    return null;
+  };
+  P.controls = () => { const v = P.viewer(); return v && v.mutable.current.cameraControl; };
+  // Straight down on the ground (viser's world +z is three.js' +y), where the camera is going.
+  const topDown = (c) => {
+    const V = c.camera.position.constructor;
+    const d = c.getTarget(new V(), true).sub(c.getPosition(new V(), true)).normalize();
+    return -d.y > Math.cos(0.5 * Math.PI / 180);
+  };
+  // Set only what differs: each assignment wakes the controls, and viser then draws frames back
+  // to back for a while (an idle page would never rest).
+  const set = (o, key, value) => { if (o[key] !== value) o[key] = value; };
+  P.apply = () => {
+    const c = P.controls();
+    if (!c) return false;
+    const A = c.constructor.ACTION;
+    if (P.flat) {
+      set(c.mouseButtons, "left", A.TRUCK);
+      set(c.touches, "one", A.TOUCH_TRUCK);
+      if (!P.held && topDown(c)) {  // hold the angles the camera is going to (it may still be easing there)
+        const S = c._spherical && c._spherical.constructor;
+        const s = S && c.getSpherical ? c.getSpherical(new S(), true) : {theta: c.azimuthAngle, phi: c.polarAngle};
+        P.held = [s.theta, s.phi];
+      }
+      if (P.held) {
+        set(c, "minAzimuthAngle", P.held[0]); set(c, "maxAzimuthAngle", P.held[0]);
+        set(c, "minPolarAngle", P.held[1]); set(c, "maxPolarAngle", P.held[1]);
+      }
+    } else {
+      set(c.mouseButtons, "left", A.ROTATE);
+      set(c.touches, "one", A.TOUCH_ROTATE);
+      set(c, "minAzimuthAngle", -Infinity); set(c, "maxAzimuthAngle", Infinity);
+      set(c, "minPolarAngle", 0); set(c, "maxPolarAngle", Math.PI);
+      P.held = null;
+    }
+    return true;
+  };
+  P.setFlat = (flat) => { P.flat = flat; if (flat) P.held = null; P.apply(); };
+  // The light drawing renders the arena at a fixed share of its pixels (viser's own fixedDpr
+  // setting, which also stops its adaptive resolution); null gives viser's default back.
+  P.dpr = null;
+  P.setLight = (on) => { P.dpr = on ? %(light_dpr)s : null; P.applyDpr(); };
+  P.applyDpr = () => {
+    const v = P.viewer();
+    if (!v || !v.useDevSettings || !v.useDevSettings.set) return;
+    if (v.useDevSettings.get().fixedDpr !== P.dpr) v.useDevSettings.set({fixedDpr: P.dpr});
+  };
+
+  const renderer = () => {
+    try {
+      const c = arena();
+      const gl = (c && (c.getContext("webgl2") || c.getContext("webgl")))
+        || document.createElement("canvas").getContext("webgl");
+      const ext = gl && gl.getExtension("WEBGL_debug_renderer_info");
+      return ext ? String(gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) || "") : "";
+    } catch (e) { return ""; }
+  };
+  const box = (label) => {
+    const l = [...document.querySelectorAll("label")].find((e) => e.textContent.trim() === label);
+    return l && document.getElementById(l.getAttribute("for"));
+  };
+  const button = (name) => [...document.querySelectorAll("button")].find((b) => b.textContent.trim() === name);
+  P.report = () => {
+    if (P.reported) return;
+    if (P.renderer === undefined) P.renderer = renderer();
+    if (!SOFTWARE.test(P.renderer)) { P.reported = true; return; }
+    const b = box(LIGHT);
+    if (!b) {  // the boxes hide behind the view row's button: show them a moment (again if nothing came)
+      const d = button(SHOW);
+      if (d && (!P.shownAt || Date.now() - P.shownAt > 4000)) { d.click(); P.shownAt = Date.now(); }
+      return;
+    }
+    P.reported = true;
+    if (!b.checked) b.click();
+    if (P.shownAt) { const d = button(SHOW); if (d) d.click(); }  // and hide them again
+  };
+  const dropToast = () => {
+    for (const n of document.querySelectorAll(".mantine-Notification-root")) {
+      if (!n.textContent.includes(TOAST)) continue;
+      const x = n.querySelector(".mantine-Notification-closeButton") || n.querySelector("button");
+      if (x) x.click(); else n.remove();
+    }
+  };
+  new MutationObserver(dropToast).observe(document.body, {childList: true, subtree: true});
+  dropToast();
+  P.text = (scale) => document.documentElement.style.setProperty("--mantine-scale", String(scale));
+  setInterval(() => { P.apply(); P.applyDpr(); P.report(); }, 400);
+})();
+"""
+
+
+def page_script() -> str:
+    return PAGE_JS % {"light": json.dumps(LIGHT_LABEL), "show": json.dumps(SHOW_BOXES),
+                      "toast": json.dumps(SOFTWARE_TOAST), "light_dpr": json.dumps(LIGHT_DPR)}
+
+
+def run_script(gui: Any, source: str) -> None:
+    """Run ``source`` in the page of ``gui`` (a client's ``GuiApi``)."""
+    gui._websock_interface.queue_message(_messages.RunJavascriptMessage(source=source))
+
+
+def install_page(gui: Any) -> None:
+    """Send the page script to the page of ``gui`` (once per page; a second copy does nothing)."""
+    run_script(gui, page_script())
+
+
+def set_flat(gui: Any, flat: bool) -> None:
+    """Hold the top view (True) or give the orbit back (False: the 3-D view)."""
+    run_script(gui, f"window.__shoalPage && window.__shoalPage.setFlat({json.dumps(bool(flat))});")
+
+
+def set_light(gui: Any, light: bool) -> None:
+    """Render the arena at :data:`LIGHT_DPR` (True) or as viser chooses (False)."""
+    run_script(gui, f"window.__shoalPage && window.__shoalPage.setLight({json.dumps(bool(light))});")
+
+
+def set_text_scale(gui: Any, scale: float) -> None:
+    """Scale the page's text (and the panel's spacing with it) by ``scale``, and widen the panel as
+    much (its controls keep their room)."""
+    run_script(gui, f"window.__shoalPage && window.__shoalPage.text({float(scale)!r});")
+    with contextlib.suppress(AttributeError):  # a viser without panel placement: the width stays
+        gui.main_panel.set_width(round(PANEL_WIDTH * scale))
