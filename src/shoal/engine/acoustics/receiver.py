@@ -27,6 +27,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..core.portable import arccos, ordered_matmul
 from .band import Band
 
 PLUS, MINUS = 0, 1  # index of r_+ (CCW, left) and r_- (CW, right) in Bearing.rays
@@ -78,7 +79,10 @@ def _phases(band: Band, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _project(X: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
-    return X.real @ cos - X.imag @ sin
+    """Re X · cos − Im X · sin, each product summed over k in index order: a BLAS product would
+    sum in the order of the kernel the CPU gets, and the refined peak would move with it
+    (:mod:`~shoal.engine.core.portable`)."""
+    return ordered_matmul(X.real, cos) - ordered_matmul(X.imag, sin)
 
 
 @lru_cache(maxsize=32)
@@ -130,7 +134,7 @@ def angle_of_arrival(tau: np.ndarray, D: float, c: float) -> np.ndarray:
     """α = arccos(clip(c·τ/D, −1, 1)) in 0..π from the bow. [7.6]; docs/readings.md,
     "Clipping the arccos and the lag search".
     """
-    return np.arccos(np.clip(c * np.asarray(tau) / D, -1.0, 1.0))
+    return arccos(np.clip(c * np.asarray(tau) / D, -1.0, 1.0))  # the C library's: the same bits on every CPU
 
 
 def rays(alpha: np.ndarray, heading: np.ndarray) -> np.ndarray:
