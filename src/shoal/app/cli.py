@@ -58,7 +58,8 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 def _cmd_run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from shoal.engine.core.runs import run_to_dir
+    from shoal.engine.core.atomic import OutputDirError, check_output_dir
+    from shoal.engine.core.runs import RUN_FILES, run_to_dir
     from shoal.presets.build import build
     from shoal.presets.io import PresetError, file_stem, load
 
@@ -68,12 +69,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
             overrides.append(f"{key}={flag}")
     try:
         scenario = load(args.preset, overrides)
+        out = Path(args.out or f"out/{file_stem(scenario.name)}-seed{scenario.sim.seed}")  # a name is no path
+        check_output_dir(out, RUN_FILES.__contains__, "shoal run")  # before any work
         sim = build(scenario)  # (a world that cannot be laid out is refused here, by field)
     except PresetError as e:
         return _err("bad preset:\n  " + "\n  ".join(e.messages))
+    except OutputDirError as e:
+        return _err(str(e))
     except MemoryError:
         return _too_big(scenario)
-    out = Path(args.out or f"out/{file_stem(scenario.name)}-seed{scenario.sim.seed}")  # a name is no path
     meta = {
         "shoal_version": __version__,
         "preset": scenario.model_dump(mode="json"),
@@ -85,6 +89,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     try:
         with tqdm(total=steps, desc=f"run {scenario.name}", unit="step", disable=steps < 200 or None) as bar:
             run_to_dir(sim, steps, out, meta, on_step=lambda _k: bar.update())
+    except OutputDirError as e:  # (a file appeared in --out meanwhile)
+        return _err(str(e))
     except OSError as e:
         return _cannot_write(out, e)
     except MemoryError:  # (its partial folder is gone already)
@@ -112,7 +118,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     try:
         summary = reproduce(args.target, out, runs=args.runs, workers=args.workers, progress=True, quick=args.quick)
     except OutputDirError as e:
-        return _err(f"{e} (choose another --out)")
+        return _err(str(e))
     except OSError as e:
         return _cannot_write(out, e)
     failed = [c["name"] for c in summary["checks"] if not c["pass"]]
@@ -180,6 +186,7 @@ def _check_counts(args: argparse.Namespace) -> str | None:
 
 
 def _reproduce_all(args: argparse.Namespace) -> int:
+    from shoal.studies.experiments import OutputDirError
     from shoal.studies.experiments.report import run_all
 
     if args.target:
@@ -189,6 +196,8 @@ def _reproduce_all(args: argparse.Namespace) -> int:
     out = Path(args.out or "out/reproduction")
     try:
         report = run_all(out, runs=args.runs, workers=args.workers, resume=args.resume, quick=args.quick)
+    except OutputDirError as e:
+        return _err(str(e))
     except OSError as e:
         return _cannot_write(out, e)
     print(f"wrote {report}")
@@ -196,11 +205,12 @@ def _reproduce_all(args: argparse.Namespace) -> int:
 
 
 def _report(folder: str) -> int:
+    from shoal.studies.experiments import OutputDirError
     from shoal.studies.experiments.report import write_report
 
     try:
         print(f"wrote {write_report(Path(folder))}")
-    except FileNotFoundError as e:
+    except (FileNotFoundError, OutputDirError) as e:
         return _err(str(e))
     return 0
 
