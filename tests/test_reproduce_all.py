@@ -86,7 +86,7 @@ def test_cli_report_and_all_refuse_bad_input(reproduced: Path, tmp_path: Path) -
     assert ok.returncode == 0 and REPORT in ok.stdout
     bad = subprocess.run([*run, "reproduce", "--all", "--runs", "0", "--out", str(tmp_path)],
                          capture_output=True, text=True)
-    assert bad.returncode == 2 and "--runs must be >= 1" in bad.stderr
+    assert bad.returncode == 2 and "argument --runs: must be at least 1, got 0" in bad.stderr
     none = subprocess.run([*run, "reproduce", "--report", str(tmp_path / "nothing")], capture_output=True, text=True)
     assert none.returncode == 2 and "no reproduced target" in none.stderr
 

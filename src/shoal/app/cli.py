@@ -5,13 +5,30 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from shoal import __version__
 
 EXIT_FAILED = 1
 EXIT_USAGE = 2
 DEFAULT_MAX_SESSIONS = 24  # as shoal.app.server.DEFAULT_MAX_SESSIONS (not imported: viser loads slowly)
+MAX_PORT = 65535
+
+
+def whole(lo: int, hi: int | None = None) -> Callable[[str], int]:
+    """An argparse type: a whole number from ``lo`` (to ``hi``), refused with the range before anything starts."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if value < lo or (hi is not None and value > hi):
+            span = f"from {lo} to {hi}" if hi is not None else f"at least {lo}"
+            raise argparse.ArgumentTypeError(f"must be {span}, got {value}")
+        return value
+
+    parse.__name__ = "whole number"
+    return parse
 
 
 def _err(msg: str, code: int = EXIT_USAGE) -> int:
@@ -39,10 +56,6 @@ def _cmd_serve(args: argparse.Namespace) -> int:
     from shoal.app.origin_guard import check_origin_url
     from shoal.app.server import serve
 
-    if args.max_sessions < 1:
-        return _err("--max-sessions must be >= 1")
-    if args.experiment_workers < 1:
-        return _err("--experiment-workers must be >= 1")
     try:
         origins = tuple(check_origin_url(url) for url in args.allow_origin or ())
     except ValueError as e:
@@ -112,8 +125,6 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
         return 0 if args.list else _err("name a TARGET (see --list)")
     if args.target not in TARGETS:
         return _err(f"unknown target {args.target!r}; known: {', '.join(TARGETS)}")
-    if (msg := _check_counts(args)) is not None:
-        return _err(msg)
     out = Path(args.out or f"out/{args.target}")
     try:
         summary = reproduce(args.target, out, runs=args.runs, workers=args.workers, progress=True, quick=args.quick)
@@ -145,8 +156,6 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     from shoal.studies.experiments.schedulers import SchedulerError, connect
     from shoal.studies.sweep import SweepError, run_sweep
 
-    if args.workers < 1:
-        return _err("--workers must be >= 1")
     out = Path(args.out or f"out/sweep-{Path(args.preset).stem}")
     try:
         with connect(args.scheduler, args.workers) as scheduler:
@@ -177,22 +186,12 @@ def _cmd_export_replay(args: argparse.Namespace) -> int:
     return 0
 
 
-def _check_counts(args: argparse.Namespace) -> str | None:
-    if args.runs is not None and args.runs < 1:
-        return "--runs must be >= 1"
-    if args.workers < 1:
-        return "--workers must be >= 1"
-    return None
-
-
 def _reproduce_all(args: argparse.Namespace) -> int:
     from shoal.studies.experiments import OutputDirError
     from shoal.studies.experiments.report import run_all
 
     if args.target:
         return _err("--all takes no TARGET")
-    if (msg := _check_counts(args)) is not None:
-        return _err(msg)
     out = Path(args.out or "out/reproduction")
     try:
         report = run_all(out, runs=args.runs, workers=args.workers, resume=args.resume, quick=args.quick)
@@ -243,34 +242,34 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("serve", help="start the browser app")
     s.add_argument("--host", default="127.0.0.1", help="bind address (default loopback)")
-    s.add_argument("--port", type=int, default=8080)
+    s.add_argument("--port", type=whole(0, MAX_PORT), default=8080, help="0 picks a free one")
     s.add_argument("--preset", default="default", help="preset name or TOML/JSON file")
-    s.add_argument("--max-sessions", type=int, default=DEFAULT_MAX_SESSIONS, metavar="N",
+    s.add_argument("--max-sessions", type=whole(1), default=DEFAULT_MAX_SESSIONS, metavar="N",
                    help=f"browser tabs with a simulation at once; more are told the server is full "
                         f"(default {DEFAULT_MAX_SESSIONS})")
     s.add_argument("--allow-origin", action="append", metavar="URL",
                    help="also accept pages of this origin, e.g. http://192.168.1.10:8080 or a proxy's "
                         "https://shoal.example.org (repeatable; by default only this server's own pages)")
     s.add_argument("--scheduler", help="run the Sweep tab's sweeps on this Dask scheduler (tcp://HOST:PORT)")
-    s.add_argument("--experiment-workers", type=int, default=1, metavar="W",
+    s.add_argument("--experiment-workers", type=whole(1), default=1, metavar="W",
                    help="without --scheduler: local worker processes for the Sweep tab (default 1)")
     s.set_defaults(func=_cmd_serve)
 
     r = sub.add_parser("run", help="headless seeded runs")
     r.add_argument("preset", help="preset name or TOML/JSON file")
     r.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field by dotted path")
-    r.add_argument("--runs", type=int)
-    r.add_argument("--seed", type=int)
-    r.add_argument("--steps", type=int)
+    r.add_argument("--runs", type=whole(1))
+    r.add_argument("--seed", type=whole(0))
+    r.add_argument("--steps", type=whole(0))
     r.add_argument("--out", help="output folder")
     r.set_defaults(func=_cmd_run)
 
     q = sub.add_parser("reproduce", help="regenerate a thesis figure or table")
     q.add_argument("target", nargs="?")
     q.add_argument("--list", action="store_true", help="list the targets")
-    q.add_argument("--runs", type=int)
+    q.add_argument("--runs", type=whole(1))
     q.add_argument("--out")
-    q.add_argument("--workers", type=int, default=1)
+    q.add_argument("--workers", type=whole(1), default=1)
     q.add_argument("--scheduler", help="Dask scheduler address (tcp://HOST:PORT)")
     q.add_argument("--all", action="store_true", help="every target into --out, plus REPRODUCTION.md")
     q.add_argument("--resume", action="store_true", help="with --all: keep targets already finished in --out")
@@ -284,18 +283,18 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--grid", action="append", required=True, metavar="KEY=V1,V2,...",
                    help="a dotted preset field and its values (TOML literals); repeat for more axes")
     w.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field in every cell")
-    w.add_argument("--runs", type=int, help="seeded runs per cell (default: the preset's sim.runs)")
-    w.add_argument("--seed", type=int)
-    w.add_argument("--steps", type=int)
+    w.add_argument("--runs", type=whole(1), help="seeded runs per cell (default: the preset's sim.runs)")
+    w.add_argument("--seed", type=whole(0))
+    w.add_argument("--steps", type=whole(0))
     w.add_argument("--out", help="output folder (a rerun into it resumes)")
-    w.add_argument("--workers", type=int, default=1)
+    w.add_argument("--workers", type=whole(1), default=1)
     w.add_argument("--scheduler", help="Dask scheduler address (tcp://HOST:PORT)")
     w.set_defaults(func=_cmd_sweep)
 
     e = sub.add_parser("export-replay", help="a seeded run as one HTML page that plays in any browser")
     e.add_argument("preset", help="preset name or TOML/JSON file")
-    e.add_argument("--seed", type=int)
-    e.add_argument("--steps", type=int)
+    e.add_argument("--seed", type=whole(0))
+    e.add_argument("--steps", type=whole(0))
     e.add_argument("--out", required=True, help="the page to write (.html)")
     e.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field by dotted path")
     e.set_defaults(func=_cmd_export_replay)

@@ -7,6 +7,7 @@ and meet the ticking thread only through each session's lock.
 
 from __future__ import annotations
 
+import errno
 import socket
 import sys
 import threading
@@ -47,24 +48,30 @@ FULL_MESSAGE = ("This server already runs {n} sessions (its maximum), so this ta
                 "Close another Shoal tab or try again later: reload this page then.")
 
 
+MAX_PORT = 65535
+
+
 class PortInUseError(OSError):
     """The requested port is taken (viser would silently move to the next free one)."""
 
 
-def _port_free(host: str, port: int) -> bool:
-    """Can a server bind ``host:port`` now? (SO_REUSEADDR as asyncio servers use it.)"""
+def _cannot_listen(host: str, port: int) -> OSError | None:
+    """Why a server cannot bind ``host:port`` now (None: it can; SO_REUSEADDR as asyncio servers use it).
+    A port in use is a :class:`PortInUseError`."""
     try:
         infos = socket.getaddrinfo(host or None, port, type=socket.SOCK_STREAM)
-    except socket.gaierror:
-        return True  # let viser report the bad host
+    except (socket.gaierror, UnicodeError) as err:
+        return OSError(f"--host {host}: not an address of this machine ({getattr(err, 'strerror', None) or err})")
     family, socktype, proto, _, addr = infos[0]
     with socket.socket(family, socktype, proto) as s:
         s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             s.bind(addr)
-        except OSError:
-            return False
-    return True
+        except OSError as err:
+            if err.errno == errno.EADDRINUSE:
+                return PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
+            return OSError(f"cannot listen on {host} port {port}: {err.strerror or err}")
+    return None
 
 
 class ShoalServer:
@@ -259,11 +266,14 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
     or on a local pool of ``experiment_workers`` processes, within ``limits``.
 
     Raises :class:`PresetError` for an unknown or invalid preset, :class:`PortInUseError`
-    when ``port`` is taken and :class:`SchedulerError` when the cluster cannot be reached.
+    when ``port`` is taken, ``OSError`` when ``host`` cannot be listened on, ``ValueError`` for a
+    port beyond 0–65535 and :class:`SchedulerError` when the cluster cannot be reached.
     """
     scenario = check_supported(presets_io.load(preset))
-    if port and not _port_free(host, port):
-        raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
+    if not 0 <= port <= MAX_PORT:
+        raise ValueError(f"--port {port}: a port is a whole number from 0 to {MAX_PORT}")
+    if (why := _cannot_listen(host, port)) is not None:  # before viser starts: it would wait for ever
+        raise why
     if experiment_workers < 1:
         raise ValueError(f"experiment_workers must be >= 1 (got {experiment_workers})")
     pool = DaskCluster(scheduler) if scheduler else experiment_pool(experiment_workers)
@@ -282,7 +292,7 @@ def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
     taken or the Dask scheduler cannot be reached."""
     try:
         server = start_server(preset, host, port, max_sessions, allow_origins, scheduler, experiment_workers)
-    except (PortInUseError, SchedulerError) as err:
+    except (OSError, SchedulerError, ValueError) as err:
         raise SystemExit(f"shoal serve: {err}") from None
     except PresetError as err:
         raise SystemExit("shoal serve: bad preset:\n" + "\n".join(err.messages)) from None
