@@ -1,4 +1,4 @@
-"""The ``shoal`` command: serve, run, reproduce, sweep, export-replay, presets."""
+"""The ``shoal`` command: serve, run, reproduce, sweep, export-replay, warmup, presets."""
 
 from __future__ import annotations
 
@@ -71,6 +71,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 def _cmd_run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
+    from shoal.app.warmup import NUMPY_TICK, WARMUP, group_of
     from shoal.engine.core.atomic import OutputDirError, check_output_dir
     from shoal.engine.core.runs import RUN_FILES, run_to_dir
     from shoal.presets.build import build
@@ -99,9 +100,17 @@ def _cmd_run(args: argparse.Namespace) -> int:
         "steps": scenario.sim.steps,
     }
     steps = scenario.sim.steps
+    if group_of(scenario) in NUMPY_TICK:  # numpy ticks while the kernels compile beside, then compiled: same numbers
+        WARMUP.start(scenario, only=True)
+        WARMUP.use(sim, scenario)
+
+    def ticked(_k: int) -> None:
+        bar.update()
+        WARMUP.use(sim, scenario)
+
     try:
         with tqdm(total=steps, desc=f"run {scenario.name}", unit="step", disable=steps < 200 or None) as bar:
-            run_to_dir(sim, steps, out, meta, on_step=lambda _k: bar.update())
+            run_to_dir(sim, steps, out, meta, on_step=ticked)
     except OutputDirError as e:  # (a file appeared in --out meanwhile)
         return _err(str(e))
     except OSError as e:
@@ -214,6 +223,21 @@ def _report(folder: str) -> int:
     return 0
 
 
+def _cmd_warmup(args: argparse.Namespace) -> int:
+    from shoal.app.warmup import WARMUP
+    from shoal.engine.core import compiled
+
+    print(f"compiling Shoal's kernels (cache: {compiled.cache_dir()})", flush=True)
+    seconds = WARMUP.run(say=lambda line: print(f"  {line}", flush=True))
+    if WARMUP.error is not None:
+        return _err(f"compiling failed: {WARMUP.error}", EXIT_FAILED)
+    if compiled.uncached:
+        print("no cache folder could be written (a read-only install and home?): every process compiles again; "
+              "set NUMBA_CACHE_DIR to a writable folder to keep them")
+    print(f"done in {seconds:.0f} s; scenes and runs now start at full speed")
+    return 0
+
+
 def _cmd_presets(args: argparse.Namespace) -> int:
     from shoal.presets.io import PresetError, list_presets, load, to_toml
 
@@ -298,6 +322,10 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--out", required=True, help="the page to write (.html)")
     e.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field by dotted path")
     e.set_defaults(func=_cmd_export_replay)
+
+    c = sub.add_parser("warmup", help="compile the kernels now, so that the first scenes and runs start at full "
+                                      "speed (otherwise they run on numpy until the kernels are ready)")
+    c.set_defaults(func=_cmd_warmup)
 
     ps = sub.add_parser("presets", help="list, show or validate presets")
     ps.add_argument("action", choices=["list", "show", "validate"])

@@ -35,6 +35,7 @@ from .session.upload import MAX_UPLOAD_BYTES
 from .tab import TabApp
 from .upload_guard import guard_uploads
 from .view.camera import home_camera, top_view
+from .warmup import WARMUP
 
 TICK_HZ = 60.0
 PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round
@@ -260,7 +261,8 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
                  max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
                  scheduler: str | None = None, experiment_workers: int = 1,
                  limits: Limits | None = None) -> ShoalServer:
-    """Start the app without blocking. ``port=0`` picks a free port (see ``.port``).
+    """Start the app without blocking. ``port=0`` picks a free port (see ``.port``). The kernels
+    compile in the background once it listens (:mod:`.warmup`); scenes run on numpy meanwhile.
 
     The Experiment tab's sweeps run on the Dask cluster at ``scheduler`` (``tcp://HOST:PORT``)
     or on a local pool of ``experiment_workers`` processes, within ``limits``.
@@ -282,6 +284,7 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
     if port and server.port != port:  # viser moved to the next free port: refuse instead
         server.stop()
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
+    WARMUP.start(scenario)  # the page is up: compile the kernels behind it, this scene's first
     return server
 
 

@@ -32,6 +32,7 @@ from ..session.lifecycle import AT_END, at_end_choice, at_end_label
 from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
+from ..warmup import WARMUP
 from .compare import CompareFolder
 from .keys import PLAYING
 from .plots import PADDING, Chart, Frame, PlotSpec
@@ -575,7 +576,8 @@ class Panel:
         state = PLAYING if s.playing else ("■ finished: Play runs it again" if s.finished else "paused")
         shown = s.shown_step()
         if shown is None:
-            self.status.content = self.part.status(s, s.readout(), state)
+            compiling = WARMUP.status(s.scenario)  # kernels compiling: what the scene does meanwhile
+            self.status.content = self.part.status(s, s.readout(), state) + (f" · ⏳ {compiling}" if compiling else "")
             return
         k, t, last = shown
         what = "replay" if s.replaying is not None else "recorded history"
