@@ -139,3 +139,26 @@ def test_a_process_without_a_warmup_compiles_as_before():
     sim = build(load("default"))
     w.use(sim, load("default"))
     assert sim.compiled and not w.waits(load("slo-walk")) and w.status(load("course-dvc")) is None
+
+
+def test_the_status_line_says_a_scene_is_being_built_and_what_it_waits_for(cold, server):
+    from app_helpers import hand_tab
+
+    def status_while_built(tab, preset: str) -> str:
+        seen, services = [], tab.panels.services
+        real = services.replace
+
+        def replace(scenario, **kw):
+            seen.append(tab.panels.status.content)
+            return real(scenario, **kw)
+
+        object.__setattr__(services, "replace", replace)  # (a frozen dataclass: the tab's own swap, wrapped)
+        tab.panels.load_preset(preset)
+        return seen[0]
+
+    with hand_tab(server) as tab:
+        cold.ready["slo"].set()
+        assert status_while_built(tab, "course-dvc") == "**course-dvc** · ⏳ building the scene …"
+        cold.ready["slo"].clear()
+        said = status_while_built(tab, "slo-walk")
+        assert said.startswith("**slo-walk** · ⏳ building the scene; waiting for this scene's compiled kernels"), said

@@ -482,6 +482,9 @@ class Panel:
 
     # ------------------------------------------------------------------ loading
     def _load(self, scenario: Scenario) -> None:
+        waits = WARMUP.waits(scenario)  # an SLO scene is built once its kernels are: said while it waits
+        self.status.content = (f"**{scenario.name}** · ⏳ building the scene" +
+                               (f"; {WARMUP.status(scenario)}" if waits else "") + " …")
         if self.services.replace is not None:
             self.services.replace(scenario)  # the tab syncs whichever panel is current afterwards
         else:
