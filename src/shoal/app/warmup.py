@@ -7,7 +7,8 @@ for bit (docs/architecture.md, "Compiled kernels"), and a run may change from on
 between two ticks with the same numbers (tests/test_warmup.py). So:
 
 - :class:`Warmup` compiles the kernels of each group of scenes in a daemon thread, by a few
-  steps of every shipped preset of the group, the group asked for first;
+  steps of every shipped preset of the group, the group asked for first (and before that the
+  few that building a scene calls, so that opening one never waits long);
 - a scene whose group is not ready runs on its numpy tick meanwhile (:meth:`Warmup.use`) and
   changes over once it is; the acoustic swarm has no kernels; scenes on SLO positions and
   Mai's SLO swarm have no numpy tick: they wait for theirs (:meth:`Warmup.waits`);
@@ -138,6 +139,9 @@ class Warmup:
             todo = {only: todo.get(only, [])}
         self.total = sum(len(v) for v in todo.values())
         try:
+            for group in NUMPY_TICK:  # what building such a scene compiles (spawning a fleet), first: seconds
+                if todo.get(group):
+                    build(load(todo[group][0], ["sim.runs=1"]))
             while True:
                 with self._lock:
                     group = next((g for g in self._order if g in todo and not self.ready[g].is_set()), None)
