@@ -93,7 +93,7 @@ def test_the_status_line_says_a_scene_runs_on_numpy_while_kernels_compile(cold, 
     with hand_tab(server) as tab:
         assert tab.session.step(2) == 2  # never waits
         tab.panels.refresh_status()
-        assert "compiling kernels in the background (0/23 scenes" in tab.panels.status.content
+        assert "compiling kernels in the background (scene 1 of 23" in tab.panels.status.content
         assert "numpy meanwhile, the same numbers" in tab.panels.status.content
         cold.ready["fleet"].set()
         tab.panels.refresh_status()
@@ -158,7 +158,7 @@ def test_the_status_line_says_a_scene_is_being_built_and_what_it_waits_for(cold,
 
     with hand_tab(server) as tab:
         cold.ready["slo"].set()
-        assert status_while_built(tab, "course-dvc") == "**course-dvc** · ⏳ building the scene …"
+        assert status_while_built(tab, "course-dvc") == "**course-dvc** · building the scene …"
         cold.ready["slo"].clear()
         said = status_while_built(tab, "slo-walk")
-        assert said.startswith("**slo-walk** · ⏳ building the scene; waiting for this scene's compiled kernels"), said
+        assert said.startswith("**slo-walk** · building the scene; waiting for this scene's compiled kernels"), said

@@ -110,7 +110,7 @@ class Warmup:
         if not self.active or self.is_ready(group):
             return None
         seconds = time.monotonic() - (self.started or time.monotonic())
-        progress = f"{self.done}/{self.total} scenes, {seconds:.0f} s"
+        progress = f"scene {min(self.done + 1, self.total)} of {self.total}, {seconds:.0f} s"
         if self.error is not None:
             return f"compiling kernels failed ({self.error}); this scene runs on numpy"
         if group in NUMPY_TICK:

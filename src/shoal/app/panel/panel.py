@@ -483,7 +483,7 @@ class Panel:
     # ------------------------------------------------------------------ loading
     def _load(self, scenario: Scenario) -> None:
         waits = WARMUP.waits(scenario)  # an SLO scene is built once its kernels are: said while it waits
-        self.status.content = (f"**{scenario.name}** · ⏳ building the scene" +
+        self.status.content = (f"**{scenario.name}** · building the scene" +
                                (f"; {WARMUP.status(scenario)}" if waits else "") + " …")
         if self.services.replace is not None:
             self.services.replace(scenario)  # the tab syncs whichever panel is current afterwards
@@ -580,7 +580,7 @@ class Panel:
         shown = s.shown_step()
         if shown is None:
             compiling = WARMUP.status(s.scenario)  # kernels compiling: what the scene does meanwhile
-            self.status.content = self.part.status(s, s.readout(), state) + (f" · ⏳ {compiling}" if compiling else "")
+            self.status.content = self.part.status(s, s.readout(), state) + (f" · {compiling}" if compiling else "")
             return
         k, t, last = shown
         what = "replay" if s.replaying is not None else "recorded history"
