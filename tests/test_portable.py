@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shoal.engine.acoustics.band import Band
-from shoal.engine.acoustics.receiver import angle_of_arrival, correlate, lag_table
+from shoal.engine.acoustics.receiver import _project, angle_of_arrival, correlate, lag_table
 from shoal.engine.core.portable import arccos, ordered_matmul
 
 
@@ -30,14 +30,15 @@ def _by_index(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 @settings(max_examples=40, deadline=None)
-@given(st.integers(1, 4), st.integers(1, 3), st.integers(1, 40), st.integers(1, 9), st.integers(0, 2**32 - 1))
-def test_ordered_matmul_sums_in_index_order(r, n, k, l, seed):
+@given(st.integers(1, 4), st.integers(1, 3), st.integers(1, 40), st.integers(1, 9), st.integers(0, 2**32 - 1),
+       st.booleans())
+def test_ordered_matmul_sums_in_index_order(r, n, k, l, seed, compiled):
     rng = np.random.default_rng(seed)
     a = rng.standard_normal((r, n, k)) * 10.0 ** rng.integers(-3, 4, (r, n, k))
     b = rng.standard_normal((k, l))
-    got = ordered_matmul(a, b)
+    got = ordered_matmul(a, b, compiled)
     assert got.shape == (r, n, l)
-    assert np.array_equal(got, _by_index(a, b))  # bit for bit
+    assert np.array_equal(got, _by_index(a, b))  # bit for bit, compiled or numpy
     np.testing.assert_allclose(got, a @ b, rtol=1e-9, atol=1e-9 * np.abs(a).max() * np.abs(b).max() * k)
 
 
@@ -63,6 +64,7 @@ def test_receiver_correlation_and_angle_use_the_portable_forms():
     lags, cos, sin = lag_table(band, 0.75)
     want = _by_index(X.real, cos) - _by_index(X.imag, sin)
     assert np.array_equal(correlate(X, band, lags), want)
+    assert np.array_equal(_project(X, cos, sin, compiled=False), want)
     tau = rng.uniform(-6e-4, 6e-4, (2, 3))
     alpha = angle_of_arrival(tau, 0.75, band.c)
     assert np.array_equal(alpha, np.array([math.acos(v) for v in np.clip(band.c * tau / 0.75, -1, 1).ravel()])

@@ -2,16 +2,17 @@
 
 A process compiles Shoal's numba kernels the first time it calls them (a minute or more after
 an install; later processes load them from the disk cache, engine/core/compiled.py). The
-numpy ticks of the Chapter 3 swarm and of the fleet are the compiled ticks' references, bit
-for bit (docs/architecture.md, "Compiled kernels"), and a run may change from one to the other
+numpy ticks of the Chapter 3 swarm, the fleet and the acoustic swarm are the compiled ticks'
+references, bit for bit (docs/architecture.md, "Compiled kernels"), and a run may change from one to the other
 between two ticks with the same numbers (tests/test_warmup.py). So:
 
 - :class:`Warmup` compiles the kernels of each group of scenes in a daemon thread, by a few
   steps of every shipped preset of the group, the group asked for first (and before that the
   few that building a scene calls, so that opening one never waits long);
 - a scene whose group is not ready runs on its numpy tick meanwhile (:meth:`Warmup.use`) and
-  changes over once it is; the acoustic swarm has no kernels; scenes on SLO positions and
-  Mai's SLO swarm have no numpy tick: they wait for theirs (:meth:`Warmup.waits`);
+  changes over once it is (the acoustic swarm's one kernel is its receiver's correlation);
+  scenes on SLO positions and Mai's SLO swarm have no numpy tick: they wait for theirs
+  (:meth:`Warmup.waits`);
 - :meth:`Warmup.status` says what is being compiled, for the app's status line;
 - ``shoal warmup`` runs it in the foreground (a machine that wants it done ahead).
 
@@ -31,8 +32,8 @@ from shoal.presets.io import list_presets, load
 from shoal.presets.models import Scenario
 
 STEPS = 3  # of each preset: every kernel a tick calls, at the argument types the app and `shoal run` use
-ORDER = ("swarm", "fleet", "slo")  # groups with kernels; "sonar" has none
-NUMPY_TICK = ("swarm", "fleet")  # groups whose engines take ``compiled = False``
+ORDER = ("swarm", "fleet", "sonar", "slo")  # groups of scenes with kernels
+NUMPY_TICK = ("swarm", "fleet", "sonar")  # groups whose engines take ``compiled = False``
 
 
 def group_of(scenario: Scenario) -> str:
@@ -82,8 +83,8 @@ class Warmup:
     def use(self, sim: Any, scenario: Scenario) -> None:
         """Before a tick: ``sim`` on its compiled tick if its kernels are ready (or no warm-up
         runs), else on its numpy tick (the same numbers)."""
-        if hasattr(sim, "compiled"):
-            sim.compiled = not self.active or self.is_ready(group_of(scenario))
+        if hasattr(sim, "compiled"):  # (a swarm on SLO positions: its own kind's kernels too)
+            sim.compiled = not self.active or all(self.is_ready(g) for g in {group_of(scenario), kind_of(scenario)})
 
     def waits(self, scenario: Scenario) -> bool:
         """Must a scene of ``scenario`` wait for its kernels (no numpy tick to run meanwhile)?"""
