@@ -107,16 +107,13 @@ class Warmup:
 
     def status(self, scenario: Scenario) -> str | None:
         """A few words for the status line while ``scenario``'s kernels are compiled, else None."""
-        group = group_of(scenario)
-        if not self.active or self.is_ready(group):
+        if not self.active or all(self.is_ready(g) for g in {group_of(scenario), kind_of(scenario)}):
             return None
         seconds = time.monotonic() - (self.started or time.monotonic())
         progress = f"scene {min(self.done + 1, self.total)} of {self.total}, {seconds:.0f} s"
-        if self.error is not None:
-            return f"compiling kernels failed ({self.error}); this scene runs on numpy"
-        if group in NUMPY_TICK:
-            return f"compiling kernels in the background ({progress}); numpy meanwhile, the same numbers"
-        return f"waiting for this scene's compiled kernels ({progress})"
+        if self.waits(scenario):
+            return f"waiting for this scene's compiled kernels ({progress})"
+        return f"compiling kernels in the background ({progress}); numpy meanwhile, the same numbers"
 
     # ------------------------------------------------------------------ compiling
     def start(self, first: Scenario | None = None, only: bool = False) -> None:
