@@ -13,7 +13,7 @@ import pytest
 
 from shoal.app.cli import main
 from shoal.app.kinds.registry import session_for
-from shoal.app.warmup import NUMPY_TICK, Warmup, group_of, groups
+from shoal.app.warmup import NUMPY_TICK, ORDER, Warmup, group_of, groups
 from shoal.presets.build import build
 from shoal.presets.io import list_presets, load
 
@@ -51,7 +51,7 @@ def test_groups_cover_every_preset_with_kernels():
 def cold(monkeypatch) -> Warmup:
     """A warm-up that has started and compiled nothing yet, seen by the sessions and panels."""
     w = Warmup()
-    w.started = 0.0
+    w.started, w.scheduled = 0.0, set(ORDER)
     w.total = 30
     for module in ("shoal.app.session.session", "shoal.app.panel.panel", "shoal.app.tab"):
         monkeypatch.setattr(f"{module}.WARMUP", w)
@@ -103,7 +103,7 @@ def test_shoal_run_gives_the_same_files_with_the_kernels_cold_or_ready(tmp_path,
     args = ["run", "course-nonomni", "--runs", "2", "--steps", "15", "--seed", "2"]
     assert main([*args, "--out", str(tmp_path / "ready")]) == 0
     never = Warmup()
-    never.started = 0.0
+    never.started, never.scheduled = 0.0, set(ORDER)
     never.start = lambda *a, **k: None  # kernels never ready: numpy throughout
     monkeypatch.setattr("shoal.app.warmup.WARMUP", never)
     assert main([*args, "--out", str(tmp_path / "numpy")]) == 0
@@ -131,6 +131,19 @@ def test_a_failed_warmup_is_said_and_scenes_compile_on_first_use(monkeypatch, ca
     w.run()
     assert "no compiler today" in capsys.readouterr().err and w.error is not None
     assert all(e.is_set() for e in w.ready.values())  # nobody waits for ever
+
+
+def test_only_the_groups_a_warmup_compiles_wait_or_run_on_numpy():
+    """``shoal run`` compiles its own group only: scenes of other groups compile on first use, as
+    before (a test process that ran ``shoal run`` in-process must not leave SLO scenes waiting)."""
+    w = Warmup()
+    w.started, w.scheduled = 0.0, {"fleet"}
+    sim = build(load("default"))
+    w.use(sim, load("default"))
+    assert sim.compiled and not w.waits(load("slo-walk")) and w.status(load("slo-walk")) is None
+    fleet = build(load("course-dvc"))
+    w.use(fleet, load("course-dvc"))
+    assert not fleet.compiled and w.status(load("course-dvc")) is not None
 
 
 def test_a_process_without_a_warmup_compiles_as_before():

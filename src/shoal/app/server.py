@@ -260,9 +260,10 @@ class ShoalServer:
 def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
                  max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
                  scheduler: str | None = None, experiment_workers: int = 1,
-                 limits: Limits | None = None) -> ShoalServer:
-    """Start the app without blocking. ``port=0`` picks a free port (see ``.port``). The kernels
-    compile in the background once it listens (:mod:`.warmup`); scenes run on numpy meanwhile.
+                 limits: Limits | None = None, warm_up: bool = False) -> ShoalServer:
+    """Start the app without blocking. ``port=0`` picks a free port (see ``.port``). With
+    ``warm_up`` (``shoal serve``) the kernels compile in the background once it listens
+    (:mod:`.warmup`) and scenes run on numpy meanwhile; else they compile on first use.
 
     The Experiment tab's sweeps run on the Dask cluster at ``scheduler`` (``tcp://HOST:PORT``)
     or on a local pool of ``experiment_workers`` processes, within ``limits``.
@@ -284,7 +285,8 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
     if port and server.port != port:  # viser moved to the next free port: refuse instead
         server.stop()
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
-    WARMUP.start(scenario)  # the page is up: compile the kernels behind it, this scene's first
+    if warm_up:
+        WARMUP.start(scenario)  # the page is up: compile the kernels behind it, this scene's first
     return server
 
 
@@ -294,7 +296,8 @@ def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
     """Run the browser app until Ctrl-C (``shoal serve``). Exits with a message if the port is
     taken or the Dask scheduler cannot be reached."""
     try:
-        server = start_server(preset, host, port, max_sessions, allow_origins, scheduler, experiment_workers)
+        server = start_server(preset, host, port, max_sessions, allow_origins, scheduler, experiment_workers,
+                              warm_up=True)
     except (OSError, SchedulerError, ValueError) as err:
         raise SystemExit(f"shoal serve: {err}") from None
     except PresetError as err:

@@ -67,6 +67,7 @@ class Warmup:
         self.total = 0
         self.error: str | None = None
         self.revision = 0  # moves with each preset warmed (the status line's cue)
+        self.scheduled: set[str] = set()  # the groups this warm-up compiles (others compile on first call)
         self._order: list[str] = list(ORDER)
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
@@ -75,10 +76,11 @@ class Warmup:
     @property
     def active(self) -> bool:
         """Was a warm-up started in this process (else kernels compile on first call, as ever)?"""
-        return self.started is not None
+        return bool(self.scheduled)
 
     def is_ready(self, group: str) -> bool:
-        return group not in self.ready or self.ready[group].is_set()
+        """Are ``group``'s kernels compiled, or left to compile on first call (not scheduled)?"""
+        return group not in self.scheduled or self.ready[group].is_set()
 
     def use(self, sim: Any, scenario: Scenario) -> None:
         """Before a tick: ``sim`` on its compiled tick if its kernels are ready (or no warm-up
@@ -126,6 +128,7 @@ class Warmup:
                 return
             group = group_of(first) if only and first is not None else None
             self.started = time.monotonic()
+            self.scheduled = {group} & set(ORDER) if group is not None else set(ORDER)
             self._thread = threading.Thread(target=self.run, name="shoal-warmup", daemon=True, kwargs={"only": group})
             self._thread.start()
 
@@ -135,6 +138,7 @@ class Warmup:
         todo = groups()
         if only is not None:
             todo = {only: todo.get(only, [])}
+        self.scheduled = self.scheduled or set(todo) & set(ORDER)
         self.total = sum(len(v) for v in todo.values())
         try:
             for group in NUMPY_TICK:  # what building such a scene compiles (spawning a fleet), first: seconds
