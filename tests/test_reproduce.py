@@ -13,8 +13,7 @@ import numpy as np
 import pytest
 
 from shoal.presets.io import load
-from shoal.studies.experiments import TARGETS, chapter3, reproduce, run_batch, run_jobs
-from shoal.studies.experiments.registry import OutputDirError
+from shoal.studies.experiments import TARGETS, OutputDirError, chapter3, reproduce, run_batch, run_jobs
 from shoal.studies.experiments.runner import Job
 
 HEADER = "case,run,seed,swarm_size,U,A_plus,dt,beta,max_speed"

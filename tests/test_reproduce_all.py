@@ -52,7 +52,7 @@ def test_a_failing_target_is_reported_and_the_others_still_run(tmp_path: Path) -
     (tmp_path / "fig3-5").write_text("not a folder")  # reproduce refuses to replace it
     report = run_all(tmp_path, runs=1, targets=QUICK, progress=False, log=lambda _m: None)
     text = report.read_text(encoding="utf-8")
-    assert "fig3-5 exists and is not a folder" in text
+    assert "fig3-5: exists and is not a folder" in text
     assert "failed to run" in text
     assert (tmp_path / "fig3-4" / "summary.json").is_file()
     assert [o.name for o in collect(tmp_path) if o.error is None] == ["fig3-4"]
@@ -86,7 +86,7 @@ def test_cli_report_and_all_refuse_bad_input(reproduced: Path, tmp_path: Path) -
     assert ok.returncode == 0 and REPORT in ok.stdout
     bad = subprocess.run([*run, "reproduce", "--all", "--runs", "0", "--out", str(tmp_path)],
                          capture_output=True, text=True)
-    assert bad.returncode == 2 and "--runs must be >= 1" in bad.stderr
+    assert bad.returncode == 2 and "argument --runs: must be at least 1, got 0" in bad.stderr
     none = subprocess.run([*run, "reproduce", "--report", str(tmp_path / "nothing")], capture_output=True, text=True)
     assert none.returncode == 2 and "no reproduced target" in none.stderr
 

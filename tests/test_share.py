@@ -379,11 +379,12 @@ def test_export_replay_writes_a_page_the_preset_in_it_reproduces(tmp_path):
 ])
 def test_export_replay_refuses_a_bad_preset_in_one_line_and_leaves_out_as_it_was(tmp_path, capsys, args, words):
     out = tmp_path / "run.html"
-    out.write_text("the old page")
+    old = '<script type="application/json" id="shoal-run-data">{}</script> the old page'  # one it wrote
+    out.write_text(old)
     assert main(["export-replay", *args, "--steps", "3", "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("shoal: error: ") and words in err and err.count("\n") == 1, err
-    assert out.read_text() == "the old page" and [p.name for p in tmp_path.iterdir()] == ["run.html"]
+    assert out.read_text() == old and [p.name for p in tmp_path.iterdir()] == ["run.html"]
 
 
 def test_export_replay_refuses_a_bad_out_before_running(tmp_path, capsys):

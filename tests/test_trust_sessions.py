@@ -229,7 +229,7 @@ def test_max_sessions_is_a_serve_option_with_a_checked_value():
         start_server("default", port=0, max_sessions=0)
     out = subprocess.run([sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(main())",
                           "serve", "--port", "0", "--max-sessions", "0"], capture_output=True, text=True, timeout=120)
-    assert out.returncode == 2 and "--max-sessions must be >= 1" in out.stderr
+    assert out.returncode == 2 and "argument --max-sessions: must be at least 1, got 0" in out.stderr
 
 
 def test_robots_of_distinct_tabs_differ_only_where_their_settings_do():

@@ -1,17 +1,34 @@
-"""The ``shoal`` command: serve, run, reproduce, sweep, export-replay, presets."""
+"""The ``shoal`` command: serve, run, reproduce, sweep, export-replay, warmup, presets."""
 
 from __future__ import annotations
 
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from shoal import __version__
 
 EXIT_FAILED = 1
 EXIT_USAGE = 2
 DEFAULT_MAX_SESSIONS = 24  # as shoal.app.server.DEFAULT_MAX_SESSIONS (not imported: viser loads slowly)
+MAX_PORT = 65535
+
+
+def whole(lo: int, hi: int | None = None) -> Callable[[str], int]:
+    """An argparse type: a whole number from ``lo`` (to ``hi``), refused with the range before anything starts."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if value < lo or (hi is not None and value > hi):
+            span = f"from {lo} to {hi}" if hi is not None else f"at least {lo}"
+            raise argparse.ArgumentTypeError(f"must be {span}, got {value}")
+        return value
+
+    parse.__name__ = "whole number"
+    return parse
 
 
 def _err(msg: str, code: int = EXIT_USAGE) -> int:
@@ -39,10 +56,6 @@ def _cmd_serve(args: argparse.Namespace) -> int:
     from shoal.app.origin_guard import check_origin_url
     from shoal.app.server import serve
 
-    if args.max_sessions < 1:
-        return _err("--max-sessions must be >= 1")
-    if args.experiment_workers < 1:
-        return _err("--experiment-workers must be >= 1")
     try:
         origins = tuple(check_origin_url(url) for url in args.allow_origin or ())
     except ValueError as e:
@@ -58,7 +71,9 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 def _cmd_run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from shoal.engine.core.runs import run_to_dir
+    from shoal.app.warmup import NUMPY_TICK, WARMUP, group_of
+    from shoal.engine.core.atomic import OutputDirError, check_output_dir
+    from shoal.engine.core.runs import RUN_FILES, run_to_dir
     from shoal.presets.build import build
     from shoal.presets.io import PresetError, file_stem, load
 
@@ -68,12 +83,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
             overrides.append(f"{key}={flag}")
     try:
         scenario = load(args.preset, overrides)
+        out = Path(args.out or f"out/{file_stem(scenario.name)}-seed{scenario.sim.seed}")  # a name is no path
+        check_output_dir(out, RUN_FILES.__contains__, "shoal run")  # before any work
         sim = build(scenario)  # (a world that cannot be laid out is refused here, by field)
     except PresetError as e:
         return _err("bad preset:\n  " + "\n  ".join(e.messages))
+    except OutputDirError as e:
+        return _err(str(e))
     except MemoryError:
         return _too_big(scenario)
-    out = Path(args.out or f"out/{file_stem(scenario.name)}-seed{scenario.sim.seed}")  # a name is no path
     meta = {
         "shoal_version": __version__,
         "preset": scenario.model_dump(mode="json"),
@@ -82,9 +100,19 @@ def _cmd_run(args: argparse.Namespace) -> int:
         "steps": scenario.sim.steps,
     }
     steps = scenario.sim.steps
+    if group_of(scenario) in NUMPY_TICK:  # numpy ticks while the kernels compile beside, then compiled: same numbers
+        WARMUP.start(scenario, only=True)
+        WARMUP.use(sim, scenario)
+
+    def ticked(_k: int) -> None:
+        bar.update()
+        WARMUP.use(sim, scenario)
+
     try:
         with tqdm(total=steps, desc=f"run {scenario.name}", unit="step", disable=steps < 200 or None) as bar:
-            run_to_dir(sim, steps, out, meta, on_step=lambda _k: bar.update())
+            run_to_dir(sim, steps, out, meta, on_step=ticked)
+    except OutputDirError as e:  # (a file appeared in --out meanwhile)
+        return _err(str(e))
     except OSError as e:
         return _cannot_write(out, e)
     except MemoryError:  # (its partial folder is gone already)
@@ -106,13 +134,11 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
         return 0 if args.list else _err("name a TARGET (see --list)")
     if args.target not in TARGETS:
         return _err(f"unknown target {args.target!r}; known: {', '.join(TARGETS)}")
-    if (msg := _check_counts(args)) is not None:
-        return _err(msg)
     out = Path(args.out or f"out/{args.target}")
     try:
         summary = reproduce(args.target, out, runs=args.runs, workers=args.workers, progress=True, quick=args.quick)
     except OutputDirError as e:
-        return _err(f"{e} (choose another --out)")
+        return _err(str(e))
     except OSError as e:
         return _cannot_write(out, e)
     failed = [c["name"] for c in summary["checks"] if not c["pass"]]
@@ -139,8 +165,6 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     from shoal.studies.experiments.schedulers import SchedulerError, connect
     from shoal.studies.sweep import SweepError, run_sweep
 
-    if args.workers < 1:
-        return _err("--workers must be >= 1")
     out = Path(args.out or f"out/sweep-{Path(args.preset).stem}")
     try:
         with connect(args.scheduler, args.workers) as scheduler:
@@ -171,24 +195,17 @@ def _cmd_export_replay(args: argparse.Namespace) -> int:
     return 0
 
 
-def _check_counts(args: argparse.Namespace) -> str | None:
-    if args.runs is not None and args.runs < 1:
-        return "--runs must be >= 1"
-    if args.workers < 1:
-        return "--workers must be >= 1"
-    return None
-
-
 def _reproduce_all(args: argparse.Namespace) -> int:
+    from shoal.studies.experiments import OutputDirError
     from shoal.studies.experiments.report import run_all
 
     if args.target:
         return _err("--all takes no TARGET")
-    if (msg := _check_counts(args)) is not None:
-        return _err(msg)
     out = Path(args.out or "out/reproduction")
     try:
         report = run_all(out, runs=args.runs, workers=args.workers, resume=args.resume, quick=args.quick)
+    except OutputDirError as e:
+        return _err(str(e))
     except OSError as e:
         return _cannot_write(out, e)
     print(f"wrote {report}")
@@ -196,12 +213,28 @@ def _reproduce_all(args: argparse.Namespace) -> int:
 
 
 def _report(folder: str) -> int:
+    from shoal.studies.experiments import OutputDirError
     from shoal.studies.experiments.report import write_report
 
     try:
         print(f"wrote {write_report(Path(folder))}")
-    except FileNotFoundError as e:
+    except (FileNotFoundError, OutputDirError) as e:
         return _err(str(e))
+    return 0
+
+
+def _cmd_warmup(args: argparse.Namespace) -> int:
+    from shoal.app.warmup import WARMUP
+    from shoal.engine.core import compiled
+
+    print(f"compiling Shoal's kernels (cache: {compiled.cache_dir()})", flush=True)
+    seconds = WARMUP.run(say=lambda line: print(f"  {line}", flush=True))
+    if WARMUP.error is not None:
+        return _err(f"compiling failed: {WARMUP.error}", EXIT_FAILED)
+    if compiled.uncached:
+        print("no cache folder could be written (a read-only install and home?): every process compiles again; "
+              "set NUMBA_CACHE_DIR to a writable folder to keep them")
+    print(f"done in {seconds:.0f} s; scenes and runs now start at full speed")
     return 0
 
 
@@ -233,34 +266,34 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("serve", help="start the browser app")
     s.add_argument("--host", default="127.0.0.1", help="bind address (default loopback)")
-    s.add_argument("--port", type=int, default=8080)
+    s.add_argument("--port", type=whole(0, MAX_PORT), default=8080, help="0 picks a free one")
     s.add_argument("--preset", default="default", help="preset name or TOML/JSON file")
-    s.add_argument("--max-sessions", type=int, default=DEFAULT_MAX_SESSIONS, metavar="N",
+    s.add_argument("--max-sessions", type=whole(1), default=DEFAULT_MAX_SESSIONS, metavar="N",
                    help=f"browser tabs with a simulation at once; more are told the server is full "
                         f"(default {DEFAULT_MAX_SESSIONS})")
     s.add_argument("--allow-origin", action="append", metavar="URL",
                    help="also accept pages of this origin, e.g. http://192.168.1.10:8080 or a proxy's "
                         "https://shoal.example.org (repeatable; by default only this server's own pages)")
     s.add_argument("--scheduler", help="run the Sweep tab's sweeps on this Dask scheduler (tcp://HOST:PORT)")
-    s.add_argument("--experiment-workers", type=int, default=1, metavar="W",
+    s.add_argument("--experiment-workers", type=whole(1), default=1, metavar="W",
                    help="without --scheduler: local worker processes for the Sweep tab (default 1)")
     s.set_defaults(func=_cmd_serve)
 
     r = sub.add_parser("run", help="headless seeded runs")
     r.add_argument("preset", help="preset name or TOML/JSON file")
     r.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field by dotted path")
-    r.add_argument("--runs", type=int)
-    r.add_argument("--seed", type=int)
-    r.add_argument("--steps", type=int)
+    r.add_argument("--runs", type=whole(1))
+    r.add_argument("--seed", type=whole(0))
+    r.add_argument("--steps", type=whole(0))
     r.add_argument("--out", help="output folder")
     r.set_defaults(func=_cmd_run)
 
     q = sub.add_parser("reproduce", help="regenerate a thesis figure or table")
     q.add_argument("target", nargs="?")
     q.add_argument("--list", action="store_true", help="list the targets")
-    q.add_argument("--runs", type=int)
+    q.add_argument("--runs", type=whole(1))
     q.add_argument("--out")
-    q.add_argument("--workers", type=int, default=1)
+    q.add_argument("--workers", type=whole(1), default=1)
     q.add_argument("--scheduler", help="Dask scheduler address (tcp://HOST:PORT)")
     q.add_argument("--all", action="store_true", help="every target into --out, plus REPRODUCTION.md")
     q.add_argument("--resume", action="store_true", help="with --all: keep targets already finished in --out")
@@ -274,21 +307,25 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--grid", action="append", required=True, metavar="KEY=V1,V2,...",
                    help="a dotted preset field and its values (TOML literals); repeat for more axes")
     w.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field in every cell")
-    w.add_argument("--runs", type=int, help="seeded runs per cell (default: the preset's sim.runs)")
-    w.add_argument("--seed", type=int)
-    w.add_argument("--steps", type=int)
+    w.add_argument("--runs", type=whole(1), help="seeded runs per cell (default: the preset's sim.runs)")
+    w.add_argument("--seed", type=whole(0))
+    w.add_argument("--steps", type=whole(0))
     w.add_argument("--out", help="output folder (a rerun into it resumes)")
-    w.add_argument("--workers", type=int, default=1)
+    w.add_argument("--workers", type=whole(1), default=1)
     w.add_argument("--scheduler", help="Dask scheduler address (tcp://HOST:PORT)")
     w.set_defaults(func=_cmd_sweep)
 
     e = sub.add_parser("export-replay", help="a seeded run as one HTML page that plays in any browser")
     e.add_argument("preset", help="preset name or TOML/JSON file")
-    e.add_argument("--seed", type=int)
-    e.add_argument("--steps", type=int)
+    e.add_argument("--seed", type=whole(0))
+    e.add_argument("--steps", type=whole(0))
     e.add_argument("--out", required=True, help="the page to write (.html)")
     e.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a field by dotted path")
     e.set_defaults(func=_cmd_export_replay)
+
+    c = sub.add_parser("warmup", help="compile the kernels now, so that the first scenes and runs start at full "
+                                      "speed (otherwise they run on numpy until the kernels are ready)")
+    c.set_defaults(func=_cmd_warmup)
 
     ps = sub.add_parser("presets", help="list, show or validate presets")
     ps.add_argument("action", choices=["list", "show", "validate"])

@@ -14,6 +14,10 @@ So every HTTP request and websocket upgrade is refused (403) unless
 
 Clients that are not browsers send no ``Origin``; they are held to the ``Host`` check only.
 
+A connection that closes or speaks no HTTP before its request (a port check, a health
+probe) is said in one line on stderr, not as websockets' three-part traceback
+(:class:`HandshakeNoise`).
+
 Viser 1.1.1 passes its own HTTP handler to ``websockets``' ``serve(process_request=...)`` and
 offers no hook of its own, so :func:`guarded_viser` wraps that handler with the check while
 (and only while) it builds the server: no copy of viser, no change to any other server.
@@ -24,6 +28,7 @@ from __future__ import annotations
 import contextlib
 import http
 import ipaddress
+import logging
 import sys
 import threading
 from typing import Any, Callable, Iterator, Sequence
@@ -148,6 +153,39 @@ def _guarding(policy: OriginPolicy) -> Iterator[threading.Event]:
             yield installed
         finally:
             ws_server.serve = real  # type: ignore[misc]
+
+
+class HandshakeNoise(logging.Filter):
+    """websockets logs a connection that ends before a valid request as "opening handshake
+    failed" with a chained traceback; this keeps one line (who, and why) for each of the first
+    ``first`` and then for every ``every``-th (a health probe every few seconds does not flood the log)."""
+
+    def __init__(self, first: int = 10, every: int = 100) -> None:
+        super().__init__()
+        self.first, self.every, self.seen = first, every, 0
+        self._lock = threading.Lock()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.msg != "opening handshake failed" or not record.exc_info:
+            return True
+        with self._lock:
+            self.seen += 1
+            seen = self.seen
+        if seen > self.first and seen % self.every:
+            return False
+        err = record.exc_info[1]
+        why = err.__cause__ or err
+        ws = getattr(record, "websocket", None)
+        peer = getattr(ws, "remote_address", None)
+        who = f"{peer[0]}:{peer[1]}" if isinstance(peer, tuple) and len(peer) >= 2 else "a client"
+        record.msg, record.args = "shoal: a connection from %s ended before a valid request (%s)%s", (
+            who, why, f"; {seen} such so far" if seen > self.first else "")
+        record.exc_info = record.exc_text = None
+        return True
+
+
+_NOISE = HandshakeNoise()
+logging.getLogger("websockets.server").addFilter(_NOISE)  # once per process, whatever servers it runs
 
 
 def guarded_viser(host: str, port: int, policy: OriginPolicy) -> viser.ViserServer:

@@ -7,6 +7,7 @@ and meet the ticking thread only through each session's lock.
 
 from __future__ import annotations
 
+import errno
 import socket
 import sys
 import threading
@@ -35,6 +36,7 @@ from .tab import TabApp
 from .upload_guard import guard_uploads
 from .view.camera import home_camera, top_view
 from .view.page import install_page
+from .warmup import WARMUP
 
 TICK_HZ = 60.0
 PLOT_SHARE = 0.5  # of a tick period: plots due later than this in a round wait for the next round
@@ -48,24 +50,30 @@ FULL_MESSAGE = ("This server already runs {n} sessions (its maximum), so this ta
                 "Close another Shoal tab or try again later: reload this page then.")
 
 
+MAX_PORT = 65535
+
+
 class PortInUseError(OSError):
     """The requested port is taken (viser would silently move to the next free one)."""
 
 
-def _port_free(host: str, port: int) -> bool:
-    """Can a server bind ``host:port`` now? (SO_REUSEADDR as asyncio servers use it.)"""
+def _cannot_listen(host: str, port: int) -> OSError | None:
+    """Why a server cannot bind ``host:port`` now (None: it can; SO_REUSEADDR as asyncio servers use it).
+    A port in use is a :class:`PortInUseError`."""
     try:
         infos = socket.getaddrinfo(host or None, port, type=socket.SOCK_STREAM)
-    except socket.gaierror:
-        return True  # let viser report the bad host
+    except (socket.gaierror, UnicodeError) as err:
+        return OSError(f"--host {host}: not an address of this machine ({getattr(err, 'strerror', None) or err})")
     family, socktype, proto, _, addr = infos[0]
     with socket.socket(family, socktype, proto) as s:
         s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             s.bind(addr)
-        except OSError:
-            return False
-    return True
+        except OSError as err:
+            if err.errno == errno.EADDRINUSE:
+                return PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
+            return OSError(f"cannot listen on {host} port {port}: {err.strerror or err}")
+    return None
 
 
 class ShoalServer:
@@ -254,18 +262,23 @@ class ShoalServer:
 def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
                  max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
                  scheduler: str | None = None, experiment_workers: int = 1,
-                 limits: Limits | None = None) -> ShoalServer:
-    """Start the app without blocking. ``port=0`` picks a free port (see ``.port``).
+                 limits: Limits | None = None, warm_up: bool = False) -> ShoalServer:
+    """Start the app without blocking. ``port=0`` picks a free port (see ``.port``). With
+    ``warm_up`` (``shoal serve``) the kernels compile in the background once it listens
+    (:mod:`.warmup`) and scenes run on numpy meanwhile; else they compile on first use.
 
     The Experiment tab's sweeps run on the Dask cluster at ``scheduler`` (``tcp://HOST:PORT``)
     or on a local pool of ``experiment_workers`` processes, within ``limits``.
 
     Raises :class:`PresetError` for an unknown or invalid preset, :class:`PortInUseError`
-    when ``port`` is taken and :class:`SchedulerError` when the cluster cannot be reached.
+    when ``port`` is taken, ``OSError`` when ``host`` cannot be listened on, ``ValueError`` for a
+    port beyond 0–65535 and :class:`SchedulerError` when the cluster cannot be reached.
     """
     scenario = check_supported(presets_io.load(preset))
-    if port and not _port_free(host, port):
-        raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
+    if not 0 <= port <= MAX_PORT:
+        raise ValueError(f"--port {port}: a port is a whole number from 0 to {MAX_PORT}")
+    if (why := _cannot_listen(host, port)) is not None:  # before viser starts: it would wait for ever
+        raise why
     if experiment_workers < 1:
         raise ValueError(f"experiment_workers must be >= 1 (got {experiment_workers})")
     pool = DaskCluster(scheduler) if scheduler else experiment_pool(experiment_workers)
@@ -274,6 +287,8 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
     if port and server.port != port:  # viser moved to the next free port: refuse instead
         server.stop()
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
+    if warm_up:
+        WARMUP.start(scenario)  # the page is up: compile the kernels behind it, this scene's first
     return server
 
 
@@ -283,8 +298,9 @@ def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
     """Run the browser app until Ctrl-C (``shoal serve``). Exits with a message if the port is
     taken or the Dask scheduler cannot be reached."""
     try:
-        server = start_server(preset, host, port, max_sessions, allow_origins, scheduler, experiment_workers)
-    except (PortInUseError, SchedulerError) as err:
+        server = start_server(preset, host, port, max_sessions, allow_origins, scheduler, experiment_workers,
+                              warm_up=True)
+    except (OSError, SchedulerError, ValueError) as err:
         raise SystemExit(f"shoal serve: {err}") from None
     except PresetError as err:
         raise SystemExit("shoal serve: bad preset:\n" + "\n".join(err.messages)) from None

@@ -33,6 +33,7 @@ from .preset_menu import PresetMenu
 from .session.session import Session
 from .view import page
 from .view.camera import Viewport, home_camera, straighten, tipped
+from .warmup import WARMUP
 
 CLICK_MODIFIERS = (None, "shift", "cmd/ctrl")
 
@@ -263,7 +264,7 @@ class TabApp:
                 self.panels.view_gui.show_legend(self.arena.legend())
             self._next_scene = now + 1.0 / self.SCENE_HZ
         if plots and now >= self._next_plot:
-            key = (s.revision, s.selected_robot, s.selected_dim, s.playing)
+            key = (s.revision, s.selected_robot, s.selected_dim, s.playing, WARMUP.revision, WARMUP.busy_seconds())
             if key != self._plot_key:
                 with self._atomic():  # one wake-up for all of them (wake-ups cost the ticking thread the GIL)
                     self.panels.refresh_status()

@@ -32,6 +32,7 @@ from ..session.lifecycle import AT_END, at_end_choice, at_end_label
 from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
+from ..warmup import WARMUP
 from .compare import CompareFolder
 from .keys import PLAYING
 from .plots import Chart, Frame, PlotSpec, scale_text
@@ -484,6 +485,9 @@ class Panel:
 
     # ------------------------------------------------------------------ loading
     def _load(self, scenario: Scenario) -> None:
+        waits = WARMUP.waits(scenario)  # an SLO scene is built once its kernels are: said while it waits
+        self.status.content = (f"**{scenario.name}** · building the scene" +
+                               (f"; {WARMUP.status(scenario)}" if waits else "") + " …")
         if self.services.replace is not None:
             self.services.replace(scenario)  # the tab syncs whichever panel is current afterwards
         else:
@@ -578,7 +582,8 @@ class Panel:
         state = PLAYING if s.playing else ("■ finished: Play runs it again" if s.finished else "paused")
         shown = s.shown_step()
         if shown is None:
-            self._status(self.part.status(s, s.readout(), state))
+            compiling = WARMUP.status(s.scenario)  # kernels compiling: what the scene does meanwhile
+            self._status(self.part.status(s, s.readout(), state) + (f" · {compiling}" if compiling else ""))
             return
         k, t, last = shown
         what = "replay" if s.replaying is not None else "recorded history"

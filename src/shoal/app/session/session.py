@@ -33,6 +33,7 @@ from shoal.presets.models import Scenario
 from .. import replay
 from ..limits import check_app_limits
 from ..replay import Recording
+from ..warmup import WARMUP
 from .driver import Driver
 from .history import TRAIL_LIMITS, Frame, History, robots_at
 from .lifecycle import Lifecycle
@@ -143,7 +144,9 @@ class Session:
     # ------------------------------------------------------------------ loading
     def _load(self, scenario: Scenario) -> None:
         check_app_limits(scenario)  # a shared server: no scene far beyond the sliders' reach
+        WARMUP.prefer(scenario)  # a scene that waits for its kernels has them compiled next
         sim = self.driver.build(scenario)  # may refuse: then nothing has changed
+        WARMUP.use(sim, scenario)  # its numpy tick while its kernels compile (the same numbers)
         self.scenario = scenario
         self.sim = sim
         self.driver.loaded()
@@ -338,6 +341,8 @@ class Session:
                 if moved:
                     self.revision += 1
                 return moved
+            if WARMUP.waits(self.scenario):  # no numpy tick: the step waits for the kernels (the status says so)
+                return 0
             if self.timeline.cursor is not None:
                 self.timeline.cursor = None
                 self.revision += 1
@@ -376,6 +381,7 @@ class Session:
     def _advance(self) -> None:
         """One engine step, recorded, and swarm B's (the lock held)."""
         self.driver.before_step()
+        WARMUP.use(self.sim, self.scenario)  # onto the compiled tick once its kernels are ready
         info = self.sim.step()
         self._record(info)
         if self.compare is not None:

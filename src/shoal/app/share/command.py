@@ -7,10 +7,19 @@ from pathlib import Path
 from typing import Iterable
 
 SUFFIXES = (".html", ".htm")
+MARK = b'id="shoal-run-data"'  # the JSON block every page this command writes carries (share/page.py)
 
 
 class ExportError(ValueError):
     """A bad preset, a bad ``--out`` or a scene the app cannot show, in one line."""
+
+
+def _is_page(path: Path) -> bool:
+    """Is ``path`` a page this command wrote (it may then be replaced)?"""
+    try:
+        return MARK in path.read_bytes()
+    except OSError:
+        return False
 
 
 def check_out(out: Path) -> None:
@@ -19,6 +28,9 @@ def check_out(out: Path) -> None:
         raise ExportError(f"--out {out}: is a folder; name the .html file to write")
     if out.suffix.lower() not in SUFFIXES:
         raise ExportError(f"--out {out}: the page needs a name ending in .html")
+    if out.exists() and not _is_page(out):
+        raise ExportError(f"--out {out}: exists and is not a page shoal export-replay wrote; it is left as it is "
+                          "(choose another name)")
     parent = out.parent
     while not parent.exists() and parent != parent.parent:
         parent = parent.parent

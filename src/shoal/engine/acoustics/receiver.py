@@ -27,6 +27,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..core.portable import arccos, ordered_matmul
 from .band import Band
 
 PLUS, MINUS = 0, 1  # index of r_+ (CCW, left) and r_- (CW, right) in Bearing.rays
@@ -77,8 +78,11 @@ def _phases(band: Band, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.cos(arg), np.sin(arg)
 
 
-def _project(X: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
-    return X.real @ cos - X.imag @ sin
+def _project(X: np.ndarray, cos: np.ndarray, sin: np.ndarray, compiled: bool = True) -> np.ndarray:
+    """Re X · cos − Im X · sin, each product summed over k in index order: a BLAS product would
+    sum in the order of the kernel the CPU gets, and the refined peak would move with it
+    (:mod:`~shoal.engine.core.portable`; ``compiled`` or numpy, the same bits)."""
+    return ordered_matmul(X.real, cos, compiled) - ordered_matmul(X.imag, sin, compiled)
 
 
 @lru_cache(maxsize=32)
@@ -130,7 +134,7 @@ def angle_of_arrival(tau: np.ndarray, D: float, c: float) -> np.ndarray:
     """α = arccos(clip(c·τ/D, −1, 1)) in 0..π from the bow. [7.6]; docs/readings.md,
     "Clipping the arccos and the lag search".
     """
-    return np.arccos(np.clip(c * np.asarray(tau) / D, -1.0, 1.0))
+    return arccos(np.clip(c * np.asarray(tau) / D, -1.0, 1.0))  # the C library's: the same bits on every CPU
 
 
 def rays(alpha: np.ndarray, heading: np.ndarray) -> np.ndarray:
@@ -141,13 +145,14 @@ def rays(alpha: np.ndarray, heading: np.ndarray) -> np.ndarray:
 
 
 def bearing(spectra: np.ndarray, band: Band, D: float, heading: np.ndarray, full_lag: bool = False,
-            refine: bool = True) -> Bearing:
+            refine: bool = True, compiled: bool = True) -> Bearing:
     """Bearing estimate of every robot from its bow/stern spectra (R, N, 2, K).
 
     ``D``: hydrophone separation (m); ``heading`` (R, N): robot heading o (rad);
     ``full_lag``: search the whole window as MATLAB ``xcorr`` would, so a peak outside
     ±D/c is clipped to α = 0 or π; ``refine``: refine the peak lag by a parabola, else keep
-    the sample lag (docs/readings.md, "The lag estimate and the sample rate").
+    the sample lag (docs/readings.md, "The lag estimate and the sample rate"); ``compiled``:
+    the correlation on the lag grid by a compiled loop, else numpy (the same bits).
     """
     if not D > 0:
         raise ValueError(f"D: hydrophone separation must be > 0, got {D}")
@@ -156,7 +161,7 @@ def bearing(spectra: np.ndarray, band: Band, D: float, heading: np.ndarray, full
         lags, corr = _correlate_full(X, band)
     else:
         lags, cos, sin = lag_table(band, float(D))
-        corr = _project(X, cos, sin)  # correlate(X, band, lags)
+        corr = _project(X, cos, sin, compiled)  # correlate(X, band, lags)
     tau = _refine(corr, lags) if refine else _sample_peak(corr, lags)
     rho = np.sum((X * band.phasor(tau)).real, axis=-1)  # ρ = R(τ_lag) [7.5]
     alpha = angle_of_arrival(tau, D, band.c)

@@ -6,9 +6,11 @@ import json
 from pathlib import Path
 from typing import Any, Callable
 
-from .atomic import atomic_output_dir
+from .atomic import output_dir
 from .contract import Engine
 from .recorder import metric_table, trajectory_header, trajectory_rows, write_metrics, write_trajectory
+
+RUN_FILES = frozenset({"run.json", "trajectories.csv", "metrics.csv"})
 
 
 def run_to_dir(
@@ -19,8 +21,10 @@ def run_to_dir(
     on_step: Callable[[int], None] | None = None,
 ) -> Path:
     """Advance ``sim`` for ``steps`` ticks and stream ``trajectories.csv`` and ``metrics.csv``
-    (step 0 = the initial state) plus ``run.json`` = ``meta``, into ``out``, atomically."""
-    with atomic_output_dir(out) as tmp:
+    (step 0 = the initial state) plus ``run.json`` = ``meta``, into ``out``, atomically. An
+    ``out`` holding other files than these three is refused (:class:`OutputDirError`) before
+    the first tick."""
+    with output_dir(out, RUN_FILES.__contains__, "shoal run") as tmp:
         (tmp / "run.json").write_text(json.dumps(meta, indent=2), encoding="utf-8")
         with open(tmp / "trajectories.csv", "w", encoding="utf-8", newline="") as traj, open(
             tmp / "metrics.csv", "w", encoding="utf-8", newline=""

@@ -248,7 +248,9 @@ class AcousticSwarm:
     state: SonarState
 
     def __init__(self, params: SonarParams | None = None, *, robots: int = 10, runs: int = 1, seed: int = 0,
-                 first_run: int = 0, positions: PositionSource | None = None) -> None:
+                 first_run: int = 0, positions: PositionSource | None = None, compiled: bool = True) -> None:
+        """``compiled`` False keeps the receiver's lag-grid correlation on numpy (the same bits)."""
+        self.compiled = compiled
         if robots < 1 or runs < 1:
             raise ValueError("robots and runs must be >= 1")
         self.params = params or SonarParams()
@@ -361,8 +363,8 @@ class AcousticSwarm:
         else:
             spectra = synthesise(rngs, pos, src, self.band, p.r_ref)  # [7.13]–[7.17] in normalised units
             power = intensity(spectra)  # f_A ≈ I + N [7.1]
-            b = bearing(spectra, self.band, p.D, heading, full_lag=p.full_lag,
-                        refine=p.lag_peak == "parabolic") if two else None  # [6.9]–[7.7]
+            b = bearing(spectra, self.band, p.D, heading, full_lag=p.full_lag, refine=p.lag_peak == "parabolic",
+                        compiled=self.compiled) if two else None  # [6.9]–[7.7]
         sensed = Sensed(
             intensity=power.mean(axis=-1) if "intensity" in strat.needs else None,
             rho=b.rho if b is not None and "rho" in strat.needs else None,  # ρ [7.5]

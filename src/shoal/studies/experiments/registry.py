@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import json
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from shoal.engine.core.atomic import atomic_output_dir
+from shoal.engine.core.atomic import output_dir
 
 from .schedulers import Scheduler, current, using
 
@@ -175,24 +174,16 @@ TARGETS: dict[str, Target] = {
 }
 
 
-class OutputDirError(ValueError):
-    """The output folder exists and does not look like an earlier reproduction."""
-
-
-def _check_replaceable(out_dir: Path) -> None:
-    if out_dir.exists():
-        if not out_dir.is_dir():
-            raise OutputDirError(f"{out_dir} exists and is not a folder")
-        if any(out_dir.iterdir()) and not (out_dir / "summary.json").is_file():
-            raise OutputDirError(
-                f"{out_dir} is not empty and holds no summary.json; refusing to replace it (choose another --out)"
-            )
-
-
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
+def _ours(out_dir: Path) -> Callable[[str], bool]:
+    """The entries of ``out_dir`` an earlier reproduction wrote (its ``summary.json`` lists them)."""
+    try:
+        files = json.loads((out_dir / "summary.json").read_text(encoding="utf-8")).get("files")
+    except (OSError, ValueError):
+        files = None
+    if not isinstance(files, list):
+        return lambda name: False  # no reproduction, or one too old to list its files: nothing is ours
+    names = {str(f) for f in files} | {"summary.json"}
+    return names.__contains__
 
 
 def _cpu_seconds() -> float:
@@ -228,8 +219,9 @@ def reproduce(
 
     Everything is written into a temporary sibling folder which replaces ``out_dir`` only
     when the target has finished: an interrupted or failed run leaves ``out_dir`` as it was
-    (absent, or the previous reproduction). A non-empty ``out_dir`` that is not an earlier
-    reproduction (no ``summary.json``) is refused. ``options`` go to the target (e.g.
+    (absent, or the previous reproduction). An ``out_dir`` holding anything an earlier
+    reproduction did not write (its ``summary.json`` lists its ``files``) is refused
+    (:class:`OutputDirError`) before the target runs. ``options`` go to the target (e.g.
     ``sizes=(10, 100)`` for a quick check).
     """
     if target not in TARGETS:
@@ -243,10 +235,8 @@ def reproduce(
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     out_dir = Path(out_dir)
-    _check_replaceable(out_dir)
     start, cpu = time.perf_counter(), _cpu_seconds()
-    with atomic_output_dir(out_dir) as tmp:
-        tmp.chmod(0o777 & ~_umask())  # mkdtemp makes it private; the result is an ordinary folder
+    with output_dir(out_dir, _ours(out_dir), f"shoal reproduce {target}") as tmp:
         with using(scheduler):
             fields = spec.run(tmp, runs, workers, progress, **options)
         summary = {"target": target, "runs": runs, "elapsed_s": round(time.perf_counter() - start, 3),
@@ -255,5 +245,6 @@ def reproduce(
         summary["quick"] = quick
         if (used := scheduler or current()) is not None:
             summary["scheduler"] = used.describe()
+        summary["files"] = sorted(p.name for p in tmp.iterdir())  # what a rerun into out_dir may replace
         (tmp / "summary.json").write_text(json.dumps(summary, indent=2, ensure_ascii=False) + "\n", encoding="utf-8")
     return summary

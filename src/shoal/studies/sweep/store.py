@@ -87,6 +87,7 @@ class SweepDir:
             raise SweepError([f"--out {self.out}: exists and is not a folder"])
         created = not self.out.exists()
         self.out.mkdir(parents=True, exist_ok=True)
+        had_lock = (self.out / LOCK).exists()
         try:
             with FileLock(self.out / LOCK, timeout=0):
                 yield
@@ -97,6 +98,8 @@ class SweepDir:
             if created and all(p.name == LOCK for p in self.out.iterdir()):  # nothing written: leave no folder
                 (self.out / LOCK).unlink(missing_ok=True)
                 self.out.rmdir()
+            elif not had_lock and not (self.out / MANIFEST).exists():  # a refused folder keeps no lock file of ours
+                (self.out / LOCK).unlink(missing_ok=True)
 
     def open(self, identity: dict[str, Any], meta: dict[str, Any]) -> None:
         """Start or resume: refuse a folder holding anything but the same sweep (call it under :meth:`locked`)."""

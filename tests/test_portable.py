@@ -1,0 +1,71 @@
+"""Arithmetic with the same bits on every CPU (engine/core/portable.py), and the receiver that
+uses it: the golden presets give the stored hashes when numpy and BLAS run as on other CPUs
+(tests/test_golden.py::test_golden_on_other_cpus)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from shoal.engine.acoustics.band import Band
+from shoal.engine.acoustics.receiver import _project, angle_of_arrival, correlate, lag_table
+from shoal.engine.core.portable import arccos, ordered_matmul
+
+
+def _by_index(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Σ_k a_k·b_kl from +0, one k after another, in Python floats (IEEE double)."""
+    rows = a.reshape(-1, a.shape[-1])
+    out = np.empty((rows.shape[0], b.shape[1]))
+    for i, row in enumerate(rows):
+        for j in range(b.shape[1]):
+            acc = 0.0
+            for k in range(b.shape[0]):
+                acc += float(row[k]) * float(b[k, j])
+            out[i, j] = acc
+    return out.reshape(a.shape[:-1] + (b.shape[1],))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(1, 4), st.integers(1, 3), st.integers(1, 40), st.integers(1, 9), st.integers(0, 2**32 - 1),
+       st.booleans())
+def test_ordered_matmul_sums_in_index_order(r, n, k, l, seed, compiled):
+    rng = np.random.default_rng(seed)
+    a = rng.standard_normal((r, n, k)) * 10.0 ** rng.integers(-3, 4, (r, n, k))
+    b = rng.standard_normal((k, l))
+    got = ordered_matmul(a, b, compiled)
+    assert got.shape == (r, n, l)
+    assert np.array_equal(got, _by_index(a, b))  # bit for bit, compiled or numpy
+    np.testing.assert_allclose(got, a @ b, rtol=1e-9, atol=1e-9 * np.abs(a).max() * np.abs(b).max() * k)
+
+
+def test_ordered_matmul_refuses_mismatched_shapes():
+    with pytest.raises(ValueError, match="terms"):
+        ordered_matmul(np.ones((2, 3)), np.ones((4, 2)))
+
+
+def test_arccos_is_the_c_librarys():
+    x = np.random.default_rng(1).uniform(-1.0, 1.0, 5000)
+    x[:4] = (-1.0, 1.0, 0.0, -0.0)
+    got = arccos(x)
+    assert got.dtype == np.float64
+    assert np.array_equal(got, np.array([math.acos(v) for v in x]))
+    assert arccos(np.float64(0.5)) == math.acos(0.5)
+    np.testing.assert_allclose(got, np.arccos(x), rtol=0, atol=1e-15)
+
+
+def test_receiver_correlation_and_angle_use_the_portable_forms():
+    band = Band(f_c=1000.0, Q=1.5, tbp=100.0, fs=48_000.0)
+    rng = np.random.default_rng(5)
+    X = rng.standard_normal((2, 3, band.freqs.size)) + 1j * rng.standard_normal((2, 3, band.freqs.size))
+    lags, cos, sin = lag_table(band, 0.75)
+    want = _by_index(X.real, cos) - _by_index(X.imag, sin)
+    assert np.array_equal(correlate(X, band, lags), want)
+    assert np.array_equal(_project(X, cos, sin, compiled=False), want)
+    tau = rng.uniform(-6e-4, 6e-4, (2, 3))
+    alpha = angle_of_arrival(tau, 0.75, band.c)
+    assert np.array_equal(alpha, np.array([math.acos(v) for v in np.clip(band.c * tau / 0.75, -1, 1).ravel()])
+                          .reshape(2, 3))
