@@ -175,7 +175,7 @@ class ShoalServer:
             self.close_tab(cid, gone=True)
 
     def _turn_away(self, client: viser.ClientHandle) -> None:
-        text = FULL_MESSAGE.format(n=self.max_sessions)
+        text = FULL_MESSAGE.format(n=f"{self.max_sessions:d}")
         client.gui.add_markdown(f"**{FULL_TITLE}.** {text}")
         with client.gui.add_modal(FULL_TITLE):
             client.gui.add_markdown(text)

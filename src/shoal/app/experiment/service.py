@@ -36,6 +36,7 @@ from shoal.studies.sweep import outcomes
 from shoal.studies.sweep.plan import SweepPlan
 from shoal.studies.sweep.table import CellTable
 
+from ..markdown import escape
 from .request import ExperimentRequest, Limits, Refused, resolve
 
 QUEUED, RUNNING, FINISHED, CANCELLED, FAILED = "queued", "running", "finished", "cancelled", "failed"
@@ -86,16 +87,16 @@ class Experiment:
     def status(self) -> str:
         """Where it stands, in words."""
         cells, done = len(self.plan), len(self.table)
-        runs = f"{self.runs_done} of {self.cost} runs"
+        runs = f"{self.runs_done:d} of {self.cost:d} runs"
         if self.phase == QUEUED:
-            return f"queued: {self.place}{_ordinal(self.place)} in the server's queue"
+            return f"queued: {self.place:d}{_ordinal(self.place)} in the server's queue"
         if self.phase == RUNNING:
             return f"{'cancelling' if self.cancelling else 'running'}: {done} of {cells} cells, {runs}"
         if self.phase == FINISHED:
-            return f"finished: {cells} cells × {self.plan.runs} runs"
+            return f"finished: {cells} cells × {self.plan.runs:d} runs"
         if self.phase == CANCELLED:
             return f"cancelled: {done} of {cells} cells finished and kept"
-        return f"failed after {done} of {cells} cells: {self.error}"
+        return f"failed after {done} of {cells} cells: {escape(self.error)}"
 
 
 def _ordinal(n: int) -> str:

@@ -22,6 +22,7 @@ from shoal.presets.build import build_simulation, kind_of, law_for, objective_fo
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
+from ..markdown import escape
 from ..panel import figures
 from ..panel.panel import TRAIL_SLIDER
 from ..panel.plots import PlotSpec, Series, log10_abs
@@ -271,7 +272,7 @@ def _set_coefficient(name: str) -> Any:
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
-    return (f"**{sc.name}** · {state} · t = {r['t']:.1f} s · {s.progress()} · "
+    return (f"**{escape(sc.name)}** · {state} · t = {r['t']:.1f} s · {s.progress()} · "
             f"best f = {r['best']:.4g}" + (f" · {int(r['outside'])} outside the arena" if r["outside"] else ""))
 
 

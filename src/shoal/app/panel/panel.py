@@ -27,6 +27,7 @@ from ..experiment.panel import ExperimentPanel
 from ..experiment.service import ExperimentService
 from ..lessons.panel import LessonProgress, LessonsPanel
 from ..lessons.scenes import load_scene
+from ..markdown import escape
 from ..preset_menu import PresetMenu
 from ..session.lifecycle import AT_END, at_end_choice, at_end_label
 from ..session.session import Session
@@ -579,7 +580,8 @@ class Panel:
             return
         k, t, last = shown
         what = "replay" if s.replaying is not None else "recorded history"
-        self.status.content = (f"**{s.scenario.name}** · {state} · {what} · step {k} of {last} · t = {t:.4g} s"
+        self.status.content = (f"**{escape(s.scenario.name)}** · {state} · {what} · step {k:d} of {last:d} · "
+                               f"t = {t:.4g} s"
                                " · the live run's numbers are not recorded")
 
     def refresh_readout(self) -> None:
