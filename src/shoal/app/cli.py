@@ -43,6 +43,13 @@ def _cmd_serve(args: argparse.Namespace) -> int:
         return _err("--max-sessions must be >= 1")
     if args.experiment_workers < 1:
         return _err("--experiment-workers must be >= 1")
+    if args.scheduler is not None:
+        from shoal.studies.experiments.schedulers import SchedulerError, scheduler_address
+
+        try:
+            scheduler_address(args.scheduler)  # (reached, with a timeout, when the server starts)
+        except SchedulerError as e:
+            return _err(str(e))
     try:
         origins = tuple(check_origin_url(url) for url in args.allow_origin or ())
     except ValueError as e:
@@ -124,7 +131,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 
 def _cmd_reproduce_on(args: argparse.Namespace) -> int:
     """``reproduce`` with ``--scheduler``: every target's chunks of runs go to the Dask cluster."""
-    if not args.scheduler or args.list or args.report:
+    if args.scheduler is None or args.list or args.report:
         return _cmd_reproduce(args)
     from shoal.studies.experiments.schedulers import SchedulerError, connect, using
 

@@ -266,7 +266,7 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
     if experiment_workers < 1:
         raise ValueError(f"experiment_workers must be >= 1 (got {experiment_workers})")
-    pool = DaskCluster(scheduler) if scheduler else experiment_pool(experiment_workers)
+    pool = DaskCluster(scheduler) if scheduler is not None else experiment_pool(experiment_workers)
     server = ShoalServer(scenario, host=host, port=port, max_sessions=max_sessions, allow_origins=allow_origins,
                          experiments=ExperimentService(pool, limits, owns_scheduler=True))
     if port and server.port != port:  # viser moved to the next free port: refuse instead

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import multiprocessing
+import socket
 import threading
 import time
 import uuid
@@ -239,12 +240,56 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
         p.join(timeout=GRACE)
 
 
+SCHEMES = ("tcp", "tls")  # the Dask protocols --scheduler takes (no scheme: tcp)
+
+
+def scheduler_address(text: str) -> str:
+    """``text`` as a Dask scheduler address ``tcp://HOST:PORT`` (or ``tls://``), else
+    :class:`SchedulerError` saying what is wrong (an empty value included)."""
+    if not isinstance(text, str) or not text.strip():
+        raise SchedulerError("--scheduler is empty: give the Dask scheduler's address, tcp://HOST:PORT")
+    text = text.strip()
+    scheme, sep, rest = text.partition("://")
+    if not sep:
+        scheme, rest = "tcp", text
+    host, colon, port = rest.rpartition(":")
+    host = host.strip("[]")
+    if (scheme not in SCHEMES or not colon or not host or not port.isdigit() or not 0 < int(port) < 65536
+            or any(c in rest for c in "/?#@ ")):
+        raise SchedulerError(f"--scheduler {text[:100]!r}: expected the Dask scheduler's address, tcp://HOST:PORT "
+                             f"(or {', '.join(f'{s}://' for s in SCHEMES[1:])})")
+    return f"{scheme}://{rest}"
+
+
+def _probe(address: str, timeout: float) -> None:
+    """Raise :class:`SchedulerError` unless something at ``address`` accepts a connection within
+    ``timeout`` s and (tcp) speaks first, as a Dask scheduler does (its handshake); a port that
+    accepts and stays silent would hang Dask's client."""
+    scheme, _, rest = address.partition("://")
+    host, _, port = rest.rpartition(":")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout) as s:
+            if scheme == "tcp":
+                s.settimeout(timeout)
+                if not s.recv(1):
+                    raise SchedulerError(f"the Dask scheduler at {address!r} closed the connection at once")
+    except TimeoutError:
+        raise SchedulerError(f"nothing at {address!r} answered as a Dask scheduler within {timeout:g} s") from None
+    except OSError as err:
+        raise SchedulerError(f"cannot reach the Dask scheduler at {address!r}: {err.strerror or err}") from None
+
+
 class DaskCluster:
     """The workers of a Dask ``distributed`` scheduler at ``address`` (``tcp://HOST:PORT``).
     Each item is one task, retried ``retries`` times if it raises; tasks on a worker that
-    dies are rescheduled by Dask itself."""
+    dies are rescheduled by Dask itself.
+
+    The address is checked (:func:`scheduler_address`) and probed (:func:`_probe`) before Dask
+    connects, and Dask's own connection is given ``timeout`` seconds as well: a bad address, a
+    closed port or a port that never answers is a :class:`SchedulerError` in seconds."""
 
     def __init__(self, address: str, retries: int = 2, timeout: float = 10.0) -> None:
+        address = scheduler_address(address)
         try:
             from distributed import Client
         except ImportError:
@@ -252,10 +297,26 @@ class DaskCluster:
                 "--scheduler needs Dask distributed: install shoal[cluster] (pip install 'shoal[cluster]')"
             ) from None
         self.address, self.retries = address, int(retries)
-        try:
-            self.client = Client(address, timeout=timeout, set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as err:
+        _probe(address, timeout)
+        made: list[Any] = []
+        failed: list[BaseException] = []
+
+        def connect() -> None:
+            try:
+                made.append(Client(address, timeout=timeout, set_as_default=False))
+            except BaseException as err:  # handed to the caller's thread
+                failed.append(err)
+
+        thread = threading.Thread(target=connect, name="shoal-dask-connect", daemon=True)
+        thread.start()
+        thread.join(2 * timeout)
+        if failed:
+            err = failed[0]
             raise SchedulerError(f"cannot reach the Dask scheduler at {address!r}: {err}") from None
+        if not made:
+            raise SchedulerError(f"the Dask scheduler at {address!r} did not finish connecting within "
+                                 f"{2 * timeout:g} s")
+        self.client = made[0]
         threads = sum(w.get("nthreads", 1) for w in self.client.scheduler_info()["workers"].values())
         self.workers = max(1, threads)
         self._lock = threading.Lock()
