@@ -205,3 +205,37 @@ def test_share_of_a_recording_beyond_the_limits_is_refused():
     session = session_for(load("default"))
     session.step(3)
     assert len(session_html(session)) < 5 * 2**20
+
+
+# ---------------------------------------------------------------------------- shoal export-replay
+@pytest.mark.parametrize("sig, code", [(__import__("signal").SIGINT, 130), (__import__("signal").SIGTERM, 143)])
+def test_a_long_export_says_its_cost_and_stops_on_a_signal_writing_nothing(tmp_path, sig, code):
+    import subprocess
+    import sys
+
+    out = tmp_path / "long.html"
+    proc = subprocess.Popen([sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(main())",
+                             "export-replay", "default", "--steps", "10000000", "--out", str(out)],
+                            stderr=subprocess.PIPE)
+    err: list[str] = []
+    import os
+    import threading
+
+    def read() -> None:
+        while chunk := os.read(proc.stderr.fileno(), 4096):
+            err.append(chunk.decode("utf-8", "replace"))
+
+    threading.Thread(target=read, daemon=True).start()
+    try:
+        wait_until(lambda: "10,000,000 steps × 20 robots × 1 runs" in "".join(err), timeout=60, what="the estimate")
+        time.sleep(3.0)  # running (the bar shows on a terminal only)
+        start = time.monotonic()
+        proc.send_signal(sig)
+        proc.wait(timeout=30)
+        took = time.monotonic() - start
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    text = "".join(err)
+    assert proc.returncode == code and took < 10, (proc.returncode, took)
+    assert "Traceback" not in text and not out.exists() and not list(tmp_path.iterdir())

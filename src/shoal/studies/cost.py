@@ -79,7 +79,7 @@ class Cost:
 
     def describe(self) -> str:
         return (f"{self.steps:,} steps × {self.robots:,} robots × {self.runs:,} runs of a {self.variant} scene: "
-                f"about {_duration(self.seconds)} of CPU")
+                f"an estimated {_duration(self.seconds)} of CPU")
 
 
 def cost(scenario: Scenario, *, steps: int | None = None, runs: int | None = None) -> Cost:
