@@ -25,6 +25,7 @@ from shoal.studies.experiments.schedulers import DaskCluster, SchedulerError
 from .experiment import ExperimentService, Limits, experiment_pool
 from .input_guard import guard_inputs
 from .kinds.registry import check_supported, session_for
+from .message_guard import install_message_guard, quiet_handler_errors
 from .native_memory import keep_large_blocks_returnable
 from .origin_guard import OriginPolicy, guarded_viser, is_loopback
 from .panel.keys import install_keys
@@ -91,7 +92,9 @@ class ShoalServer:
         self._errors: weakref.WeakKeyDictionary[TabApp, str] = weakref.WeakKeyDictionary()  # last error per tab
         keep_large_blocks_returnable()  # tabs that come and go give their memory back
         self.policy = OriginPolicy(host, allow_origins)
+        install_message_guard()  # every connection's messages: a budget, and checked before viser's handlers
         self.viser = guarded_viser(host, port, self.policy)
+        quiet_handler_errors(self.viser)
         self.port = self.viser.get_port()
         self.tabs: dict[int, TabApp] = {}
         self._lock = threading.Lock()

@@ -1,0 +1,102 @@
+"""One client's flood and malformed messages (issue 20, case 7), over viser's raw websocket.
+
+- A flood of refused values is read at the connection's budget (``message_guard.RATE`` a
+  second after a burst), so it waits in the flooder's own socket while another tab's scene
+  keeps updating; how much the other tab's update rate keeps is measured in
+  ``benchmarks/bench_hostile.py``, not asserted here.
+- A malformed message (not msgpack, a text frame, an unknown type, a field of the wrong type)
+  is dropped with one line on stderr; the connection stays open (no 1011, no traceback) until
+  ``MAX_MALFORMED`` of them close it with 1008.
+"""
+
+from __future__ import annotations
+
+import time
+
+import msgspec
+import pytest
+from viser import _messages
+
+from shoal.app import message_guard
+from shoal.app.server import start_server
+
+from browser.browser_helpers import wait_until
+from viser_wire import WireClient
+
+
+@pytest.fixture(scope="module")
+def served():
+    srv = start_server("default", port=0)
+    yield srv
+    srv.stop()
+
+
+def _tab(srv) -> WireClient:
+    before = set(srv.tabs)
+    c = WireClient(srv.port, decode=True)
+    wait_until(lambda: set(srv.tabs) - before and c.uuid_of("robots"), what="a tab")
+    return c
+
+
+def test_a_flood_is_read_at_the_connections_budget_and_the_other_tab_goes_on(served):
+    other, flood = _tab(served), _tab(served)
+    try:
+        uuid = flood.uuid_of("robots")
+        refusals = lambda: sum(1 for t, _, _ in flood.notifications() if t.startswith("Refused"))  # noqa: E731
+        start = time.monotonic()
+        for _ in range(5_000):  # values no control can hold: each one refused
+            flood.send(_messages.GuiUpdateMessage(uuid, {"value": "lots"}))
+        sent = time.monotonic() - start
+        before = other.counts()[2]
+        time.sleep(2.0)
+        elapsed = time.monotonic() - start
+        handled = refusals()
+        allowed = message_guard.BURST + message_guard.RATE * elapsed + 50
+        assert 0 < handled <= allowed, (handled, allowed, sent)
+        assert other.counts()[2] > before  # the other tab's robots kept moving
+        assert not flood.closed.is_set()  # paced, not cut off
+    finally:
+        flood.close()
+        other.close()
+
+
+BAD = [
+    b"\x00\x01\x02 not msgpack",
+    msgspec.msgpack.encode([1, 2, 3]),
+    msgspec.msgpack.encode({"type": "NoSuchMessage", "x": 1}),
+    msgspec.msgpack.encode({"type": "ViewerCameraMessage", "wxyz": "abc", "position": 1}),
+    msgspec.msgpack.encode({"type": "GuiUpdateMessage", "uuid": 123, "updates": []}),
+    msgspec.msgpack.encode({"type": "FileTransferPart", "source_component_uuid": None, "transfer_uuid": 5,
+                            "part_index": "x", "content": "not bytes"}),
+]
+
+
+@pytest.mark.parametrize("payload", [*BAD, "a text frame"], ids=[*(f"bad{i}" for i in range(len(BAD))), "text"])
+def test_a_malformed_message_is_dropped_with_one_line_and_the_tab_stays(served, capfd, payload):
+    c = _tab(served)
+    try:
+        frames = c.counts()[0]
+        c.ws.send(payload)
+        wait_until(lambda: c.counts()[0] > frames + 3, what="updates after the malformed message")
+        assert not c.closed.is_set()
+        c.set_value("robots", 9)  # the tab still works
+        wait_until(lambda: any(s.sim.robots == 9 for s in served.sessions.values()), what="9 robots")
+    finally:
+        c.close()
+    err = capfd.readouterr().err
+    assert "dropped a malformed message" in err and "Traceback" not in err and "1011" not in err, err[-2000:]
+    assert err.count("dropped a malformed message") == 1
+
+
+def test_many_malformed_messages_close_the_connection_with_1008(served, capfd):
+    c = _tab(served)
+    for _ in range(message_guard.MAX_MALFORMED + 5):
+        try:
+            c.ws.send(b"\xc1")  # (never used in msgpack)
+        except Exception:
+            break
+    wait_until(lambda: c.closed.is_set(), what="the connection closed")
+    assert c.ws.close_code == message_guard.POLICY_VIOLATION
+    err = capfd.readouterr().err
+    assert "closed the connection" in err and "Traceback" not in err
+    assert err.count("dropped a malformed message") <= 3  # said once, then counted
