@@ -19,6 +19,7 @@ from viser import _messages
 
 from shoal.app import message_guard
 from shoal.app.server import start_server
+from shoal.presets import io as presets_io
 
 from browser.browser_helpers import wait_until
 from viser_wire import WireClient
@@ -100,3 +101,23 @@ def test_many_malformed_messages_close_the_connection_with_1008(served, capfd):
     err = capfd.readouterr().err
     assert "closed the connection" in err and "Traceback" not in err
     assert err.count("dropped a malformed message") <= 3  # said once, then counted
+
+
+def test_a_preset_uploaded_while_the_tab_is_built_is_loaded(served, capfd):
+    """The upload button reaches the page before the rest of the tab; an upload sent at once
+    used to be lost (``AttributeError: 'TabApp' object has no attribute 'panels'``)."""
+    data = presets_io.to_toml(presets_io.load("course-dvc")).encode()  # another kind: the tab is swapped
+    before = set(served.tabs)
+    c = WireClient(served.port, decode=True)
+    try:
+        wait_until(lambda: c.uuid_of("Upload preset"), timeout=60, what="the upload button")
+        early = not (set(served.tabs) - before)  # the server has not finished the tab yet
+        c.upload("Upload preset", "early.toml", data)
+        wait_until(lambda: any(t.session.scenario.name == "course-dvc" for k, t in served.tabs.items()
+                               if k not in before), timeout=60, what="the uploaded preset loaded")
+        wait_until(lambda: c.saw("Preset uploaded"), what="the verdict in the page")
+    finally:
+        c.close()
+    err = capfd.readouterr().err
+    assert "AttributeError" not in err and "Traceback" not in err, err[-2000:]
+    assert early, "the upload came after the tab was built: the test did not test the race"

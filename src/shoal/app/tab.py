@@ -72,13 +72,16 @@ class TabApp:
         self._send_client = send_file
         self._atomic = atomic or contextlib.nullcontext
         self.camera = camera  # the browser's camera (viser ``CameraHandle``), None without one
-        self._ticking = threading.Lock()
+        # held while the panels are built and while a tick or a swap runs: an upload (or any
+        # control) the page sends while the tab is still being built waits for it, then loads
+        self._ticking = threading.RLock()
         self._clicks: list[Callable[[Any], None]] = []
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
         self.control_hold = self.CONTROL_HOLD
         self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
         self.menu = PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included, across swaps
-        self._build_kind()
+        with self._ticking:
+            self._build_kind()
         if camera is not None:
             camera.on_update(self._camera_moved)
 
