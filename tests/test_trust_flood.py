@@ -123,3 +123,20 @@ def test_a_preset_uploaded_while_the_tab_is_built_is_loaded(served, capfd):
     err = capfd.readouterr().err
     assert "AttributeError" not in err and "Traceback" not in err, err[-2000:]
     assert early, "the upload came after the tab was built: the test did not test the race"
+
+
+@pytest.mark.parametrize("name, data, words", [
+    ("dotted.toml", b"a" + b".a" * 49_000 + b" = 1\n", "a key of more than 16 dotted parts"),
+    ("header.toml", b"[" + b"a." * 49_000 + b"a]\n", "a key of more than 16 dotted parts"),
+    ("deep.toml", b"x = " + b"{a = " * 20_000 + b"1" + b"}" * 20_000, "nested deeper than 16"),
+])
+def test_a_99_kib_hostile_preset_on_the_wire_is_refused_at_once(served, name, data, words):
+    """Issue 20, case 2: ``tomllib`` took minutes and gigabytes on these; the bounds refuse them
+    before it parses (how fast is measured in ``benchmarks/bench_hostile.py``)."""
+    assert len(data) > 90 * 1024
+    c = _tab(served)
+    try:
+        c.upload("Upload preset", name, data)
+        wait_until(lambda: c.saw(words), timeout=30, what="the refusal")
+    finally:
+        c.close()
