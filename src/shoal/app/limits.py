@@ -28,35 +28,29 @@ from typing import Any
 import numpy as np
 
 from shoal.presets.io import PresetError
+from shoal.presets.kinds import KINDS, kind_for
 from shoal.presets.models import Scenario
 from shoal.studies.cost import Cost, cost, tick_cost
 
-# Robots per scene kind, where one step still costs a few tens of ms at most: the compiled
-# kinematic fleet tick takes 1000 robots in a few ms, pymunk physics 200 in about 20 ms; the
-# SLO and acoustic swarms grow faster than linearly with the robots (about 2× the slider's top).
-MAX_ROBOTS = {"free-space swarm": 2000, "fleet": 1000, "fleet, pymunk physics": 200, "acoustic swarm": 100,
-              "SLO swarm": 100}
-LIVE_TICK_SECONDS = 0.005  # estimated CPU of one live tick (every kind at its robot cap is within it)
+# Robots per kind of scene in one tab: the caps of the kinds' registry entries (presets/kinds.py).
+MAX_ROBOTS = {cap.label: cap.robots for kind in KINDS.values() for cap in kind.caps}
+LIVE_TICK_SECONDS = 0.005  # estimated CPU of one live tick (every built-in kind at its robot cap is within it)
 
 
 def scene_kind(scenario: Scenario) -> str:
-    if scenario.slo is not None:
-        return "SLO swarm"
-    if scenario.acoustics is not None:
-        return "acoustic swarm"
-    if scenario.world is None:
-        return "free-space swarm"
-    return "fleet, pymunk physics" if scenario.robot.motion == "physics" else "fleet"
+    """The kind of scene whose robot cap applies to ``scenario`` (its kind's first cap that holds)."""
+    return kind_for(scenario).cap(scenario).label
 
 
 def robot_cap(scenario: Scenario) -> int:
     """The most robots a tab may show of ``scenario``'s kind."""
-    return MAX_ROBOTS[scene_kind(scenario)]
+    return kind_for(scenario).cap(scenario).robots
 
 
 def check_app_limits(scenario: Scenario) -> Scenario:
     """``scenario`` if one browser tab may run it, else :class:`PresetError` naming the field."""
-    kind, cap = scene_kind(scenario), robot_cap(scenario)
+    limit = kind_for(scenario).cap(scenario)
+    kind, cap = limit.label, limit.robots
     if scenario.sim.robots > cap:
         raise PresetError([f"sim.robots = {scenario.sim.robots}: the browser app runs at most {cap} robots "
                            f"in this kind of scene ({kind}); use `shoal run` for larger swarms"])

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from shoal.presets.build import kind_of
+from shoal.presets.kinds import kind_for
 from shoal.presets.models import Scenario
 
 
@@ -29,8 +29,9 @@ class TickCost:
     pair: float = 0.0
 
 
-# The per-kind constants, in one table (a kind's registry entry may declare its own one day):
-# engine kind, or kind/variant where a setting changes the cost.
+# The built-in kinds' constants, in one table: engine kind, or kind/variant where a setting
+# changes the cost. A kind not in it (a plug-in's) is priced by its registry entry's ``cost``
+# (presets/kinds.py: CPU s per run and tick, per robot and tick).
 TICK_COSTS: dict[str, TickCost] = {
     "swarm": TickCost(run=2e-6, robot=0.1e-6),
     "fleet": TickCost(run=30e-6, robot=3e-6),
@@ -43,8 +44,8 @@ SLO_HOST = TickCost(run=0.0, robot=0.0, pair=0.1e-6)  # a swarm, fleet or sonar 
 
 
 def variant(scenario: Scenario) -> str:
-    """The key of ``scenario``'s row in :data:`TICK_COSTS`."""
-    kind = kind_of(scenario)
+    """The key of ``scenario``'s row in :data:`TICK_COSTS` (a plug-in kind: its name)."""
+    kind = kind_for(scenario).name
     if kind == "fleet" and scenario.robot.motion == "physics":
         return "fleet/physics"
     if kind == "sonar" and scenario.acoustics is not None and scenario.acoustics.mode != "waveform":
@@ -56,7 +57,8 @@ def tick_cost(scenario: Scenario, robots: int | None = None) -> float:
     """Estimated CPU seconds of one tick of one run of ``scenario`` (with ``robots`` robots:
     by default its ``sim.robots``)."""
     n = scenario.sim.robots if robots is None else robots
-    row = TICK_COSTS[variant(scenario)]
+    key = variant(scenario)
+    row = TICK_COSTS.get(key) or TickCost(*kind_for(scenario).cost)
     pair = row.pair or (SLO_HOST.pair if scenario.slo is not None else 0.0)
     return row.run + n * row.robot + n * n * pair
 
