@@ -7,8 +7,7 @@ Each version's server runs in a child process started from that version's ``src`
 previous one is ``git archive``'d to a temporary folder), with one Sweep worker as ``shoal
 serve`` has by default. This process holds the clients (``tests/viser_wire.py``):
 
-- an **observer** tab plays the default scene at 240 steps a second (so its arena is redrawn
-  as often as a tab's is, 30 times a second) and counts its robot point-cloud updates; its
+- an **observer** tab plays the default scene and counts its robot point-cloud updates; its
   rate over ``--seconds`` is measured idle, then while another tab does the worst it can:
 - **upload**: uploads a 99 KiB preset of one dotted key of 20,000 parts (``a.a.a…=1``), again
   as soon as it is refused;
@@ -53,7 +52,6 @@ sys.stdin.read()
 srv.stop()
 """
 SCENARIOS = ("idle", "upload", "replay", "sweep", "sweep-steps", "flood")
-OBSERVER_SPEED = 240  # steps a second the observer plays (the slider's top): its arena is drawn 30 times a second
 MEMORY_CAP = 4 * 2**30  # address space of the child that runs tomllib alone (the machine is shared)
 
 
@@ -222,7 +220,6 @@ def measure(src: Path, seconds: float, only: tuple[str, ...], replay_bytes: byte
     for name in only:
         server = Server(src)
         observer = tab(server.port)
-        observer.set_value("speed [steps/s]", OBSERVER_SPEED)  # drawn at the tab's most, 30 a second
         try:
             start = observer.counts()[2]  # the observer's run is under way (its kernels compiled)
             end = time.monotonic() + 300
