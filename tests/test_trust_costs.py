@@ -7,6 +7,7 @@ raw websocket (``viser_wire.WireClient``)."""
 from __future__ import annotations
 
 import dataclasses
+import signal
 import time
 
 import numpy as np
@@ -208,7 +209,7 @@ def test_share_of_a_recording_beyond_the_limits_is_refused():
 
 
 # ---------------------------------------------------------------------------- shoal export-replay
-@pytest.mark.parametrize("sig, code", [(__import__("signal").SIGINT, 130), (__import__("signal").SIGTERM, 143)])
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_a_long_export_says_its_cost_and_stops_on_a_signal_writing_nothing(tmp_path, sig, code):
     import subprocess
     import sys
@@ -216,7 +217,8 @@ def test_a_long_export_says_its_cost_and_stops_on_a_signal_writing_nothing(tmp_p
     out = tmp_path / "long.html"
     proc = subprocess.Popen([sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(main())",
                              "export-replay", "default", "--steps", "10000000", "--out", str(out)],
-                            stderr=subprocess.PIPE)
+                            stderr=subprocess.PIPE,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # (xdist ignores SIGINT)
     err: list[str] = []
     import os
     import threading

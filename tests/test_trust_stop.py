@@ -21,7 +21,8 @@ CLI = [sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(m
 
 
 def _serve() -> tuple[subprocess.Popen, list[str], int]:
-    proc = subprocess.Popen([*CLI, "serve", "--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen([*CLI, "serve", "--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # (xdist ignores SIGINT)
     lines: list[str] = []
     threading.Thread(target=lambda: lines.extend(proc.stdout), daemon=True).start()  # type: ignore[arg-type]
     url = wait_until(lambda: next((line.split()[4] for line in lines if "Shoal is running" in line), None),
@@ -59,7 +60,7 @@ def test_a_signal_stops_serve_and_its_workers_while_a_sweep_runs(sig, code):
         gone, alive = psutil.wait_procs(started, timeout=10)
         for p in alive:  # (what this test started: a failing server leaves no process behind)
             p.kill()
-    assert took < 15.0, took
+    assert took < 30.0, took  # (a few seconds on a quiet machine; the old server never exited)
     assert proc.returncode in (0, code), err[-2000:]
     assert "Traceback" not in err, err[-2000:]
     assert not alive, "left running: " + ", ".join(" ".join(p.cmdline()[:4]) for p in alive)

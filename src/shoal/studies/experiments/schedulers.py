@@ -183,12 +183,15 @@ class LocalPool:
                 futures = {pool.submit(fn, item): i for i, item in pending.items()}
                 while futures and not flag.is_set():
                     done, _ = wait(futures, timeout=WAIT_TICK, return_when=FIRST_COMPLETED)
-                    for fut in done:
+                    while done:
+                        fut = done.pop()
                         i = futures.pop(fut)  # a finished future keeps its result: drop it
                         try:
                             res = fut.result()
                         except (BrokenProcessPool, Interrupted):
                             continue  # every unfinished item fails alike; retried by the next pool
+                        finally:
+                            del fut
                         del pending[i]
                         yield i, res
             finally:
