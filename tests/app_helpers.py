@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import html
+import re
 from contextlib import contextmanager
 from typing import Any, Iterator
 
@@ -21,3 +23,11 @@ def hand_tab(server: Any, cid: int = HAND_TAB) -> Iterator[Any]:
         server.close_tab(cid)
         server.viser.gui.reset()
         server.viser.scene.reset()
+
+
+_ESCAPED = re.compile(r"\\([!-/:-@\[-`{-~])")
+
+
+def shown(markdown: str) -> str:
+    """Markdown as the page reads it: the app's escapes (``markdown.escape``) undone."""
+    return html.unescape(_ESCAPED.sub(r"\1", markdown))

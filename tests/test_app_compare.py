@@ -19,6 +19,8 @@ from shoal.app.session.twin import parse_overrides, twin_scenario
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 
+from app_helpers import shown
+
 KINDS = ("default", "course-dvc", "sonar-xb-pso", "slo-walk")
 
 
@@ -217,7 +219,7 @@ def test_the_timeline_slider_scrubs_and_the_arena_shows_that_step(tab):
     np.testing.assert_allclose(robots, tab.arena.to_view(s.frames[12].x)[:, :2], atol=1e-5)
     assert not tab.arena.nodes["gbest"].visible  # bests are not recorded
     assert tab.panels.handles["speed"].data[0][-1] == pytest.approx(s.frames[12].t)
-    assert "step 12" in tab.panels.replay_gui.where.content
+    assert "step 12" in shown(tab.panels.replay_gui.where.content)
 
 
 def test_load_replay_swaps_the_scene_kind_and_shows_the_badge(tab):
@@ -230,7 +232,7 @@ def test_load_replay_swaps_the_scene_kind_and_shows_the_badge(tab):
     assert tab.messages[-1][2] == "green" and "verified" in tab.messages[-1][1]
     tab.tick(1.0)
     badge = tab.panels.replay_gui.badge
-    assert badge.visible and "Replay of course-dvc, seed" in badge.content
+    assert badge.visible and "Replay of course-dvc, seed" in shown(badge.content)
     s.scrub(9)
     tab.tick(2.0)
     pts = np.asarray(tab.arena.nodes["robots"].points)[:, :2]

@@ -13,6 +13,7 @@ from shoal.app.experiment.service import CANCELLED, FINISHED
 from shoal.presets.io import load
 from shoal.studies.sweep import catalogue
 
+from app_helpers import shown
 from browser.browser_helpers import wait_until
 
 
@@ -39,7 +40,7 @@ def test_the_tab_offers_the_fields_and_outcomes_of_its_scene(tab):
     assert tuple(p.axes[0].field.options) == keys and tuple(p.axes[1].field.options) == (NONE, *keys)
     assert p.axes[0].field.value == "controller.U" and p.axes[1].field.value == NONE
     assert p.axes[0].values.value == "3.0, 5.25, 7.5, 9.75, 12.0"  # half to twice the preset's U = 6
-    assert "top speed U" in p.axes[0].info.content and "0 < U ≤ 1000" in p.axes[0].info.content
+    assert "top speed U" in shown(p.axes[0].info.content) and "0 < U ≤ 1000" in shown(p.axes[0].info.content)
     assert tuple(p.outcome.options) == tuple(o.title for o in catalogue.outcomes(sc))
     assert p.outcome.value == "final best f" and p.steps.value == sc.sim.steps
     p.axes[0].field.value = "controller.law"  # a choice: every law the model accepts here
@@ -64,13 +65,14 @@ def test_a_run_shows_progress_medians_cells_and_sends_the_downloads(tab):
     _ask(p, "controller.U", "6, 9", "controller.A_plus", "10, 20")
     p.run.value = True
     exp = _settle(p)
-    assert exp.phase == FINISHED and p.progress.value == 100.0 and "finished: 4 cells × 6 runs" in p.status.content
+    assert exp.phase == FINISHED and p.progress.value == 100.0
+    assert "finished: 4 cells × 6 runs" in shown(p.status.content)
     heat = p.plot.figure.data[0]
     med, lo, hi = exp.table.summary("best_fitness")
     assert heat.type == "heatmap" and np.allclose(np.array(heat.z, dtype=float), med.T)
     assert len(p.cell.options) == 4 and "A_plus=20" in p.cell.options[3]
-    assert "median" in p.cell_info.content and "95 % interval" in p.cell_info.content
-    assert "--grid controller.U=6,9 --grid controller.A_plus=10,20 --runs 6" in p.command.content
+    assert "median" in shown(p.cell_info.content) and "95 % interval" in shown(p.cell_info.content)
+    assert "--grid controller.U=6,9 --grid controller.A_plus=10,20 --runs 6" in shown(p.command.content)
     p.download_csv.value = True
     p.download_png.value = True
     p.download_preset.value = True
@@ -80,7 +82,7 @@ def test_a_run_shows_progress_medians_cells_and_sends_the_downloads(tab):
     assert toml_name == "default-experiment.toml" and b"runs = 6" in toml_bytes and b"steps = 30" in toml_bytes
     p.outcome.value = "highest robot speed over the run [m/s]"  # another outcome: no new run
     assert "highest robot speed over the run" in p.plot.figure.layout.title.text
-    assert p.experiment is exp and "median" in p.cell_info.content
+    assert p.experiment is exp and "median" in shown(p.cell_info.content)
 
 
 def test_one_field_draws_the_median_and_its_interval_band(tab):
@@ -115,8 +117,8 @@ def test_a_refused_run_says_why_in_the_page(tab):
     p = tab.panels.experiment
     _ask(p, "controller.U", "0, 6")
     p.run.value = True
-    assert p.experiment is None and "**Refused:**" in p.status.content and "0 is outside 0 < U ≤ 1000" in \
-        p.status.content
+    assert p.experiment is None and "**Refused:**" in shown(p.status.content) and "0 is outside 0 < U ≤ 1000" in \
+        shown(p.status.content)
     title, body, color = tab.messages[-1]
     assert (title, color) == ("Refused: experiment", "red") and "controller.U" in body
 
@@ -129,7 +131,7 @@ def test_cancel_in_the_page_keeps_the_finished_cells(tab):
     p.cancel.value = True
     exp = _settle(p)
     assert exp.phase == CANCELLED and 1 <= len(exp.table) < 12
-    assert "cells finished and kept" in p.status.content and len(p.cell.options) == len(exp.table)
+    assert "cells finished and kept" in shown(p.status.content) and len(p.cell.options) == len(exp.table)
 
 
 def test_a_scene_of_another_kind_still_shows_the_tabs_experiment(tab):
@@ -139,7 +141,7 @@ def test_a_scene_of_another_kind_still_shows_the_tabs_experiment(tab):
     exp = _settle(p)
     assert tab.panels.load_preset("sonar-xb-pso")
     q = tab.panels.experiment
-    assert q is not p and p.removed and q.experiment is exp and "finished" in q.status.content
+    assert q is not p and p.removed and q.experiment is exp and "finished" in shown(q.status.content)
     assert q.axes[0].field.value == "acoustics.algorithm"
     q.axes[0].values.value = "x-pso, xb-pso"
     q.runs.value, q.steps.value = 2, 5
@@ -180,15 +182,15 @@ def test_the_panel_stands_alone_and_its_plot_keeps_up_with_the_cells(server):
         panel.run.value = True
         wait_until(lambda: 2 in held.STARTED, what="cell 2 held back")
 
-        def shown():
+        def drawn():
             data = panel.plot.figure.data  # the median is the last trace (none before a cell is in)
             return sum(v is not None for v in data[-1].y) if data else 0
 
-        wait_until(lambda: shown() == 2, timeout=30, what="the plot with the two finished cells")  # (held 60 s)
-        assert "running: 2 of 4 cells" in panel.status.content and panel.run.disabled
+        wait_until(lambda: drawn() == 2, timeout=30, what="the plot with the two finished cells")  # (held 60 s)
+        assert "running: 2 of 4 cells" in shown(panel.status.content) and panel.run.disabled
         held.GATES[2].set()
         exp = _settle(panel)
-        assert shown() == 4 and exp.phase == FINISHED and not said
+        assert drawn() == 4 and exp.phase == FINISHED and not said
         panel.download_csv.value = True
         assert sent == ["default-experiment.csv"]
     finally:

@@ -134,3 +134,28 @@ def test_shoal_serve_with_a_scheduler_runs_experiments_on_the_cluster(cluster):
     assert on_cluster.phase == here.phase == "finished"
     assert on_cluster.table.csv() == here.table.csv()
     assert cluster.client.status == "running"  # the fixture's own client: not the server's to close
+
+
+def test_cancel_interrupts_the_runs_on_the_cluster_within_seconds(cluster):
+    """Issue 20, case 3: the tasks in progress see the scheduler's event and stop."""
+    import time
+
+    from shoal.app.experiment.request import AxisRequest, ExperimentRequest, Limits
+    from shoal.app.experiment.service import CANCELLED, RUNNING, ExperimentService
+    from shoal.presets.io import load
+
+    from browser.browser_helpers import wait_until
+
+    service = ExperimentService(cluster, Limits(max_seconds=1e6, max_queue_seconds=1e6))
+    try:
+        exp = service.submit("a", load("default"), ExperimentRequest(
+            axes=(AxisRequest("sim.robots", values="1000, 999"),), runs=100, steps=10_000))
+        wait_until(lambda: exp.phase == RUNNING, timeout=60, what="the experiment running")
+        time.sleep(3.0)  # tasks on both workers
+        start = time.monotonic()
+        service.cancel("a")
+        wait_until(lambda: exp.over, timeout=30, what="the experiment over")
+        assert exp.phase == CANCELLED and time.monotonic() - start < 5.0
+        wait_until(lambda: not any(cluster.client.processing().values()), timeout=10, what="idle workers")
+    finally:
+        service.stop()

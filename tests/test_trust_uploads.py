@@ -66,6 +66,15 @@ BAD = [
     ("worldlaw.toml", b"[world]\nkind = \"empty\"\n", "controller.law"),
     ("replay.npz", b"PK\x03\x04" + bytes(200), "TOML syntax"),
     ("exact.toml", b"#" * (MAX_UPLOAD_BYTES + 1), "KiB limit"),
+    # tomllib is quadratic in a key's dotted parts: these are refused before it parses (issue 20, case 2)
+    ("dotted.toml", b"a" + b".a" * 20_000 + b" = 1\n", "TOML syntax: a key of more than 16 dotted parts (line 1)"),
+    ("header.toml", b"[sim]\nrobots = 5\n[" + b"a." * 20_000 + b"a]\n", "more than 16 dotted parts (line 3)"),
+    ("tables.toml", b"[[" + b"a." * 20_000 + b"a]]\n", "more than 16 dotted parts"),
+    ("inline.toml", b"x = {" + b"a." * 20_000 + b"a = 1}\n", "more than 16 dotted parts"),
+    ("quoted.toml", b'"a".' * 20_000 + b'"a" = 1\n', "more than 16 dotted parts"),
+    ("longkey.toml", b"a" * 90_000 + b" = 1\n", "a key of 90,000 characters"),
+    ("deepinline.toml", b"x = " + b"{a = " * 20_000 + b"1" + b"}" * 20_000, "TOML syntax: nested deeper than 16"),
+    ("keys.toml", b"".join(b"k%d = 1\n" % i for i in range(9000)), "more than 2,000 keys"),
 ]
 
 

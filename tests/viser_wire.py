@@ -23,6 +23,8 @@ from viser import _messages
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
+from app_helpers import shown
+
 
 def decode_frame(payload: bytes) -> list[dict[str, Any]]:
     """The messages of one viser frame (binary buffers left out)."""
@@ -113,8 +115,9 @@ class WireClient:
             return self.frames, self.nbytes, self.robot_updates
 
     def saw(self, text: str) -> bool:
+        """Did ``text`` arrive (in markdown: as the page shows it, the app's escapes undone)?"""
         with self._lock:
-            return any(text in t for t in self.texts)
+            return any(text in t or text in shown(t) for t in self.texts)
 
     def uuid_of(self, label: str) -> str | None:
         """The id of the GUI element labelled ``label`` (decode=True), if it arrived."""
@@ -126,6 +129,17 @@ class WireClient:
         with self._lock:
             return [(m["props"]["title"], m["props"]["body"], m["props"]["color"]) for m in self.gui
                     if m.get("type") == "NotificationShowMessage"]
+
+    def markdown(self) -> list[str]:
+        """Every content a markdown element of the page was given, in order (decode=True)."""
+        with self._lock:
+            ids = {m["uuid"] for m in self.gui if m.get("type") == "GuiMarkdownMessage"}
+            out = []
+            for m in self.gui:
+                fields = m.get("props") if m.get("type") == "GuiMarkdownMessage" else (
+                    m.get("updates") if m.get("type") == "GuiUpdateMessage" and m.get("uuid") in ids else None)
+                out += [str(v) for k, v in (fields or {}).items() if k in ("_markdown", "content", "markdown")]
+            return out
 
     def value_of(self, uuid: str) -> Any:
         """The value the server last gave the GUI element ``uuid`` (decode=True)."""

@@ -56,6 +56,13 @@ def _cmd_serve(args: argparse.Namespace) -> int:
     from shoal.app.origin_guard import check_origin_url
     from shoal.app.server import serve
 
+    if args.scheduler is not None:
+        from shoal.studies.experiments.schedulers import SchedulerError, scheduler_address
+
+        try:
+            scheduler_address(args.scheduler)  # (reached, with a timeout, when the server starts)
+        except SchedulerError as e:
+            return _err(str(e))
     try:
         origins = tuple(check_origin_url(url) for url in args.allow_origin or ())
     except ValueError as e:
@@ -150,7 +157,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 
 def _cmd_reproduce_on(args: argparse.Namespace) -> int:
     """``reproduce`` with ``--scheduler``: every target's chunks of runs go to the Dask cluster."""
-    if not args.scheduler or args.list or args.report:
+    if args.scheduler is None or args.list or args.report:
         return _cmd_reproduce(args)
     from shoal.studies.experiments.schedulers import SchedulerError, connect, using
 

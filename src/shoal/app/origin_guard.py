@@ -17,6 +17,8 @@ Clients that are not browsers send no ``Origin``; they are held to the ``Host`` 
 A connection that closes or speaks no HTTP before its request (a port check, a health
 probe) is said in one line on stderr, not as websockets' three-part traceback
 (:class:`HandshakeNoise`).
+A request that names ``Host`` or ``Origin`` more than once is refused too (403, not an error).
+The private server that records a Share page takes no request at all (:class:`Closed`).
 
 Viser 1.1.1 passes its own HTTP handler to ``websockets``' ``serve(process_request=...)`` and
 offers no hook of its own, so :func:`guarded_viser` wraps that handler with the check while
@@ -118,13 +120,34 @@ class OriginPolicy:
         print(f"shoal: refused a connection: {why}", file=sys.stderr, flush=True)
 
 
+class Closed:
+    """The policy of a server nobody is meant to reach (the private one that records a Share
+    page or ``shoal export-replay``'s scene): every request is refused, quietly."""
+
+    def refusal(self, host_header: str | None, origin_header: str | None, local: tuple[str, int]) -> str | None:
+        return "this server records a page and takes no connections"
+
+    def report(self, why: str) -> None:
+        pass
+
+
+Policy = OriginPolicy | Closed
 ProcessRequest = Callable[[Any, Any], Any]
 
 
-def _guard(policy: OriginPolicy, inner: ProcessRequest | None) -> ProcessRequest:
+def _one(headers: Any, name: str) -> tuple[str | None, str | None]:
+    """(the value of header ``name`` or None, why it is refused: it came more than once)."""
+    values = headers.get_all(name)
+    if len(values) > 1:
+        return None, f"{len(values)} {name} headers in one request"
+    return (values[0] if values else None), None
+
+
+def _guard(policy: Policy, inner: ProcessRequest | None) -> ProcessRequest:
     def process_request(connection: Any, request: Any) -> Any:
         address, port = (connection.local_address or ("", 0))[:2]
-        why = policy.refusal(request.headers.get("Host"), request.headers.get("Origin"), (str(address), int(port)))
+        (host, twice), (origin, twice_too) = _one(request.headers, "Host"), _one(request.headers, "Origin")
+        why = twice or twice_too or policy.refusal(host, origin, (str(address), int(port)))
         if why is not None:
             policy.report(why)
             return connection.respond(http.HTTPStatus.FORBIDDEN, f"Forbidden: {why}\n")
@@ -137,7 +160,7 @@ _building = threading.Lock()  # one guarded server built at a time: the wrapper 
 
 
 @contextlib.contextmanager
-def _guarding(policy: OriginPolicy) -> Iterator[threading.Event]:
+def _guarding(policy: Policy) -> Iterator[threading.Event]:
     """While active, a websockets server started (by viser) checks ``policy`` first; the
     event yielded is set once one did."""
     real, installed = ws_server.serve, threading.Event()
@@ -188,7 +211,7 @@ _NOISE = HandshakeNoise()
 logging.getLogger("websockets.server").addFilter(_NOISE)  # once per process, whatever servers it runs
 
 
-def guarded_viser(host: str, port: int, policy: OriginPolicy) -> viser.ViserServer:
+def guarded_viser(host: str, port: int, policy: Policy) -> viser.ViserServer:
     """A started ``viser.ViserServer`` whose every request passes ``policy`` first. Raises
     RuntimeError (and serves nothing) if this viser starts its server some other way."""
     with _guarding(policy) as installed:

@@ -47,6 +47,7 @@ MAX_MEMBERS = 32
 MAX_ROWS_SHOWN = 20_000  # rows of one version of a scene part (obstacles drawn at once)
 MAX_SCENE_M = 1e7  # |x|, |y|, r of a scene part (a preset's places are within 1e5 m; float32 views stay finite)
 MAX_FRAMES = 20_000  # frames (a session keeps 5,000; each frame shown becomes objects of its own)
+MAX_ROWS = 400_000  # robot rows (frames × robots) of swarm A, and of swarm B: what a session's history keeps
 ROBOTS = ("k", "t", "n", "x", "heading", "status", "metrics")
 TWIN = ("b_n", "b_x", "b_status")
 SCENE_PARTS = {"obstacles": 3, "source": 2}  # part → columns of a row
@@ -381,6 +382,10 @@ def from_bytes(content: bytes, filename: str = "replay") -> Recording:
             missing = [a for a in ("meta",) + ROBOTS if a not in headers]
             if missing:
                 raise ReplayError([f"{where}: missing {', '.join(missing)} (not a shoal replay?)"])
+            rows = [(name, headers[name][0][0]) for name in ("x", "b_x") if name in headers and headers[name][0]]
+            if any(r > MAX_ROWS for _, r in rows):
+                raise ReplayError([f"{where}: {name}: {r:,} robot rows (frames × robots), more than the {MAX_ROWS:,} "
+                                   "a replay may hold (what a session records)" for name, r in rows if r > MAX_ROWS])
             numbers = sum(int(np.prod(s)) for s, _ in headers.values())
             if numbers > MAX_NUMBERS or headers["meta"][0][0] > MAX_META_BYTES:
                 raise ReplayError([f"{where}: {numbers:,} numbers once unpacked, more than the "

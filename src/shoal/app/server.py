@@ -26,6 +26,7 @@ from shoal.studies.experiments.schedulers import DaskCluster, SchedulerError
 from .experiment import ExperimentService, Limits, experiment_pool
 from .input_guard import guard_inputs
 from .kinds.registry import check_supported, session_for
+from .message_guard import install_message_guard, quiet_handler_errors
 from .native_memory import keep_large_blocks_returnable
 from .origin_guard import OriginPolicy, guarded_viser, is_loopback
 from .panel.keys import install_keys
@@ -100,7 +101,9 @@ class ShoalServer:
         self._errors: weakref.WeakKeyDictionary[TabApp, str] = weakref.WeakKeyDictionary()  # last error per tab
         keep_large_blocks_returnable()  # tabs that come and go give their memory back
         self.policy = OriginPolicy(host, allow_origins)
+        install_message_guard()  # every connection's messages: a budget, and checked before viser's handlers
         self.viser = guarded_viser(host, port, self.policy)
+        quiet_handler_errors(self.viser)
         self.port = self.viser.get_port()
         self.tabs: dict[int, TabApp] = {}
         self._lock = threading.Lock()
@@ -184,7 +187,7 @@ class ShoalServer:
             self.close_tab(cid, gone=True)
 
     def _turn_away(self, client: viser.ClientHandle) -> None:
-        text = FULL_MESSAGE.format(n=self.max_sessions)
+        text = FULL_MESSAGE.format(n=f"{self.max_sessions:d}")
         client.gui.add_markdown(f"**{FULL_TITLE}.** {text}")
         with client.gui.add_modal(FULL_TITLE):
             client.gui.add_markdown(text)
@@ -281,7 +284,7 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
         raise why
     if experiment_workers < 1:
         raise ValueError(f"experiment_workers must be >= 1 (got {experiment_workers})")
-    pool = DaskCluster(scheduler) if scheduler else experiment_pool(experiment_workers)
+    pool = DaskCluster(scheduler) if scheduler is not None else experiment_pool(experiment_workers)
     server = ShoalServer(scenario, host=host, port=port, max_sessions=max_sessions, allow_origins=allow_origins,
                          experiments=ExperimentService(pool, limits, owns_scheduler=True))
     if port and server.port != port:  # viser moved to the next free port: refuse instead

@@ -75,7 +75,9 @@ class TabApp:
         self._send_client = send_file
         self._atomic = atomic or contextlib.nullcontext
         self.camera = camera  # the browser's camera (viser ``CameraHandle``), None without one
-        self._ticking = threading.Lock()
+        # held while the panels are built and while a tick or a swap runs: an upload (or any
+        # control) the page sends while the tab is still being built waits for it, then loads
+        self._ticking = threading.RLock()
         self._clicks: list[Callable[[Any], None]] = []
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
         self.control_hold = self.CONTROL_HOLD
@@ -84,7 +86,8 @@ class TabApp:
         self.display = Display()  # how the arena is drawn, across swaps
         self._page = Display()  # what the page was last told (flat camera, text scale)
         self._home_when_resized: float | None = None  # the camera's aspect before the panel's width changed
-        self._build_kind()
+        with self._ticking:
+            self._build_kind()
         if camera is not None:
             camera.on_update(self._camera_moved)
 
@@ -153,7 +156,7 @@ class TabApp:
         and show the status area's note."""
         d = self.display
         self.arena.restyle(light=d.light, text_scale=d.text_scale)
-        self.panels.show_note(d.note())
+        self.panels.show_light(d.light)
         self.panels.view_gui.sync(d)
         if self.panels.text_scale != d.text_scale:
             self.panels.text_scale = d.text_scale

@@ -112,7 +112,7 @@ class Warmup:
         if not self.active or all(self.is_ready(g) for g in {group_of(scenario), kind_of(scenario)}):
             return None
         seconds = time.monotonic() - (self.started or time.monotonic())
-        progress = f"scene {min(self.done + 1, self.total)} of {self.total}, {seconds:.0f} s"
+        progress = f"scene {min(self.done + 1, self.total):d} of {self.total:d}, {seconds:.0f} s"
         if self.waits(scenario):
             return f"waiting for this scene's compiled kernels ({progress})"
         return f"compiling kernels in the background ({progress}); numpy meanwhile, the same numbers"

@@ -17,6 +17,7 @@ from pydantic import ValidationError
 from shoal.engine.core.plugins import load_plugins
 
 from .models import Scenario
+from .toml_bounds import check_toml
 
 
 class PresetError(ValueError):
@@ -72,10 +73,14 @@ def list_presets() -> dict[str, str]:
 
 
 def parse_text(text: str, fmt: str = "toml") -> dict[str, Any]:
-    """Parse TOML or JSON text into a dict, syntax errors as :class:`PresetError`."""
+    """Parse TOML or JSON text into a dict, syntax errors as :class:`PresetError`. TOML is
+    checked against :mod:`.toml_bounds` first (keys, dotted parts, nesting: what makes
+    ``tomllib`` slow), so a hostile text costs milliseconds."""
     try:
+        if fmt != "json":
+            check_toml(text)
         data = json.loads(text) if fmt == "json" else tomllib.loads(text)
-    except ValueError as err:  # syntax errors, and integers too long to convert
+    except ValueError as err:  # syntax errors, bounds, and integers too long to convert
         why = "a number with thousands of digits" if "integer string conversion" in str(err) else str(err)[:200]
         raise PresetError([f"{fmt.upper()} syntax: {why}"]) from None
     except RecursionError:
@@ -173,9 +178,12 @@ def read_raw(name_or_path: str | Path) -> dict[str, Any]:
 
 
 def parse_value(text: str) -> Any:
-    """A ``--set`` value: a TOML literal (number, bool, array, quoted string) or a bare string."""
+    """A ``--set`` value: a TOML literal (number, bool, array, quoted string) or a bare string
+    (also what a text beyond :mod:`.toml_bounds` is taken as, unparsed)."""
     try:
-        return tomllib.loads(f"v = {text}")["v"]
+        literal = f"v = {text}"
+        check_toml(literal)
+        return tomllib.loads(literal)["v"]
     except (ValueError, RecursionError):  # not a TOML literal (or one nested too deeply): a string
         return text
 

@@ -27,6 +27,7 @@ from shoal.studies.sweep import catalogue
 from shoal.studies.sweep.catalogue import Field, Outcome
 from shoal.studies.sweep.grid import label
 
+from ..markdown import escape
 from . import figure
 from .request import AxisRequest, ExperimentRequest, Refused
 from .service import RUNNING, Experiment, ExperimentService
@@ -77,7 +78,8 @@ class _AxisGui:
         for h in (self.start, self.stop, self.count):
             h.visible = ranged
         now = "unset" if field is None or field.value is None else label(field.value)
-        self.info.content = f"{field.description} · {field.range_text()} · now {now}" if chosen else ""
+        self.info.content = (f"{escape(field.description)} · {escape(field.range_text())} · now {escape(now)}"
+                             if chosen else "")
 
     def suggest(self, field: Field) -> None:
         """Fill the values with a first guess for ``field``."""
@@ -133,7 +135,7 @@ class ExperimentPanel:
         self.cancel = gui.add_button("Cancel experiment", color="red", disabled=True,
                                      hint="stop it; the cells already finished are kept")
         self.progress = gui.add_progress_bar(0.0)
-        self.status = gui.add_markdown(f"Limits of this server: {limits.describe()}.")
+        self.status = gui.add_markdown(f"Limits of this server: {escape(limits.describe())}.")
         self.outcome = gui.add_dropdown("outcome", ("",), hint="what the plot compares; can change after the run")
         self.plot = gui.add_plotly(figure.empty_figure("the medians appear here as cells finish"), aspect=0.8)
         with gui.add_folder("Cells") as self.cells_folder:
@@ -262,7 +264,7 @@ class ExperimentPanel:
         try:
             exp = self.service.submit(self.owner, self.scenario(), self.request(), listener=self.changed)
         except Refused as err:
-            self.status.content = "**Refused:** " + "; ".join(err.messages[:6])
+            self.status.content = "**Refused:** " + "; ".join(escape(m) for m in err.messages[:6])
             self.notify("Refused: experiment", "\n".join(err.messages[:6]), "red")
             return None
         return exp
@@ -283,7 +285,7 @@ class ExperimentPanel:
                 self._adopt(exp)
             self.progress.value = 100.0 * exp.runs_done / max(exp.cost, 1)
             self.progress.animated = exp.phase == RUNNING
-            self.status.content = f"**Experiment {exp.number}** ({exp.name}): {exp.status()}"
+            self.status.content = f"**Experiment {exp.number:d}** ({escape(exp.name)}): {escape(exp.status())}"
             if new or exp.over:
                 self._redraw()
             elif len(exp.table) != self._drawn_cells:  # a new cell: drawn now, or soon if just drawn
@@ -357,8 +359,8 @@ class ExperimentPanel:
             where = np.unravel_index(index, exp.plan.shape)
             med, lo, hi = (float(v[where]) for v in exp.table.summary(outcome.name))
             band = f" (95 % interval {_num(lo)} … {_num(hi)})" if lo == lo else " (too few runs for an interval)"
-            self.cell_info.content = (f"median {_num(med)}{band} over {exp.plan.runs} runs · "
-                                      f"run 0: {_num(runs[0])} · seed {exp.plan.scenarios[index].sim.seed}")
+            self.cell_info.content = (f"median {_num(med)}{band} over {exp.plan.runs:d} runs · "
+                                      f"run 0: {_num(runs[0])} · seed {exp.plan.scenarios[index].sim.seed:d}")
 
     def open_selected(self) -> bool:
         """Open in arena: the selected cell's scenario (its preset and seed) replaces the scene."""
@@ -410,4 +412,4 @@ def _command(exp: Experiment) -> str:
     stem = file_stem(exp.name)
     grid = " ".join(f"--grid {a.key}={','.join(a.labels)}" for a in exp.plan.axes)
     return (f"The same cells from a terminal, with the preset from *Download experiment preset*:  \n"
-            f"`shoal sweep {stem}-experiment.toml {grid} --runs {exp.plan.runs}`")
+            f"<code>{escape(f'shoal sweep {stem}-experiment.toml {grid} --runs {exp.plan.runs}', limit=None)}</code>")

@@ -16,11 +16,12 @@ from typing import Any, Sequence
 
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
+from shoal.studies.cost import cost
 from shoal.studies.sweep import catalogue
 from shoal.studies.sweep.grid import Axis, SweepError, label, parse_values
 from shoal.studies.sweep.plan import SweepPlan
 
-from ..limits import check_app_limits
+from ..limits import check_runs
 
 MAX_TEXT = 1000  # characters of a typed list of values
 MAX_AXES = 2
@@ -44,11 +45,14 @@ class Limits:
     max_steps: int = 10_000  # steps per run
     max_experiment_runs: int = 1_000  # cells × runs of one experiment
     max_queue_runs: int = 3_000  # cells × runs of every experiment queued or running on the server
+    max_seconds: float = 600.0  # estimated CPU seconds of one experiment (shoal.studies.cost)
+    max_queue_seconds: float = 1_800.0  # estimated CPU seconds of every experiment queued or running
 
     def describe(self) -> str:
         return (f"at most {self.max_values} values per field, {self.max_cells} cells, {self.max_runs} runs per "
-                f"cell, {self.max_steps} steps per run and {self.max_experiment_runs} cells × runs per experiment; "
-                f"{self.max_queue_runs} cells × runs in the server's queue")
+                f"cell, {self.max_steps} steps per run, {self.max_experiment_runs} cells × runs and about "
+                f"{self.max_seconds / 60:.0f} CPU minutes per experiment; {self.max_queue_runs} cells × runs and "
+                f"{self.max_queue_seconds / 60:.0f} CPU minutes in the server's queue")
 
 
 @dataclass(frozen=True)
@@ -167,11 +171,23 @@ def resolve(scenario: Scenario, request: ExperimentRequest, limits: Limits) -> t
     except SweepError as err:
         raise Refused(err.messages[:8]) from None
     problems: dict[str, None] = {}
-    for sc in plan.scenarios:
+    seconds = 0.0
+    for i, sc in enumerate(plan.scenarios):  # whatever the fields: sim.steps and sim.robots may be swept
+        where = "cell " + ", ".join(f"{k} = {v}" for k, v in plan.prefix(i).items())
         try:
-            check_app_limits(sc)
+            seconds += check_runs(sc, steps=sc.sim.steps, runs=runs, max_steps=limits.max_steps,
+                                  max_seconds=limits.max_seconds, what=where).seconds
         except PresetError as err:
             problems.update(dict.fromkeys(err.messages))
     if problems:
         raise Refused(list(problems)[:8])
+    if seconds > limits.max_seconds:
+        raise Refused([f"{len(plan)} cells × {runs} runs: about {seconds:,.0f} CPU seconds, more than the "
+                       f"{limits.max_seconds:,.0f} this server gives one experiment; fewer values, runs, steps "
+                       "or robots"])
     return plan, outcome
+
+
+def plan_seconds(plan: SweepPlan) -> float:
+    """Estimated CPU seconds of every run of ``plan`` (:func:`shoal.studies.cost.cost`)."""
+    return sum(cost(sc, steps=sc.sim.steps, runs=plan.runs).seconds for sc in plan.scenarios)

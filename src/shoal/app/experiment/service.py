@@ -13,8 +13,9 @@ Fairness on a shared server:
 * one queue for the whole server, first come first served, one experiment running at a time,
   holding at most :attr:`Limits.max_queue_runs` cells × runs; a request that does not fit is
   refused, saying how much is queued;
-* Cancel drops a queued experiment, or stops a running one after the chunks in progress
-  (its finished cells are kept); a tab that closes cancels its experiment.
+* Cancel drops a queued experiment, or stops a running one within a second or two: the
+  scheduler is interrupted, its runs in progress stop at their next step (a local worker that
+  does not is killed), and its finished cells are kept; a tab that closes cancels its experiment.
 
 Every change of an experiment (queued, its place in the queue, a chunk of runs, a cell,
 the end) is passed to its listener, on whichever thread made it: the page's panel.
@@ -36,10 +37,12 @@ from shoal.studies.sweep import outcomes
 from shoal.studies.sweep.plan import SweepPlan
 from shoal.studies.sweep.table import CellTable
 
-from .request import ExperimentRequest, Limits, Refused, resolve
+from ..markdown import escape
+from .request import ExperimentRequest, Limits, Refused, plan_seconds, resolve
 
 QUEUED, RUNNING, FINISHED, CANCELLED, FAILED = "queued", "running", "finished", "cancelled", "failed"
-CHUNK = 10  # runs per task at most: Cancel and the progress bar move after each chunk
+CHUNK = 10  # runs per task at most: the progress bar moves after each chunk
+STOP_SECONDS = 10.0  # stop() waits this long for the running experiment to end (it is interrupted)
 
 Listener = Callable[["Experiment"], None]
 
@@ -47,8 +50,10 @@ Listener = Callable[["Experiment"], None]
 class Experiment:
     """One tab's sweep: its plan, its finished cells and where it stands (``phase``)."""
 
-    def __init__(self, number: int, owner: Hashable, plan: SweepPlan, outcome: str, name: str) -> None:
+    def __init__(self, number: int, owner: Hashable, plan: SweepPlan, outcome: str, name: str,
+                 seconds: float | None = None) -> None:
         self.number, self.owner, self.plan, self.outcome, self.name = number, owner, plan, outcome, name
+        self.seconds = plan_seconds(plan) if seconds is None else seconds  # estimated CPU
         self.table = CellTable(plan)
         self.phase = QUEUED
         self.place = 0  # in the queue: 1 = next to run
@@ -86,16 +91,16 @@ class Experiment:
     def status(self) -> str:
         """Where it stands, in words."""
         cells, done = len(self.plan), len(self.table)
-        runs = f"{self.runs_done} of {self.cost} runs"
+        runs = f"{self.runs_done:d} of {self.cost:d} runs"
         if self.phase == QUEUED:
-            return f"queued: {self.place}{_ordinal(self.place)} in the server's queue"
+            return f"queued: {self.place:d}{_ordinal(self.place)} in the server's queue"
         if self.phase == RUNNING:
             return f"{'cancelling' if self.cancelling else 'running'}: {done} of {cells} cells, {runs}"
         if self.phase == FINISHED:
-            return f"finished: {cells} cells × {self.plan.runs} runs"
+            return f"finished: {cells} cells × {self.plan.runs:d} runs"
         if self.phase == CANCELLED:
             return f"cancelled: {done} of {cells} cells finished and kept"
-        return f"failed after {done} of {cells} cells: {self.error}"
+        return f"failed after {done} of {cells} cells: {escape(self.error)}"
 
 
 def _ordinal(n: int) -> str:
@@ -136,6 +141,10 @@ class ExperimentService:
     def _load(self) -> int:
         return sum(e.cost for e in self._queue) + (self._running.cost if self._running else 0)
 
+    def _seconds(self) -> float:
+        """Estimated CPU seconds of the experiments queued or running."""
+        return sum(e.seconds for e in self._queue) + (self._running.seconds if self._running else 0.0)
+
     def experiment(self, owner: Hashable) -> Experiment | None:
         """The owner's latest experiment (running, queued or over), if any."""
         with self._cond:
@@ -158,12 +167,18 @@ class ExperimentService:
             self._checking.add(owner)
         try:
             plan, outcome = resolve(scenario, request, self.limits)
+            seconds = plan_seconds(plan)
             with self._cond:
                 need, load, cap = len(plan) * plan.runs, self._load(), self.limits.max_queue_runs
                 if load + need > cap:
                     raise Refused([f"the server's queue holds {load} of its {cap} cells × runs and this experiment "
                                    f"needs {need}: try again when it has room, or ask for fewer cells or runs"])
-                exp = Experiment(next(self._numbers), owner, plan, outcome, scenario.name)
+                busy, budget = self._seconds(), self.limits.max_queue_seconds
+                if busy + seconds > budget:
+                    raise Refused([f"the server's queue holds about {busy / 60:.0f} of its {budget / 60:.0f} CPU "
+                                   f"minutes and this experiment needs about {seconds / 60:.1f}: try again when "
+                                   "it has room, or ask for less"])
+                exp = Experiment(next(self._numbers), owner, plan, outcome, scenario.name, seconds)
                 exp.listen(listener)
                 self._queue.append(exp)
                 self._owners[owner] = exp
@@ -176,8 +191,9 @@ class ExperimentService:
         return exp
 
     def cancel(self, owner: Hashable) -> Experiment | None:
-        """Cancel the owner's experiment: a queued one at once, a running one after the chunks
-        in progress (its finished cells are kept). Returns it (None if there was none to cancel)."""
+        """Cancel the owner's experiment: a queued one at once, a running one within a second or
+        two (the scheduler is interrupted; its finished cells are kept). Returns it (None if there
+        was none to cancel)."""
         with self._cond:
             exp = self._owners.get(owner)
             if exp is None or exp.over:
@@ -188,9 +204,21 @@ class ExperimentService:
                 self._queue.remove(exp)
                 exp.phase = CANCELLED
                 moved = self._renumber()
+            running = exp is self._running
+        if running:
+            self._interrupt()
         for e in (exp, *moved):
             e.changed()
         return exp
+
+    def _interrupt(self) -> None:
+        """Stop the runs in progress on the scheduler (it runs one experiment at a time)."""
+        interrupt = getattr(self.scheduler, "interrupt", None)
+        if interrupt is not None:
+            try:
+                interrupt()
+            except Exception as err:  # a lost cluster: the experiment ends when its chunks do
+                print(f"shoal: could not interrupt the experiment's runs: {err!r}", file=sys.stderr)
 
     def close_owner(self, owner: Hashable) -> None:
         """The owner's tab closed: cancel its experiment and forget it."""
@@ -259,10 +287,12 @@ class ExperimentService:
             if running is not None:
                 running._cancel.set()
             self._cond.notify_all()
+        if running is not None:
+            self._interrupt()
         for e in queued:
             e.changed()
         if threading.current_thread() is not self._thread:
-            self._thread.join(timeout=60)
+            self._thread.join(timeout=STOP_SECONDS)
         close = getattr(self.scheduler, "close", None)
         if self.owns_scheduler and close is not None:
             close()

@@ -26,6 +26,7 @@ from shoal.presets.build import build_fleet, check_world, fleet_keywords, fleet_
 from shoal.presets.io import PresetError, kept_fields
 from shoal.presets.models import Scenario
 
+from ..markdown import escape
 from ..panel.panel import TRAIL_SLIDER
 from ..panel.plots import Line, PlotSpec, Series
 from ..panel.positions import positions_choices, positions_folder
@@ -673,7 +674,7 @@ def _readout(s: Session) -> str:
     c = s.scenario.controller
     if c.mode == "dvc":
         n = ROBOT_LAWS[c.law].terms
-        text = (f"ω = 1 − β = {1 - c.beta:.3g}; every robot gets its own c1..c{n} each step from its "
+        text = (f"ω = 1 − β = {1 - c.beta:.3g}; every robot gets its own c1..c{n:d} each step from its "
                 "sector gaps (see the selected robot above).")
     else:
         c_hat = c.c1 + c.c2 + _avoidance(s.scenario)
@@ -689,12 +690,12 @@ def _readout(s: Session) -> str:
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc, edits = s.scenario, driver(s).edits
-    return (f"**{sc.name}** · {state} · t = {r['t']:.0f} s · {s.progress()} · "
+    return (f"**{escape(sc.name)}** · {state} · t = {r['t']:.0f} s · {s.progress()} · "
             f"CoM x = {r['com']:.1f} m"
             + (f" · layers passed {int(r['layers_passed'])}/{int(r['layers'])}" if r["layers"] else "")
             + f" · {int(r['operational'])}/{int(r['operational'] + r['collided'])} operational"
             + (f" · {int(r['stalled'])} stalled" if r.get("stalled") else "")
-            + (f" · {edits} obstacle edit{'s' * (edits != 1)}" if edits else ""))
+            + (f" · {edits:d} obstacle edit{'s' * (edits != 1)}" if edits else ""))
 
 
 def _compare(s: Session) -> dict[str, dict[str, Any]]:

@@ -35,7 +35,7 @@ def budget_markdown(view: RobotView, params: FleetParams, status: int, cmd: np.n
     p, c = params, np.asarray(view.c, dtype=float)
     state = "operational" if status == 0 else "**collided** (disabled)"
     s = np.sort(view.gap)
-    head = [f"**robot {view.robot}** · {state} · ω = {view.omega:.3g} · "
+    head = [f"**robot {view.robot:d}** · {state} · ω = {view.omega:.3g} · "
             f"s₁ = {s[0]:.2f} m, s₂ = {s[1]:.2f} m", "",
             "| term | c | budget | |", "|---|---|---|---|"]
     if p.law == "nonomni":

@@ -30,6 +30,7 @@ from shoal.presets.build import build_slo, kind_of, slo_live_changes
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario, SLOErrorValues
 
+from ..markdown import escape
 from ..panel.panel import TRAIL_SLIDER
 from ..panel.plots import PlotSpec, Series, log10_abs
 from ..panel.positions import ERROR_SETS, label_of
@@ -341,19 +342,20 @@ def _pick_neighbour(panel: PanelAPI, value: Any) -> None:
 def _engine(s: Session) -> str:
     sc = s.scenario
     what = "SPSO 2011 in each robot's frame" if sc.slo.motion == "pso" else "a random walk"
-    return f"engine: **{s.engine_name}**, Mai's SLO swarm ({what}) · selection {sc.slo.selection.upper()}"
+    return (f"engine: **{escape(s.engine_name)}**, Mai's SLO swarm ({what}) · "
+            f"selection {escape(sc.slo.selection.upper())}")
 
 
 def _inspector(s: Session, snap: Snapshot) -> str:
     p: PairView | None = snap.extras["pair"]
     if p is None:
-        return f"Robot {snap.selected} has no neighbour this step."
+        return f"Robot {snap.selected:d} has no neighbour this step."
     cand = " · ".join(f"{n}" for n, m in zip(("x1", "x2", "x3"), p.mask) if m)
     err = float(np.hypot(*(p.chosen - p.b)))
     lines = [
-        f"**pair ({p.i} → {p.j})**{'' if p.neighbour else ' (not a neighbour this step: stale)'}",
-        f"candidates: {cand or '—'} · {FLAG_NAMES.get(p.flag, p.flag)}",
-        f"chosen: **{KIND_NAMES.get(p.kind, p.kind)}** · error |x̂ − r| = {fmt(err)}",
+        f"**pair ({p.i:d} → {p.j:d})**{'' if p.neighbour else ' (not a neighbour this step: stale)'}",
+        f"candidates: {cand or '—'} · {FLAG_NAMES.get(p.flag, escape(p.flag))}",
+        f"chosen: **{KIND_NAMES.get(p.kind, escape(p.kind))}** · error |x̂ − r| = {fmt(err)}",
         f"cos α = {fmt(p.cos_alpha)} · |v|/d = {fmt(p.thinness)}",
     ]
     if s.scenario.slo.selection == "rts":
@@ -365,7 +367,7 @@ def _inspector(s: Session, snap: Snapshot) -> str:
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
-    return (f"**{sc.name}** · {state} · {s.progress('gen')} · "
+    return (f"**{escape(sc.name)}** · {state} · {s.progress('gen')} · "
             f"mean e_abs {fmt(r['e_abs_mean'])} · best f {fmt(r['generation_best'])}")
 
 

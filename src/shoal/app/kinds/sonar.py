@@ -27,6 +27,7 @@ from shoal.presets.build import build_sonar, kind_of, sonar_keywords, sonar_para
 from shoal.presets.io import PresetError, kept_fields
 from shoal.presets.models import Scenario
 
+from ..markdown import escape
 from ..panel.panel import TRAIL_SLIDER
 from ..panel.plots import Chart, Line, PlotSpec, Series
 from ..panel.positions import positions_choices, positions_folder
@@ -582,7 +583,7 @@ def _set_algorithm(s: Session, label: str) -> dict[str, Any] | None:
 
 def _hearing(s: Session, snap: Snapshot) -> str:
     e, i = snap.extras, snap.selected
-    text = f"robot {i}: SNR {e['snr'][i]:.1f} dB, {np.hypot(*(snap.x[i] - e['source'])):.0f} m from the source"
+    text = f"robot {i:d}: SNR {e['snr'][i]:.1f} dB, {np.hypot(*(snap.x[i] - e['source'])):.0f} m from the source"
     corr = driver(s).correlation(i)
     if corr is not None:
         _, _, tau, rho = corr
@@ -598,14 +599,14 @@ def _readout(s: Session) -> str:
              else f"source starts at d_s = {fmt(r['d_s'], 'm')}")
     return (f"R_ref = {fmt(r['r_ref'], 'm')} (SNR 0 dB) · {start} · "
             f"λ_c = {fmt(r['lambda'], 'm')} · D = {fmt(r['D'], 'm')} · window ±D/c = "
-            f"{r['D'] / ac.c * 1e3:.3g} ms · controller {ac.controller}")
+            f"{r['D'] / ac.c * 1e3:.3g} ms · controller {escape(ac.controller)}")
 
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
     conv = f" · reached d_c at step {int(r['converged_at'])}" if r["converged_at"] >= 0 else ""
     ring = f" · {100 * r['inside']:.0f}% inside r" if sc.acoustics.r > 0 else ""
-    return (f"**{sc.name}** · {LABELS[sc.acoustics.algorithm]} · {state} · t = {r['t']:.0f} s · "
+    return (f"**{escape(sc.name)}** · {LABELS[sc.acoustics.algorithm]} · {state} · t = {r['t']:.0f} s · "
             f"{s.progress()} · |CoM − source| = {r['com_dist']:.0f} m{conv}{ring}")
 
 

@@ -22,6 +22,7 @@ from shoal.presets.build import build_simulation, kind_of, objective_for, slo_un
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
+from ..markdown import escape
 from ..panel import figures
 from ..panel.panel import TRAIL_SLIDER
 from ..panel.plots import PlotSpec, Series, log10_abs
@@ -234,7 +235,7 @@ def _readout(s: Session) -> str:
     r, c = s.readout(), s.scenario.controller
     law = LAWS[c.law]
     if not law.adapted:
-        return f"*{law.label}: ĉ = c1 + c2 has no unit and nothing bounds the speed.*"
+        return f"*{escape(law.label)}: ĉ = c1 + c2 has no unit and nothing bounds the speed.*"
     if c.mode == "physical":
         return (f"β = {fmt(r['beta'])} · U_j = {fmt(r['U_j'], 'm/s')} · A− = {fmt(r['A_minus'], 'm/s²')}  \n"
                 "*ω, c1 and c2 follow from U, A+ and Δt; moving one of them switches to raw mode.*")
@@ -271,7 +272,7 @@ def _set_coefficient(name: str) -> Any:
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
-    return (f"**{sc.name}** · {state} · t = {r['t']:.1f} s · {s.progress()} · "
+    return (f"**{escape(sc.name)}** · {state} · t = {r['t']:.1f} s · {s.progress()} · "
             f"best f = {r['best']:.4g}" + (f" · {int(r['outside'])} outside the arena" if r["outside"] else ""))
 
 

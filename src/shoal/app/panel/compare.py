@@ -14,6 +14,7 @@ from typing import Any
 
 from shoal.presets.io import PresetError
 
+from ..markdown import escape
 from ..session.twin import override_text, parse_overrides
 from .spec import Host
 
@@ -104,7 +105,8 @@ class CompareFolder:
             if not on and self.quick.value in choices:  # follow A while B is off
                 p.set_quietly(self.text, override_text(choices[self.quick.value]))
         if on:
-            lines = "\n".join(f"- `{k} = {v}`" for k, v in s.overrides.items()) or "- nothing: B is A"
+            lines = ("\n".join(f"- <code>{escape(f'{k} = {v}')}</code>" for k, v in s.overrides.items())
+                     or "- nothing: B is A")
             self.info.content = f"B = A with:\n{lines}"
         else:
             self.info.content = "B is off."

@@ -27,6 +27,7 @@ from ..experiment.panel import ExperimentPanel
 from ..experiment.service import ExperimentService
 from ..lessons.panel import LessonProgress, LessonsPanel
 from ..lessons.scenes import load_scene
+from ..markdown import escape
 from ..preset_menu import PresetMenu
 from ..session.lifecycle import AT_END, at_end_choice, at_end_label
 from ..session.session import Session
@@ -52,7 +53,7 @@ from .spec import (
     Text,
     get_path,
 )
-from .view_row import Display, ViewRow
+from .view_row import LIGHT_NOTE, Display, ViewRow
 
 PLAYBACK = ("Play", "Pause", "Step", "Reset")
 SPEED_SLIDER = Slider("view.steps_per_second", "speed [steps/s]", 1.0, 240.0, 1.0, "playback rate")
@@ -159,7 +160,7 @@ class Panel:
             "preset", names, initial_value=menu.label_for(sc) or names[0],
             hint="shipped scenes and the presets uploaded in this tab; switching replaces the whole scene")
         self.status = gui.add_markdown("")
-        self.note = ""  # a line under the status line about the drawing (the light drawing)
+        self.light = False  # the light drawing: said on a line under the status line
         self.playback = gui.add_button_group("playback", PLAYBACK)
         self.top += [self.preset, self.status, self.playback, self._build(SPEED_SLIDER)]
         self.at_end = gui.add_dropdown(
@@ -486,7 +487,7 @@ class Panel:
     # ------------------------------------------------------------------ loading
     def _load(self, scenario: Scenario) -> None:
         waits = WARMUP.waits(scenario)  # an SLO scene is built once its kernels are: said while it waits
-        self.status.content = (f"**{scenario.name}** · building the scene" +
+        self.status.content = (f"**{escape(scenario.name)}** · building the scene" +
                                (f"; {WARMUP.status(scenario)}" if waits else "") + " …")
         if self.services.replace is not None:
             self.services.replace(scenario)  # the tab syncs whichever panel is current afterwards
@@ -587,17 +588,17 @@ class Panel:
             return
         k, t, last = shown
         what = "replay" if s.replaying is not None else "recorded history"
-        self._status(f"**{s.scenario.name}** · {state} · {what} · step {k} of {last} · t = {t:.4g} s"
+        self._status(f"**{escape(s.scenario.name)}** · {state} · {what} · step {k:d} of {last:d} · t = {t:.4g} s"
                      " · the live run's numbers are not recorded")
 
     def _status(self, text: str) -> None:
         """Show the status line, with the drawing's note (if any) on a line of its own below it."""
-        self.status.content = f"{text}<br>{self.note}" if self.note else text
+        self.status.content = f"{text}<br>{LIGHT_NOTE}" if self.light else text
 
-    def show_note(self, text: str) -> None:
-        """The line under the status line about the drawing ("" for none)."""
-        if text != self.note:
-            self.note = text
+    def show_light(self, light: bool) -> None:
+        """Say (or stop saying) under the status line that the arena is drawn lightly."""
+        if light != self.light:
+            self.light = light
             self.refresh_status()
 
     def refresh_readout(self) -> None:

@@ -28,8 +28,8 @@ def ghost_text(ghosts: Ghosts | None) -> str:
     if ghosts is None:
         return "True positions: every robot knows where everyone is (the oracle)."
     if not len(ghosts.of):
-        return f"robot {ghosts.observer} localised nobody at its last step"
-    text = (f"robot {ghosts.observer} localises {len(ghosts.of)} robots · mean error "
+        return f"robot {ghosts.observer:d} localised nobody at its last step"
+    text = (f"robot {ghosts.observer:d} localises {len(ghosts.of)} robots · mean error "
             f"{ghosts.mean_error:.2f} m · worst {ghosts.error.max():.2f} m")
     if ghosts.best is not None and ghosts.true_best is not None:
         off = float(((ghosts.best - ghosts.true_best) ** 2).sum() ** 0.5)

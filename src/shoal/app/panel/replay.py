@@ -19,6 +19,7 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 
 from .. import replay
+from ..markdown import escape
 from ..replay import ReplayError
 from ..session.timeline import verify_replay
 from .spec import Host
@@ -126,13 +127,13 @@ class ReplayFolder:
                 self.timeline.min, self.timeline.max = first, hi
             p.set_quietly(self.timeline, shown)
         state = "live" if live else ("replay" if info is not None else "recorded")
-        self.where.content = f"{state}: step {shown} · t = {t:.4g} · recorded steps {first}–{last}"
+        self.where.content = f"{state}: step {shown:d} · t = {t:.4g} · recorded steps {first:d}–{last:d}"
         if info is None:
             self.badge.visible = False
             return
         mark = {True: "✓", False: "✗", None: "·"}[info.verified]
-        edits = f" · {info.live_edits} live edit(s) while it ran" if info.live_edits else ""
+        edits = f" · {info.live_edits:d} live edit(s) while it ran" if info.live_edits else ""
         edits += " · with swarm B (teal)" if info.twin is not None else ""
-        self.badge.content = (f"**Replay of {info.name}, seed {info.seed}** (shoal {info.shoal}){edits}  \n"
-                              f"{mark} {info.check} · Reset runs the preset live")
+        self.badge.content = (f"**Replay of {escape(info.name)}, seed {info.seed:d}** (shoal {escape(info.shoal)})"
+                              f"{edits}  \n{mark} {escape(info.check)} · Reset runs the preset live")
         self.badge.visible = True

@@ -33,10 +33,6 @@ class Display:
     def text_scale(self) -> float:
         return TEXT_SCALE if self.large_text else 1.0
 
-    def note(self) -> str:
-        """The status area's line about the drawing ("" for none)."""
-        return LIGHT_NOTE if self.light else ""
-
 
 # (label, Display field, hint): the boxes of the Display folder; the page script finds the first by its label
 BOXES = (

@@ -12,6 +12,8 @@ import numpy as np
 
 from shoal.engine.core.recorder import TRAJECTORY_COLUMNS
 
+from ..replay import MAX_ROWS  # a replay holds what a history keeps
+
 TRAIL_LIMITS = (80, 40)  # at most this many trails of this many points
 
 
@@ -86,7 +88,7 @@ class History:
     ``max_metrics`` metric rows: a tab left playing for hours holds a constant amount of memory.
     """
 
-    def __init__(self, names: tuple[str, ...], max_steps: int = 5000, max_rows: int = 400_000,
+    def __init__(self, names: tuple[str, ...], max_steps: int = 5000, max_rows: int = MAX_ROWS,
                  max_metrics: int = 5000) -> None:
         self.names = names
         self.max_steps, self.max_rows, self.max_metrics = max_steps, max_rows, max_metrics

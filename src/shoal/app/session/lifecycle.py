@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..markdown import escape
+
 STOP, LOOP, RUN_ON = "stop", "loop", "run on"
 AT_END = (STOP, LOOP, RUN_ON)
 
@@ -49,4 +51,4 @@ class Lifecycle:
 
     def progress(self, k: int, steps: int, unit: str = "step") -> str:
         """``step 12/600``; past the last step (run on) ``step 612 (on past 600)``."""
-        return f"{unit} {k}/{steps}" if k <= steps else f"{unit} {k} (on past {steps})"
+        return f"{escape(unit)} {k:d}/{steps:d}" if k <= steps else f"{escape(unit)} {k:d} (on past {steps:d})"

@@ -31,7 +31,7 @@ from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from .. import replay
-from ..limits import check_app_limits
+from ..limits import check_app_limits, check_recording
 from ..replay import Recording
 from ..warmup import WARMUP
 from .driver import Driver
@@ -538,12 +538,13 @@ class Session:
 
     def check_replay(self, rec: Recording) -> None:
         """Refuse a recording this session cannot show (raises :class:`ReplayError`, or
-        :class:`PresetError` naming B's field for overrides of swarm B the preset cannot take)."""
+        :class:`PresetError` naming B's field for overrides of swarm B the preset cannot take,
+        or a frame of more robots than a tab of this kind may show)."""
         d, expect = rec.x.shape[1], self.history.frames[-1].x.shape[-1]
         if d != expect:
             raise replay.ReplayError([f"x: positions have {d} columns but the preset's robots move in {expect}-D"])
-        if rec.twin_overrides is not None:
-            twin_scenario(self.scenario, rec.twin_overrides)
+        twin = twin_scenario(self.scenario, rec.twin_overrides) if rec.twin_overrides is not None else None
+        check_recording(rec, self.scenario, twin)
 
     def enter_replay(self, rec: Recording, check: tuple[bool | None, str]) -> None:
         """Show ``rec`` (already checked against this session's scenario) instead of the engine."""

@@ -1,13 +1,21 @@
-"""``shoal export-replay``: a seeded run of a preset as one HTML page, written atomically."""
+"""``shoal export-replay``: a seeded run of a preset as one HTML page, written atomically.
+
+The run may be long (``sim.steps`` up to ten million): its cost (:func:`shoal.studies.cost.cost`)
+is said before it starts when it is more than :data:`SAY_SECONDS`, a progress bar follows the
+steps, and Ctrl-C (or SIGTERM) stops it at once, writing nothing."""
 
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 from typing import Iterable
 
+from shoal.studies.cost import cost
+
 SUFFIXES = (".html", ".htm")
 MARK = b'id="shoal-run-data"'  # the JSON block every page this command writes carries (share/page.py)
+SAY_SECONDS = 10.0  # an export estimated to take longer says so before it starts
 
 
 class ExportError(ValueError):
@@ -61,6 +69,10 @@ def export_replay(preset: str, out: str | Path, *, seed: int | None = None, step
         raise ExportError("bad preset: " + "; ".join(err.messages)) from None
     check_out(out)
     n = scenario.sim.steps
+    estimate = cost(scenario, runs=1)
+    if estimate.seconds > SAY_SECONDS:
+        print(f"export-replay: {estimate.describe()} at least (drawn as the app draws it, it takes longer: the "
+              "progress bar shows the time left); Ctrl-C stops it and writes nothing", file=sys.stderr, flush=True)
     try:
         with tqdm(total=n, desc=f"export {scenario.name}", unit="step", disable=n < 200 or None) as bar:
             page = preset_html(scenario, on_steps=bar.update)

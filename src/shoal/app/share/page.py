@@ -1,7 +1,7 @@
 """An exported run as one HTML page: viser's own static client with the recorded scene in it
 (``StateSerializer.as_html``), and a panel that names the run.
 
-The arena is drawn on a private viser server (loopback, a free port; no browser connects)
+The arena is drawn on a private viser server (loopback, a free port, every request refused)
 whose scene serializer records every message; a pause between kept steps gives viser's
 player its timeline (play/pause, a scrub bar, 0.5×–8×). The panel (preset, seed, versions,
 frames kept, the preset as TOML to download) is plain, escaped HTML beside the client's root;
@@ -19,6 +19,7 @@ import urllib.parse
 from dataclasses import dataclass, field
 from typing import Any, Iterator
 
+from ..origin_guard import Closed, guarded_viser
 from ..panel.view_row import legend_html
 from ..session.twin import literal
 from ..view.camera import VIEW_HALF, top_view
@@ -49,16 +50,16 @@ def _quiet() -> Iterator[None]:
 @contextlib.contextmanager
 def recording_scene() -> Iterator[tuple[Any, Any]]:
     """(scene, serializer) of a private viser server whose camera looks straight down on the
-    arena as the app's does; the server is stopped on the way out. One export runs at a time
-    and one more may wait; a third is refused (:class:`Busy`)."""
-    import viser
-
+    arena as the app's does; the server is stopped on the way out. It refuses every request
+    (:class:`~shoal.app.origin_guard.Closed`): while it lives (seconds, or the whole run of an
+    export), no page and no rebinding name can read the scene. One export runs at a time and
+    one more may wait; a third is refused (:class:`Busy`)."""
     if not _QUEUE.acquire(blocking=False):
         raise Busy()
     try:
         with _LOCK:
             with _quiet():
-                server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+                server = guarded_viser("127.0.0.1", 0, Closed())
             try:
                 top_view(server)
                 yield server.scene, server.get_scene_serializer()

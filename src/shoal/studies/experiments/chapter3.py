@@ -18,7 +18,7 @@ import numpy as np
 from shoal.presets.io import load
 from shoal.presets.models import Scenario
 
-from .output import check, r3, write_csv  # noqa: F401 (used as c3.check etc.)
+from .output import check, r3, save, write_csv  # noqa: F401 (used as c3.check etc.)
 from .output import num as _num
 from .runner import BatchResult, Job, run_jobs
 
@@ -198,7 +198,7 @@ def save_figure(path: Path, panels: Sequence[tuple[str, dict[int, Series]]], nco
     labels = labels[:n_bands][::-1] + labels[n_bands:]
     fig.legend(handles, labels, loc="outside lower center", ncols=min(6, len(labels)), fontsize=8, frameon=False)
     fig.suptitle(suptitle, fontsize=11)
-    fig.savefig(path, dpi=120, metadata={"Software": None})
+    save(fig, path)
 
 
 def median_range(values: np.ndarray) -> str:

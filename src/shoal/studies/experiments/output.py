@@ -12,6 +12,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from shoal.engine.core.atomic import atomic_write_bytes
+
 
 def num(v: float) -> str:
     """A number for a CSV cell: 12 significant digits, ``-0`` written as ``0``."""
@@ -81,7 +83,9 @@ def new_figure(nrows: int, ncols: int, width: float, height: float) -> tuple[Any
 
 
 def save(fig: Any, path: Path, dpi: int = 120) -> None:
-    fig.savefig(path, dpi=dpi, metadata={"Software": None})  # no version stamp: same inputs, same bytes
+    """Write the figure as a PNG completely or not at all (a full disk leaves no empty or cut
+    picture: drawn in memory, then written beside ``path`` and renamed)."""
+    atomic_write_bytes(path, png_bytes(fig, dpi))
 
 
 def png_bytes(fig: Any, dpi: int = 120) -> bytes:

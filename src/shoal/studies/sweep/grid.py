@@ -17,6 +17,7 @@ from typing import Any, Sequence
 from shoal.presets.build import check_world
 from shoal.presets.io import PresetError, parse_value, set_dotted, validate
 from shoal.presets.models import Scenario
+from shoal.presets.toml_bounds import check_toml
 
 
 class SweepError(ValueError):
@@ -69,8 +70,10 @@ def _split_top_level(text: str) -> list[str]:
 def parse_values(text: str) -> list[Any]:
     """``1,1.5,3`` → ``[1, 1.5, 3]``; ``b-pso,xb-pso`` → two strings; arrays stay whole."""
     try:
-        values = tomllib.loads(f"v = [{text}]")["v"]
-    except tomllib.TOMLDecodeError:
+        literal = f"v = [{text}]"
+        check_toml(literal)  # (keys, dotted parts and nesting bounded before tomllib)
+        values = tomllib.loads(literal)["v"]
+    except (ValueError, RecursionError):  # not TOML, or beyond the bounds: value by value
         values = None
     if values is None or len(values) != len(_split_top_level(text)):
         parts = [p.strip() for p in _split_top_level(text)]

@@ -21,6 +21,7 @@ from shoal.presets.kinds import integer_columns
 from shoal.presets.models import Scenario
 
 from ..cost import run_cost
+from ..experiments.schedulers import check_interrupt
 
 # first-passage times: a run that never got there has none (NaN/inf), and a median counts it as +inf
 FIRST_PASSAGE = frozenset({"steps_to_converge", "time_to_converge_s", "quality_met_at"})
@@ -88,6 +89,7 @@ def simulate_cell(job: CellJob, first_run: int, runs: int) -> CellBatch:
     for _ in range(job.steps):
         if running is not None and not np.any(sim.running):  # type: ignore[attr-defined]
             break
+        check_interrupt()  # a cancelled experiment stops here, within a fraction of a second
         info = sim.step()
         peak = np.maximum(peak, speed())
     table = metric_table(sim.state, info, sim.t)

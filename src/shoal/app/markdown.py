@@ -1,0 +1,41 @@
+"""Text that is not the app's own, shown in viser markdown: escaped, so it shows as written.
+
+Viser renders a markdown element with raw HTML and no sanitiser: ``<img onerror=…>`` or an
+``<iframe srcdoc>`` in its content runs script in the page. A preset's ``name``, a replay's
+metadata, a file name, a refused value echoed in a message or a field's description are
+written by whoever made the file or the request, not by the app. Every such text reaches a
+markdown element through :func:`escape` (the one helper; ``tests/test_markdown_escaped.py``
+scans the app for f-strings and ``format`` calls into markdown content that bypass it):
+
+- ``&``, ``<``, ``>``, ``"`` and ``'`` become character references, so nothing is a tag or
+  leaves an attribute, in a markdown paragraph or inside the app's own raw HTML;
+- every other ASCII punctuation character is backslash-escaped (CommonMark's escape), so no
+  ``*``, ``_``, ``[``, ``#``, `````, ``|`` or ``:`` starts emphasis, a link, a heading, code or a
+  table;
+- line breaks and other control characters become spaces (a name stays on its line), and a
+  text longer than ``limit`` characters is cut with an ellipsis.
+
+Markdown the project writes itself (the shipped notes and lessons, and literals in the code)
+is not escaped: it is meant as markdown.
+"""
+
+from __future__ import annotations
+
+import re
+
+MAX_SHOWN = 300  # characters of one escaped text, by default (a replay's name may be 1 MiB long)
+
+_CONTROL = re.compile(r"[\x00-\x1f\x7f\u0085\u2028\u2029]+")
+_PUNCTUATION = re.compile(r"([!#$%()*+,\-./:;=?@\[\\\]^_`{|}~])")  # ASCII punctuation but & < > " '
+_REFERENCES = {"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;"}
+_REFERENCE = re.compile("[&<>\"']")
+
+
+def escape(value: object, limit: int | None = MAX_SHOWN) -> str:
+    """``value`` as text that viser's markdown shows literally (see the module doc); ``limit``:
+    the most characters kept (None: all)."""
+    text = _CONTROL.sub(" ", str(value))
+    if limit is not None and len(text) > limit:
+        text = text[: max(limit - 1, 0)] + "…"
+    text = _PUNCTUATION.sub(r"\\\1", text)
+    return _REFERENCE.sub(lambda m: _REFERENCES[m.group()], text)
