@@ -229,6 +229,7 @@ class TabApp:
                     self.panels.refresh_readout()
                     self.panels.refresh_plots()
                     self.panels.refresh_timeline()
+                    self.panels.refresh_lessons()
                     self.panels.refresh_experiment()
                 self._plot_key = key
             self._next_plot = now + 1.0 / self.PLOT_HZ

@@ -34,6 +34,7 @@ from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
 from .compare import CompareFolder
 from .keys import PLAYING
+from .lesson_run import LessonRun
 from .plots import PADDING, Chart, Frame, PlotSpec
 from .replay import ReplayFolder
 from .spec import (
@@ -255,7 +256,8 @@ class Panel:
     def _build_lessons(self, notes: str) -> None:
         """The Lessons tab, the chapter's teaching notes below the lessons."""
         with self.tabs.add_tab("Lessons"):
-            self.lessons = LessonsPanel(self.gui, self.set_up_lesson, self.notify, self.services.lessons)
+            self.lessons = LessonsPanel(self.gui, self.set_up_lesson, self.notify, self.services.lessons,
+                                        measure=LessonRun(self.session))
             with self.gui.add_folder("Notes on this chapter", expand_by_default=False):
                 self.notes = self.gui.add_markdown(notes_text(notes))
 
@@ -624,6 +626,11 @@ class Panel:
         if twin is not None and len(m["t"]) < 2:
             twin = None
         return item.render(m, span, s, twin)
+
+    def refresh_lessons(self) -> None:
+        """The numbers of the lesson step shown, as the run on screen reads them (the caller throttles this)."""
+        if not self.removed:
+            self.lessons.refresh()
 
     def refresh_timeline(self) -> None:
         """The Replay folder: timeline and badge (the caller throttles this)."""
