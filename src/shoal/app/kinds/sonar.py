@@ -183,6 +183,7 @@ class SonarDriver(BaseDriver):
         return {
             "t": self.session.clock(), "k": float(self.sim.state.k), "com_dist": float(info.com_dist[0]),
             "converged_at": float(info.steps_to_converge[0]), "inside": float(info.frac_inside_ring[0]),
+            "mean_dist": float(info.mean_dist_to_source[0]),
             "r_ref": p.r_ref, "d_s": p.d_s, "D": p.D, "lambda": p.c / p.f_c,
             "snr_sel": float(self.sim.state.snr_db[0, i]), "source_x": float(self.sim.state.source[0, 0]),
             "source_y": float(self.sim.state.source[0, 1]),
@@ -545,7 +546,8 @@ def _readout(s: Session) -> str:
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
     conv = f" · reached d_c at step {int(r['converged_at'])}" if r["converged_at"] >= 0 else ""
-    ring = f" · {100 * r['inside']:.0f}% inside r" if sc.acoustics.r > 0 else ""
+    ring = (f" · robots {r['mean_dist']:.0f} m from the source on average, {100 * r['inside']:.0f}% inside r"
+            if sc.acoustics.r > 0 else "")
     return (f"**{sc.name}** · {LABELS[sc.acoustics.algorithm]} · {state} · t = {r['t']:.0f} s · "
             f"{s.progress()} · |CoM − source| = {r['com_dist']:.0f} m{conv}{ring}")
 
