@@ -130,11 +130,13 @@ class Panel:
         self._build_header()
         self.view_gui = ViewRow(self)
         badge = gui.add_markdown("", visible=False)  # names a loaded replay
+        live = gui.add_button("Run live (leave the replay)", visible=False,
+                              hint="a live run of the replay's preset and seed, from step 0")
         with gui.add_folder("Replay and files", expand_by_default=False) as files:  # closed: the controls fit
-            self.replay_gui = ReplayFolder(self, badge)
+            self.replay_gui = ReplayFolder(self, badge, live)
             self._build_files()
         self.compare_gui = CompareFolder(self)
-        self.top += [badge, files, self.compare_gui.folder]
+        self.top += [badge, live, files, self.compare_gui.folder]
         for folder in self.part.folders:
             self.top.append(self._build(folder))
         self.tabs = gui.add_tab_group()  # one row at 1280 px: the kind's tabs, Lessons and Sweep
