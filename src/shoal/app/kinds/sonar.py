@@ -246,6 +246,7 @@ class Source(Static):
 
     def __init__(self, on_drag: SourceDrag | None) -> None:
         self.on_drag = on_drag
+        self.label = "source (drag me)" if on_drag is not None else "source"  # a shared page drags nothing
         self._canvas: Canvas | None = None
 
     def build(self, canvas: Canvas, snap: Snapshot) -> None:
@@ -256,14 +257,15 @@ class Source(Static):
             batched_positions=np.zeros((1, 3), np.float32), batched_scales=np.array([0.022 * SIDE], np.float32),
             batched_colors=SOURCE, lod="off", material="toon3", side="double", cast_shadow=False,
             receive_shadow=False))
-        node.on_drag("left")(self.dragged)
-        canvas.label("source_label", "source (drag me)", np.zeros(2))
+        if self.on_drag is not None:
+            node.on_drag("left")(self.dragged)
+        canvas.label("source_label", self.label, np.zeros(2))
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         e = snap.extras
         src = e["source"]
         canvas.nodes["source"].batched_positions = canvas.to_view(src[None], Z["source"])
-        canvas.label("source_label", "source (drag me)", src + 0.04 * _half(snap))
+        canvas.label("source_label", self.label, src + 0.04 * _half(snap))
         canvas.lines("dc_ring", shapes.circle_segments(src, e["d_c"], 72), DC_RING, 1.0, Z["rings"])
         if e["r_trap"] > 0 and snap.live and snap.yg is not None:
             rings = np.concatenate([shapes.circle_segments(snap.yg, e["r_trap"], 72),

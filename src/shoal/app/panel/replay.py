@@ -8,8 +8,8 @@ file from *Export replay* (checked by :func:`~shoal.app.replay.from_bytes`; a ba
 refused with a red notification and changes nothing), builds the scene from the preset
 inside it, checks that a fresh run of that preset and seed reproduces its first steps, and
 shows it from its first step, paused: Play plays it, Reset goes back to its first step,
-*Run live* (or a changed control) leaves it for a live run of its preset. *Share* sends the recorded steps (swarm B's too) as one web page that plays in any
-browser.
+*Run live* (or a changed control) leaves it for a live run of its preset. *Share* sends the
+recorded steps (swarm B's too) as one web page that plays in any browser.
 """
 
 from __future__ import annotations
