@@ -59,8 +59,13 @@ class Experiment:
 
     @property
     def cost(self) -> int:
-        """Cells × runs."""
-        return len(self.plan) * self.plan.runs
+        """Cells that run × runs."""
+        return self.cells * self.plan.runs
+
+    @property
+    def cells(self) -> int:
+        """The cells that run (a grid's cells but those left out as invalid)."""
+        return len(self.plan.runnable)
 
     @property
     def over(self) -> bool:
@@ -85,14 +90,15 @@ class Experiment:
 
     def status(self) -> str:
         """Where it stands, in words."""
-        cells, done = len(self.plan), len(self.table)
+        cells, done = self.cells, len(self.table)
         runs = f"{self.runs_done} of {self.cost} runs"
+        left_out = f" ({len(self.plan.skipped)} invalid left out)" if self.plan.skipped else ""
         if self.phase == QUEUED:
             return f"queued: {self.place}{_ordinal(self.place)} in the server's queue"
         if self.phase == RUNNING:
-            return f"{'cancelling' if self.cancelling else 'running'}: {done} of {cells} cells, {runs}"
+            return f"{'cancelling' if self.cancelling else 'running'}: {done} of {cells} cells{left_out}, {runs}"
         if self.phase == FINISHED:
-            return f"finished: {cells} cells × {self.plan.runs} runs"
+            return f"finished: {cells} cells × {self.plan.runs} runs{left_out}"
         if self.phase == CANCELLED:
             return f"cancelled: {done} of {cells} cells finished and kept"
         return f"failed after {done} of {cells} cells: {self.error}"
@@ -159,7 +165,7 @@ class ExperimentService:
         try:
             plan, outcome = resolve(scenario, request, self.limits)
             with self._cond:
-                need, load, cap = len(plan) * plan.runs, self._load(), self.limits.max_queue_runs
+                need, load, cap = len(plan.runnable) * plan.runs, self._load(), self.limits.max_queue_runs
                 if load + need > cap:
                     raise Refused([f"the server's queue holds {load} of its {cap} cells × runs and this experiment "
                                    f"needs {need}: try again when it has room, or ask for fewer cells or runs"])
@@ -240,13 +246,13 @@ class ExperimentService:
             exp.runs_done += runs
             exp.changed()
 
-        jobs = [exp.plan.job(i) for i in range(len(exp.plan))]
+        jobs = [exp.plan.job(i) for i in exp.plan.runnable]
         for key, batch in iter_jobs(jobs, scheduler=self.scheduler, progress=progress, chunk=self.chunk,
                                     simulate=self.simulate, merge=outcomes.merge, desc="experiment",
                                     cancelled=exp._cancel.is_set):
             exp.table.add(key, batch)
             exp.changed()
-        exp.phase = FINISHED if len(exp.table) == len(exp.plan) else CANCELLED
+        exp.phase = FINISHED if len(exp.table) == exp.cells else CANCELLED
 
     def stop(self) -> None:
         """Cancel everything, stop the thread, close the scheduler if it is this service's."""

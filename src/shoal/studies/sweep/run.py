@@ -128,7 +128,7 @@ def run_sweep(
                   unit="run", disable=not progress) as bar:
             for key, batch in iter_jobs(jobs, workers=workers, scheduler=scheduler, progress=bar.update,
                                         simulate=simulate, merge=outcomes.merge, desc="sweep"):
-                store.write_cell(key, plan.prefix(key), batch.first_run, scenarios[key].sim.seed, batch.columns)
+                store.write_cell(key, plan.prefix(key), batch.first_run, plan.scenario(key).sim.seed, batch.columns)
         indices = list(range(len(scenarios)))
         columns = store.assemble(indices)
         names, medians = _medians(store, axes, len(scenarios))
