@@ -308,14 +308,14 @@ def test_readings_take_the_checks_aggregates_over_the_run_so_far():
     assert (final.span, final.shown, final.complete) == ("at step 6 (of 10)", "2", False)
     assert (top.span, top.shown) == ("highest over steps 4–6 so far (of 4–10)", "25.0 %")
     assert (mean.span, mean.shown) == ("mean over steps 4–6 so far (of 4–10)", "5")
-    assert top.label == "share of robots inside the escort ring" and mean.label == "mean robot speed at the end [m/s]"
+    assert top.label == "share of robots inside the escort ring" and mean.label == "mean robot speed [m/s]"
     early = readings.read(check, Run(np.arange(0, 3), {k: v[:3] for k, v in run.metrics.items()}))
     assert early[2].value is None and early[2].span == "mean over steps 4–10 (from step 4)"
     cut = readings.read(check, Run(np.arange(5, 11), {k: np.ones(6) for k in run.metrics}))
     assert cut[0].shown == "1" and cut[2].value is None  # steps 4–10 are no longer all recorded
     text = readings.text(readings.read(check, run), 6)
     assert text.startswith("**Read on screen** <small>(the run shown, at step 6)</small>")
-    assert "- mean robot speed at the end [m/s], mean over steps 4–6 so far (of 4–10): **5**" in text
+    assert "- mean robot speed [m/s], mean over steps 4–6 so far (of 4–10): **5**" in text
 
 
 @pytest.mark.parametrize("metric, value, shown", [

@@ -21,8 +21,10 @@ from shoal.studies.sweep.catalogue import LABELS
 
 from .model import AGGREGATES, Check, Lesson
 
-# metrics the sweep catalogue does not label (verify.py's own, and the SLO swarm's best so far)
-EXTRA_LABELS = {"outside": ("robots outside the arena", "robots"), "best_so_far": ("best f so far", "")}
+# verify.py's own metric, the SLO swarm's best so far (the sweep catalogue labels neither) and
+# the sweep's "final best f" (a reading is at a step of its own)
+OWN_LABELS = {"outside": ("robots outside the arena", "robots"), "best_so_far": ("best f so far", ""),
+              "best_fitness": ("best f", "")}
 SHARES = ("frac_inside_ring", "dead_reckoning")  # read as a percentage
 COUNTS = ("collided", "stalled", "operational", "layers_passed", "outside", "contacts", "steps_to_converge",
           "quality_met_at")
@@ -64,7 +66,9 @@ class Reading:
 
     @property
     def label(self) -> str:
-        name, unit = LABELS.get(self.metric) or EXTRA_LABELS.get(self.metric) or (self.metric.replace("_", " "), "")
+        """What the metric is, with its unit (the sweep's outcome labels, without their "at the end")."""
+        name, unit = OWN_LABELS.get(self.metric) or LABELS.get(self.metric) or (self.metric.replace("_", " "), "")
+        name = name.replace(" at the end", "")
         return f"{name} [{unit}]" if unit and self.metric not in SHARES and unit not in name else name
 
     @property
