@@ -93,6 +93,23 @@ def test_a_set_up_of_another_kind_rebuilds_the_panels_and_keeps_the_place(tab):
     assert new.progress.step == 1
 
 
+
+def test_a_swapped_out_panel_is_hidden_at_once_and_removed_a_moment_later(tab):
+    """The page applies a batch's GUI updates after its removals: the old panel gets no update
+    once it is swapped out, and its handles go only when its last updates have landed."""
+    old = tab.panels
+    lessons = _open(tab, "obstacles")
+    lessons.setup_button.value = True  # a fleet: the panels are swapped
+    assert tab.panels is not old and old.removed
+    status = old.status
+    assert all(not h.visible for h in old.top) and not status._impl.removed
+    tab.tick(5.0)  # not yet: their last updates may still be on their way
+    assert not status._impl.removed and old.top
+    tab._retired[0] = (0.0, old)  # (as RETIRE_SECONDS later)
+    tab.tick(6.0)
+    assert status._impl.removed and not old.top and not tab._retired
+
+
 def test_the_chooser_walks_to_a_leaf_and_opens_its_scene(tab):
     lessons = tab.panels.lessons
     tree = lessons.tree
@@ -186,7 +203,7 @@ def test_a_steps_numbers_are_read_out_under_its_question(tab):
     assert "mean over steps 100–300 (from step 100)" in lessons.readings.content
     s.advance(150)
     tab.tick(1.0)
-    assert "mean robot speed at the end [m/s], mean over steps 100–150 so far (of 100–300)" in \
+    assert "mean robot speed [m/s], mean over steps 100–150 so far (of 100–300)" in \
         lessons.readings.content
     s.advance(150)
     tab.tick(2.0)

@@ -547,10 +547,21 @@ class Panel:
         name = self.session.scenario.name
         return "".join(c if c.isalnum() or c in "-_" else "_" for c in name) or "shoal"
 
-    def remove(self) -> None:
-        """Take every handle of this panel off the page (the tab swaps in another kind)."""
+    def retire(self) -> None:
+        """Hide every handle of this panel and stop updating them (the tab swaps in another kind
+        and removes them a moment later: see :meth:`shoal.app.tab.TabApp.replace`)."""
+        if self.removed:
+            return
         self.removed = True
         self.lessons.close()
+        if self.experiment is not None:
+            self.experiment.detach()
+        for h in self.top:
+            h.visible = False
+
+    def remove(self) -> None:
+        """Take every handle of this panel off the page."""
+        self.retire()
         if self.experiment is not None:
             self.experiment.remove()
         for h in reversed(self.top):
