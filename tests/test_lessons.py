@@ -309,6 +309,8 @@ def test_readings_take_the_checks_aggregates_over_the_run_so_far():
     assert (top.span, top.shown) == ("highest over steps 4–6 so far (of 4–10)", "25.0 %")
     assert (mean.span, mean.shown) == ("mean over steps 4–6 so far (of 4–10)", "5")
     assert top.label == "share of robots inside the escort ring" and mean.label == "mean robot speed [m/s]"
+    assert final.label == "collided robots"
+    assert readings.Reading("mean_dist_to_source", "mean", 1, 2, 2, 1.0).label == "mean robot–source distance [m]"
     early = readings.read(check, Run(np.arange(0, 3), {k: v[:3] for k, v in run.metrics.items()}))
     assert early[2].value is None and early[2].span == "mean over steps 4–10 (from step 4)"
     cut = readings.read(check, Run(np.arange(5, 11), {k: np.ones(6) for k in run.metrics}))

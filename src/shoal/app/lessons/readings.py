@@ -69,7 +69,8 @@ class Reading:
         """What the metric is, with its unit (the sweep's outcome labels, without their "at the end")."""
         name, unit = OWN_LABELS.get(self.metric) or LABELS.get(self.metric) or (self.metric.replace("_", " "), "")
         name = name.replace(" at the end", "")
-        return f"{name} [{unit}]" if unit and self.metric not in SHARES and unit not in name else name
+        counted = unit in name.split()  # "collided robots", not "collided robots [robots]"
+        return f"{name} [{unit}]" if unit and self.metric not in SHARES and not counted else name
 
     @property
     def span(self) -> str:
