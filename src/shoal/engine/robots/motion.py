@@ -90,7 +90,7 @@ class Kinematic:
         new_x = target.copy()
         hit = np.zeros(active.shape, dtype=bool)
         for r, sp in enumerate(spaces):  # the space holds every robot at x (kept in sync)
-            for i in np.flatnonzero(active[r]):
+            for i in map(int, np.flatnonzero(active[r])):
                 start, end = tuple(x[r, i]), tuple(target[r, i])
                 if start != end:
                     alpha = first_contact(sp, start, end, i)
