@@ -20,7 +20,7 @@ from typing import Any, Sequence
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 from shoal.studies.sweep import catalogue
-from shoal.studies.sweep.grid import Axis, SweepError, label, parse_values
+from shoal.studies.sweep.grid import Axis, SweepError, cell_problems, label, parse_values
 from shoal.studies.sweep.plan import SweepPlan
 
 from ..limits import check_app_limits
@@ -137,15 +137,8 @@ def resolve_axis(field: catalogue.Field, ax: AxisRequest, limits: Limits) -> Axi
 
 def _cell_problems(plan: SweepPlan) -> list[str]:
     """Each distinct reason a cell was left out, once, naming the first cell and how many more."""
-    first: dict[str, str] = {}
-    count: dict[str, int] = {}
-    for i, messages in sorted(plan.skipped.items()):
-        cell = ", ".join(f"{k}={v}" for k, v in plan.prefix(i).items())
-        for m in messages:
-            first.setdefault(m, cell)
-            count[m] = count.get(m, 0) + 1
-    return [f"cell {cell}: {m}" + (f" (and {count[m] - 1} more cells)" if count[m] > 1 else "")
-            for m, cell in first.items()]
+    checked = [PresetError(list(plan.skipped[i])) if i in plan.skipped else sc for i, sc in enumerate(plan.scenarios)]
+    return cell_problems(plan.axes, checked, "cell")
 
 
 def resolve(scenario: Scenario, request: ExperimentRequest, limits: Limits) -> tuple[SweepPlan, str]:
