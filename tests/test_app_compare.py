@@ -158,21 +158,29 @@ def test_a_run_changed_while_it_ran_is_shown_but_not_verified():
     assert verified is False and "not reproduced" in text
 
 
-def test_replay_mode_moves_through_the_recording_and_reset_leaves_it():
+def test_a_replay_opens_at_its_start_plays_through_and_reset_rewinds_it():
     src = session("default")
     src.step(12)
     rec = replay.from_bytes(src.export_replay())
     s = session("default")
     s.enter_replay(rec, (True, "verified"))
-    assert s.replaying.name == "default" and s.cursor == 12
-    s.play()  # at the end: from the start again
-    assert s.cursor == 0
+    assert s.replaying.name == "default" and s.cursor == 0 and not s.playing  # at its first step, paused
+    s.play()
     assert s.step(5) == 5 and s.cursor == 5 and s.sim.state.k == 0  # the engine does not advance
     np.testing.assert_array_equal(s.shown_snapshot().x, src.frames[5].x)
+    assert s.step(100) == 7 and s.cursor == 12 and not s.playing  # its end: paused there
+    s.play()  # at the end: from the start again
+    assert s.cursor == 0 and s.playing
+    s.step(4)
     s.apply({"view.trail_seconds": 3.0})  # a view change keeps the replay
     assert s.replaying is not None
-    s.reset()
+    s.reset()  # back to the replay's first step, playing on
+    assert s.replaying is not None and s.cursor == 0 and s.playing
+    s.leave_replay()  # a live run of its preset (so does a changed control)
     assert s.replaying is None and s.cursor is None and len(s.frames) == 1
+    s.enter_replay(rec, (True, "verified"))
+    s.reset(seed=5)  # a new seed: a live run with it
+    assert s.replaying is None and s.scenario.sim.seed == 5
 
 
 # ---------------------------------------------------------------------------- panels
@@ -231,17 +239,20 @@ def test_load_replay_swaps_the_scene_kind_and_shows_the_badge(tab):
     assert s.kind is fleet.KIND and s.replaying is not None and s.scenario.name == "course-dvc"
     assert tab.messages[-1][2] == "green" and "verified" in tab.messages[-1][1]
     tab.tick(1.0)
-    badge = tab.panels.replay_gui.badge
-    assert badge.visible and "Replay of course-dvc, seed" in shown(badge.content)
+    badge, live = tab.panels.replay_gui.badge, tab.panels.replay_gui.live
+    assert badge.visible and "Replay of course-dvc, seed" in shown(badge.content) and live.visible
+    assert "Reset goes back to its first step" in shown(badge.content)
     s.scrub(9)
     tab.tick(2.0)
     pts = np.asarray(tab.arena.nodes["robots"].points)[:, :2]
     np.testing.assert_allclose(pts, tab.arena.to_view(src.frames[9].x)[:, :2], atol=1e-5)
     nodes = tab.arena.nodes
     assert not nodes["gbest"].visible and not any(nodes[k].visible for k in PROBE_NODES if k in nodes)
-    s.reset()  # a live run of the preset: the sensing view is back
+    tab.panels.press("Reset")  # the replay's first step
+    assert s.replaying is not None and s.cursor == 0
+    live.value = True  # Run live: a live run of the preset, playing; the sensing view is back
     tab.tick(3.0)
-    assert s.replaying is None and not tab.panels.replay_gui.badge.visible
+    assert s.replaying is None and s.playing and not badge.visible and not live.visible
     assert nodes["sectors"].visible and nodes["gbest"].visible
 
 

@@ -198,3 +198,25 @@ def test_the_panel_stands_alone_and_its_plot_keeps_up_with_the_cells(server):
         panel.remove()
         service.stop()
         server.viser.gui.reset()
+
+
+def test_a_grid_with_an_invalid_cell_is_offered_without_it_and_named_by_labels_and_units(tab):
+    p = tab.panels.experiment
+    _ask(p, "controller.U", "2, 6", "controller.A_plus", "10, 30", runs=2, steps=5)  # β = 30·0.1/2 > 1
+    p.run.value = True
+    assert p.experiment is None and "1 of 4 cells cannot run" in p.status.content
+    assert p.skip.visible and p.skip.label == "Run the other 3 of 4 cells"
+    p.skip.value = True
+    exp = _settle(p)
+    assert not p.skip.visible and "finished: 3 cells × 2 runs (1 invalid left out)" in p.status.content
+    heat = p.plot.figure.data[0]
+    assert heat.text[1][0] == "invalid" and heat.text[0][0] not in ("", "invalid")  # U = 2, A+ = 30 left out
+    layout = p.plot.figure.layout
+    assert layout.xaxis.title.text == "top speed U [m/s]" and layout.yaxis.title.text == "top acceleration A+ [m/s²]"
+    assert "controller." not in heat.hovertemplate and len(p.cell.options) == 3
+    assert exp.plan.axes[0].name == "top speed U [m/s]"
+    _ask(p, "controller.U", "2, 6", "controller.A_plus", "10, 30", runs=2, steps=5)
+    p.run.value = True
+    assert p.skip.visible
+    p.axes[1].field.value = "controller.dt"  # another grid: the offer goes
+    assert not p.skip.visible

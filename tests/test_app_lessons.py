@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import pytest
 
-from shoal.app.lessons import parse_lesson
+from shoal.app.lessons import parse_lesson, readings
 from shoal.app.lessons.chooser import paths
 from shoal.app.lessons.panel import NAV, LessonProgress, LessonsPanel
+from shoal.app.lessons.verify import run_metrics
 
 APP_PRESET = "default"
 
@@ -92,6 +93,23 @@ def test_a_set_up_of_another_kind_rebuilds_the_panels_and_keeps_the_place(tab):
     assert new.progress.step == 1
 
 
+
+def test_a_swapped_out_panel_is_hidden_at_once_and_removed_a_moment_later(tab):
+    """The page applies a batch's GUI updates after its removals: the old panel gets no update
+    once it is swapped out, and its handles go only when its last updates have landed."""
+    old = tab.panels
+    lessons = _open(tab, "obstacles")
+    lessons.setup_button.value = True  # a fleet: the panels are swapped
+    assert tab.panels is not old and old.removed
+    status = old.status
+    assert all(not h.visible for h in old.top) and not status._impl.removed
+    tab.tick(5.0)  # not yet: their last updates may still be on their way
+    assert not status._impl.removed and old.top
+    tab._retired[0] = (0.0, old)  # (as RETIRE_SECONDS later)
+    tab.tick(6.0)
+    assert status._impl.removed and not old.top and not tab._retired
+
+
 def test_the_chooser_walks_to_a_leaf_and_opens_its_scene(tab):
     lessons = tab.panels.lessons
     tree = lessons.tree
@@ -170,3 +188,34 @@ def test_the_panel_needs_only_a_gui_and_two_callbacks(server):
     panel.setup_button.value = True
     assert calls[-1] == ("escort-stationary", {"sim.robots": 10})
     folder.remove()
+
+
+def test_a_steps_numbers_are_read_out_under_its_question(tab):
+    """Set up, Play: the numbers the step's check names follow the run shown, as the headless
+    check computes them; another scene on screen says so instead of showing numbers."""
+    lessons = _open(tab, "sideways")  # Ch. 5, step 1: the mean speed over steps 100–300
+    assert lessons.readings.visible and "another scene than this step's" in lessons.readings.content
+    lessons.setup_button.value = True
+    lessons = tab.panels.lessons  # a fleet: the panels were built again
+    s = tab.session
+    assert s.scenario.name == "open-nonomni" and s.k == 0
+    assert "(the run shown, at step 0)" in lessons.readings.content
+    assert "mean over steps 100–300 (from step 100)" in lessons.readings.content
+    s.advance(150)
+    tab.tick(1.0)
+    assert "mean robot speed [m/s], mean over steps 100–150 so far (of 100–300)" in \
+        lessons.readings.content
+    s.advance(150)
+    tab.tick(2.0)
+    (preset, values), check = readings.step_check(lessons.lesson, 0)
+    want = readings.headless(check, run_metrics(preset, values, check.steps))
+    for r in want:
+        assert f"{r.label}, {r.span}: **{r.shown}**" in lessons.readings.content
+    tab.panels.apply({"sim.robots": 12}, "robots")
+    tab.tick(3.0)
+    assert "another scene than this step's" in lessons.readings.content
+    lessons.nav.value = NAV[1]
+    lessons.nav.value = NAV[1]
+    lessons.nav.value = NAV[1]
+    lessons.nav.value = NAV[1]  # the last page: nothing to read
+    assert not lessons.readings.visible

@@ -61,7 +61,7 @@ def test_a_replay_draws_the_obstacles_as_they_were_at_each_step(tab):
         np.testing.assert_allclose(np.asarray(tab.arena.nodes["obstacles"].batched_scales) / tab.arena.scale,
                                    circles[:, 2], rtol=1e-6)
     assert "obstacle" in [e.label for e in tab.arena.legend()]
-    s.reset()  # a live run of the preset: its own world again
+    s.leave_replay()  # Run live: a live run of the preset, its own world again
     tab.tick(20.0)
     np.testing.assert_allclose(drawn(tab, "obstacles", "batched_positions"), generated[:, :2], atol=1e-5)
 
@@ -130,7 +130,7 @@ def test_a_replay_keeps_swarm_b_and_draws_it_in_teal(tab):
     again = replay.from_bytes(s.export_replay())  # exported again from the replay: B kept
     assert again.twin_overrides == {"controller.law": "standard", "controller.mode": "raw"}
     np.testing.assert_array_equal(again.twin(15)[0], b[15])
-    s.reset()  # a live run of the preset, without B
+    s.leave_replay()  # Run live: a live run of the preset, without B
     tab.tick(40.0)
     assert not tab.arena.nodes["twin"].visible
 

@@ -32,7 +32,7 @@ from shoal.engine.pso.coeffs import Constant, Physical
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 
-from app_helpers import HAND_TAB
+from app_helpers import HAND_TAB, shown
 
 
 def _raw(tab):
@@ -90,7 +90,9 @@ def test_physical_mode_derives_omega_c_beta_from_U_A_dt(tab):
     assert omega == pytest.approx(1 - beta)  # [3.35]
     assert c_hat == pytest.approx(20.0 * 0.1 / np.sqrt(2))  # [3.32]
     tab.tick(10.0)
-    assert f"β = {beta:.4g}" in p.handles["readout"].content
+    table = shown(p.handles["readout"].content)  # the coefficients and bounds as a table, ĉ included
+    assert f"| β = A+Δt/U [3.34] | {beta:.4g} |" in table and f"| ω = 1 − β [3.35] | {1 - beta:.4g} |" in table
+    assert f"| ĉ = A+Δt/√d [3.32] | {c_hat:.4g} m/s |" in table
     h = p.handles  # ω, c1, c2 in force are read-outs on their sliders (moving one switches to raw mode)
     assert h["controller.omega"].value == pytest.approx(1 - beta, rel=1e-3)
     assert h["controller.c1"].value + h["controller.c2"].value == pytest.approx(c_hat, rel=1e-3)

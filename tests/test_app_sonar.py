@@ -125,6 +125,18 @@ def test_a_moving_source_continues_from_where_it_was_dropped(tab):
     np.testing.assert_allclose(s.sim.state.source[0], [10.0 + v, 20.0], atol=1e-9)
 
 
+
+def test_an_escort_status_reads_the_robots_distance_and_share_inside_the_ring(tab):
+    tab.panels.preset.value = "escort-stationary"
+    s = tab.session
+    s.step(30)
+    tab.panels.refresh_status()
+    info = s.sim.info()
+    dist, inside = float(info.mean_dist_to_source[0]), float(info.frac_inside_ring[0])
+    assert (f"robots {dist:.0f} m from the source on average, {100 * inside:.0f}% inside r"
+            in tab.panels.status.content)
+
+
 def test_the_correlation_plot_shows_the_selected_robots_corr(tab):
     s, p = tab.session, tab.panels
     s.step(2)

@@ -252,3 +252,36 @@ def test_a_stopped_service_refuses_and_cancels_what_it_held(gates):
     assert not stopper.is_alive() and b.phase == CANCELLED and a.phase == CANCELLED and len(a.table) == 0
     with pytest.raises(Refused, match="stopping"):
         service.submit("C", load("default"), _request(AxisRequest("controller.U", values="8")))
+
+
+def test_a_grid_with_invalid_cells_is_offered_without_them_and_runs_the_rest():
+    """U × A+ where β = A+Δt/U > 1 in one cell: refused as a whole with the count of cells that
+    can run; asked again with skip_invalid, the other cells run, seeded as shoal sweep's, and
+    the invalid one is named, never run."""
+    service = ExperimentService(InProcess())
+    axes = (AxisRequest("controller.U", values="2, 6"), AxisRequest("controller.A_plus", values="10, 30"))
+    try:
+        with pytest.raises(Refused) as err:
+            service.submit("tab", load("default"), _request(*axes, runs=2, steps=5))
+        assert (err.value.runnable, err.value.cells) == (3, 4)
+        assert err.value.messages[0] == "1 of 4 cells cannot run; the other 3 can: run them and leave these out?"
+        assert any(m.startswith("cell controller.U=2, controller.A_plus=30: controller:") and "> 1" in m
+                   for m in err.value.messages[1:]), err.value.messages
+        assert service.queued_runs() == 0
+        skip = ExperimentRequest(axes=axes, runs=2, steps=5, skip_invalid=True)
+        exp = _done(service.submit("tab", load("default"), skip))
+        assert exp.phase == FINISHED and exp.cells == 3 and exp.cost == 6 and exp.table.finished() == [0, 2, 3]
+        assert list(exp.plan.skipped) == [1] and exp.plan.scenarios[1] is None
+        assert exp.status() == "finished: 3 cells × 2 runs (1 invalid left out)"
+        med = exp.table.summary("best_fitness")[0]
+        assert med.shape == (2, 2) and med[0, 1] != med[0, 1] and all(v == v for v in med.ravel()[[0, 2, 3]])
+        with pytest.raises(Refused) as none:  # no cell can run: no offer
+            service.submit("tab", load("default"), ExperimentRequest(
+                axes=(AxisRequest("controller.U", values="1, 2"), AxisRequest("controller.A_plus", values="30, 40")),
+                runs=1, steps=2, skip_invalid=True))
+        assert none.value.runnable == 0
+        truthy = ExperimentRequest(axes=axes, runs=2, steps=5, skip_invalid="yes")  # only True skips
+        with pytest.raises(Refused):
+            service.submit("tab", load("default"), truthy)
+    finally:
+        service.stop()

@@ -3,17 +3,22 @@ reads, names only scenes the preset model and the app accept, and passes its che
 
 from __future__ import annotations
 
+import functools
 import math
 
+import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
 from shoal.app.kinds.registry import kind_for
-from shoal.app.lessons import LessonError, library, parse_lesson
+from shoal.app.lessons import LessonError, library, parse_lesson, readings
 from shoal.app.lessons.library import read_lesson, shipped
-from shoal.app.lessons.scenes import load_scene, overrides, scene_errors, toml_literal
+from shoal.app.lessons.model import Check
+from shoal.app.lessons.readings import Run, format_value
+from shoal.app.lessons.scenes import describe, load_scene, overrides, scene_errors, toml_literal
 from shoal.app.lessons.verify import check_failures, lesson_check_failures, run_metrics
+from shoal.app.panel.lesson_run import NOT_THIS_SCENE, LessonRun
 from shoal.presets.io import PresetError, parse_value
 
 GOOD = '''+++
@@ -241,10 +246,42 @@ def test_every_scene_of_a_shipped_lesson_validates(lesson_id):
             kind_for(load_scene(*scene))  # the app has a view for it
 
 
-@pytest.mark.parametrize("lesson_id", sorted(LESSONS))
-def test_every_check_of_a_shipped_lesson_holds(lesson_id):
+CHECKED = [(lid, i) for lid in sorted(LESSONS) for i in range(len(LESSONS[lid].steps))
+           if readings.step_check(LESSONS[lid], i) is not None]
+
+
+@functools.cache
+def _headless(lesson_id: str, index: int) -> dict[str, np.ndarray]:
+    """The step's scene run headless for its check (shared by the tests below)."""
+    (preset, values), check = readings.step_check(LESSONS[lesson_id], index)
+    return run_metrics(preset, values, check.steps, check.runs)
+
+
+@pytest.mark.parametrize("lesson_id, index", CHECKED)
+def test_every_check_of_a_shipped_lesson_holds(lesson_id, index):
     """What each step says the student will see, run headless on the step's scene."""
-    assert lesson_check_failures(LESSONS[lesson_id]) == []
+    (preset, values), check = readings.step_check(LESSONS[lesson_id], index)
+    where = f"{lesson_id}.md, step {index + 1} ({describe(preset, values)})"
+    assert [f"{where}: {m}" for m in check_failures(preset, values, check, _headless(lesson_id, index))] == []
+
+
+@pytest.mark.parametrize("lesson_id, index", CHECKED)
+def test_the_screen_reads_what_the_check_computes(lesson_id, index):
+    """Every number a step's check names is read out on the screen the step sets up (the
+    Lessons tab's readings of the app's session, run 0) and equals the headless run's."""
+    (preset, values), check = readings.step_check(LESSONS[lesson_id], index)
+    scenario = load_scene(preset, values)
+    session = kind_for(scenario).session(scenario)
+    measure = LessonRun(session)
+    session.advance(check.steps)
+    run = measure(preset, values, readings.names(check))
+    assert isinstance(run, Run) and run.k == check.steps
+    shown = readings.read(check, run)
+    headless = readings.headless(check, _headless(lesson_id, index))
+    assert [(r.label, r.span, r.shown) for r in shown] == [(r.label, r.span, r.shown) for r in headless]
+    assert all(r.complete and r.value is not None for r in shown)
+    session.apply({"sim.seed": scenario.sim.seed + 1})  # another scene than the step's: no numbers
+    assert measure(preset, values, readings.names(check)) == NOT_THIS_SCENE
 
 
 def test_every_step_with_numbers_in_its_answer_is_checked():
@@ -258,3 +295,35 @@ def test_check_failures_uses_run_zero_as_the_app_shows_it():
     lesson = LESSONS["03a-stability"]
     scene = lesson.scene(0)
     assert check_failures(*scene, lesson.steps[0].setup.check) == []
+
+
+# ---------------------------------------------------------------------------- readings
+def test_readings_take_the_checks_aggregates_over_the_run_so_far():
+    check = Check(steps=10, after=4, final={"collided": (0, 1)}, mean={"mean_speed": (0, 1)},
+                  max={"frac_inside_ring": (0, 1)})
+    steps = np.arange(0, 7)  # the run is at step 6 of the 10 the check needs
+    run = Run(steps, {"collided": np.array([0, 0, 0, 1, 1, 2, 2.0]), "mean_speed": np.arange(7.0),
+                      "frac_inside_ring": np.array([0, 0, 0, 0.5, 0.25, 0.125, 0.0])})
+    final, top, mean = readings.read(check, run)
+    assert (final.span, final.shown, final.complete) == ("at step 6 (of 10)", "2", False)
+    assert (top.span, top.shown) == ("highest over steps 4–6 so far (of 4–10)", "25.0 %")
+    assert (mean.span, mean.shown) == ("mean over steps 4–6 so far (of 4–10)", "5")
+    assert top.label == "share of robots inside the escort ring" and mean.label == "mean robot speed [m/s]"
+    assert final.label == "collided robots"
+    assert readings.Reading("mean_dist_to_source", "mean", 1, 2, 2, 1.0).label == "mean robot–source distance [m]"
+    early = readings.read(check, Run(np.arange(0, 3), {k: v[:3] for k, v in run.metrics.items()}))
+    assert early[2].value is None and early[2].span == "mean over steps 4–10 (from step 4)"
+    cut = readings.read(check, Run(np.arange(5, 11), {k: np.ones(6) for k in run.metrics}))
+    assert cut[0].shown == "1" and cut[2].value is None  # steps 4–10 are no longer all recorded
+    text = readings.text(readings.read(check, run), 6)
+    assert text.startswith("**Read on screen** <small>(the run shown, at step 6)</small>")
+    assert "- mean robot speed [m/s], mean over steps 4–6 so far (of 4–10): **5**" in text
+
+
+@pytest.mark.parametrize("metric, value, shown", [
+    ("com_dist", 223.71, "223.7"), ("frac_inside_ring", 0.0681, "6.8 %"), ("steps_to_converge", -1.0, "not yet"),
+    ("steps_to_converge", 285.0, "285"), ("best_so_far", 1.65e-26, "1.65×10⁻²⁶"), ("max_speed", 2.851e7, "2.85×10⁷"),
+    ("max_speed", 0.0, "0"), ("max_speed", math.inf, "∞"), ("max_speed", math.nan, "—"), ("outside", 14.0, "14"),
+])
+def test_a_reading_is_printed_for_a_projector(metric, value, shown):
+    assert format_value(metric, value) == shown

@@ -26,6 +26,7 @@ from shoal.app.cli import main
 from shoal.app.share import MAX_FRAMES, preset_html, recording_html, session_html, write_html
 from shoal.app.share.draw import new_session
 from shoal.app.share.frames import MAX_ROBOT_FRAMES, frame_budget, plan, run_plan
+from shoal.app.share.page import SOFTWARE_JS
 from shoal.presets import io as presets_io
 from shoal.presets.build import build_simulation
 from shoal.presets.io import PresetError
@@ -141,6 +142,34 @@ def test_a_seeded_run_draws_what_the_app_draws_live():
     for label in ("robot", "source", "GT-PSO triangle", "personal best"):
         assert f"&nbsp;{label}" in legend  # the page's panel names the glyphs it draws
     assert "swarm B" not in legend and "believed position" not in legend
+
+
+def _about(page: str) -> str:
+    about = page[page.index("<summary>About this page</summary>"):]
+    return html_lib.unescape(re.sub(r"<[^>]+>", " ", about[:about.index("<details><summary>Preset")]))
+
+
+@pytest.mark.parametrize("speed, fps, pace", [(20.0, 20, "the app's pace"), (100.0, 30, "0.3× the app's pace")])
+def test_the_about_text_says_what_the_player_plays(speed, fps, pace):
+    """Frames, frames a second, the clock's end: the numbers of the recording viser's player plays."""
+    page = preset_html(presets_io.load("default", ["sim.steps=60", f"view.steps_per_second={speed}"]))
+    run, rec = data_block(page)["run"], recorded(page)
+    times = sorted({t for t, m in rec.messages if m.get("name", "").endswith("/robots")})
+    assert len(times) == run["frames"] == 61 and rec.duration == pytest.approx(61 / fps)
+    assert np.diff(times) == pytest.approx(1 / fps) and run["seconds"] == pytest.approx(rec.duration)
+    about = " ".join(_about(page).split())
+    assert (f"61 frames of a seeded run of 20 robots (every step), steps 0–60. At 1× the page plays {fps} frames "
+            f"a second, {pace}: its clock, the number beside ▶, runs from 0 to {61 / fps:.4g} s") in about
+    assert "robot positions, so that it stays a few MB" in about  # no budget of its own to mention
+    long = preset_html(presets_io.load("default", ["sim.steps=1500", "sim.robots=3"]))
+    assert "(every 3rd step and the last), steps 0–1500. At 1× the page plays 20 frames a second, 3× the app's pace" \
+        in " ".join(_about(long).split())
+
+
+def test_a_sonar_page_names_the_source_without_offering_a_drag():
+    rec = recorded(preset_html(presets_io.load("sonar-xb-pso", ["sim.steps=3"])))
+    texts = [v for _, v in rec.updates(node(rec, "source_label"), "text")]
+    assert texts and set(texts) == {"source"}
 
 
 def test_swarm_b_is_drawn_where_it_ran():
@@ -281,7 +310,8 @@ def test_a_hostile_preset_name_is_text_in_the_page():
                                     "name": evil})
     page = preset_html(scenario)
     ours = page[page.index('<div id="shoal-run">'):]
-    assert "alert" in ours and "<img" not in ours and ours.count("<script") == 1  # the JSON block only
+    assert "alert" in ours and "<img" not in ours and ours.count("<script") == 2  # the JSON block and ...
+    assert ours.endswith(f"<script>{SOFTWARE_JS}</script></body>\n</html>\n")  # ... the fixed toast script
     assert data_block(page)["run"]["name"] == evil
     title = re.search(r"<title>(.*?)</title>", page, re.S).group(1)
     assert "<" not in title and html_lib.unescape(title).startswith(evil)

@@ -116,3 +116,27 @@ def test_outcomes_are_the_recorded_columns_each_labelled(preset):
     first = catalogue.first_outcome(offered).name
     assert first == {"sonar": "com_dist", "fleet": "com_fitness", "slo_swarm": "e_abs_mean"}.get(kind_of(sc),
                                                                                                  "best_fitness")
+
+
+@pytest.mark.parametrize("preset, key, title", [
+    ("default", "controller.U", "top speed U [m/s]"),  # "(physical mode)" left out
+    ("default", "controller.dt", "controller period Δt [s]"),
+    ("default", "controller.c1_share", "c1/(c1+c2) split of ĉ"),  # a formula's bracket stays
+    ("course-dvc", "controller.alpha", "DVC safety factor α [4.14]"),  # an equation number is no unit
+    ("course-dvc", "controller.r_min", "minimum turning radius [m]"),
+    ("sonar-xb-pso", "acoustics.snr0_db", "SNR at the origin [dB]"),  # what follows a ';' left out
+    ("sonar-xb-pso", "acoustics.a", "forgetting scale a [7.2]"),  # ... and after a ':' ending 3 words
+    ("slo-walk", "slo.error_values.range_sigma_m", "range: stochastic multiplicative σ_m [4.2]"),
+    ("default", "controller.law", "law"),
+])
+def test_a_field_is_titled_in_words_with_its_unit(preset, key, title):
+    field = next(f for f in catalogue.fields(load(preset)) if f.key == key)
+    assert field.title == title
+
+
+def test_every_offered_field_has_a_short_title_with_the_unit_its_description_gives():
+    for preset in ("default", "course-dvc", "sonar-xb-pso", "slo-walk", "escort-stationary"):
+        for f in catalogue.fields(load(preset)):
+            assert 0 < len(f.title) <= catalogue.TITLE_CHARS + 8 and " (" not in f.title  # no remark left
+            if f.unit:
+                assert f"[{f.unit}]" in f.title and not f.unit[0].isdigit()

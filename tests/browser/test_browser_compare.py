@@ -216,3 +216,47 @@ def test_a_replay_exported_here_plays_back_in_another_server(server, browser, pa
             page2.context.close()
     finally:
         other.stop()
+
+
+def test_a_loaded_replay_plays_from_its_first_step_on_play(server, page, cid):
+    """A replay opens paused at its first step; Play plays it through, Reset goes back to its
+    first step, *Run live* leaves it for a live run of its preset."""
+    from shoal.app.kinds.registry import session_for
+    from shoal.presets import io as presets_io
+
+    src = session_for(presets_io.load("default", ["sim.seed=7"]))
+    src.advance(80)
+    data = src.export_replay()
+    dismiss_toasts(page)
+    open_folder(page, "Replay and files", "Load replay")
+    upload_input(page, "Load replay").set_input_files(
+        {"name": "seven-replay.npz", "mimeType": "application/octet-stream", "buffer": data})
+    tab = server.tabs[cid]
+    wait_until(lambda: tab.session.replaying is not None and tab.session.replaying.seed == 7, what="the replay")
+    s = tab.session
+    assert s.cursor == 0 and not s.playing
+    page.wait_for_selector("text=replay · step 0 of 80", timeout=20000)
+    page.wait_for_selector("text=Play plays it, Reset goes back to its first step", timeout=20000)
+    wait_until(lambda: tab.arena.drawn_revision == s.revision, what="step 0 drawn")
+    np.testing.assert_allclose(np.asarray(tab.arena.nodes["robots"].points)[:, :2],
+                               tab.arena.to_view(src.frames[0].x)[:, :2], atol=1e-5)
+
+    page.get_by_role("button", name="Play", exact=True).click()
+    wait_until(lambda: (s.cursor or 0) >= 20, timeout=30, what="the replay playing on from step 0")
+    page.wait_for_selector("text=/replay · step [1-9][0-9]* of 80/", timeout=20000)
+    page.get_by_role("button", name="Pause", exact=True).click()
+    wait_until(lambda: not s.playing, what="pause")
+    k = s.cursor
+    wait_until(lambda: tab.arena.drawn_revision == s.revision, what="the paused step drawn")
+    np.testing.assert_allclose(np.asarray(tab.arena.nodes["robots"].points)[:, :2],
+                               tab.arena.to_view(src.frames[k].x)[:, :2], atol=1e-5)
+    assert s.sim.state.k == 0  # the engine stayed where it was
+
+    page.get_by_role("button", name="Reset", exact=True).click()
+    wait_until(lambda: s.cursor == 0, what="Reset: the replay's first step")
+    assert s.replaying is not None
+    page.get_by_role("button", name="Run live (leave the replay)").click()
+    wait_until(lambda: s.replaying is None and s.playing, what="a live run")
+    wait_until(lambda: s.k > 3, what="the live run stepping")
+    assert not page.get_by_role("button", name="Run live (leave the replay)").is_visible()
+    dismiss_toasts(page)

@@ -204,3 +204,38 @@ def test_a_page_opened_from_a_file_plays_too(browser, run):
         assert abs(k - 0.5 * STEPS) <= 0.05 * STEPS and sockets == []
     finally:
         pg.close()
+
+
+def clock(pg) -> float:
+    """The player's clock, the number beside its ▶ (seconds of the page)."""
+    return float(pg.locator("input").first.input_value())
+
+
+def test_the_panel_leaves_the_arena_clear_and_the_clock_runs_as_the_about_text_says(browser, run):
+    """At 1280×800 the panel sits left of the arena (its colour bar is to the right), viser's
+    software-WebGL toast is closed and named in one line of the panel; the About text's frames,
+    frames a second and clock end are what the player shows."""
+    pg, _, _ = open_page(browser, run.path.as_uri())
+    try:
+        half = float(run.scenario.arena.half_size)
+        card = pg.locator("#shoal-run").bounding_box()
+        left_edge = to_pixels(pg, run, np.array([[-half, half]]))[0, 0]
+        assert card["x"] + card["width"] < left_edge, (card, left_edge)
+        wait_until(lambda: not pg.get_by_text("Software WebGL rendering detected").count(), timeout=20,
+                   what="viser's software-WebGL toast closed")
+        assert pg.locator("#shoal-software").is_visible()  # (headless Chromium draws without a GPU)
+        kept = run.kept
+        fps, stride = 1.0 / kept["seconds_per_frame"], kept["stride"]
+        pg.get_by_text("About this page").click()
+        about = " ".join(pg.locator("#shoal-run").inner_text().split())
+        assert (f"{kept['frames']} frames of a seeded run" in about and f"plays {fps:.3g} frames a second" in about
+                and f"runs from 0 to {kept['seconds']:.4g} s" in about), about
+        pause(pg, run)
+        scrub(pg, 0.999)  # the end: the clock the About text names, the last step
+        assert shown_step(pg, run) == STEPS and clock(pg) == pytest.approx(kept["seconds"], abs=0.11)
+        for fraction in (0.3, 0.6):
+            scrub(pg, fraction)
+            k = shown_step(pg, run)
+            assert abs(k - clock(pg) * fps * stride) <= 2 * stride + 0.1 * fps * stride, (fraction, k, clock(pg))
+    finally:
+        pg.close()

@@ -51,6 +51,7 @@ class TabApp:
     CONTROL_HOLD = 0.3  # s without scene redraws after a control event: feedback first, a dragged slider coalesces
     PLOT_HZ = 4.0
     MAX_STEPS_PER_TICK = 25
+    RETIRE_SECONDS = 2.0  # a swapped-out panel stays hidden this long before its handles are removed (see replace)
     STEP_BUDGET = 0.025  # s of engine steps per tick: a heavy scene plays slower, it never stalls the other tabs
 
     def __init__(
@@ -79,6 +80,7 @@ class TabApp:
         # control) the page sends while the tab is still being built waits for it, then loads
         self._ticking = threading.RLock()
         self._clicks: list[Callable[[Any], None]] = []
+        self._retired: deque[tuple[float, Panel]] = deque()  # (when to remove, panel) of swapped-out kinds
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
         self.control_hold = self.CONTROL_HOLD
         self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
@@ -117,12 +119,24 @@ class TabApp:
         for cb in self._clicks:
             self.scene.remove_click_callback(cb)
         self._clicks.clear()
-        self.panels.remove()
+        self.panels.retire()
+        self._retired.append((time.monotonic() + self.RETIRE_SECONDS, self.panels))
         self.arena.clear()
+
+    def _remove_retired(self, now: float) -> None:
+        """Remove the handles of panels swapped out long enough ago. viser's page applies the GUI
+        updates of a batch of messages after its removals, so an update still on its way to a
+        panel removed in the same batch is an error in the page's console: a swapped-out panel is
+        hidden and updated no more at once, and removed only when its last updates have landed."""
+        while self._retired and self._retired[0][0] <= now:
+            _, panel = self._retired.popleft()
+            with contextlib.suppress(Exception):  # a tab closing meanwhile
+                panel.remove()
 
     def replace(self, scenario: Scenario, *, play: bool = True) -> Session:
         """Load ``scenario``, playing (``play=False``: paused at step 0); a scene of the other
-        kind swaps session, panels and arena. Returns the session now shown. Raises
+        kind swaps session, panels and arena (the old panel hidden at once, removed a moment
+        later: :meth:`_remove_retired`). Returns the session now shown. Raises
         :class:`PresetError` (nothing changed) when it cannot be shown."""
         kind = kind_for(scenario)
         with self._ticking:
@@ -237,6 +251,8 @@ class TabApp:
                 return
 
     def _tick(self, now: float, plots: bool = True) -> None:
+        if self._retired:
+            self._remove_retired(time.monotonic())
         s = self.session
         elapsed = 0.0 if self._last is None else max(0.0, now - self._last)
         self._last = now
@@ -274,6 +290,7 @@ class TabApp:
                     self.panels.refresh_readout()
                     self.panels.refresh_plots()
                     self.panels.refresh_timeline()
+                    self.panels.refresh_lessons()
                     self.panels.refresh_experiment()
                 self._plot_key = key
             self._next_plot = now + 1.0 / self.PLOT_HZ

@@ -4,7 +4,8 @@ as a PNG to download (matplotlib, the pictures of ``shoal sweep``).
 One field: the median of the outcome over each cell's runs against the field's value, with
 its 95 % confidence interval as a band. Two fields: a heat map of the medians, first field
 across, second up. A first-passage median of +inf (fewer than half the runs got there) is
-marked "n.c."; a cell not finished yet is left blank.
+marked "n.c."; a cell left out as invalid "invalid"; a cell not finished yet is left blank.
+Axes are named by the fields' titles with their units (:attr:`Field.title`).
 """
 
 from __future__ import annotations
@@ -32,9 +33,14 @@ def _numeric(values: tuple[Any, ...]) -> bool:
     return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
 
 
+def _escape(text: str) -> str:
+    """Text for a plotly hover template (``%{...}`` is its markup)."""
+    return text.replace("{", "(").replace("}", ")")
+
+
 def title(exp: Experiment, outcome: Outcome, sep: str = " ") -> str:
     """``median <outcome>``, then (after ``sep``) the runs per cell and, while it runs, the cells done."""
-    done, cells = len(exp.table), len(exp.plan)
+    done, cells = len(exp.table), exp.cells
     part = "" if done == cells else f" · {done} of {cells} cells"
     return f"median {outcome.title}{sep}over {exp.plan.runs} runs per cell{part}"
 
@@ -52,23 +58,29 @@ def page_figure(exp: Experiment, outcome: Outcome) -> go.Figure:
         fig.add_trace(go.Scatter(x=x, y=_finite(hi), mode="lines", line={"width": 0}, fill="tonexty",
                                  fillcolor=BAND, name="95 % interval", hoverinfo="skip"))
         fig.add_trace(go.Scatter(x=x, y=_finite(med), mode="lines+markers", line={"color": BLUE}, name="median"))
-        nc = [xi for xi, m in zip(x, med) if np.isinf(m)]
-        for xi in nc:
-            fig.add_annotation(x=xi, y=1.0, yref="paper", text="n.c.", showarrow=False, font={"color": GREY})
-        fig.update_xaxes(title_text=ax.key, type=None if _numeric(ax.values) else "category")
+        marks = [(xi, "n.c.") for xi, m in zip(x, med) if np.isinf(m)]
+        marks += [(x[i], "invalid") for i in exp.plan.skipped]
+        for xi, text in marks:
+            fig.add_annotation(x=xi, y=1.0, yref="paper", text=text, showarrow=False, font={"color": GREY})
+        fig.update_xaxes(title_text=ax.name, type=None if _numeric(ax.values) else "category")
         fig.update_yaxes(title_text=outcome.title)
         fig.update_layout(legend={"orientation": "h", "y": -0.3})
     else:
         ax_x, ax_y = axes[0], axes[1]
         z = med.T  # rows: second field, columns: first field
-        text = [["" if np.isnan(v) else ("n.c." if np.isinf(v) else f"{v:.3g}") for v in row] for row in z]
+        invalid = np.zeros(exp.plan.shape, dtype=bool)
+        for i in exp.plan.skipped:
+            invalid[np.unravel_index(i, exp.plan.shape)] = True
+        text = [["invalid" if bad else ("" if np.isnan(v) else ("n.c." if np.isinf(v) else f"{v:.3g}"))
+                 for v, bad in zip(row, bad_row)] for row, bad_row in zip(z, invalid.T)]
+        median = f"median [{outcome.unit}]" if outcome.unit else "median"
         fig.add_trace(go.Heatmap(x=list(ax_x.labels), y=list(ax_y.labels),
                                  z=[_finite(row) for row in z], text=text, texttemplate="%{text}",
-                                 colorscale="Viridis", colorbar={"title": {"text": "median", "side": "right"}},
-                                 hovertemplate=f"{ax_x.key}=%{{x}}<br>{ax_y.key}=%{{y}}<br>median %{{text}}"
-                                               "<extra></extra>"))
-        fig.update_xaxes(title_text=ax_x.key, type="category")
-        fig.update_yaxes(title_text=ax_y.key, type="category")
+                                 colorscale="Viridis", colorbar={"title": {"text": median, "side": "right"}},
+                                 hovertemplate=f"{_escape(ax_x.name)} = %{{x}}<br>{_escape(ax_y.name)} = %{{y}}"
+                                               "<br>median %{text}<extra></extra>"))
+        fig.update_xaxes(title_text=ax_x.name, type="category")
+        fig.update_yaxes(title_text=ax_y.name, type="category")
     fig.update_layout(title={"text": title(exp, outcome, "<br>"), "font": {"size": 12}},
                       margin={"l": 50, "r": 10, "t": 50, "b": 50}, uirevision=f"experiment-{exp.number}")
     return fig

@@ -1,6 +1,8 @@
 """The Sweep tab: pick one or two fields of the scene, their values, the runs per cell and
 the outcome; run the sweep on the server; watch the medians come in; open a cell in the arena;
-download the tidy CSV and the figure.
+download the tidy CSV and the figure. A grid some of whose cells the model refuses (two
+fields whose values do not go together) is refused with an offer: *Run the other cells*
+runs the rest and marks those "invalid".
 
 Self-contained: it takes a viser GUI handle, the server's :class:`ExperimentService`, the tab
 (``owner``) and four callbacks (the scene's scenario now, open a scenario in the arena,
@@ -132,6 +134,8 @@ class ExperimentPanel:
         self.steps = gui.add_number("steps per run", 100.0, min=1, max=limits.max_steps, step=1,
                                     hint="control ticks of every run (the preset's sim.steps)")
         self.run = gui.add_button("Run experiment", color="green", hint="queue the sweep on this server")
+        self.skip = gui.add_button("Run the other cells", color="yellow", visible=False,
+                                   hint="run the cells that can run; those the model refuses are left out")
         self.cancel = gui.add_button("Cancel experiment", color="red", disabled=True,
                                      hint="stop it; the cells already finished are kept")
         self.progress = gui.add_progress_bar(0.0)
@@ -148,14 +152,15 @@ class ExperimentPanel:
             self.download_preset = gui.add_button("Download experiment preset",
                                                   hint="the scene the cells vary, with these runs and steps (TOML)")
             self.command = gui.add_markdown("")
-        self.handles += [self.runs, self.steps, self.run, self.cancel, self.progress, self.status, self.outcome,
-                         self.plot, self.cells_folder]
+        self.handles += [self.runs, self.steps, self.run, self.skip, self.cancel, self.progress, self.status,
+                         self.outcome, self.plot, self.cells_folder]
 
     def _wire(self) -> None:
         for ax in self.axes:
             ax.field.on_update(lambda _e, ax=ax: self._user(self._field_changed, ax))
             ax.given.on_update(lambda _e, ax=ax: self._user(self._show_axis, ax))
         self.run.on_click(lambda _e: self._user(self.start))
+        self.skip.on_click(lambda _e: self._user(self.start, True))
         self.cancel.on_click(lambda _e: self._user(self.stop))
         self.outcome.on_update(lambda _e: self._user(self._outcome_changed))
         self.cell.on_update(lambda _e: self._user(self._describe_cell))
@@ -237,6 +242,7 @@ class ExperimentPanel:
         self.outcome.value = before if before in options else first
 
     def _field_changed(self, ax: _AxisGui) -> None:
+        self.skip.visible = False  # the offer was for the grid asked before
         with self._lock, self._sync():
             field = self._fields.get(ax.field.value)
             if field is not None:
@@ -248,7 +254,7 @@ class ExperimentPanel:
             ax.show(self._fields.get(ax.field.value))
 
     # ------------------------------------------------------------------ run and cancel
-    def request(self) -> ExperimentRequest:
+    def request(self, skip_invalid: bool = False) -> ExperimentRequest:
         """What the handles ask for (checked by the service, never here). The outcome shown
         goes along if the scene records it (the list may still be a past experiment's)."""
         outcome = self._outcomes.get(self.outcome.value)
@@ -257,14 +263,19 @@ class ExperimentPanel:
         else:
             name = outcome.name if outcome.name in self._scene_outcomes else None
         return ExperimentRequest(axes=tuple(ax.request() for ax in self.axes if ax.chosen), runs=self.runs.value,
-                                 steps=self.steps.value, outcome=name)
+                                 steps=self.steps.value, outcome=name, skip_invalid=skip_invalid)
 
-    def start(self) -> Experiment | None:
-        """Run experiment: queue the request, or say why it is refused."""
+    def start(self, skip_invalid: bool = False) -> Experiment | None:
+        """Run experiment (``skip_invalid``: *Run the other cells*): queue the request, or say why
+        it is refused, offering to leave out the cells the model refuses when others can run."""
+        self.skip.visible = False
         try:
-            exp = self.service.submit(self.owner, self.scenario(), self.request(), listener=self.changed)
+            exp = self.service.submit(self.owner, self.scenario(), self.request(skip_invalid), listener=self.changed)
         except Refused as err:
             self.status.content = "**Refused:** " + "; ".join(escape(m) for m in err.messages[:6])
+            if err.runnable:
+                self.skip.label = f"Run the other {err.runnable:d} of {err.cells:d} cells"
+                self.skip.visible = True
             self.notify("Refused: experiment", "\n".join(err.messages[:6]), "red")
             return None
         return exp
@@ -285,7 +296,7 @@ class ExperimentPanel:
                 self._adopt(exp)
             self.progress.value = 100.0 * exp.runs_done / max(exp.cost, 1)
             self.progress.animated = exp.phase == RUNNING
-            self.status.content = f"**Experiment {exp.number:d}** ({escape(exp.name)}): {escape(exp.status())}"
+            self.status.content = f"**Experiment {exp.number:d}** ({escape(exp.name)}): {exp.status()}"
             if new or exp.over:
                 self._redraw()
             elif len(exp.table) != self._drawn_cells:  # a new cell: drawn now, or soon if just drawn

@@ -5,11 +5,14 @@ range and a count), the runs per cell, the steps per run and the outcome to show
 comes from the page, so any part of it may be anything a hostile client can send: every value
 is checked against the scene's catalogue and the server's :class:`Limits`, and every cell by
 the preset model and the app's limits, before anything is queued. A refusal names each
-problem (:class:`Refused`).
+problem (:class:`Refused`). A grid in which the model or the limits refuse only some cells
+(two fields whose values do not go together) is refused with the number of cells that could
+run; asked again with ``skip_invalid``, it runs those and leaves the others out.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Sequence
@@ -18,7 +21,7 @@ from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 from shoal.studies.cost import cost
 from shoal.studies.sweep import catalogue
-from shoal.studies.sweep.grid import Axis, SweepError, label, parse_values
+from shoal.studies.sweep.grid import Axis, SweepError, cell_problems, label, parse_values
 from shoal.studies.sweep.plan import SweepPlan
 
 from ..limits import check_runs
@@ -28,10 +31,11 @@ MAX_AXES = 2
 
 
 class Refused(ValueError):
-    """An experiment that cannot run; ``messages`` say why, one problem each."""
+    """An experiment that cannot run; ``messages`` say why, one problem each. ``runnable``:
+    when only some cells are refused, how many could run (of ``cells``) with ``skip_invalid``."""
 
-    def __init__(self, messages: list[str]) -> None:
-        self.messages = messages
+    def __init__(self, messages: list[str], runnable: int = 0, cells: int = 0) -> None:
+        self.messages, self.runnable, self.cells = messages, runnable, cells
         super().__init__("\n".join(messages))
 
 
@@ -73,6 +77,7 @@ class ExperimentRequest:
     runs: Any
     steps: Any = None  # None: the scene's sim.steps
     outcome: Any = None  # None: the first outcome of the scene
+    skip_invalid: Any = False  # True: run the cells the model and the limits accept, leave the others out
 
 
 def _whole(value: Any, what: str, lo: int, hi: int) -> int:
@@ -131,7 +136,13 @@ def resolve_axis(field: catalogue.Field, ax: AxisRequest, limits: Limits) -> Axi
     problems = [p for p in (field.problem(v) for v in values) if p]
     if problems:
         raise Refused(problems[:6])
-    return Axis(field.key, tuple(values))
+    return Axis(field.key, tuple(values), title=field.title)
+
+
+def _cell_problems(plan: SweepPlan) -> list[str]:
+    """Each distinct reason a cell was left out, once, naming the first cell and how many more."""
+    checked = [PresetError(list(plan.skipped[i])) if i in plan.skipped else sc for i, sc in enumerate(plan.scenarios)]
+    return cell_problems(plan.axes, checked, "cell")
 
 
 def resolve(scenario: Scenario, request: ExperimentRequest, limits: Limits) -> tuple[SweepPlan, str]:
@@ -167,22 +178,32 @@ def resolve(scenario: Scenario, request: ExperimentRequest, limits: Limits) -> t
     base = scenario.model_dump(mode="json")
     base["sim"].update(runs=runs, steps=steps)  # as shoal sweep --runs --steps
     try:
-        plan = SweepPlan.resolve(base, axes, where="cell")
-    except SweepError as err:
+        plan = SweepPlan.resolve(base, axes, where="cell", skip_invalid=True)
+    except SweepError as err:  # no cell is valid
         raise Refused(err.messages[:8]) from None
-    problems: dict[str, None] = {}
-    seconds = 0.0
-    for i, sc in enumerate(plan.scenarios):  # whatever the fields: sim.steps and sim.robots may be swept
-        where = "cell " + ", ".join(f"{k} = {v}" for k, v in plan.prefix(i).items())
+    limited: dict[int, tuple[str, ...]] = {}
+    for i in plan.runnable:  # whatever the fields: sim.steps and sim.robots may be swept
+        sc = plan.scenario(i)
         try:
-            seconds += check_runs(sc, steps=sc.sim.steps, runs=runs, max_steps=limits.max_steps,
-                                  max_seconds=limits.max_seconds, what=where).seconds
+            check_runs(sc, steps=sc.sim.steps, runs=runs, max_steps=limits.max_steps,
+                       max_seconds=limits.max_seconds)
         except PresetError as err:
-            problems.update(dict.fromkeys(err.messages))
-    if problems:
-        raise Refused(list(problems)[:8])
+            limited[i] = tuple(err.messages)
+    if limited:
+        plan = dataclasses.replace(plan, scenarios=tuple(None if i in limited else sc
+                                                         for i, sc in enumerate(plan.scenarios)),
+                                   skipped={**plan.skipped, **limited})
+    if plan.skipped:
+        runnable = len(plan.runnable)
+        if not runnable:
+            raise Refused(_cell_problems(plan)[:8])
+        if request.skip_invalid is not True:
+            offer = (f"{len(plan.skipped)} of {cells} cells cannot run; the other {runnable} can: "
+                     "run them and leave these out?")
+            raise Refused([offer, *_cell_problems(plan)[:7]], runnable=runnable, cells=cells)
+    seconds = plan_seconds(plan)
     if seconds > limits.max_seconds:
-        raise Refused([f"{len(plan)} cells × {runs} runs: about {seconds:,.0f} CPU seconds, more than the "
+        raise Refused([f"{len(plan.runnable)} cells × {runs} runs: about {seconds:,.0f} CPU seconds, more than the "
                        f"{limits.max_seconds:,.0f} this server gives one experiment; fewer values, runs, steps "
                        "or robots"])
     return plan, outcome
@@ -190,4 +211,4 @@ def resolve(scenario: Scenario, request: ExperimentRequest, limits: Limits) -> t
 
 def plan_seconds(plan: SweepPlan) -> float:
     """Estimated CPU seconds of every run of ``plan`` (:func:`shoal.studies.cost.cost`)."""
-    return sum(cost(sc, steps=sc.sim.steps, runs=plan.runs).seconds for sc in plan.scenarios)
+    return sum(cost(sc, steps=sc.sim.steps, runs=plan.runs).seconds for sc in plan.scenarios if sc is not None)

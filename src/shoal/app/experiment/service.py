@@ -64,8 +64,13 @@ class Experiment:
 
     @property
     def cost(self) -> int:
-        """Cells × runs."""
-        return len(self.plan) * self.plan.runs
+        """Cells that run × runs."""
+        return self.cells * self.plan.runs
+
+    @property
+    def cells(self) -> int:
+        """The cells that run (a grid's cells but those left out as invalid)."""
+        return len(self.plan.runnable)
 
     @property
     def over(self) -> bool:
@@ -89,15 +94,16 @@ class Experiment:
             print(f"shoal: experiment listener failed: {err!r}", file=sys.stderr)
 
     def status(self) -> str:
-        """Where it stands, in words."""
-        cells, done = len(self.plan), len(self.table)
+        """Where it stands, in words (markdown: the error's text escaped)."""
+        cells, done = int(self.cells), len(self.table)
         runs = f"{self.runs_done:d} of {self.cost:d} runs"
+        left_out = f" ({len(self.plan.skipped):d} invalid left out)" if self.plan.skipped else ""
         if self.phase == QUEUED:
             return f"queued: {self.place:d}{_ordinal(self.place)} in the server's queue"
         if self.phase == RUNNING:
-            return f"{'cancelling' if self.cancelling else 'running'}: {done} of {cells} cells, {runs}"
+            return f"{'cancelling' if self.cancelling else 'running'}: {done} of {cells} cells{left_out}, {runs}"
         if self.phase == FINISHED:
-            return f"finished: {cells} cells × {self.plan.runs:d} runs"
+            return f"finished: {cells:d} cells × {self.plan.runs:d} runs{left_out}"
         if self.phase == CANCELLED:
             return f"cancelled: {done} of {cells} cells finished and kept"
         return f"failed after {done} of {cells} cells: {escape(self.error)}"
@@ -169,7 +175,7 @@ class ExperimentService:
             plan, outcome = resolve(scenario, request, self.limits)
             seconds = plan_seconds(plan)
             with self._cond:
-                need, load, cap = len(plan) * plan.runs, self._load(), self.limits.max_queue_runs
+                need, load, cap = len(plan.runnable) * plan.runs, self._load(), self.limits.max_queue_runs
                 if load + need > cap:
                     raise Refused([f"the server's queue holds {load} of its {cap} cells × runs and this experiment "
                                    f"needs {need}: try again when it has room, or ask for fewer cells or runs"])
@@ -268,13 +274,13 @@ class ExperimentService:
             exp.runs_done += runs
             exp.changed()
 
-        jobs = [exp.plan.job(i) for i in range(len(exp.plan))]
+        jobs = [exp.plan.job(i) for i in exp.plan.runnable]
         for key, batch in iter_jobs(jobs, scheduler=self.scheduler, progress=progress, chunk=self.chunk,
                                     simulate=self.simulate, merge=outcomes.merge, desc="experiment",
                                     cancelled=exp._cancel.is_set):
             exp.table.add(key, batch)
             exp.changed()
-        exp.phase = FINISHED if len(exp.table) == len(exp.plan) else CANCELLED
+        exp.phase = FINISHED if len(exp.table) == exp.cells else CANCELLED
 
     def stop(self) -> None:
         """Cancel everything, stop the thread, close the scheduler if it is this service's."""

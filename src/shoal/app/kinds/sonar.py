@@ -186,6 +186,7 @@ class SonarDriver(BaseDriver):
         return {
             "t": self.session.clock(), "k": float(self.sim.state.k), "com_dist": float(info.com_dist[0]),
             "converged_at": float(info.steps_to_converge[0]), "inside": float(info.frac_inside_ring[0]),
+            "mean_dist": float(info.mean_dist_to_source[0]),
             "r_ref": p.r_ref, "d_s": p.d_s, "D": p.D, "lambda": p.c / p.f_c,
             "snr_sel": float(self.sim.state.snr_db[0, i]), "source_x": float(self.sim.state.source[0, 0]),
             "source_y": float(self.sim.state.source[0, 1]),
@@ -248,6 +249,7 @@ class Source(Static):
 
     def __init__(self, on_drag: SourceDrag | None) -> None:
         self.on_drag = on_drag
+        self.label = "source (drag me)" if on_drag is not None else "source"  # a shared page drags nothing
         self._canvas: Canvas | None = None
 
     def build(self, canvas: Canvas, snap: Snapshot) -> None:
@@ -258,14 +260,15 @@ class Source(Static):
             batched_positions=np.zeros((1, 3), np.float32), batched_scales=np.array([0.022 * SIDE], np.float32),
             batched_colors=SOURCE, lod="off", material="toon3", side="double", cast_shadow=False,
             receive_shadow=False))
-        node.on_drag("left")(self.dragged)
-        canvas.label("source_label", "source (drag me)", np.zeros(2))
+        if self.on_drag is not None:
+            node.on_drag("left")(self.dragged)
+        canvas.label("source_label", self.label, np.zeros(2))
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         e = snap.extras
         src = e["source"]
         canvas.nodes["source"].batched_positions = canvas.to_view(src[None], Z["source"])
-        canvas.label("source_label", "source (drag me)", src + 0.04 * _half(snap))
+        canvas.label("source_label", self.label, src + 0.04 * _half(snap))
         canvas.lines("dc_ring", shapes.circle_segments(src, e["d_c"], 72), DC_RING, 1.0, Z["rings"])
         if e["r_trap"] > 0 and snap.live and snap.yg is not None:
             rings = np.concatenate([shapes.circle_segments(snap.yg, e["r_trap"], 72),
@@ -605,7 +608,8 @@ def _readout(s: Session) -> str:
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
     conv = f" · reached d_c at step {int(r['converged_at'])}" if r["converged_at"] >= 0 else ""
-    ring = f" · {100 * r['inside']:.0f}% inside r" if sc.acoustics.r > 0 else ""
+    ring = (f" · robots {r['mean_dist']:.0f} m from the source on average, {100 * r['inside']:.0f}% inside r"
+            if sc.acoustics.r > 0 else "")
     return (f"**{escape(sc.name)}** · {LABELS[sc.acoustics.algorithm]} · {state} · t = {r['t']:.0f} s · "
             f"{s.progress()} · |CoM − source| = {r['com_dist']:.0f} m{conv}{ring}")
 

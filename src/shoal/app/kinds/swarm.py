@@ -231,17 +231,27 @@ def _pick_dim(panel: PanelAPI, value: Any) -> None:
         panel.session.selected_dim = dims.index(value)
 
 
+def _table(rows: list[tuple[str, str]]) -> str:
+    """A two-column markdown table: what, value."""
+    return "| | |\n|---|---|\n" + "\n".join(f"| {escape(what)} | {escape(value)} |" for what, value in rows)
+
+
 def _readout(s: Session) -> str:
+    """The controller's coefficients and bounds as a table [3.26]–[3.35] (the derived ones in
+    physical mode: β, ω, ĉ, U_j, A−; in raw mode U and A+ too)."""
     r, c = s.readout(), s.scenario.controller
     law = LAWS[c.law]
     if not law.adapted:
-        return f"*{escape(law.label)}: ĉ = c1 + c2 has no unit and nothing bounds the speed.*"
+        return (_table([("ω", fmt(r["omega"])), ("ĉ = c1 + c2", fmt(r["c_hat"]))])
+                + f"\n\n*{escape(law.label)}: ĉ has no unit and nothing bounds the speed.*")
+    rows = [("β = A+Δt/U [3.34]", fmt(r["beta"])), ("ω = 1 − β [3.35]", fmt(r["omega"])),
+            ("ĉ = A+Δt/√d [3.32]", fmt(r["c_hat"], "m/s")), ("U_j = ĉ/(1 − ω) [3.26]", fmt(r["U_j"], "m/s"))]
     if c.mode == "physical":
-        return (f"β = {fmt(r['beta'])} · U_j = {fmt(r['U_j'], 'm/s')} · A− = {fmt(r['A_minus'], 'm/s²')}  \n"
-                "*ω, c1 and c2 follow from U, A+ and Δt; moving one of them switches to raw mode.*")
-    return (f"β = {fmt(r['beta'])} · U = {fmt(r['U'], 'm/s')} · U_j = {fmt(r['U_j'], 'm/s')} · "
-            f"A+ = {fmt(r['A_plus'], 'm/s²')} · A− = {fmt(r['A_minus'], 'm/s²')}  \n"
-            "*Raw mode: U and A+ follow from ω and ĉ = c1 + c2 [m/s].*")
+        return (_table(rows + [("A− = 2A+ [3.31]", fmt(r["A_minus"], "m/s²"))])
+                + "\n\n*ω, c1 and c2 follow from U, A+ and Δt; moving one of them switches to raw mode.*")
+    return (_table(rows + [("U = U_j√d [3.29]", fmt(r["U"], "m/s")), ("A+ = ĉ√d/Δt", fmt(r["A_plus"], "m/s²")),
+                           ("A− = 2A+ [3.31]", fmt(r["A_minus"], "m/s²"))])
+            + "\n\n*Raw mode: U and A+ follow from ω and ĉ = c1 + c2 [m/s].*")
 
 
 def _physical(s: Session) -> bool:

@@ -7,7 +7,11 @@ should fill) and two callbacks from its host:
 - ``set_up(preset, values) -> errors``: load ``preset`` with field ``values`` (dotted path →
   value) through the app's validated path, best paused at step 0 so that the student predicts
   before pressing Play; an empty list means done, else the refusal's messages;
-- ``notify(title, body, color)``: a toast.
+- ``notify(title, body, color)``: a toast;
+- optionally ``measure(preset, values, metrics)``: the run on screen (:class:`.readings.Run`)
+  if it is that scene, else why not. With it, a step whose ``check`` names metrics lists
+  them under its question as they read on screen (:meth:`LessonsPanel.refresh`, which the host
+  calls a few times a second).
 
 Where the student is (lesson, step, answer shown, chooser answers) lives in a
 :class:`LessonProgress` the host keeps, so a panel rebuilt by the host (a *Set up* that loads
@@ -21,17 +25,19 @@ import threading
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from . import chooser, library
+from . import chooser, library, readings
 from .chooser import MAX_ANSWERS, Leaf, Question, Tree
 from .model import Lesson
 from .parse import LessonError
+from .readings import Measure
 from .scenes import describe
 
 SetUp = Callable[[str, dict[str, Any]], list[str]]
 Notify = Callable[[str, str, str], None]
 NAV = ("◀ Back", "Next ▶")
 CHOOSER_NAV = ("◀ Back", "Start over")
-INTRO = "Set up a step, read its question, predict, press **Play**, then reveal the answer."
+INTRO = ("Set up a step, read its question, predict, press **Play**, then reveal the answer. The numbers "
+         "a step asks about are read out under its question as the run goes.")
 
 
 @dataclass
@@ -49,8 +55,9 @@ class LessonsPanel:
     """The lessons and the chooser, built on ``gui`` (see the module docstring)."""
 
     def __init__(self, gui: Any, set_up: SetUp, notify: Notify, progress: LessonProgress | None = None,
-                 lessons: dict[str, Lesson] | None = None, tree: Tree | None = None) -> None:
-        self.gui, self._set_up, self.notify = gui, set_up, notify
+                 lessons: dict[str, Lesson] | None = None, tree: Tree | None = None,
+                 measure: Measure | None = None) -> None:
+        self.gui, self._set_up, self.notify, self._measure = gui, set_up, notify, measure
         self.progress = progress if progress is not None else LessonProgress()
         problems: tuple[str, ...] = ()
         if lessons is None:
@@ -87,6 +94,7 @@ class LessonsPanel:
         self.setup_text = gui.add_markdown("")
         self.instruction = gui.add_markdown("")
         self.question = gui.add_markdown("")
+        self.readings = gui.add_markdown("", visible=False)
         self.answer_button = gui.add_button("Show answer", hint="predict first, then check")
         self.answer = gui.add_markdown("", visible=False)
         with gui.add_folder("Which algorithm? (thesis Fig. 9-1)", expand_by_default=False):
@@ -195,7 +203,7 @@ class LessonsPanel:
             self.step_text.content = ("#### Try it yourself\n\n"
                                       + "\n".join(f"- {idea}" for idea in lesson.try_it))
             for h in (self.setup_button, self.setup_text, self.instruction, self.question, self.answer_button,
-                      self.answer):
+                      self.answer, self.readings):
                 h.visible = False
             return
         step = lesson.steps[p.step]
@@ -210,6 +218,31 @@ class LessonsPanel:
         for h in (self.instruction, self.question, self.answer_button):
             h.visible = True
         self._show_answer()
+        self._show_readings()
+
+    def refresh(self) -> None:
+        """Read the step's numbers off the run on screen again (the host calls this a few
+        times a second; a handle is sent only when its text changed)."""
+        with self._lock:
+            if not self.closed:
+                self._show_readings()
+
+    def _show_readings(self) -> None:
+        lesson = self.lesson
+        found = readings.step_check(lesson, self.progress.step) if lesson is not None else None
+        if found is None or self._measure is None:
+            self.readings.visible = False
+            return
+        (preset, values), check = found
+        run = self._measure(preset, values, readings.names(check))
+        if isinstance(run, str):
+            content = f"**Read on screen:** *{run}*"
+        else:
+            content = readings.text(readings.read(check, run), run.k)
+        if self.readings.content != content:
+            self.readings.content = content
+        if not self.readings.visible:
+            self.readings.visible = True
 
     def _show_answer(self) -> None:
         self.answer.visible = self.progress.revealed

@@ -19,9 +19,9 @@ from .model import AGGREGATES, Check, Lesson
 from .scenes import describe, load_scene
 
 
-def _outside(state: Any, half_size: float) -> np.ndarray:
-    x = state.x[..., :2]
-    return np.sum(np.any(np.abs(x) > half_size, axis=-1), axis=-1).astype(float)
+def outside(x: np.ndarray, half_size: float) -> np.ndarray:
+    """Robots outside the arena square in positions ``x`` (..., N, d): the count over N."""
+    return np.sum(np.any(np.abs(np.asarray(x)[..., :2]) > half_size, axis=-1), axis=-1).astype(float)
 
 
 def run_metrics(preset: str, values: dict[str, Any], steps: int, runs: int = 1) -> dict[str, np.ndarray]:
@@ -33,15 +33,17 @@ def run_metrics(preset: str, values: dict[str, Any], steps: int, runs: int = 1) 
     for _ in range(steps):
         info = sim.step()
         table = metric_table(sim.state, info, sim.t)
-        table["outside"] = _outside(sim.state, half)
+        table["outside"] = outside(sim.state.x, half)
         for name, value in table.items():
             rows.setdefault(name, []).append(np.asarray(value, dtype=float))
     return {name: np.stack(v) for name, v in rows.items() if name not in ("run", "step")}
 
 
-def check_failures(preset: str, values: dict[str, Any], check: Check) -> list[str]:
-    """What does not hold of ``check`` in the scene (empty: everything holds)."""
-    m = run_metrics(preset, values, check.steps, check.runs)
+def check_failures(preset: str, values: dict[str, Any], check: Check,
+                   metrics: dict[str, np.ndarray] | None = None) -> list[str]:
+    """What does not hold of ``check`` in the scene (empty: everything holds); ``metrics``:
+    the scene's :func:`run_metrics` if already run."""
+    m = run_metrics(preset, values, check.steps, check.runs) if metrics is None else metrics
     out = []
     for kind in AGGREGATES:
         for name, (lo, hi) in getattr(check, kind).items():

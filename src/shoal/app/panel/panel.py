@@ -36,6 +36,7 @@ from ..session.upload import parse_upload
 from ..warmup import WARMUP
 from .compare import CompareFolder
 from .keys import PLAYING
+from .lesson_run import LessonRun
 from .plots import Chart, Frame, PlotSpec, scale_text
 from .replay import ReplayFolder
 from .spec import (
@@ -133,11 +134,13 @@ class Panel:
         self._build_header()
         self.view_gui = ViewRow(self)
         badge = gui.add_markdown("", visible=False)  # names a loaded replay
+        live = gui.add_button("Run live (leave the replay)", visible=False,
+                              hint="a live run of the replay's preset and seed, from step 0")
         with gui.add_folder("Replay and files", expand_by_default=False) as files:  # closed: the controls fit
-            self.replay_gui = ReplayFolder(self, badge)
+            self.replay_gui = ReplayFolder(self, badge, live)
             self._build_files()
         self.compare_gui = CompareFolder(self)
-        self.top += [badge, files, self.compare_gui.folder]
+        self.top += [badge, live, files, self.compare_gui.folder]
         for folder in self.part.folders:
             self.top.append(self._build(folder))
         self.tabs = gui.add_tab_group()  # one row at 1280 px: the kind's tabs, Lessons and Sweep
@@ -260,7 +263,8 @@ class Panel:
     def _build_lessons(self, notes: str) -> None:
         """The Lessons tab, the chapter's teaching notes below the lessons."""
         with self.tabs.add_tab("Lessons"):
-            self.lessons = LessonsPanel(self.gui, self.set_up_lesson, self.notify, self.services.lessons)
+            self.lessons = LessonsPanel(self.gui, self.set_up_lesson, self.notify, self.services.lessons,
+                                        measure=LessonRun(self.session))
             with self.gui.add_folder("Notes on this chapter", expand_by_default=False):
                 self.notes = self.gui.add_markdown(notes_text(notes))
 
@@ -551,10 +555,21 @@ class Panel:
         name = self.session.scenario.name
         return "".join(c if c.isalnum() or c in "-_" else "_" for c in name) or "shoal"
 
-    def remove(self) -> None:
-        """Take every handle of this panel off the page (the tab swaps in another kind)."""
+    def retire(self) -> None:
+        """Hide every handle of this panel and stop updating them (the tab swaps in another kind
+        and removes them a moment later: see :meth:`shoal.app.tab.TabApp.replace`)."""
+        if self.removed:
+            return
         self.removed = True
         self.lessons.close()
+        if self.experiment is not None:
+            self.experiment.detach()
+        for h in self.top:
+            h.visible = False
+
+    def remove(self) -> None:
+        """Take every handle of this panel off the page."""
+        self.retire()
         if self.experiment is not None:
             self.experiment.remove()
         for h in reversed(self.top):
@@ -643,6 +658,11 @@ class Panel:
         if twin is not None and len(m["t"]) < 2:
             twin = None
         return scale_text(item.render(m, span, s, twin), self.text_scale)
+
+    def refresh_lessons(self) -> None:
+        """The numbers of the lesson step shown, as the run on screen reads them (the caller throttles this)."""
+        if not self.removed:
+            self.lessons.refresh()
 
     def refresh_timeline(self) -> None:
         """The Replay folder: timeline and badge (the caller throttles this)."""

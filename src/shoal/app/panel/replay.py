@@ -1,14 +1,15 @@
 """The replay part of every panel's *Replay and files* folder: a timeline over the recorded
-steps, a badge while a loaded replay is shown, and the Export replay / Load replay / Share
-buttons.
+steps, a badge and a *Run live* button while a loaded replay is shown, and the Export
+replay / Load replay / Share buttons.
 
 Dragging the timeline pauses and shows the recorded frame of that step (robots, trails up
 to then, the plots cut there); Play carries on from the live end. *Load replay* reads a
 file from *Export replay* (checked by :func:`~shoal.app.replay.from_bytes`; a bad one is
 refused with a red notification and changes nothing), builds the scene from the preset
 inside it, checks that a fresh run of that preset and seed reproduces its first steps, and
-shows it. *Share* sends the recorded steps (swarm B's too) as one web page that plays in any
-browser.
+shows it from its first step, paused: Play plays it, Reset goes back to its first step,
+*Run live* (or a changed control) leaves it for a live run of its preset. *Share* sends the
+recorded steps (swarm B's too) as one web page that plays in any browser.
 """
 
 from __future__ import annotations
@@ -27,12 +28,13 @@ from .spec import Host
 
 class ReplayFolder:
     """The replay handles (built in the caller's folder; ``badge``, the line that names a loaded
-    replay, outside it so that it shows with the folder closed), wired to ``panel.session``."""
+    replay, and ``live``, the button that leaves it, outside it so that they show with the
+    folder closed), wired to ``panel.session``."""
 
-    def __init__(self, panel: Host, badge: Any) -> None:
+    def __init__(self, panel: Host, badge: Any, live: Any) -> None:
         self.panel = panel
         gui = panel.gui
-        self.badge = badge
+        self.badge, self.live = badge, live
         self.timeline = gui.add_slider(
             "timeline [step]", min=0, max=1, step=1, initial_value=0,
             hint="drag to see a recorded step (pauses); Play carries on from the live end")
@@ -78,6 +80,19 @@ class ReplayFolder:
         def _(event: Any) -> None:
             f = event.target.value
             self.load(f.name, f.content)
+
+        @self.live.on_click
+        def _(event: Any) -> None:
+            self.run_live()
+
+    def run_live(self) -> None:
+        """Leave the replay shown for a live run of its preset, playing."""
+        p = self.panel
+        p.controls += 1
+        self.session.leave_replay(play=True)
+        p.sync()
+        p.refresh_status()
+        self.refresh()
 
     # ------------------------------------------------------------------ loading
     def load(self, filename: str, content: bytes) -> bool:
@@ -129,11 +144,12 @@ class ReplayFolder:
         state = "live" if live else ("replay" if info is not None else "recorded")
         self.where.content = f"{state}: step {shown:d} · t = {t:.4g} · recorded steps {first:d}–{last:d}"
         if info is None:
-            self.badge.visible = False
+            self.badge.visible = self.live.visible = False
             return
         mark = {True: "✓", False: "✗", None: "·"}[info.verified]
         edits = f" · {info.live_edits:d} live edit(s) while it ran" if info.live_edits else ""
         edits += " · with swarm B (teal)" if info.twin is not None else ""
         self.badge.content = (f"**Replay of {escape(info.name)}, seed {info.seed:d}** (shoal {escape(info.shoal)})"
-                              f"{edits}  \n{mark} {escape(info.check)} · Reset runs the preset live")
-        self.badge.visible = True
+                              f"{edits}  \n{mark} {escape(info.check)} · "
+                              "Play plays it, Reset goes back to its first step")
+        self.badge.visible = self.live.visible = True

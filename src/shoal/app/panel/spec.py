@@ -57,6 +57,7 @@ class Host(PanelAPI, Protocol):
     tabs: Any
     top: list[Any]
     services: Any  # :class:`~.panel.Services`
+    controls: int  # the user's control events so far
 
     @property
     def syncing(self) -> bool: ...
@@ -70,6 +71,8 @@ class Host(PanelAPI, Protocol):
     def stem(self) -> str: ...
 
     def sync(self) -> None: ...
+
+    def refresh_status(self) -> None: ...
 
     def compare_choices(self) -> dict[str, dict[str, Any]]: ...
 

@@ -310,8 +310,13 @@ class Session:
 
     def reset(self, seed: int | None = None) -> None:
         """Back to step 0 with the current values; with ``seed`` also change the scenario's seed
-        (validated). A playing run plays on, and so does one that had finished."""
+        (validated). A playing run plays on, and so does one that had finished. A replay goes
+        back to its first step (a new seed leaves it for a live run with that seed)."""
         with self.lock:
+            if self.replaying is not None and (seed is None or seed == self.scenario.sim.seed):
+                self.timeline.rewind()
+                self.revision += 1
+                return
             play = self.playing or self.finished
             if seed is not None and seed != self.scenario.sim.seed:
                 self.apply({"sim.seed": int(seed)})  # resets as part of the change
@@ -555,12 +560,14 @@ class Session:
             self.timeline.load(rec, check, metrics_match=rec.metric_names == self.history.names)
             self.revision += 1
 
-    def leave_replay(self) -> None:
-        """Back to a live run of the scene's preset from step 0."""
+    def leave_replay(self, play: bool = False) -> None:
+        """Back to a live run of the scene's preset from step 0 (``play``: playing it)."""
         with self.lock:
             if self.replaying is not None:
                 self.restart(self.scenario.sim.seed)
                 self.revision += 1
+                if play:
+                    self.playing = True
 
     # ------------------------------------------------------------------ export
     def trajectory_rows(self) -> np.ndarray:

@@ -3,8 +3,9 @@
 * **Scrub**: a cursor on a recorded step (``cursor``; None shows the live end). The session
   pauses and shows that frame: the robots, the trails up to then and the plots cut there.
 * **Replay**: a loaded :class:`~shoal.app.replay.Recording` replaces the history (with the
-  scene as it was at each frame, and swarm B's frames when Compare ran); the engine does not
-  advance and Play and Step move the cursor through the recording.
+  scene as it was at each frame, and swarm B's frames when Compare ran); it opens at its first
+  step, the engine does not advance and Play and Step move the cursor through the recording
+  (Play at its end starts it again; :meth:`Timeline.rewind` goes back to its start).
 * :func:`verify_replay` re-simulates the first steps of a recording's preset and seed in a
   fresh session and compares the positions.
 """
@@ -150,11 +151,15 @@ class Timeline:
             return True
         return False
 
+    def rewind(self) -> None:
+        """The cursor on the first recorded frame."""
+        self.cursor = self.history.frames[0].k
+
     def load(self, rec: Recording, check: tuple[bool | None, str], metrics_match: bool) -> None:
         """Show ``rec`` instead of the live history (its metric rows too if their names match)."""
         self.history.replace(recorded_frames(rec), (tuple(float(v) for v in row) for row in rec.metrics)
                              if metrics_match else ())
-        self.cursor = self.history.frames[-1].k
+        self.rewind()  # a replay opens at its start: Play plays it from there
         self.twin_frames = twin_frames(rec)
         self.replaying = ReplayInfo(name=rec.name, seed=rec.seed, shoal=str(rec.meta["shoal"]), verified=check[0],
                                     check=check[1], live_edits=int(rec.meta["live_edits"]),

@@ -18,7 +18,7 @@ from ..replay import Recording
 from ..session.snapshot import Snapshot
 from ..session.twin import twin_scenario
 from . import draw, page
-from .frames import MAX_FRAMES, FramePlan, frame_budget, plan, run_plan
+from .frames import MAX_FRAMES, FramePlan, frame_budget, plan, run_plan, seconds_per_frame
 
 
 def _page(scenario: Scenario, frames: Iterable[Snapshot], info: page.PageInfo) -> str:
@@ -40,7 +40,8 @@ def _info(scenario: Scenario, fp: FramePlan, *, origin: str, shoal_version: str,
     return page.PageInfo(
         name=scenario.name, seed=int(scenario.sim.seed), shoal=shoal_version, exported_by=shoal.__version__,
         kind=scene_kind(scenario), origin=origin, first=fp.first, last=fp.last, stride=fp.stride, frames=fp.frames,
-        max_frames=max_frames, robots=robots, seconds_per_frame=1.0 / scenario.view.steps_per_second,
+        max_frames=max_frames, robots=robots, seconds_per_frame=seconds_per_frame(scenario.view.steps_per_second),
+        app_steps_per_second=float(scenario.view.steps_per_second),
         preset=scenario.model_dump(mode="json"), preset_toml=presets_io.to_toml(scenario), live_edits=live_edits,
         twin_overrides=dict(overrides or {}), twin_toml=None if twin is None else presets_io.to_toml(twin))
 

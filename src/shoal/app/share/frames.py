@@ -12,6 +12,12 @@ import numpy as np
 MAX_FRAMES = 600  # frames in one exported page, whatever the run's length
 MAX_ROBOT_FRAMES = 120_000  # robots × frames in one page (about 15 bytes each once compressed)
 MIN_FRAMES = 50  # a large swarm still gets this many
+MAX_FPS = 30.0  # frames a second a page plays at 1× at most (what a browser draws smoothly)
+
+
+def seconds_per_frame(steps_per_second: float) -> float:
+    """The page's clock between two frames: the app's pace, at most :data:`MAX_FPS` frames a second."""
+    return 1.0 / min(float(steps_per_second), MAX_FPS)
 
 
 def frame_budget(robots: int, max_frames: int = MAX_FRAMES) -> int:

@@ -5,7 +5,9 @@ The arena is drawn on a private viser server (loopback, a free port, every reque
 whose scene serializer records every message; a pause between kept steps gives viser's
 player its timeline (play/pause, a scrub bar, 0.5×–8×). The panel (preset, seed, versions,
 frames kept, the preset as TOML to download) is plain, escaped HTML beside the client's root;
-the same facts are in a JSON block (``#shoal-run-data``) for programs.
+the same facts are in a JSON block (``#shoal-run-data``) for programs. On a computer without
+a GPU, viser's toast about software WebGL would cover the panel: a small script closes it and
+the panel says so in one line (:data:`SOFTWARE_JS`).
 """
 
 from __future__ import annotations
@@ -96,7 +98,8 @@ class PageInfo:
     frames: int
     max_frames: int  # the budget of this page (:func:`~.frames.frame_budget`)
     robots: int  # the most robots in a frame (swarm B's included)
-    seconds_per_frame: float
+    seconds_per_frame: float  # the page's clock between two frames
+    app_steps_per_second: float  # the app's playback rate the run was shown at
     preset: dict[str, Any]
     preset_toml: str
     live_edits: int = 0
@@ -107,12 +110,28 @@ class PageInfo:
     def data(self) -> dict[str, Any]:
         run = {k: getattr(self, k) for k in ("name", "seed", "shoal", "kind", "origin", "first", "last", "stride",
                                              "frames", "max_frames", "robots", "seconds_per_frame", "live_edits")}
+        run["seconds"] = self.seconds
         twin = None if self.twin_toml is None else {"overrides": self.twin_overrides}
         return {"exported_by": f"shoal {self.exported_by}", "run": run, "preset": self.preset, "twin": twin}
 
+    @property
+    def fps(self) -> float:
+        """Frames a second at 1×."""
+        return 1.0 / self.seconds_per_frame
+
+    @property
+    def seconds(self) -> float:
+        """The page's clock at the end of its last frame, at 1× (every frame holds ``seconds_per_frame``)."""
+        return self.frames * self.seconds_per_frame
+
+    def pace(self) -> str:
+        """The page's steps a second against the app's, in words."""
+        ratio = self.stride * self.fps / self.app_steps_per_second
+        return "the app's pace" if abs(ratio - 1.0) < 1e-9 else f"{ratio:.3g}× the app's pace"
+
 
 STYLE = """
-#shoal-run{position:fixed;top:12px;right:12px;z-index:20;max-width:17rem;max-height:calc(100vh - 90px);
+#shoal-run{position:fixed;top:12px;left:12px;z-index:20;max-width:17rem;max-height:calc(100vh - 90px);
  overflow:auto;background:rgba(255,255,255,.94);border:1px solid #d5d7de;border-radius:6px;
  box-shadow:0 2px 10px rgba(0,0,0,.12);font:13px/1.45 system-ui,-apple-system,"Segoe UI",sans-serif;
  color:#222;padding:.45rem .7rem}
@@ -126,6 +145,24 @@ STYLE = """
 #shoal-run code{font-size:12px}
 #shoal-run .twin{color:#14aab4;font-weight:600}
 #shoal-run .legend{margin:.3rem 0}
+"""
+
+
+SOFTWARE_NOTE = ("Drawn without a GPU (software WebGL): the page may skip frames, its clock keeps time.")
+SOFTWARE_JS = """
+(() => {
+  const TITLE = "Software WebGL rendering detected";
+  const close = () => {
+    for (const n of document.querySelectorAll(".mantine-Notification-root")) {
+      if (!n.textContent.includes(TITLE)) continue;
+      const button = n.querySelector("button");
+      if (button) button.click();
+      const note = document.getElementById("shoal-software");
+      if (note) note.hidden = false;
+    }
+  };
+  new MutationObserver(close).observe(document.body, {childList: true, subtree: true});
+})();
 """
 
 
@@ -146,7 +183,7 @@ def panel(info: PageInfo, file_stem: str) -> str:
             ("steps", f"{info.first}–{info.last}"), ("ran with", f"shoal {e(info.shoal)}")]
     table = "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in rows)
     every = "every step" if info.stride == 1 else f"every {_ordinal(info.stride)} step and the last"
-    pace = "the app's pace" if info.stride == 1 else f"{info.stride}× the app's pace"
+    budget = f" (for {info.robots} robots: {info.max_frames} frames)" if info.max_frames < MAX_FRAMES else ""
     parts = [f"<details open><summary>Shoal · {e(info.name)}, seed {info.seed}</summary><table>{table}</table>"]
     if info.legend:
         parts.append(f'<p class="legend">{legend_html(info.legend)}</p>')
@@ -157,12 +194,16 @@ def panel(info: PageInfo, file_stem: str) -> str:
     if info.live_edits:
         parts.append(f"<p>Changed {info.live_edits} time(s) while it ran: a fresh run of this preset and seed "
                      "differs from it.</p>")
+    parts.append(f'<p id="shoal-software" hidden><small>{SOFTWARE_NOTE}</small></p>')
     parts.append(f"<p>{_download(f'{file_stem}.toml', info.preset_toml, 'Download the preset (TOML)')}</p>")
     parts.append(
         "<details><summary>About this page</summary>"
-        f"<p>{info.frames} frames of a {e(info.origin)} of {info.robots} robots ({every}). A page keeps at most "
-        f"{MAX_FRAMES} frames and {MAX_ROBOT_FRAMES:,} robot positions (here {info.max_frames} frames), so that "
-        f"it stays a few MB. At 1× the player shows {1.0 / info.seconds_per_frame:.3g} frames a second, {pace}.</p>"
+        f"<p>{info.frames} frames of a {e(info.origin)} of {info.robots} robots ({every}), steps "
+        f"{info.first}–{info.last}. At 1× the page plays {info.fps:.3g} frames a second, {info.pace()}: its clock, "
+        f"the number beside ▶, runs from 0 to {info.seconds:.4g} s, while the label above the arena gives each "
+        "frame's step and the run's time t. A slow computer may skip frames, never the clock.</p>"
+        f"<p>A page keeps at most {MAX_FRAMES} frames and {MAX_ROBOT_FRAMES:,} robot positions{budget}, so that it "
+        "stays a few MB.</p>"
         "<p>▶/❚❚ plays and pauses (or the space bar), the bar scrubs, the menu sets the speed; drag to turn the "
         "view, scroll to zoom.</p>"
         f"<p>Run it yourself: <code>shoal run {e(file_stem)}.toml --seed {info.seed}</code>. Page by shoal "
@@ -186,6 +227,6 @@ def to_html(serializer: Any, info: PageInfo, file_stem: str) -> str:
         page = page.replace("<title>Viser</title>", head, 1)
     else:
         page = page.replace("</head>", head + "</head>", 1)
-    body = panel(info, file_stem) + _json_script(info.data())
+    body = panel(info, file_stem) + _json_script(info.data()) + f"<script>{SOFTWARE_JS}</script>"
     cut = page.rindex("</body>")
     return page[:cut] + body + page[cut:]

@@ -19,6 +19,7 @@ from __future__ import annotations
 import copy
 import functools
 import math
+import re
 import types
 import typing
 from dataclasses import dataclass
@@ -43,6 +44,12 @@ MODE_ONLY = {"omega": ("raw",), "c1": ("raw",), "c2": ("raw",), "c3": ("raw",), 
              "guard": ("dvc",)}
 
 
+_BRACKET = re.compile(r"\[([^\[\]]+)\]")
+_CITATION = re.compile(r"[\d.,–\- ]+")  # what an equation number holds: [4.14], [3.26, 3.29]
+_REMARK = re.compile(r"\s+\([^()]*\)")  # " (physical mode)"; not the bracket of c1/(c1+c2)
+TITLE_CHARS = 48
+
+
 @dataclass(frozen=True)
 class Field:
     """A preset field that can be an axis: a number in ``[lo, hi]`` (``lo_open``/``hi_open``:
@@ -61,6 +68,32 @@ class Field:
     @property
     def numeric(self) -> bool:
         return self.kind != "choice"
+
+    @property
+    def unit(self) -> str:
+        """The unit its description gives in brackets (``[m/s]``; an equation number is no unit), or ''."""
+        found = [u for u in _BRACKET.findall(self.description) if not _CITATION.fullmatch(u)]
+        return found[0] if found else ""
+
+    @property
+    def title(self) -> str:
+        """The field in words with its unit, for a plot's axis: ``top speed U [m/s]``, ``inertia
+        weight ω``, ``DVC safety factor α [4.14]`` (remarks in parentheses and after a ';' left
+        out, and after a ':' that ends three words or more); its name when nothing is left."""
+        text = self.description
+        while (shorter := _REMARK.sub("", text)) != text:
+            text = shorter
+        text = text.split(";", 1)[0]
+        head, colon, _ = text.partition(": ")
+        if colon and len(head.split()) >= 3:
+            text = head
+        text = " ".join(text.split()).strip(" ,")
+        if not text:
+            text = self.key.rsplit(".", 1)[-1]
+        if len(text) > TITLE_CHARS:
+            text = text[: TITLE_CHARS - 1].rstrip() + "…"
+        unit = self.unit
+        return f"{text} [{unit}]" if unit and f"[{unit}]" not in text else text
 
     def range_text(self) -> str:
         """``0 < U ≤ 1000``, or the choices."""

@@ -11,7 +11,7 @@ import copy
 import itertools
 import json
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 from shoal.presets.build import check_world
@@ -30,10 +30,17 @@ class SweepError(ValueError):
 
 @dataclass(frozen=True)
 class Axis:
-    """One ``--grid`` argument: a dotted preset field and the values it takes."""
+    """One ``--grid`` argument: a dotted preset field and the values it takes; ``title`` names
+    it on a plot (a label with its unit; the key when empty)."""
 
     key: str
     values: tuple[Any, ...]
+    title: str = field(default="", compare=False)
+
+    @property
+    def name(self) -> str:
+        """What a plot's axis says: the title, or the dotted key."""
+        return self.title or self.key
 
     @property
     def labels(self) -> tuple[str, ...]:
@@ -144,22 +151,38 @@ def cell_scenario(base: dict[str, Any], axes: Sequence[Axis], values: Sequence[A
     return check_world(validate(data))
 
 
-def resolve_cells(base: dict[str, Any], axes: Sequence[Axis], where: str = "--grid cell") -> list[Scenario]:
-    """Validate every cell; all problems in one :class:`SweepError`, each distinct message
-    once, naming the first cell it occurs in (after ``where``) and the field, e.g. ``--grid cell
-    acoustics.Q=-1, acoustics.U=2: acoustics.Q: Input should be greater than 0 (got -1)``."""
-    out: list[Scenario] = []
-    first: dict[str, str] = {}
-    count: dict[str, int] = {}
+def check_cells(base: dict[str, Any], axes: Sequence[Axis]) -> list[Scenario | PresetError]:
+    """Every cell's scenario, or the model's refusal of it, in :func:`cells` order."""
+    out: list[Scenario | PresetError] = []
     for values in cells(axes):
         try:
             out.append(cell_scenario(base, axes, values))
         except PresetError as err:
+            out.append(err)
+    return out
+
+
+def cell_problems(axes: Sequence[Axis], checked: Sequence[Any], where: str = "--grid cell") -> list[str]:
+    """The refusals among ``checked`` (one per cell, a :class:`PresetError` where refused), each
+    distinct message once, naming the first cell it occurs in (after ``where``) and the field,
+    e.g. ``--grid cell acoustics.Q=-1, acoustics.U=2: acoustics.Q: Input should be greater than
+    0 (got -1)``."""
+    first: dict[str, str] = {}
+    count: dict[str, int] = {}
+    for values, result in zip(cells(axes), checked):
+        if isinstance(result, PresetError):
             cell = ", ".join(f"{a.key}={label(v)}" for a, v in zip(axes, values))
-            for m in err.messages:
+            for m in result.messages:
                 first.setdefault(m, cell)
                 count[m] = count.get(m, 0) + 1
-    if first:
-        raise SweepError([f"{where} {cell}: {m}" + (f" (and {count[m] - 1} more cells)" if count[m] > 1 else "")
-                          for m, cell in first.items()])
-    return out
+    return [f"{where} {cell}: {m}" + (f" (and {count[m] - 1} more cells)" if count[m] > 1 else "")
+            for m, cell in first.items()]
+
+
+def resolve_cells(base: dict[str, Any], axes: Sequence[Axis], where: str = "--grid cell") -> list[Scenario]:
+    """Validate every cell; all problems in one :class:`SweepError` (see :func:`cell_problems`)."""
+    checked = check_cells(base, axes)
+    problems = cell_problems(axes, checked, where)
+    if problems:
+        raise SweepError(problems)
+    return [sc for sc in checked if isinstance(sc, Scenario)]

@@ -13,7 +13,7 @@ from typing import Any, Sequence
 from shoal.presets.io import PresetError, validate
 from shoal.presets.models import Scenario
 
-from .grid import Axis, SweepError, cells, label, resolve_cells
+from .grid import Axis, SweepError, cell_problems, cells, check_cells, label
 from .outcomes import CellJob
 
 
@@ -21,24 +21,45 @@ from .outcomes import CellJob
 class SweepPlan:
     """Every cell of a grid, validated; cell ``i`` is the ``i``-th of :func:`~.grid.cells`
     (first axis slowest). The runs per cell are the base's ``sim.runs``; a cell's seed and
-    steps are its own ``sim.seed`` and ``sim.steps`` (the base's unless gridded)."""
+    steps are its own ``sim.seed`` and ``sim.steps`` (the base's unless gridded). A plan
+    resolved with ``skip_invalid`` leaves out the cells the model refuses (``scenarios[i]``
+    None, ``skipped[i]`` why); it runs the others."""
 
     base: Scenario
     axes: tuple[Axis, ...]
-    scenarios: tuple[Scenario, ...]
+    scenarios: tuple[Scenario | None, ...]
     labels: tuple[tuple[str, ...], ...] = field(repr=False)  # per cell, the label of each axis' value
+    skipped: dict[int, tuple[str, ...]] = field(default_factory=dict)  # cell → the model's messages
 
     @classmethod
-    def resolve(cls, base_raw: dict[str, Any], axes: Sequence[Axis], where: str = "--grid cell") -> SweepPlan:
+    def resolve(cls, base_raw: dict[str, Any], axes: Sequence[Axis], where: str = "--grid cell",
+                skip_invalid: bool = False) -> SweepPlan:
         """Validate the base and every cell (:class:`SweepError` names each bad field and the
-        first cell it occurs in, after ``where``)."""
+        first cell it occurs in, after ``where``; with ``skip_invalid`` only when no cell is left)."""
         try:
             base = validate(base_raw)
         except PresetError as err:
             raise SweepError(err.messages) from None
-        scenarios = resolve_cells(base_raw, axes, where)
+        checked = check_cells(base_raw, axes)
+        problems = cell_problems(axes, checked, where)
+        valid = [sc if isinstance(sc, Scenario) else None for sc in checked]
+        if problems and (not skip_invalid or all(sc is None for sc in valid)):
+            raise SweepError(problems)
+        skipped = {i: tuple(r.messages) for i, r in enumerate(checked) if isinstance(r, PresetError)}
         labels = tuple(tuple(label(v) for v in values) for values in cells(axes))
-        return cls(base, tuple(axes), tuple(scenarios), labels)
+        return cls(base, tuple(axes), tuple(valid), labels, skipped)
+
+    @property
+    def runnable(self) -> tuple[int, ...]:
+        """The cells that run (all but the skipped ones), in grid order."""
+        return tuple(i for i, sc in enumerate(self.scenarios) if sc is not None)
+
+    def scenario(self, index: int) -> Scenario:
+        """Cell ``index``'s scenario (:class:`SweepError` for a skipped cell)."""
+        sc = self.scenarios[index]
+        if sc is None:
+            raise SweepError([f"cell {index + 1} was skipped: " + "; ".join(self.skipped.get(index, ()))])
+        return sc
 
     @property
     def runs(self) -> int:
@@ -61,5 +82,5 @@ class SweepPlan:
 
     def job(self, index: int) -> CellJob:
         """The seeded runs of cell ``index`` (run i = child i of ``SeedSequence(seed)``)."""
-        sc = self.scenarios[index]
+        sc = self.scenario(index)
         return CellJob(index, sc.model_dump_json(), sc.sim.seed, self.runs, sc.sim.steps)

@@ -54,7 +54,7 @@ def line_figure(axis: Axis, name: str, z: np.ndarray, runs: int, *,
         ax.annotate("n.c.", (xi, 1.0), xycoords=("data", "axes fraction"), ha="center", va="top", color="grey")
     if not _numeric(axis):
         ax.set_xticks(x, axis.labels)
-    ax.set_xlabel(axis.key)
+    ax.set_xlabel(axis.name)
     ax.set_ylabel(f"median {name}")
     ax.set_title(title or f"median {name} over {_runs(runs)} per cell", fontsize=10)
     ax.grid(alpha=0.3)
@@ -86,8 +86,8 @@ def heat_figure(axes: Sequence[Axis], name: str, z: np.ndarray, runs: int, *, ti
                         color="black" if light else "white")
         ax.set_xticks(range(len(ax_x.values)), ax_x.labels)
         ax.set_yticks(range(len(ax_y.values)), ax_y.labels)
-        ax.set_xlabel(ax_x.key)
-        ax.set_ylabel(ax_y.key)
+        ax.set_xlabel(ax_x.name)
+        ax.set_ylabel(ax_y.name)
         if rest:
             ax.set_title(", ".join(f"{a.key}={a.labels[j]}" for a, j in zip(rest, idx)), fontsize=8)
     for ax in panels[len(facets):]:

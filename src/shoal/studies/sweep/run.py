@@ -102,7 +102,7 @@ def sweep_rows(plan: SweepPlan, *, workers: int = 1, scheduler: Scheduler | None
         names += [n for n in batches[i].columns if n not in names]
     table: dict[str, list[Any]] = {k: [] for k in (*plan.keys, "run", "seed", *names)}
     for i, values in enumerate(cells(plan.axes)):
-        batch, sc = batches[i], plan.scenarios[i]
+        batch, sc = batches[i], plan.scenario(i)
         for r in range(batch.runs):
             for key, v in zip(plan.keys, values):
                 table[key].append(v)
@@ -167,7 +167,7 @@ def run_sweep(
             for key, batch in iter_jobs(jobs, workers=workers, scheduler=scheduler, progress=bar.update,
                                         simulate=simulate, merge=outcomes.merge, desc="sweep"):
                 i = int(key)  # type: ignore[call-overload]  # (a cell's key is its index)
-                store.write_cell(i, plan.prefix(i), batch.first_run, scenarios[i].sim.seed, batch.columns)
+                store.write_cell(i, plan.prefix(i), batch.first_run, plan.scenario(i).sim.seed, batch.columns)
         indices = list(range(len(scenarios)))
         columns = store.assemble(indices)
         names, medians = _medians(store, axes, len(scenarios))

@@ -62,7 +62,7 @@ class CellTable:
         columns: list[str] = []
         rows: list[dict[str, str]] = []
         for i, batch in cells:
-            header, values = cell_rows(self.plan.prefix(i), batch.first_run, self.plan.scenarios[i].sim.seed,
+            header, values = cell_rows(self.plan.prefix(i), batch.first_run, self.plan.scenario(i).sim.seed,
                                        batch.columns)
             columns += [c for c in header if c not in columns]
             rows += [dict(zip(header, r)) for r in values]
