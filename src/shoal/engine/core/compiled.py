@@ -15,14 +15,14 @@ from __future__ import annotations
 import os
 import threading
 from pathlib import Path
-from typing import Callable, TypeVar
+from typing import Any, Callable, TypeVar, cast
 
 import numpy as np
 import platformdirs
 from numba import njit
-from numba.core import config
+from numba.core import config as numba_config
 
-OPTIONS = {"error_model": "numpy", "nogil": True}
+config: Any = numba_config  # numba's settings (CACHE_DIR is set when numba starts; its stubs do not list it)
 NO_LOCATOR = "no locator available"  # numba's words when no cache folder can be written
 
 F = TypeVar("F", bound=Callable)
@@ -43,12 +43,12 @@ def kernel(fn: F) -> F:
         before = config.CACHE_DIR
         config.CACHE_DIR = str(cache_dir())  # numba's first choice of folder, for this function only
         try:
-            return njit(cache=True, **OPTIONS)(fn)
+            return cast(F, njit(cache=True, error_model="numpy", nogil=True)(fn))  # a Dispatcher, called as fn
         except RuntimeError as err:
             if NO_LOCATOR not in str(err):
                 raise
             uncached.append(fn.__qualname__)
-            return njit(cache=False, **OPTIONS)(fn)
+            return cast(F, njit(cache=False, error_model="numpy", nogil=True)(fn))
         finally:
             config.CACHE_DIR = before
 

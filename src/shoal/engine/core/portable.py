@@ -65,4 +65,6 @@ def _ordered_rows(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
 def arccos(x: np.ndarray) -> np.ndarray:
     """The C library's ``acos`` of every element (float64; ``x`` in [−1, 1])."""
     x = np.asarray(x, dtype=float)
-    return _acos(x).astype(float) if x.ndim else np.float64(math.acos(float(x)))
+    if x.ndim:
+        return _acos(x).astype(float)
+    return np.float64(math.acos(float(x)))  # type: ignore[return-value]  # a scalar for a scalar, as numpy's
