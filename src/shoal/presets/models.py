@@ -157,8 +157,9 @@ class Robot(_Model):
     motion: Literal["kinematic", "physics"] = "kinematic"
     drive: Literal["holonomic", "mecanum", "differential"] = "holonomic"
     spawn_gap: Annotated[float, Field(ge=0.0, le=10.0, description="free space between robots at the start [m]")] = 0.3
-    contact_tolerance: Annotated[float, Field(ge=0.0, le=0.1, description=(
-        "a collision is an overlap deeper than this [m]; a shallower touch only stops the robot"))] = 1e-3
+    contact_tolerance: Annotated[float, Field(ge=0.0, le=1e-6, description=(
+        "float-noise allowance [m]: a collision is an overlap deeper than this, a shallower touch only stops the "
+        "robot (at most a micrometre, so it never hides a real contact; docs/readings.md)"))] = 1e-9
 
 
 class Sensing(_Model):
