@@ -55,11 +55,12 @@ def test_fig4_8_runs_every_entry_reading_and_they_differ(tmp_path):
     rows = _rows(tmp_path / "runs.csv")
     head = rows[0]
     err = {(r[0], r[1]): float(r[head.index("e_abs_avg")]) for r in rows[1:]}
-    default, stale, geo = ("css/random=0.3/low" + t for t in ("", "/stale", "/geometric_random"))
-    assert all((c, "0") in err for c in (default, stale, geo))
-    assert len({err[(c, "0")] for c in (default, stale, geo)}) == 3  # the entry rule changes the run
+    policies = ("", "/stale", "/geometric_random", "/dead_reckoning")
+    cases = ["css/random=0.3/low" + t for t in policies]
+    assert all((c, "0") in err for c in cases)
+    assert len({err[(c, "0")] for c in cases}) == 4  # the entry rule changes the run
     summary = json.loads((tmp_path / "summary.json").read_text(encoding="utf-8"))
-    for policy in ("stale", "geometric_random"):
+    for policy in ("stale", "geometric_random", "dead_reckoning"):
         assert f"slo.entry_policy={policy}" in json.dumps(summary["commands"])
-    for png in ("fig4-8.png", "fig4-8-stale.png", "fig4-8-geometric-entry.png"):
+    for png in ("fig4-8.png", "fig4-8-stale.png", "fig4-8-geometric-entry.png", "fig4-8-dead-reckoning.png"):
         assert (tmp_path / png).is_file()

@@ -23,6 +23,7 @@ from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.engine.core.objectives import ObjectiveName
 from shoal.engine.pso.laws import LAWS
 from shoal.engine.robots.laws import ROBOT_LAWS
+from shoal.engine.slo.beliefs import ENTRY_POLICIES
 from shoal.engine.slo.selection import SELECTIONS
 
 DVC_LAWS = tuple(name for name, law in ROBOT_LAWS.items() if law.dvc is not None)
@@ -313,9 +314,11 @@ class SLO(_Model):
     delta_v: Annotated[float, Field(ge=0.0, le=10.0, description="mitigation threshold δ_v [3.6]")] = 0.03
     literal_eq_3_1: bool = Field(
         False, description="use [3.1] as printed (known slip) instead of the corrected law of cosines")
-    entry_policy: Literal["dead_reckoning", "stale", "geometric_random"] = Field(
-        "dead_reckoning", description="estimates of robots outside the neighbourhood: carried by odometry (exact with "
-        "perfect sensors), frozen, or frozen with an arriving neighbour placed on a random mirror candidate")
+    entry_policy: Literal[ENTRY_POLICIES] = Field(
+        "geometric_nearest", description="estimates of robots outside the neighbourhood and where an arriving "
+        "neighbour starts: frozen, then the geometric candidate nearest the old estimate (our reading of Mai §4.5, "
+        "§4.5.4); frozen and blended; frozen, then a random mirror candidate; or carried by odometry (an extension "
+        "that assumes every robot's odometry is heard)")
     neighbourhood: Literal["knn", "radius", "full", "random", "ring"] = Field("knn", description="who localises whom")
     neighbourhood_param: Annotated[float | None, Field(
         ge=0.0, le=1e4, description="k (knn), r (radius), n (ring), p (random); unset = 5, 25, 2, 0.5")] = None

@@ -321,12 +321,14 @@ RING_N = (1, 2, 3, 5)
 P_RANDOM = (0.3, 0.5, 0.9)
 
 
-ENTRY_TEXT = {"dead_reckoning": "non-neighbours carried by dead reckoning, the default",
-              "stale": "non-neighbours frozen, a returning neighbour starts where it was last seen",
-              "geometric_random": "frozen, a returning neighbour starts on a random mirror candidate"}
+ENTRY_TEXT = {"geometric_nearest": "frozen, an arriving neighbour starts on the geometric candidate nearest its last "
+                                   "estimate, the default",
+              "stale": "frozen, an arriving neighbour is blended with where it was last seen",
+              "geometric_random": "frozen, an arriving neighbour starts on a random mirror candidate",
+              "dead_reckoning": "non-neighbours carried by dead reckoning (an extension)"}
 ENTRY = ENTRY_POLICIES  # how estimates of non-neighbours are kept (docs/readings.md); the first is the default
-ENTRY_FIGURE = {"dead_reckoning": "fig4-8.png", "stale": "fig4-8-stale.png",
-                "geometric_random": "fig4-8-geometric-entry.png"}
+ENTRY_FIGURE = {"geometric_nearest": "fig4-8.png", "stale": "fig4-8-stale.png",
+                "geometric_random": "fig4-8-geometric-entry.png", "dead_reckoning": "fig4-8-dead-reckoning.png"}
 
 
 def _nb(sel: str, nbh: str, param: float, entry: str = ENTRY[0]) -> sc.Case:
@@ -387,7 +389,7 @@ def run_neighbourhood(out_dir: Path, runs: int, workers: int = 1, progress: bool
     (out_dir / "README.md").write_text(_readme(
         "Figs. 4.7-4.8 reproduction: SLO neighbourhoods (random walk, Low error)",
         f"Fig. 4.7: ring, CSS, n in {RING_N}. Fig. 4.8: random topology, p in {P_RANDOM}, CSS and RTS, "
-        "each under the three readings of how a robot keeps its estimates of robots outside its neighbourhood "
+        f"each under the {len(ENTRY)} readings of how a robot keeps its estimates of robots outside its neighbourhood "
         "(`slo.entry_policy`, docs/readings.md): " + "; ".join(f"`{e}` {ENTRY_TEXT[e]}" for e in ENTRY) + ". The "
         "thesis credits an entry rule for new neighbours that it does not describe; the other checks use the "
         "default.",
