@@ -35,7 +35,7 @@ def test_slo_pso_runs_csv_header_and_determinism(tmp_path):
         assert (tmp_path / "a" / f).is_file()
     summary = json.loads((tmp_path / "a" / "summary.json").read_text(encoding="utf-8"))
     assert summary["target"] == "slo-pso" and summary["runs"] == 2
-    assert all(set(c) == {"name", "thesis", "measured", "pass"} for c in summary["checks"])
+    assert all(set(c) == {"name", "thesis", "measured", "pass", "verdict", "runs"} for c in summary["checks"])
     # cheap qualitative claim: without error Sphere goes far below the Low-error runs (precision floor)
     end = {(r[4], r[5]): float(r[8]) for r in rows[1:] if r[1] == "0"}
     assert end[("css", "none")] < 1e-100 < end[("css", "low")]
