@@ -170,3 +170,13 @@ def test_corr_data_marks_tau_with_a_vertical_line():
     assert np.all(np.diff(x) >= 0)
     assert mark.max() == 0.9 and x[np.argmax(mark)] == pytest.approx(0.25)
     np.testing.assert_allclose(y, np.interp(x / 1e3, lags, corr))
+
+
+def test_the_notes_mark_where_each_value_comes_from(tab):
+    p = tab.panels
+    p.preset.value = "sonar-xb-pso"
+    text = tab.panels.marks.content
+    assert "| `acoustics.fs` | 4000.0 | fitted |" in text and "| `acoustics.c1_share` | 0.25 | fitted |" in text
+    assert "| `acoustics.f_c` | 1000.0 | stated |" in text and "unmarked" not in text
+    tab.panels.preset.value = "sonar-gt-pso"
+    assert "| `acoustics.c1_share` | 0.5 | stated |" in tab.panels.marks.content

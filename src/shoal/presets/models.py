@@ -385,6 +385,13 @@ class Scenario(_Model):
     sensing: Sensing = Field(default_factory=Sensing)
     view: View = Field(default_factory=View)
 
+    def marks(self) -> dict[str, Any]:
+        """Where each value that shapes this scene's runs comes from: stated, read, fitted or
+        ours, with its source (:func:`shoal.presets.marks.provenance`; None: unmarked)."""
+        from .marks import provenance
+
+        return provenance(self)
+
     @model_validator(mode="after")
     def _world_for_robot_laws(self) -> "Scenario":
         if self.controller.law in ROBOT_LAWS and self.world is None:
