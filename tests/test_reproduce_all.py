@@ -134,3 +134,19 @@ def test_the_report_gives_each_targets_wall_and_cpu_time_and_their_totals() -> N
     assert "| 3 | 0 | 0 | 0 | 0 | 12.5 | 20.25 | 2 |" in text and "| 31 | 0 | 0 | 0 | 0 | 100.0 | 190.0 | 2 |" in text
     assert "| all | | | 0 | 0 | 0 | 0 | 112 | 210 | |" in text
 
+
+def test_two_reproductions_are_compared_check_by_check(tmp_path: Path) -> None:
+    from shoal.studies.experiments.report import disagreements
+
+    def write(folder: Path, verdicts: list[str]) -> None:
+        (folder / "fig4-6").mkdir(parents=True)
+        checks = [{"name": f"c{i}", "thesis": "", "measured": "", "pass": v == "holds", "verdict": v, "runs": 3}
+                  for i, v in enumerate(verdicts)]
+        (folder / "fig4-6" / "summary.json").write_text(json.dumps({"target": "fig4-6", "runs": 3, "checks": checks}))
+
+    write(tmp_path / "quick", ["holds", "undecided", "fails", "holds"])
+    write(tmp_path / "full", ["holds", "fails", "holds", "holds"])
+    got = disagreements(tmp_path / "quick", tmp_path / "full")
+    assert got["decided"] == [("fig4-6", "c2", "fails", "holds")]
+    assert got["undecided"] == [("fig4-6", "c1", "undecided", "fails")]
+

@@ -232,7 +232,7 @@ Timing: {summary['timing']}.
 |u_j| ≤ U_j is a fixed point of u ← ω u + ĉ r sgn(·), reached geometrically: after U
 drops from U_old to U_new at a switch, the worst case after n iterations is
 U_new + ω^n (U_old − U_new). With β = 1 (ω = 0) the new bound holds at the first new
-command; with β = 0.2 (ω = 0.8, 3-5b) the old speed decays over several seconds. The
+command; with β = 0.2 (ω = 1 − β, 3-5b) the old speed decays over several seconds. The
 checks therefore test every sample against this envelope, and against U(t) itself only
 where the carried term is below {DECAYED:.0%} of U.
 

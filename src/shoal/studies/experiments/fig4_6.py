@@ -333,7 +333,7 @@ def _readme(summary: dict[str, Any], n_runs: dict[str, int], duration: float) ->
     cmds = "\n".join(f"- `{n}`: `{summary['commands'][n][next(iter(summary['commands'][n]))]}`" for n in CASE_NAMES)
     return f"""# Figs. 4-6 and 4-7 reproduction: seven Chapter 4 cases on the obstacle course
 
-Six omnidirectional robots (1 m diameter, 3 m/s, 3 m sensing in six 60° sectors) seek the
+Six omnidirectional robots (1 m diameter, 3 m/s, 3 m sensing in six equal sectors) seek the
 source through six layers of circular obstacles that get denser toward the source (our
 course in the spirit of Fig. 4-1; the thesis gives no dimensions). {duration:g} s of
 simulated time with Δt = 1 s; {modes}. Every case is a shipped preset plus `--set`
@@ -364,7 +364,7 @@ overrides, e.g.:
 
 ## Differences from the thesis
 
-- The course is ours: layer positions {summary['layer_x_m']} m, source at x = 56 m. The
+- The course is ours: layer positions {summary['layer_x_m']} m, the source beyond the last. The
   thesis' absolute numbers (e.g. the Gazebo DVC fitness of 47) belong to its own course.
 - `physics` is pymunk with mecanum wheels, not Gazebo/ROS; it runs fewer repeats than the
   kinematic mode because it is slower (the thesis does not state its Gazebo repeat count).

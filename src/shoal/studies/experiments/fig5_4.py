@@ -231,7 +231,7 @@ def _readme(summary: dict[str, Any], runs: int) -> str:
     return f"""# Fig. 5-4 reproduction: twenty non-omni robots in open space
 
 {summary['robots']} differential-drive robots with the non-omnidirectional DVC controller in
-an empty 40 m × 40 m walled arena, {summary['duration_s']:g} s, {runs} seeded runs per case:
+an empty square walled arena (preset `open-nonomni`), {summary['duration_s']:g} s, {runs} seeded runs per case:
 
 {cmds}
 

@@ -29,7 +29,7 @@ class Target:
     default_runs: int
     _run: Callable[..., dict[str, Any]]
     quick: dict[str, Any] = field(default_factory=dict)
-    module: str = ""  # the module of ``readme(summary)`` and ``why(summary)``, e.g. "fig3_4"
+    module: str = ""  # the module of ``readme(summary)``, e.g. "fig3_4"
 
     def readme(self, summary: dict[str, Any]) -> str:
         """The target's README.md, rendered from its ``summary.json`` alone (so it never
@@ -38,8 +38,9 @@ class Target:
 
     def why(self, summary: dict[str, Any]) -> str:
         """Why Shoal and the thesis differ, written from the measured numbers ("" if none)."""
-        why = getattr(self._template(), "why", None)
-        return why(summary) if why is not None else ""
+        from .why import why
+
+        return why(self.name, summary)
 
     def _template(self) -> Any:
         from importlib import import_module

@@ -281,3 +281,21 @@ def write_report(out_dir: Path, names: Iterable[str] | None = None, *, dest: Pat
     dest = out_dir / REPORT if dest is None else Path(dest)
     atomic_write_text(dest, render(outcomes, image_prefix=image_prefix))
     return dest
+
+
+def disagreements(a: Path, b: Path) -> dict[str, list[tuple[str, str, str, str]]]:
+    """Compare two reproductions of the same targets (e.g. ``--quick`` against a full run), check
+    by check: ``decided`` lists the checks that one holds and the other fails (target, check,
+    verdict in a, verdict in b); ``undecided`` those decided in one and undecided in the other;
+    checks only one of them ran are left out."""
+    def verdicts(folder: Path) -> dict[tuple[str, str], str]:
+        return {(o.name, c["name"]): verdict_of(c) for o in collect(folder) for c in o.checks}
+
+    va, vb = verdicts(Path(a)), verdicts(Path(b))
+    out: dict[str, list[tuple[str, str, str, str]]] = {"decided": [], "undecided": []}
+    for key in sorted(set(va) & set(vb)):
+        x, y = va[key], vb[key]
+        if x != y:
+            out["undecided" if UNDECIDED in (x, y) else "decided"].append((*key, x, y))
+    return out
+
