@@ -96,7 +96,8 @@ def test_information_is_shown_beside_the_checks_but_not_counted() -> None:
     from shoal.studies.experiments.report import Outcome, render
     from shoal.studies.experiments.verdict import exact
 
-    summary = {"runs": 3, "elapsed_s": 1.0, "checks": [check("median run collision-free", "none", "0", True, exact(True))],
+    free = check("median run collision-free", "none", "0", True, exact(True))
+    summary = {"runs": 3, "elapsed_s": 1.0, "checks": [free],
                "information": [info("every run collision-free", "none", "2 robots in 1 run", False)]}
     text = render([Outcome("fig4-6", summary=summary)])
     assert "| [fig4-6](#fig4-6) | Rossides, Figs. 4-6 and 4-7 | 3 | 1 | 1 | 0 | 0 | 1.0 |" in text

@@ -235,12 +235,8 @@ def all_of(*verdicts: Verdict | Iterable[Verdict]) -> Verdict:
 
 
 def any_of(*verdicts: Verdict | Iterable[Verdict]) -> Verdict:
-    """Some part holds: holds if one holds, fails if all fail."""
-    vs = _flat(verdicts)
-    runs = _fewest(*(v.runs for v in vs))
-    if any(v.outcome == HOLDS for v in vs):
-        return Verdict(HOLDS, runs)
-    return Verdict(FAILS if all(v.outcome == FAILS for v in vs) else UNDECIDED, runs)
+    """Some part holds: holds if one holds, fails if all fail (the dual of :func:`all_of`)."""
+    return negate(all_of(negate(v) for v in _flat(verdicts)))
 
 
 def negate(v: Verdict) -> Verdict:
