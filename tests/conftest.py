@@ -9,6 +9,13 @@ settings.load_profile("shoal")
 import pytest  # noqa: E402
 
 from app_helpers import hand_tab  # noqa: E402
+from plugin_env import install_example  # noqa: E402
+
+
+@pytest.fixture(scope="session")
+def example_plugin(tmp_path_factory):
+    """A folder with the example plug-in installed (for child processes: :mod:`plugin_env`)."""
+    return install_example(tmp_path_factory.mktemp("plugin"))
 
 
 @pytest.fixture(scope="module")

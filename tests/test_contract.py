@@ -11,11 +11,27 @@ from shoal.engine.core.contract import Engine, Info, State
 from shoal.engine.core.recorder import metric_table
 from shoal.engine.pso.coeffs import Constant
 from shoal.presets.build import build
-from shoal.presets.io import load
+from shoal.presets.io import list_presets, load
+from shoal.presets.kinds import KINDS as SCENE_KINDS
+from shoal.presets.kinds import kind_for
 
-# one preset per scene kind, and the three host swarms on SLO positions
-KINDS = ("default", "course-dvc", "sonar-xb-pso", "slo-walk", "slo-adapted", "course-dvc-slo", "sonar-xb-pso-slo")
+
+def one_preset_per_kind() -> dict[tuple[str, bool], str]:
+    """The first shipped preset of each registered scene kind, on true and on SLO positions."""
+    out: dict[tuple[str, bool], str] = {}
+    for name in list_presets():
+        sc = load(name)
+        out.setdefault((kind_for(sc).name, sc.slo is not None), name)
+    return out
+
+
+BY_KIND = one_preset_per_kind()
+KINDS = tuple(BY_KIND.values())
 COMMON = ("run", "step", "t", "best_fitness", "max_speed", "mean_speed")
+
+
+def test_every_registered_kind_has_a_shipped_preset():
+    assert {kind for kind, _ in BY_KIND} == set(SCENE_KINDS)
 
 
 def engine(preset: str, runs: int = 2):
@@ -46,6 +62,19 @@ def test_the_metric_table_is_the_common_columns_then_the_kinds(preset):
     table = metric_table(sim.state, info, sim.t)
     assert list(table) == [*COMMON, *info.columns()]
     np.testing.assert_array_equal(table["best_fitness"], sim.state.best_fitness)
+
+
+@pytest.mark.parametrize("preset", KINDS)
+def test_the_kinds_schema_is_its_metric_table(preset):
+    """The registry entry's columns are the table's, in order; a kind optimises something exactly
+    when its state has a best fitness."""
+    kind = kind_for(load(preset))
+    sim = engine(preset)
+    assert type(sim) is kind.engine
+    table = metric_table(sim.state, sim.step(), sim.t)
+    assert [c.name for c in kind.columns] == list(table)
+    assert hasattr(sim.state, "best_fitness") == kind.optimises
+    assert all(c.unit is not None and c.description and c.dtype in ("int", "float") for c in kind.columns)
 
 
 @pytest.mark.parametrize("preset", KINDS)

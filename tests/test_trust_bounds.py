@@ -28,10 +28,11 @@ from test_trust_extremes import BOUNDS
 from shoal.engine.core.recorder import metric_table
 from shoal.presets.build import build
 from shoal.presets.io import PresetError, list_presets, read_raw, set_dotted, validate
+from shoal.presets.kinds import sections
 
 PRESETS = sorted(list_presets())
 SIZES = {"sim.robots", "sim.runs", "sim.steps"}
-OPTIONAL = {"world", "acoustics", "slo"}
+OPTIONAL = set(sections())  # the sections that ask for a scene kind (the kinds' registry)
 STEPS = 3
 
 
@@ -116,8 +117,8 @@ def test_any_preset_at_the_edge_of_any_field_runs_finite_or_is_refused_by_name(c
 def test_every_preset_and_field_is_drawn_from():
     """The strategy reaches all 27 presets and every kind of section (a guard on the lists above)."""
     assert len(PRESETS) >= 27
-    sections = {p.split(".")[0] for preset in PRESETS for p in fields_of(preset)}
-    assert {"sim", "controller", "objective", "world", "acoustics", "slo", "robot", "sensing"} <= sections
+    drawn = {p.split(".")[0] for preset in PRESETS for p in fields_of(preset)}
+    assert {"sim", "controller", "objective", "world", "acoustics", "slo", "robot", "sensing"} <= drawn
 
 
 def test_a_world_the_generator_cannot_lay_out_is_refused_by_field():

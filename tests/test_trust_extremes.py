@@ -21,6 +21,7 @@ from pydantic import BaseModel
 from shoal.app.kinds.registry import session_for
 from shoal.app.limits import MAX_ROBOTS, check_app_limits, scene_kind
 from shoal.presets.io import PresetError, load, read_raw, set_dotted, validate
+from shoal.presets.kinds import sections
 from shoal.presets.models import Scenario
 
 # One shipped preset for each kind of scene and motion the app runs.
@@ -62,7 +63,7 @@ BOUNDS = bounds(Scenario)
 def fields_of(preset: str) -> list[str]:
     """The bounded fields that apply to ``preset``: its own sections and the ones every scene has."""
     raw = read_raw(preset)
-    optional = {"world", "acoustics", "slo"}
+    optional = set(sections())  # the sections that ask for a scene kind (the kinds' registry)
     return sorted(p for p in BOUNDS if p.split(".")[0] not in optional or p.split(".")[0] in raw)
 
 

@@ -27,10 +27,11 @@ from shoal.presets.io import (
     to_toml,
     validate,
 )
+from shoal.presets.kinds import plugin_sections
 from shoal.presets.models import Scenario
 
 PRESETS = sorted(list_presets())
-SECTIONS = tuple(Scenario.model_fields)
+SECTIONS = tuple(Scenario.model_fields) + tuple(plugin_sections())  # the model's and the plug-in kinds' sections
 INTERNALS = ("Traceback", "pydantic", "errors.pydantic.dev", "type=", "ValidationError", "KeyError")
 FUZZ = settings(max_examples=150, suppress_health_check=[HealthCheck.too_slow])
 

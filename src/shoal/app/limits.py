@@ -10,29 +10,22 @@ model's full range.
 from __future__ import annotations
 
 from shoal.presets.io import PresetError
+from shoal.presets.kinds import KINDS, kind_for
 from shoal.presets.models import Scenario
 
-# Robots per scene kind, where one step still costs a few tens of ms at most: the compiled
-# kinematic fleet tick takes 1000 robots in a few ms, pymunk physics 200 in about 20 ms; the
-# SLO and acoustic swarms grow faster than linearly with the robots (about 2× the slider's top).
-MAX_ROBOTS = {"free-space swarm": 2000, "fleet": 1000, "fleet, pymunk physics": 200, "acoustic swarm": 100,
-              "SLO swarm": 100}
+# Robots per kind of scene in one tab: the caps of the kinds' registry entries (presets/kinds.py).
+MAX_ROBOTS = {cap.label: cap.robots for kind in KINDS.values() for cap in kind.caps}
 
 
 def scene_kind(scenario: Scenario) -> str:
-    if scenario.slo is not None:
-        return "SLO swarm"
-    if scenario.acoustics is not None:
-        return "acoustic swarm"
-    if scenario.world is None:
-        return "free-space swarm"
-    return "fleet, pymunk physics" if scenario.robot.motion == "physics" else "fleet"
+    """The kind of scene whose robot cap applies to ``scenario`` (its kind's first cap that holds)."""
+    return kind_for(scenario).cap(scenario).label
 
 
 def check_app_limits(scenario: Scenario) -> Scenario:
     """``scenario`` if one browser tab may run it, else :class:`PresetError` naming the field."""
-    kind = scene_kind(scenario)
-    cap = MAX_ROBOTS[kind]
+    limit = kind_for(scenario).cap(scenario)
+    kind, cap = limit.label, limit.robots
     if scenario.sim.robots > cap:
         raise PresetError([f"sim.robots = {scenario.sim.robots}: the browser app runs at most {cap} robots "
                            f"in this kind of scene ({kind}); use `shoal run` for larger swarms"])

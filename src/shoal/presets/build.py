@@ -1,5 +1,6 @@
-"""Turn a validated :class:`Scenario` into engine objects: :data:`BUILDERS` holds one build
-function per scene kind, each returning a :class:`~shoal.engine.core.contract.Engine`."""
+"""Turn a validated :class:`Scenario` into engine objects: one build function per scene kind
+(each returning a :class:`~shoal.engine.core.contract.Engine`; the kinds' registry,
+:mod:`.kinds`, names them), and the keywords that retune a running engine."""
 
 from __future__ import annotations
 
@@ -36,13 +37,13 @@ def law_for(c: Controller) -> Law:
     return Law(name=c.law, smooth_width=c.smooth_width)
 
 
-def _xyz(v: tuple[float, float]) -> np.ndarray:
-    """A preset's (x, y) as a point in up to three dimensions (z = 0): any ``sim.d`` takes its first d."""
-    return np.append(np.asarray(v, dtype=float), 0.0)
+def _xyz(v: tuple[float, float], d: int = 3) -> np.ndarray:
+    """A preset's (x, y) as a point in max(d, 3) dimensions (the others 0): any ``sim.d`` takes its first d."""
+    return np.concatenate([np.asarray(v, dtype=float), np.zeros(max(d, 3) - 2)])
 
 
-def objective_for(o: ObjectiveModel) -> Objective:
-    return Objective(name=o.kind, source=_xyz(o.source), scale=o.scale)
+def objective_for(o: ObjectiveModel, d: int = 3) -> Objective:
+    return Objective(name=o.kind, source=_xyz(o.source, d), scale=o.scale)
 
 
 def build_simulation(
@@ -62,13 +63,13 @@ def _simulation_kwargs(scenario: Scenario, *, runs: int | None, seed: int | None
         dt=s.controller.dt,
         law=law_for(s.controller),
         policy=policy_for(s.controller),
-        objective=objective_for(s.objective),
+        objective=objective_for(s.objective, s.sim.d),
         runs=runs or s.sim.runs,
         seed=s.sim.seed if seed is None else seed,
         first_run=first_run,
         attractors=s.bests.attractors,
         pbest_order=s.bests.pbest_order,
-        init_center=_xyz(s.init.center),
+        init_center=_xyz(s.init.center, s.sim.d),
         init_spread=s.init.spread,
         init_speed=s.init.speed,
     )
@@ -267,27 +268,89 @@ class Builder(Protocol):
                  first_run: int = 0) -> Engine: ...
 
 
-# scene kind (the module of engine/kinds) → its build function
-BUILDERS: dict[str, Builder] = {
-    "swarm": build_simulation, "fleet": build_fleet, "sonar": build_sonar, "slo_swarm": build_slo_swarm,
-}
+# ---------------------------------------------------------------- a running engine, retuned
+def swarm_keywords(s: Scenario) -> dict[str, Any]:
+    """The ``Simulation.retune`` keywords of a scenario's controller, swarm size, bests and objective."""
+    c = s.controller
+    return dict(policy=policy_for(c), law=law_for(c), dt=float(c.dt), robots=s.sim.robots,
+                attractors=s.bests.attractors, pbest_order=s.bests.pbest_order,
+                objective=objective_for(s.objective, s.sim.d))
+
+
+def fleet_keywords(s: Scenario) -> dict[str, Any]:
+    """The ``Fleet.retune`` keywords of a scenario (its :class:`FleetParams` in ``Fleet.LIVE``)."""
+    params = fleet_params_for(s)
+    return {k: getattr(params, k) for k in Fleet.LIVE - {"slo"}}
+
+
+def sonar_keywords(s: Scenario) -> dict[str, Any]:
+    """The ``AcousticSwarm.retune`` keywords of a scenario (its :class:`SonarParams` in ``LIVE``)."""
+    assert s.acoustics is not None
+    params = sonar_params_for(s.acoustics)
+    return {k: getattr(params, k) for k in AcousticSwarm.LIVE - {"slo"}}
+
+
+def _same_but(old: Scenario, new: Scenario, *paths: str) -> bool:
+    """Do ``old`` and ``new`` agree on everything but ``paths`` (sections or dotted fields), the
+    view, the name, the description and the horizon?"""
+    dumps = []
+    for sc in (old, new):
+        d = sc.model_dump()
+        for path in (*paths, "view", "name", "description", "sim.steps"):
+            section, _, name = path.partition(".")
+            if name and isinstance(d.get(section), dict):
+                d[section].pop(name, None)
+            elif not name:
+                d.pop(section, None)
+        dumps.append(d)
+    return dumps[0] == dumps[1]
+
+
+def _fixed_same(a: object, b: object, live: frozenset[str]) -> bool:
+    return all(getattr(a, f.name) == getattr(b, f.name) for f in dataclasses.fields(a) if f.name not in live)  # type: ignore[arg-type]
+
+
+def swarm_live(old: Scenario, new: Scenario) -> dict[str, Any] | None:
+    """``retune`` keywords taking a running Chapter 3 swarm from ``old`` to ``new``, or None when
+    something else changed (the start, the dimension, the positions: a new swarm is needed)."""
+    if not _same_but(old, new, "controller", "bests", "objective", "sim.robots"):
+        return None
+    return swarm_keywords(new)
+
+
+def fleet_live(old: Scenario, new: Scenario) -> dict[str, Any] | None:
+    """``retune`` keywords taking a running fleet from ``old`` to ``new`` (None: it needs a new one)."""
+    if not _same_but(old, new, "controller", "robot", "sensing", "init", "objective", "bests") or \
+            not _fixed_same(fleet_params_for(old), fleet_params_for(new), Fleet.LIVE):
+        return None
+    return fleet_keywords(new)
+
+
+def sonar_live(old: Scenario, new: Scenario) -> dict[str, Any] | None:
+    """``retune`` keywords taking a running acoustic swarm from ``old`` to ``new`` (None: a new one)."""
+    if old.acoustics is None or new.acoustics is None or \
+            not _same_but(old, new, "acoustics", "controller", "robot", "sensing", "init", "objective", "bests") or \
+            not _fixed_same(sonar_params_for(old.acoustics), sonar_params_for(new.acoustics), AcousticSwarm.LIVE):
+        return None
+    return sonar_keywords(new)
 
 
 def kind_of(scenario: Scenario) -> str:
-    """The scene kind a scenario describes: Mai's SLO swarm (``[slo] swarm = "slo"``), an acoustic
-    swarm (``[acoustics]``, Ch. 7–8), a fleet in a world (``[world]``, Ch. 4–5) or the free-space
-    swarm (Ch. 3); the last three on SLO or true positions as ``[slo]`` says."""
-    if scenario.slo is not None and scenario.slo.swarm == "slo":
-        return "slo_swarm"
-    if scenario.acoustics is not None:
-        return "sonar"
-    return "fleet" if scenario.world is not None else "swarm"
+    """The scene kind a scenario describes (the name of its :class:`~.kinds.SceneKind`): Mai's SLO
+    swarm (``[slo] swarm = "slo"``), an acoustic swarm (``[acoustics]``, Ch. 7–8), a fleet in a
+    world (``[world]``, Ch. 4–5), a plug-in kind (its own section) or the free-space swarm (Ch. 3);
+    the fleet, the acoustic and the free-space swarm on SLO or true positions as ``[slo]`` says."""
+    from .kinds import kind_for  # (the kinds' registry holds this module's build functions)
+
+    return kind_for(scenario).name
 
 
 def build(scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0) -> Engine:
     """The engine of whatever the scenario describes (:func:`kind_of`), for runs ``first_run …
     first_run + runs − 1`` of the seed (default: the preset's)."""
-    return BUILDERS[kind_of(scenario)](scenario, runs=runs, seed=seed, first_run=first_run)
+    from .kinds import kind_for
+
+    return kind_for(scenario).build(scenario, runs=runs, seed=seed, first_run=first_run)
 
 
 def build_slo(scenario: Scenario, *, runs: int | None = None, seed: int | None = None, first_run: int = 0) -> Engine:

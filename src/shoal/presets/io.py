@@ -14,6 +14,8 @@ from typing import Any
 import tomli_w
 from pydantic import ValidationError
 
+from shoal.engine.core.plugins import load_plugins
+
 from .models import Scenario
 
 
@@ -100,22 +102,46 @@ def _depth(data: Any) -> int:
 
 
 MAX_PRESET_NAME = 4096  # characters of a preset name or file path (PATH_MAX): longer ones are refused unread
+_INSTALLED: dict[str, Any] = {}  # preset name → its file, from an installed plug-in (add_presets)
+
+
+def add_presets(folder: Any) -> list[str]:
+    """Offer the ``*.toml`` files of ``folder`` (a path or an ``importlib.resources`` folder of an
+    installed plug-in) as presets by name, beside the shipped ones; a name already taken is
+    refused (``ValueError``). Returns the names added."""
+    folder = Path(folder) if isinstance(folder, str) else folder
+    files = sorted((f for f in folder.iterdir() if f.name.endswith(".toml")), key=lambda f: f.name)
+    names = [f.name.removesuffix(".toml") for f in files]
+    taken = sorted(set(names) & set(shipped_names()))
+    if taken:
+        raise ValueError(f"presets {', '.join(taken)}: a preset of that name exists already")
+    _INSTALLED.update(zip(names, files))
+    _names.cache_clear()
+    return names
 
 
 @functools.lru_cache(maxsize=1)
+def _names() -> tuple[str, ...]:
+    load_plugins()  # (a plug-in may add presets)
+    own = (f.name.removesuffix(".toml") for f in _files().iterdir() if f.name.endswith(".toml"))
+    return tuple(sorted({*own, *_INSTALLED}))
+
+
 def shipped_names() -> tuple[str, ...]:
-    """The names of the presets shipped with Shoal (the files of ``shoal.presets``), sorted."""
-    return tuple(sorted(f.name.removesuffix(".toml") for f in _files().iterdir() if f.name.endswith(".toml")))
+    """The names of the presets shipped with Shoal (the files of ``shoal.presets``) and with the
+    installed plug-ins, sorted."""
+    return _names()
 
 
 def read_shipped(name: str) -> dict[str, Any]:
-    """The unvalidated dict of the shipped preset ``name``. Only a name from
+    """The unvalidated dict of the shipped (or plug-in) preset ``name``. Only a name from
     :func:`shipped_names` is read; anything else (a path, a long or odd string) is refused
     without touching the file system."""
     if not isinstance(name, str) or name not in shipped_names():
         raise PresetError([f"no shipped preset named {short(name)} "
                            f"(shipped presets: {', '.join(shipped_names())})"])
-    return parse_text(_files().joinpath(f"{name}.toml").read_text(encoding="utf-8"))
+    file = _INSTALLED.get(name) or _files().joinpath(f"{name}.toml")
+    return parse_text(file.read_text(encoding="utf-8"))
 
 
 def load_shipped(name: str, overrides: list[str] | None = None) -> Scenario:

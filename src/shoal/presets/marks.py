@@ -237,7 +237,7 @@ RULES: tuple[Rule, ...] = (
     read("slo.radial", "uniform_radius", "The point in the hypersphere (SPSO 2011)", _is("slo.motion", "pso")),
     read("slo.quality_threshold", None, "Quality thresholds"),
     ours("slo.neighbourhood", "full", "a host scene of ours: every robot localises every robot",
-         lambda d: scene_kind(d) != "slo"),
+         lambda d: not _mai(d)),
     ours("slo.neighbourhood_param", None, "not used by the full neighbourhood", _is("slo.neighbourhood", "full")),
 )
 
@@ -288,15 +288,9 @@ EXTRA: dict[str, Callable[[dict[str, Any]], tuple[str, ...]]] = {
 }
 
 
-def scene_kind(d: dict[str, Any]) -> str:
-    """The kind of scene of a dumped scenario: swarm (Ch. 3), fleet (Chs. 4–5), sonar (Chs. 7–8), slo (Mai)."""
-    if d.get("acoustics") is not None:
-        return "sonar"
-    if d.get("world") is not None:
-        return "fleet"
-    if d.get("slo") is not None and d["slo"].get("swarm") == "slo":
-        return "slo"
-    return "swarm"
+def _mai(d: dict[str, Any]) -> bool:
+    """Mai's own SLO swarm (not a host scene on SLO positions)."""
+    return d.get("slo") is not None and d["slo"].get("swarm") == "slo"
 
 
 def _matches(rule: Rule, value: Any, d: dict[str, Any]) -> bool:
@@ -314,8 +308,12 @@ def _equal(a: Any, b: Any) -> bool:
 def provenance(scenario: Any) -> dict[str, Mark | None]:
     """Every field that shapes a run of this scenario's kind, with its mark (None: no rule
     covers its value). ``scenario`` is a :class:`~shoal.presets.models.Scenario`."""
+    from .kinds import kind_for
+
     d = scenario.model_dump(mode="json")
-    kind = scene_kind(d)
+    kind = {"slo_swarm": "slo"}.get(kind_for(scenario).name, kind_for(scenario).name)
+    if kind not in FIELDS:  # a plug-in kind: no thesis values
+        return {}
     paths = FIELDS[kind] + EXTRA.get(kind, lambda _d: ())(d)
     if kind != "slo" and d.get("slo") is not None:  # a host swarm on SLO positions
         paths += tuple(p for p in FIELDS["slo"] if p not in ("sim.robots", "sim.steps", "slo.motion",

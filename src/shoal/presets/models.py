@@ -7,9 +7,11 @@ variants (laws, strategies, selections) and their rules come from the engine's r
 
 from __future__ import annotations
 
-from typing import Annotated, Any, ClassVar, Literal
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Annotated, Any, ClassVar, Literal, TypeAlias
 
 from pydantic import (
+    AfterValidator,
     BaseModel,
     ConfigDict,
     Field,
@@ -20,13 +22,53 @@ from pydantic import (
 )
 
 from shoal.engine.acoustics.strategies import STRATEGIES
-from shoal.engine.core.objectives import ObjectiveName
+from shoal.engine.core.objectives import OBJECTIVES
+from shoal.engine.core.registry import Registry
 from shoal.engine.pso.laws import LAWS
 from shoal.engine.robots.laws import ROBOT_LAWS
-from shoal.engine.slo.beliefs import ENTRY_POLICIES
+from shoal.engine.slo.beliefs import EntryPolicy
 from shoal.engine.slo.selection import SELECTIONS
 
-DVC_LAWS = tuple(name for name, law in ROBOT_LAWS.items() if law.dvc is not None)
+
+def dvc_laws() -> tuple[str, ...]:
+    """The robot laws with a DVC form."""
+    return tuple(name for name, law in ROBOT_LAWS.items() if law.dvc is not None)
+
+
+@dataclass(frozen=True)
+class Registered:
+    """The mark of a field whose value names an entry of ``registries`` (its choices)."""
+
+    registries: tuple[Registry[Any], ...]
+
+    def names(self) -> tuple[str, ...]:
+        return tuple(n for r in self.registries for n in r)
+
+
+def registered(*registries: Registry[Any]) -> Any:
+    """A string field whose value must be a name of one of ``registries`` (looked up when a preset
+    is validated, so plug-ins' names count; a name is only ever looked up, never imported)."""
+
+    def check(value: str) -> str:
+        names = [n for r in registries for n in r]
+        if value not in names:
+            raise ValueError(f"Input should be {', '.join(map(repr, names[:-1]))} or {names[-1]!r}"
+                             if len(names) > 1 else f"Input should be {names[0]!r}")
+        return value
+
+    return Annotated[str, Field(max_length=100), Registered(registries), AfterValidator(check)]
+
+
+if TYPE_CHECKING:  # (a type checker sees plain strings; pydantic the registries' checks)
+    LawName: TypeAlias = str
+    ObjectiveKind: TypeAlias = str
+    StrategyName: TypeAlias = str
+    SelectionName: TypeAlias = str
+else:
+    LawName = registered(LAWS, ROBOT_LAWS)
+    ObjectiveKind = registered(OBJECTIVES)
+    StrategyName = registered(STRATEGIES)
+    SelectionName = registered(SELECTIONS)
 
 Coefficient = Annotated[float, Field(ge=0.0, le=100.0)]
 Coordinate = Annotated[float, Field(ge=-1e5, le=1e5)]  # m, a place on a scene
@@ -51,7 +93,8 @@ class Sim(_Model):
     """Size, length and seed of a run."""
 
     robots: Annotated[int, Field(ge=1, le=100_000, description="number of particles / robots")] = 20
-    d: Annotated[int, Field(ge=1, le=3, description="spatial dimensions")] = 2
+    d: Annotated[int, Field(ge=1, le=1000, description="spatial dimensions (the Chapter 3 swarm: 1–1000; the "
+                                                      "others: 2)")] = 2
     steps: Annotated[int, Field(ge=1, le=10_000_000, description="control ticks per run")] = 600
     runs: Annotated[int, Field(ge=1, le=100_000, description="Monte-Carlo runs")] = 1
     seed: Annotated[int, Field(ge=0, le=2**63 - 1)] = 0
@@ -76,7 +119,7 @@ class StepChange(_Model):
 class Controller(_Model):
     """Velocity law and its coefficients, raw (ω, c1, c2) or physical (U, A+, Δt)."""
 
-    law: Literal[LAWS.names() + ROBOT_LAWS.names()] = "adapted-sgn"
+    law: LawName = "adapted-sgn"
     mode: Literal["raw", "physical", "dvc"] = "physical"
     dt: Annotated[float, Field(ge=1e-6, le=10.0, description="controller period Δt [s]")] = 0.1
     omega: Annotated[float, Field(ge=-1.0, le=1.2, description="inertia weight ω (raw mode)")] = 0.5
@@ -106,16 +149,17 @@ class Controller(_Model):
         robot_law = self.law in ROBOT_LAWS
         if robot_law and self.mode == "physical":
             raise ValueError(f"law {self.law!r} takes mode 'raw' (constant c1..c3, omega) or 'dvc'")
-        if self.mode == "dvc" and self.law not in DVC_LAWS:
-            raise ValueError(f"mode 'dvc' needs law {' or '.join(map(repr, DVC_LAWS))}")
+        if self.mode == "dvc" and self.law not in dvc_laws():
+            raise ValueError(f"mode 'dvc' needs law {' or '.join(map(repr, dvc_laws()))}")
         if robot_law:
             return self
-        adapted = LAWS[self.law].adapted
-        if self.mode == "raw" and adapted and not (0.0 <= self.omega < 1.0):
-            raise ValueError(f"omega = {self.omega:g}: an Adapted law needs 0 <= omega < 1 [3.14]")
+        law = LAWS[self.law]
+        why = law.check_omega(self.omega) if self.mode == "raw" else None
+        if why:
+            raise ValueError(why)
         if self.mode == "physical":
-            if not adapted:
-                raise ValueError("mode 'physical' needs an Adapted law (standard PSO has no speed limit)")
+            if not law.adapted:
+                raise ValueError(f"mode 'physical' needs an Adapted law ({law.label} has no speed limit to tune)")
             for where, U, A in [("A_plus", self.U, self.A_plus)] + [
                 (f"schedule.{i}.A_plus", s.U, s.A_plus) for i, s in enumerate(self.schedule)
             ]:
@@ -180,7 +224,7 @@ class Bests(_Model):
 class ObjectiveModel(_Model):
     """What the swarm optimises: the distance to a source, f = x1, or a benchmark."""
 
-    kind: ObjectiveName = "source-distance"
+    kind: ObjectiveKind = "source-distance"
     source: tuple[float, float] = (15.0, 5.0)
     # (below 1e-6 m per unit the benchmark functions overflow over the arena: best_fitness = NaN)
     scale: Annotated[float, Field(ge=1e-6, le=1e4, description="benchmark length scale [m per unit]")] = 1.0
@@ -195,7 +239,7 @@ class Acoustics(_Model):
 
     omit_unset = ("source",)
 
-    algorithm: Literal[STRATEGIES.names()] = Field(
+    algorithm: StrategyName = Field(
         "xb-pso", description="best-location strategy: A-/X-/B-/XB-PSO (Ch. 7) or GT-PSO (Ch. 8)")
     controller: Literal["adapted", "nonomni"] = Field(
         "adapted",
@@ -305,7 +349,7 @@ class SLO(_Model):
         "pso", description="SLO swarm: SPSO 2011 in each robot's frame or a random walk")
     objective: Literal["ackley", "griewank", "line", "plane", "rastrigin", "rosenbrock", "sphere"] = Field(
         "sphere", description="SLO swarm: 2-D benchmark, minimised (DEAP forms)")
-    selection: Literal[SELECTIONS.names()] = Field("css", description="candidate selection [3.7]-[3.9]")
+    selection: SelectionName = Field("css", description="candidate selection [3.7]-[3.9]")
     errors: Literal["none", "low", "high"] = Field("low", description="sensor error set of Tab. 4.3")
     error_values: SLOErrorValues = Field(default_factory=SLOErrorValues,
                                          description="single error parameters replacing the set's")
@@ -314,7 +358,7 @@ class SLO(_Model):
     delta_v: Annotated[float, Field(ge=0.0, le=10.0, description="mitigation threshold δ_v [3.6]")] = 0.03
     literal_eq_3_1: bool = Field(
         False, description="use [3.1] as printed (known slip) instead of the corrected law of cosines")
-    entry_policy: Literal[ENTRY_POLICIES] = Field(
+    entry_policy: EntryPolicy = Field(
         "geometric_nearest", description="estimates of robots outside the neighbourhood and where an arriving "
         "neighbour starts: frozen, then the geometric candidate nearest the old estimate (our reading of Mai §4.5, "
         "§4.5.4); frozen and blended; frozen, then a random mirror candidate; or carried by odometry (an extension "
@@ -367,14 +411,18 @@ class View(_Model):
 
 
 class Scenario(_Model):
-    """A complete, validated scenario: a preset file plus overrides."""
+    """A complete, validated scenario: a preset file plus overrides. Beyond its fields it takes
+    the sections of the plug-in scene kinds (:mod:`shoal.presets.kinds`), each validated by its
+    kind's model; any other name is refused."""
+
+    model_config = ConfigDict(extra="allow")
 
     schema_version: Literal[1] = 1
     name: Annotated[str, Field(min_length=1, max_length=80)] = "custom"
     description: Annotated[str, Field(max_length=2000)] = ""
     sim: Sim = Field(default_factory=Sim)
     init: Init = Field(default_factory=Init)
-    controller: Controller = Field(default_factory=Controller)
+    controller: Controller = Field(default_factory=Controller)  # type: ignore[arg-type]  # (mypy misreads Field("…") defaults)
     bests: Bests = Field(default_factory=Bests)
     objective: ObjectiveModel = Field(default_factory=ObjectiveModel)
     arena: Arena = Field(default_factory=Arena)
@@ -393,36 +441,33 @@ class Scenario(_Model):
         return provenance(self)
 
     @model_validator(mode="after")
-    def _world_for_robot_laws(self) -> "Scenario":
-        if self.controller.law in ROBOT_LAWS and self.world is None:
-            raise ValueError(f"controller.law {self.controller.law!r} needs a [world] section")
-        if self.world is not None and self.controller.law not in ROBOT_LAWS:
-            raise ValueError(f"controller.law {self.controller.law!r}: a [world] scene needs a robot law "
-                             f"({', '.join(ROBOT_LAWS)})")
+    def _across_sections(self) -> "Scenario":
+        from .kinds import check_plugin_sections, check_scene  # (the kinds' registry builds on these models)
+
+        if self.model_extra:
+            self.__pydantic_extra__ = check_plugin_sections(self.model_extra)
+        check_scene(self)  # one kind, its dimensions, a law of the registry it reads
         if self.world is not None and 2.0 * self.robot.radius >= self.world.start_size:
             raise ValueError(f"robot.radius = {self.robot.radius:g}: a robot must fit the start square "
                              f"(world.start_size = {self.world.start_size:g})")
         law = ROBOT_LAWS.get(self.controller.law)
         if law is not None and law.body_frame and self.robot.drive != "differential":
             raise ValueError(f"controller.law {self.controller.law!r} needs robot.drive = 'differential'")
-        if self.world is not None and self.sim.d != 2:
-            raise ValueError("sim.d must be 2 with a [world]")
         if self.acoustics is not None:
             a = self.acoustics
-            if self.world is not None:
-                raise ValueError("[acoustics] runs in an open sea: remove the [world] section")
-            if self.sim.d != 2:
-                raise ValueError("sim.d must be 2 with [acoustics]")
             need = STRATEGIES[a.algorithm].min_robots
             if self.sim.robots < need:
                 raise ValueError(f"sim.robots = {self.sim.robots}: acoustics.algorithm {a.algorithm!r} "
                                  f"needs at least {need}")
         if self.slo is not None:
-            if self.slo.swarm == "slo" and (self.world is not None or self.acoustics is not None):
-                raise ValueError("slo.swarm = 'slo': Mai's SLO swarm runs in free space; set slo.swarm = 'host' to "
-                                 "put the [world] fleet or the [acoustics] swarm on SLO positions")
             if self.sim.d != 2:
                 raise ValueError("sim.d must be 2 with [slo]")
             if self.sim.robots < 2:
                 raise ValueError(f"sim.robots = {self.sim.robots}: [slo] needs at least 2 robots")
         return self
+
+    def section(self, name: str) -> Any:
+        """The section ``name`` (a field such as ``world``, or a plug-in kind's), None if unset."""
+        if name in type(self).model_fields:
+            return getattr(self, name)
+        return (self.model_extra or {}).get(name)

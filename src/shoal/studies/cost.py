@@ -9,7 +9,7 @@ rank and split work sensibly; it is never a promise, and results never depend on
 
 from __future__ import annotations
 
-from shoal.presets.build import kind_of
+from shoal.presets.kinds import kind_for
 from shoal.presets.models import Scenario
 
 RUN_TICK = {"swarm": 2e-6, "fleet": 30e-6, "sonar": 30e-6, "slo_swarm": 40e-6}  # s per run and tick
@@ -21,12 +21,13 @@ PAIR_TICK = 0.1e-6  # SLO: every ordered pair is ranged and localised each tick
 
 def run_cost(scenario: Scenario, steps: int) -> float:
     """Estimated CPU seconds of one run of ``scenario`` for ``steps`` ticks."""
-    kind = kind_of(scenario)
+    entry = kind_for(scenario)  # a kind not priced here (a plug-in's): its registry entry's price
+    kind = entry.name
     n = scenario.sim.robots
-    per_robot = ROBOT_TICK.get(kind, 0.0)
+    per_robot = ROBOT_TICK.get(kind, 0.0 if kind in RUN_TICK else entry.cost[1])
     if kind == "fleet" and scenario.robot.motion == "physics":
         per_robot = PHYSICS_ROBOT_TICK
     if kind == "sonar" and scenario.acoustics is not None and scenario.acoustics.mode != "waveform":
         per_robot = SURROGATE_ROBOT_TICK
     pairs = n * n * PAIR_TICK if scenario.slo is not None else 0.0  # the SLO swarm, or a host on SLO positions
-    return max(steps, 1) * (RUN_TICK[kind] + n * per_robot + pairs)
+    return max(steps, 1) * (RUN_TICK.get(kind, entry.cost[0]) + n * per_robot + pairs)

@@ -23,7 +23,7 @@ class AppKind:
 
     name: str
     title: str  # in words, for messages
-    engine: str  # the engine kind it shows (``presets.build.kind_of``, a key of ``BUILDERS``)
+    engine: str  # the engine kind it shows (``presets.build.kind_of``: the name of a ``presets.kinds.KINDS`` entry)
     refuse: Callable[[Scenario], None]  # raises PresetError saying why a scenario is not this kind's
     make_driver: Callable[[Session], Driver]
     notes: str  # teaching notes ``static/notes/<notes>.md``

@@ -22,7 +22,7 @@ from shoal.engine.kinds.fleet_probe import RobotView, robot_view
 from shoal.engine.robots.dvc import TABLE_4_1
 from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.engine.robots.world import WorldSpec
-from shoal.presets.build import build_fleet, check_world, fleet_params_for, kind_of, world_for
+from shoal.presets.build import build_fleet, check_world, fleet_keywords, fleet_params_for, kind_of, world_for
 from shoal.presets.io import PresetError, kept_fields
 from shoal.presets.models import Scenario
 
@@ -107,8 +107,8 @@ class FleetDriver(BaseDriver):
                 or any(getattr(a, f) != getattr(b, f) for f in fixed))
 
     def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
-        params, slo = fleet_params_for(new), slo_retune(old, new)  # slo: the running fleet keeps its beliefs
-        return {**{k: getattr(params, k) for k in Fleet.LIVE - {"slo"}}, **({"slo": slo} if slo else {})}
+        slo = slo_retune(old, new)  # slo: the running fleet keeps its beliefs
+        return {**fleet_keywords(new), **({"slo": slo} if slo else {})}
 
     # ------------------------------------------------------------------ world edits
     def _world_changed(self) -> None:

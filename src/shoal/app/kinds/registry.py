@@ -1,31 +1,43 @@
 """The scene kinds the app shows, one for each engine kind: a scenario is shown by the app kind
-of the engine kind it describes (:func:`shoal.presets.build.kind_of`, the one rule that tells
-them apart, Mai's SLO swarm before the acoustic swarm before the fleet before the Chapter 3
-swarm).
-
-A new kind is one more module in :mod:`shoal.app.kinds` and one more entry in ``KINDS``."""
+of the engine kind it describes (:func:`shoal.presets.kinds.kind_for`, the one rule that tells
+them apart). Each kind's registry entry (:data:`shoal.presets.kinds.KINDS`) names the module
+whose ``KIND`` shows it: the built-in ones here, a plug-in's in its own package."""
 
 from __future__ import annotations
 
 import functools
+import importlib
 
 from shoal.presets import io as presets_io
-from shoal.presets.build import kind_of
+from shoal.presets import kinds as scene_kinds
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
 from ..session.session import Session
-from . import fleet, mai, sonar, swarm
 from .base import AppKind
 
-KINDS: tuple[AppKind, ...] = (swarm.KIND, fleet.KIND, sonar.KIND, mai.KIND)
-BY_NAME = {kind.name: kind for kind in KINDS}
-BY_ENGINE = {kind.engine: kind for kind in KINDS}
+
+def _app_kind(module: str) -> AppKind:
+    """The ``KIND`` of an app module a kind's registry entry names (code the owner installed)."""
+    kind = getattr(importlib.import_module(module), "KIND", None)
+    if not isinstance(kind, AppKind):
+        raise TypeError(f"{module}.KIND is not an AppKind")
+    return kind
+
+
+@functools.cache
+def app_kinds() -> dict[str, AppKind]:
+    """Engine kind → the app kind that shows it, for every registered kind with an app module."""
+    return {k.name: _app_kind(k.app) for k in scene_kinds.KINDS.values() if k.app is not None}
+
+
+def kinds() -> tuple[AppKind, ...]:
+    return tuple(app_kinds().values())
 
 
 def kind_for(scenario: Scenario) -> AppKind:
     """The kind that shows ``scenario`` (:class:`PresetError` if none does)."""
-    kind = BY_ENGINE.get(kind_of(scenario))
+    kind = app_kinds().get(scene_kinds.kind_for(scenario).name)
     if kind is None:
         raise PresetError([f"{scenario.name}: no view for this kind of scene"])
     return kind
@@ -33,7 +45,7 @@ def kind_for(scenario: Scenario) -> AppKind:
 
 def app_kind(session: Session) -> AppKind:
     """The plug-in behind ``session``."""
-    return BY_NAME[session.kind.name]
+    return next(k for k in kinds() if k.name == session.kind.name)
 
 
 def check_supported(scenario: Scenario) -> Scenario:

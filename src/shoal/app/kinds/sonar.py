@@ -22,7 +22,7 @@ import numpy as np
 from shoal.engine.acoustics.propagation import snr_db
 from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams
-from shoal.presets.build import build_sonar, kind_of, sonar_params_for
+from shoal.presets.build import build_sonar, kind_of, sonar_keywords, sonar_params_for
 from shoal.presets.io import PresetError, kept_fields
 from shoal.presets.models import Scenario
 
@@ -103,8 +103,9 @@ class SonarDriver(BaseDriver):
                 or any(getattr(a, f) != getattr(b, f) for f in fixed))
 
     def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
-        params, slo = _params(new), slo_retune(old, new)  # slo: the running swarm keeps its beliefs
-        return {**{k: getattr(params, k) for k in AcousticSwarm.LIVE - {"slo"}}, **({"slo": slo} if slo else {})}
+        _params(new)  # (a combination the engine refuses: PresetError by field)
+        slo = slo_retune(old, new)  # slo: the running swarm keeps its beliefs
+        return {**sonar_keywords(new), **({"slo": slo} if slo else {})}
 
     def _refresh_snr(self) -> None:
         s, p = self.sim.state, self.sim.params

@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from shoal.engine.core.objectives import Objective
+from shoal.engine.core.objectives import OBJECTIVES, Objective
 from shoal.engine.kinds.swarm import Simulation
 from shoal.engine.pso import tuning
 from shoal.engine.pso.laws import LAWS
-from shoal.presets.build import build_simulation, kind_of, law_for, objective_for, policy_for, slo_unit
+from shoal.presets.build import build_simulation, kind_of, objective_for, slo_unit, swarm_keywords
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
@@ -82,10 +82,7 @@ class SwarmDriver(BaseDriver):
 
     def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
         slo = slo_retune(old, new)  # errors, selection, neighbourhood…: the running SLO source keeps its beliefs
-        c = new.controller
-        return dict(policy=policy_for(c), law=law_for(c), dt=float(c.dt), robots=new.sim.robots,
-                    attractors=new.bests.attractors, pbest_order=new.bests.pbest_order,
-                    objective=objective_for(new.objective), **({"slo": slo} if slo else {}))
+        return {**swarm_keywords(new), **({"slo": slo} if slo else {})}
 
     def frame(self, t: float) -> Frame:
         return frame_of(self.sim.state, t, accelerations=True)
@@ -218,7 +215,9 @@ def _mode_changes(s: Session, target: str) -> dict[str, Any] | None:
 
 
 def _dims(s: Session) -> tuple[str, ...]:
-    return DIMS[: s.scenario.sim.d]
+    """The names of the swarm's axes: x, y, z up to three; x1 … xd beyond (the arena draws the first two)."""
+    d = s.scenario.sim.d
+    return DIMS[:d] if d <= len(DIMS) else tuple(f"x{i + 1}" for i in range(d))
 
 
 def _dim(s: Session) -> str:
@@ -233,8 +232,9 @@ def _pick_dim(panel: PanelAPI, value: Any) -> None:
 
 def _readout(s: Session) -> str:
     r, c = s.readout(), s.scenario.controller
-    if not LAWS[c.law].adapted:
-        return "*Standard PSO: ĉ = c1 + c2 has no unit and nothing bounds the speed.*"
+    law = LAWS[c.law]
+    if not law.adapted:
+        return f"*{law.label}: ĉ = c1 + c2 has no unit and nothing bounds the speed.*"
     if c.mode == "physical":
         return (f"β = {fmt(r['beta'])} · U_j = {fmt(r['U_j'], 'm/s')} · A− = {fmt(r['A_minus'], 'm/s²')}  \n"
                 "*ω, c1 and c2 follow from U, A+ and Δt; moving one of them switches to raw mode.*")
@@ -280,7 +280,7 @@ def _compare(s: Session) -> dict[str, dict[str, Any]]:
     also on the other positions (oracle vs SLO)."""
     sc = s.scenario
     out: dict[str, dict[str, Any]] = {}
-    if LAWS[sc.controller.law].adapted:
+    if LAWS[sc.controller.law].adapted and "standard" in LAWS:
         out["standard PSO law (same ω, c1, c2)"] = {"controller.law": "standard", **_raw_coefficients(s)}
     for law in LAWS.names():
         if LAWS[law].adapted and law != sc.controller.law:
@@ -357,7 +357,7 @@ class _Figures:
 
     def _key(self, s: Session) -> tuple:
         omega, c_hat = driver(s).coefficients()
-        return round(omega, 9), round(c_hat, 9), _adapted(s.scenario)
+        return round(omega, 9), round(c_hat, 9), LAWS[s.scenario.controller.law].region == "adapted"
 
     def refresh_stability(self, panel: PanelAPI, handle: Any) -> None:
         key = self._key(panel.session)
@@ -391,8 +391,11 @@ def panel(api: PanelAPI) -> KindPanel:
     return KindPanel(
         tabs=(
             Tab("Controller", (
-                Dropdown("controller.law", "law", LAWS.names(),
-                         hint="velocity update: standard PSO [2.1] or Adapted PSO [3.11]"),
+                Dropdown("controller.law", "law", lambda s: LAWS.names(),
+                         hint="velocity update: standard PSO [2.1], Adapted PSO [3.11] or an installed plug-in's"),
+                Dropdown("objective.kind", "objective", lambda s: OBJECTIVES.names(),
+                         hint="what the swarm optimises: the distance to the source, a benchmark or an installed "
+                              "plug-in's function"),
                 Dropdown("controller.mode", "mode", MODES, write=_mode_changes,
                          hint="raw: set ω, c1, c2; physical: set U, A+, Δt and derive ω, ĉ"),
                 Slider("controller.dt", "Δt [s]", 0.01, 2.0, 0.01,

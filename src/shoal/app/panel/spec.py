@@ -19,6 +19,7 @@ from typing import Any, Callable, Protocol, Union
 
 import annotated_types as at
 
+from shoal.presets.kinds import plugin_sections
 from shoal.presets.models import Scenario
 
 from ..session.session import Session
@@ -77,7 +78,8 @@ class Host(PanelAPI, Protocol):
 def field_bounds(path: str) -> tuple[float, float]:
     """The closed range [lo, hi] the model allows for a numeric field ``section.name`` (±inf when open)."""
     section, name = path.split(".")
-    model = Scenario.model_fields[section].annotation
+    field = Scenario.model_fields.get(section)
+    model = field.annotation if field is not None else plugin_sections()[section]  # a plug-in kind's section
     model = next((a for a in getattr(model, "__args__", (model,)) if hasattr(a, "model_fields")), model)
     lo, hi = -math.inf, math.inf
     for m in model.model_fields[name].metadata:  # type: ignore[union-attr]

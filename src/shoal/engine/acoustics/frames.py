@@ -54,11 +54,12 @@ def own_rows(a: np.ndarray | None, runs: int, robots: int) -> np.ndarray | None:
 
 def own_decision(info: LocInfo, runs: int, robots: int) -> dict[str, Any]:
     """The LocInfo fields of every robot's own row (f_g and improved left to the caller)."""
-    out = {k: own_rows(getattr(info, k), runs, robots)
-           for k in ("candidate", "fitness", "valid", "partner", "points", "forward", "kept", "selected")}
+    fields = ("candidate", "fitness", "valid", "partner", "points", "forward", "kept", "selected")
+    out: dict[str, Any] = {k: own_rows(getattr(info, k), runs, robots) for k in fields}
     t = info.triangles
-    out["triangles"] = None if t is None else Triangles(
-        *(own_rows(getattr(t, k), runs, robots) for k in ("members", "centroid", "direction", "normal", "valid")))
+    rows = [own_rows(getattr(t, k), runs, robots) for k in ("members", "centroid", "direction", "normal", "valid")] \
+        if t is not None else []
+    out["triangles"] = None if t is None else Triangles(*rows)  # type: ignore[arg-type]  # (each row set: t's are)
     return out
 
 
@@ -74,5 +75,6 @@ def in_own_frames(strategy: Strategy, f_hat: np.ndarray, frames: np.ndarray, sen
 
     per_frame = Sensed(intensity=rep(sensed.intensity), rho=rep(sensed.rho), rays=rep(sensed.rays))
     flat = frames.reshape(R * N, N, 2)
-    _, _, _, info = strategy.update(rep(f_hat), flat, flat, per_frame, frame_draws(rngs, N))
+    draws: Any = frame_draws(rngs, N)  # type: ignore[arg-type]  # (one generator per run)
+    _, _, _, info = strategy.update(np.repeat(f_hat, N, axis=0), flat, flat, per_frame, draws)
     return own_decision(info, R, N)

@@ -73,7 +73,9 @@ class Strategy(Protocol):
     needs: ClassVar[tuple[str, ...]]
     hydrophones: ClassVar[int]
     global_best: ClassVar[GlobalBest]
-    a: float
+
+    @property
+    def a(self) -> float: ...  # the forgetting scale [7.2] (a frozen dataclass field)
 
     def update(self, f_hat: np.ndarray, y: np.ndarray, x: np.ndarray, sensed: Sensed, rng: Rngs) -> Update:
         """``f_hat`` (R, N), ``y`` and ``x`` (R, N, 2) → (f_hat, y, y_g (R, 2), info)."""
@@ -226,7 +228,7 @@ class GTPSO:
         return f_hat, y, y_g, info
 
 
-STRATEGIES: Registry[type[Strategy]] = Registry("strategy", APSO, XPSO, BPSO, XBPSO, GTPSO)
+STRATEGIES: Registry[type[Strategy]] = Registry[type[Strategy]]("strategy", APSO, XPSO, BPSO, XBPSO, GTPSO)
 
 
 def make_strategy(name: str, **params: float | bool) -> Strategy:

@@ -73,7 +73,7 @@ def surrogate(
         raise ValueError(f"rngs: need one generator per run ({R}), got {len(rngs)}")
     K = band.K
     pair = H == 2 and D is not None and heading is not None
-    m = _cycles(band, D) if pair else np.zeros(0, dtype=int)
+    m = _cycles(band, D) if pair and D is not None else np.zeros(0, dtype=int)
     M = m.size
     n_src = N if source_per_robot else 1
     ps, z_cross, chi, z_peak, z_lag = (np.empty((R,) + s) for s in ((n_src,), (N, H), (N, H), (N, M), (N,)))
@@ -88,7 +88,7 @@ def surrogate(
     a = np.asarray(r_ref, dtype=float).reshape(-1, 1, 1) / clamp_range(dist)  # (R, N, H)
     sig = a**2 * ps[..., None]
     f_a = sig + np.sqrt(2.0 * sig / K) * z_cross + chi
-    if not pair:
+    if not pair or D is None:
         return SurrogateReading(intensity=f_a, bearing=None)
 
     d = (dist[..., 1] - dist[..., 0]) / band.c  # true lag, bow hears first → d > 0

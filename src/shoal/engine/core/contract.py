@@ -12,8 +12,10 @@ Mai's SLO swarm) simulates ``runs`` independent seeded runs at once and exposes:
   ``ValueError`` naming the key, and a refused call changes nothing. It returns the names that
   changed.
 
-:meth:`Info.columns` gives the kind's own metric columns by name, one value per run; the
-recorder writes the common columns (run, step, t, best fitness, speeds) followed by these.
+:meth:`Info.columns` gives the kind's own metric columns by name, one value per run, as the
+class's ``COLUMNS`` schema declares them (name, unit, dtype, description); the recorder writes
+the common columns (run, step, t, best fitness, speeds) followed by these. A kind that
+optimises nothing has no ``best_fitness`` in its state and none in its metrics.
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ from __future__ import annotations
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
+
+from .schema import Schema
 
 
 @runtime_checkable
@@ -32,11 +36,7 @@ class State(Protocol):
     u: np.ndarray  # (R, N, d) velocities
     heading: np.ndarray  # (R, N) direction of each robot
     status: np.ndarray  # (R, N) int8, 0 = active
-
-    @property
-    def best_fitness(self) -> np.ndarray:
-        """(R,) the best fitness each run has found so far."""
-        ...
+    # and, for a kind that optimises something, ``best_fitness`` (R,): the best each run found so far
 
 
 @runtime_checkable
@@ -56,6 +56,7 @@ class Engine(Protocol):
     """A scene kind's engine: ``runs`` seeded runs (``first_run`` … ``first_run + runs − 1``)."""
 
     LIVE: ClassVar[frozenset[str]]  # the keywords :meth:`retune` accepts
+    COLUMNS: ClassVar[Schema]  # the columns of :meth:`Info.columns`, in order
     runs: int
     seed: int
     first_run: int

@@ -2,7 +2,8 @@
 
 Every objective returns a value per robot, shape ``(runs, robots)``, and says whether
 it is maximised; :meth:`Objective.is_better` is the single comparison the swarm uses
-(docs/readings.md, "Fitness or cost").
+(docs/readings.md, "Fitness or cost"). :data:`OBJECTIVES` is their registry: a plug-in adds its
+own vectorised function there.
 """
 
 from __future__ import annotations
@@ -12,9 +13,7 @@ from typing import Callable, Literal
 
 import numpy as np
 
-ObjectiveName = Literal[
-    "source-distance", "linear", "sphere", "rastrigin", "ackley", "rosenbrock", "griewank"
-]
+from .registry import Registry
 
 
 def source_distance(x: np.ndarray, source: np.ndarray) -> np.ndarray:
@@ -59,23 +58,49 @@ def griewank(x: np.ndarray) -> np.ndarray:
     return 1.0 + np.sum(x**2, axis=-1) / 4000.0 - np.prod(np.cos(x / np.sqrt(i)), axis=-1)
 
 
-_BENCHMARKS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
-    "sphere": sphere,
-    "rastrigin": rastrigin,
-    "ackley": ackley,
-    "rosenbrock": rosenbrock,
-    "griewank": griewank,
-}
+Frame = Literal["x", "offset", "scaled"]  # f sees x itself, x − source, or (x − source)/scale
+
+
+@dataclass(frozen=True)
+class ObjectiveFunction:
+    """One objective of :data:`OBJECTIVES`: a vectorised ``f`` of positions (..., d) → (...)
+    (a numpy function, or a numba-compiled one), whether it is maximised, and the frame it sees.
+    A plug-in's objective sees ``(x − source)/scale`` as the benchmarks do, so a preset's
+    ``objective.source`` and ``objective.scale`` place and size it on the scene."""
+
+    name: str
+    label: str
+    f: Callable[[np.ndarray], np.ndarray]
+    maximise: bool = False
+    frame: Frame = "scaled"
+
+
+OBJECTIVES: Registry[ObjectiveFunction] = Registry(
+    "objective",
+    ObjectiveFunction("source-distance", "distance to the source", lambda z: np.linalg.norm(z, axis=-1),
+                      frame="offset"),  # Alg. 1
+    ObjectiveFunction("linear", "f = x1 (maximised)", linear, maximise=True, frame="x"),  # §3.5
+    ObjectiveFunction("sphere", "sphere", sphere),
+    ObjectiveFunction("rastrigin", "Rastrigin", rastrigin),
+    ObjectiveFunction("ackley", "Ackley", ackley),
+    ObjectiveFunction("rosenbrock", "Rosenbrock", rosenbrock),
+    ObjectiveFunction("griewank", "Griewank", griewank),
+)
 
 
 @dataclass(eq=False)
 class Objective:
-    """A named objective; benchmark functions are evaluated at ``(x − source)/scale``
-    so that their optimum sits on the source and their features fit the arena."""
+    """A named objective of :data:`OBJECTIVES`; benchmark functions (and plug-ins') are
+    evaluated at ``(x − source)/scale`` so that their optimum sits on the source and their
+    features fit the arena. ``source`` has as many components as the swarm or more (the first
+    d are used; missing ones are 0)."""
 
-    name: ObjectiveName = "source-distance"
+    name: str = "source-distance"
     source: np.ndarray = field(default_factory=lambda: np.zeros(2))
     scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        OBJECTIVES.pick(self.name)
 
     def __eq__(self, other: object) -> bool:
         return (isinstance(other, Objective) and (self.name, self.scale) == (other.name, other.scale)
@@ -83,15 +108,18 @@ class Objective:
 
     @property
     def maximise(self) -> bool:
-        return self.name == "linear"
+        return OBJECTIVES[self.name].maximise
+
+    def _source(self, d: int) -> np.ndarray:
+        src = self.source[:d]
+        return src if src.shape[-1] == d else np.concatenate([src, np.zeros(d - src.shape[-1])])
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
-        if self.name == "source-distance":
-            return source_distance(x, self.source[: x.shape[-1]])
-        if self.name == "linear":
-            return linear(x)
-        z = (x - self.source[: x.shape[-1]]) / self.scale
-        return _BENCHMARKS[self.name](z)
+        entry = OBJECTIVES[self.name]
+        if entry.frame == "x":
+            return entry.f(x)
+        z = x - self._source(x.shape[-1])
+        return np.asarray(entry.f(z if entry.frame == "offset" else z / self.scale), dtype=float)
 
     def is_better(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """True where fitness ``a`` beats ``b`` (strictly)."""

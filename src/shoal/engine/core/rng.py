@@ -65,5 +65,5 @@ class BlockDraws:
         unused = (self.ticks - self.used) * int(np.prod(self.shape))
         if unused:
             for g in self.rngs:
-                g.bit_generator.advance(-unused)
+                g.bit_generator.advance(-unused)  # type: ignore[attr-defined]  # (PCG64's; numpy's stubs lack it)
         self.used = self.ticks

@@ -27,11 +27,12 @@ def run_to_dir(
         ) as metrics:
             traj.write(trajectory_header(sim.state.x.shape[-1]) + "\n")
             write_trajectory(traj, trajectory_rows(sim.state, sim.t))
-            write_metrics(metrics, metric_table(sim.state, sim.info(), sim.t), header=True)
+            columns = type(sim).COLUMNS
+            write_metrics(metrics, metric_table(sim.state, sim.info(), sim.t), columns, header=True)
             for k in range(steps):
                 info = sim.step()
                 write_trajectory(traj, trajectory_rows(sim.state, sim.t))
-                write_metrics(metrics, metric_table(sim.state, info, sim.t))
+                write_metrics(metrics, metric_table(sim.state, info, sim.t), columns)
                 if on_step is not None:
                     on_step(k)
     return Path(out)

@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar, Literal, cast
 
 import numpy as np
 
 from ..core.contract import check_live
 from ..core.rng import run_generators
+from ..core.schema import Column, Schema
 from ..robots import kernels
 from ..robots.dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
 from ..robots.laws import ROBOT_LAWS, Inertia, Limits, rotational_energy_factor
@@ -77,7 +78,8 @@ class FleetParams:
         law = ROBOT_LAWS[self.law]
         coefficients = {None: kernels.CONSTANT, "omni": kernels.DVC_OMNI, "nonomni": kernels.DVC_NONOMNI}[
             law.dvc if self.dvc else None]
-        c = (tuple(float(v) for v in self.c) + (0.0,) * 5)[: law.terms] + (0.0,) * (5 - law.terms)
+        c = cast(tuple[float, float, float, float, float],
+                 (tuple(float(v) for v in self.c) + (0.0,) * 5)[: law.terms] + (0.0,) * (5 - law.terms))
         wm = w_max(self.v_max, self.dt, self.rotational_energy, self.robot_radius) if coefficients else 0.0
         return kernels.TickParams(
             law=kernels.LAWS.index(self.law), coefficients=coefficients, drive=kernels.DRIVES.index(self.drive),
@@ -115,6 +117,16 @@ class FleetState:
     omega: np.ndarray | None = None  # (R, N)
     c: np.ndarray | None = None  # (n, R, N) coefficients in force this tick
     a: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+COLUMNS: Schema = (
+    Column("com_fitness", "m", "float", "CoM fitness [4.17]: the mean x_1 of all robots"),
+    Column("collided", "count", "int", "robots disabled by a collision (an overlap deeper than "
+                                        "robot.contact_tolerance)"),
+    Column("stalled", "count", "int", "operational robots slower than the stall speed for the stall time"),
+    Column("operational", "count", "int", "robots not disabled"),
+    Column("layers_passed", "count", "int", "obstacle layers whose x lies below the CoM"),
+)
 
 
 @dataclass
@@ -179,6 +191,7 @@ class Fleet:
     LIVE: ClassVar[frozenset[str]] = frozenset(
         {"law", "dvc", "dt", "omega", "c", "alpha", "beta", "gamma", "c1_share", "sensing_range", "r_min", "s_min",
          "rotational_energy", "update", "guard", "slo"})
+    COLUMNS: ClassVar[Schema] = COLUMNS
 
     def __init__(self, *, world: WorldSpec, robots: int, params: FleetParams | None = None,
                  runs: int = 1, seed: int = 0, first_run: int = 0, positions: PositionSource | None = None,
@@ -250,7 +263,7 @@ class Fleet:
 
     def _build_spaces(self) -> None:
         p, s = self.params, self.state
-        body = "dynamic" if p.motion == "physics" else "kinematic"
+        body: Literal["kinematic", "dynamic"] = "dynamic" if p.motion == "physics" else "kinematic"
         self._spaces = [RunSpace(self.world, s.x[r], p.robot_radius, body_type=body) for r in range(self.runs)]
         self._stale = False
         if p.motion == "physics":
@@ -364,7 +377,7 @@ class Fleet:
             kernels.touching_bodies(self._body_positions(), moved, self._kernel_params(), world, grid, out)
             return out & (self.state.status == ACTIVE)
         for r, sp in enumerate(self.spaces):
-            for i in np.flatnonzero(moved[r]):
+            for i in map(int, np.flatnonzero(moved[r])):
                 bodies = sp.contacts_of(i, -self.params.contact_tolerance)
                 if bodies:
                     out[r, i] = True

@@ -21,6 +21,7 @@ import numpy as np
 from ..core.compiled_draws import CompiledDraws
 from ..core.contract import check_live
 from ..core.rng import component_generators
+from ..core.schema import Column, Schema
 from ..pso.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
 from ..pso.spso_kernels import local_velocity
 from ..slo import metrics
@@ -191,6 +192,22 @@ class SLOState:
 
 METRICS = ("e_abs", "e_rel", "e_ang", "distance")  # statistics (metrics.STATS) of pair values
 STATS = metrics.STATS
+_METRIC_WORDS = {"e_abs": ("unit", "absolute distance error |d̂_ij − d_ij| of neighbour pairs"),
+                 "e_rel": ("", "relative distance error of neighbour pairs"),
+                 "e_ang": ("rad", "angular error of neighbour pairs' estimated directions"),
+                 "distance": ("unit", "distance between particles, over all unordered pairs")}
+_STAT_WORDS = {"mean": "mean", "std": "standard deviation", "sem": "standard error of the mean", "median": "median",
+               "count": "number of pairs behind the statistics"}
+COLUMNS: Schema = (
+    Column("generation_best", "objective", "float", "min_i f(x_i) of this generation"),
+    Column("best_so_far", "objective", "float", "the best f of any generation so far"),
+    Column("quality_met_at", "", "float", "first generation with best ≤ the quality threshold T (inf if not yet)"),
+    *(Column(f"{m}_{k}", "count" if k == "count" else unit, "float", f"{_STAT_WORDS[k]} of the {what}"
+             + ("" if k == "count" else " (NaN with no pair)") + (" [thesis length units]" if unit == "unit" else ""))
+      for m, (unit, what) in _METRIC_WORDS.items() for k in STATS),
+    Column("dead_reckoning", "", "float", "share of the estimates carried by dead reckoning (out of range)"),
+    Column("round_trip", "unit", "float", "mean round-trip error [3.8] of closed triangles [thesis length units]"),
+)
 
 
 @dataclass
@@ -293,6 +310,7 @@ class SLOSwarm:
     LIVE: ClassVar[frozenset[str]] = frozenset(
         {"selection", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1", "entry_policy", "neighbourhood",
          "neighbourhood_param", "errors", "objective", "walk_speed", "quality_threshold"})
+    COLUMNS: ClassVar[Schema] = COLUMNS
 
     def __init__(self, *, runs: int = 1, seed: int = 0, first_run: int = 0, **params) -> None:
         if runs < 1:

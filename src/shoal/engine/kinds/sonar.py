@@ -56,6 +56,7 @@ from ..acoustics.strategies import LocInfo, Sensed, Strategy, initial_memory, ma
 from ..acoustics.surrogate import surrogate
 from ..core.contract import check_live
 from ..core.rng import run_generators
+from ..core.schema import Column, Schema
 from ..pso.laws import adapted_velocity, motion_heading
 from ..pso.tuning import from_beta, split
 from ..robots.dvc import dvc_nonomni, forward_guard, w_max
@@ -191,6 +192,21 @@ class Decision:
     ring: np.ndarray  # (R', 2) y_g, or (R', N, 2) where each robot believes it is (SLO)
 
 
+COLUMNS: Schema = (
+    Column("com_x", "m", "float", "x of the swarm's centre of mass (CoM)"),
+    Column("com_y", "m", "float", "y of the CoM"),
+    Column("source_x", "m", "float", "x of the acoustic source"),
+    Column("source_y", "m", "float", "y of the acoustic source"),
+    Column("com_dist", "m", "float", "|CoM − source|"),
+    Column("converged", "", "int", "1 once the CoM has come within d_c of the source, else 0"),
+    Column("steps_to_converge", "", "int", "the first tick it did, −1 if none yet"),
+    Column("frac_inside_ring", "", "float", "share of robots within the escort ring's radius of the source (0 "
+                                            "without a ring)"),
+    Column("mean_dist_to_source", "m", "float", "mean robot–source distance"),
+    Column("contacts", "count", "int", "robots touching another (collisions are not enforced)"),
+)
+
+
 @dataclass
 class SonarInfo:
     """Per-run metrics after a tick."""
@@ -228,6 +244,8 @@ class AcousticSwarm:
     the source's motion, …) and, on SLO positions, the localisation keywords (``slo``)."""
 
     LIVE: ClassVar[frozenset[str]] = frozenset({f.name for f in fields(SonarParams)} - _FIXED | {"slo"})
+    COLUMNS: ClassVar[Schema] = COLUMNS
+    state: SonarState
 
     def __init__(self, params: SonarParams | None = None, *, robots: int = 10, runs: int = 1, seed: int = 0,
                  first_run: int = 0, positions: PositionSource | None = None) -> None:

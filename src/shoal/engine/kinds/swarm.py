@@ -16,6 +16,7 @@ import numpy as np
 from ..core.contract import check_live
 from ..core.objectives import Objective
 from ..core.rng import BlockDraws, run_generators
+from ..core.schema import Column, Schema
 from ..pso import kernels
 from ..pso.bests import best_index, global_best, update_personal
 from ..pso.coeffs import CoefficientPolicy
@@ -70,7 +71,7 @@ class SwarmState:
 
     def copy(self) -> "SwarmState":
         values = {f.name: getattr(self, f.name) for f in fields(self)}
-        return SwarmState(**{k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in values.items()})
+        return SwarmState(**{k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in values.items()})  # type: ignore[arg-type]
 
     def turns(self) -> Turns:
         """The pending headings of a compiled tick (new ones if the swarm's shape changed)."""
@@ -97,6 +98,16 @@ def _set_heading(s: SwarmState, value: np.ndarray) -> None:
 
 
 SwarmState.heading = property(_get_heading, _set_heading)  # type: ignore[assignment]
+
+
+COLUMNS: Schema = (
+    Column("max_component", "m/s", "float", "highest velocity component |u_j| in the run (m per tick for standard "
+                                            "PSO, whose update [2.2] has no Δt)"),
+    Column("omega", "", "float", "inertia weight ω in force during the last tick (mean over robots; NaN before the "
+                                 "first)"),
+    Column("c_hat", "m/s", "float", "ĉ = Σ c_n in force during the last tick (no unit for standard PSO; NaN before "
+                                    "the first)"),
+)
 
 
 @dataclass
@@ -150,6 +161,7 @@ class Simulation:
 
     LIVE: ClassVar[frozenset[str]] = frozenset(
         {"policy", "law", "dt", "slo", "robots", "attractors", "pbest_order", "objective"})
+    COLUMNS: ClassVar[Schema] = COLUMNS
 
     def __init__(
         self,
@@ -207,7 +219,8 @@ class Simulation:
         """Start again from step 0 with ``seed`` (or the current seed)."""
         if seed is not None:
             self.seed = int(seed)
-        self._rngs, self._block = run_generators(self.seed, self.first_run, self.runs), None
+        self._rngs = run_generators(self.seed, self.first_run, self.runs)
+        self._block: BlockDraws | None = None
         self._setup: tuple | None = None
         x, u = self._spawn(self._robots)
         self.state = self._fresh_state(x, u)

@@ -9,12 +9,13 @@ random draws are ``(n, runs, robots, d)`` and coefficients ``c`` are ``(n,)`` or
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Literal
+from typing import Any, Callable, Literal
 
 import numpy as np
 from scipy.special import expit
 
 from ..core.registry import Registry
+from . import stability
 
 Squash = Literal["sgn", "tanh", "logistic"]
 
@@ -79,14 +80,40 @@ def adapted_velocity(
 Velocity = Callable[[np.ndarray, np.ndarray, np.ndarray, "np.ndarray | float", np.ndarray, float], np.ndarray]
 
 
+Region = Literal["adapted", "order-2"]  # the (ω, ĉ) regions the panel draws: [3.13]/[3.14] or [3.9]
+
+
 @dataclass(frozen=True)
 class VelocityLaw:
-    """One Chapter 3 velocity law and what the rest of Shoal needs to know about it."""
+    """One Chapter 3 velocity law and what the rest of Shoal needs to know about it: how it
+    moves, its coefficient rule and its stability region."""
 
     name: str
     label: str
-    adapted: bool  # bounded per-component terms [3.11] with the position update x + Δt u [3.10]
+    adapted: bool  # bounded per-component terms [3.11] with the position update x + Δt u [3.10]; the
+    # physical tuning (U, A+, Δt → ω, ĉ [3.32]–[3.35]) and the speed bounds U, U_j [3.26] apply
     velocity: Velocity
+    omega_range: tuple[float, float] | None = None  # raw-mode ω it needs, lo <= ω < hi (None: the model's range)
+    region: Region = "order-2"  # its stability region in the (ω, ĉ) plane
+    rule: str = ""  # the coefficient rule in words, with its equation (the preset names it when refused)
+
+    def check_omega(self, omega: float) -> str | None:
+        """Why raw ``omega`` does not suit this law (None if it does)."""
+        if self.omega_range is None:
+            return None
+        lo, hi = self.omega_range
+        return None if lo <= omega < hi else f"omega = {omega:g}: {self.label} needs {self.rule}"
+
+    def stable(self, omega: float, c_hat: float) -> bool:
+        """Is (ω, ĉ) inside this law's stability region?"""
+        if self.region == "adapted":
+            return bool(stability.adapted_stable(omega, c_hat, robot_subset=True))
+        return bool(stability.order2_stable(omega, c_hat))
+
+    @property
+    def c_unit(self) -> str:
+        """The unit of ĉ = Σ c_n: a speed for a law that moves by Δt u, none for standard PSO."""
+        return "m/s" if self.adapted else ""
 
 
 def _standard(u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | float, r: np.ndarray,
@@ -102,12 +129,14 @@ def _adapted(kind: Squash) -> Velocity:
     return velocity
 
 
+_ADAPTED_RULE: dict[str, Any] = dict(omega_range=(0.0, 1.0), region="adapted", rule="0 <= omega < 1 [3.14]")
 LAWS: Registry[VelocityLaw] = Registry(
     "law",
-    VelocityLaw("standard", "Standard PSO", False, _standard),  # [2.1], [2.2]
-    VelocityLaw("adapted-sgn", "Adapted PSO (sgn)", True, _adapted("sgn")),  # [3.11]
-    VelocityLaw("adapted-tanh", "Adapted PSO (tanh)", True, _adapted("tanh")),  # Rossides §3.2.1 smooth option
-    VelocityLaw("adapted-logistic", "Adapted PSO (logistic)", True, _adapted("logistic")),
+    VelocityLaw("standard", "Standard PSO", False, _standard),  # [2.1], [2.2]; order-2 region [3.9]
+    VelocityLaw("adapted-sgn", "Adapted PSO (sgn)", True, _adapted("sgn"), **_ADAPTED_RULE),  # [3.11]
+    VelocityLaw("adapted-tanh", "Adapted PSO (tanh)", True, _adapted("tanh"),  # Rossides §3.2.1 smooth option
+                **_ADAPTED_RULE),
+    VelocityLaw("adapted-logistic", "Adapted PSO (logistic)", True, _adapted("logistic"), **_ADAPTED_RULE),
 )
 
 

@@ -110,7 +110,8 @@ def world_arrays(circles: np.ndarray, walls: np.ndarray, wall_radius: float, gri
     walls = np.ascontiguousarray(walls, dtype=float).reshape(-1, 4)
     start, items = _circle_cells(circles, grid)
     normal = np.array([segment_normal(*w) for w in walls], dtype=float).reshape(-1, 2)
-    box = np.array([segment_box(*w, float(wall_radius)) for w in walls], dtype=float).reshape(-1, 4)
+    box = np.array([segment_box(*w, float(wall_radius)) for w in walls],  # type: ignore[call-arg,type-var]
+                   dtype=float).reshape(-1, 4)  # (a compiled function: its stub takes no arguments)
     return WorldArrays(circles, start, items, walls, normal, box, float(wall_radius))
 
 

@@ -101,7 +101,7 @@ class Kinematic:
         hit = np.zeros(active.shape, dtype=bool)
         struck = np.zeros(active.shape, dtype=bool)
         for r, sp in enumerate(spaces):  # the space holds every robot at x (kept in sync)
-            for i in np.flatnonzero(active[r]):
+            for i in map(int, np.flatnonzero(active[r])):
                 start, end = tuple(x[r, i]), tuple(target[r, i])
                 if start != end:
                     contact = first_contact(sp, start, end, i)

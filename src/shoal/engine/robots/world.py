@@ -398,7 +398,7 @@ class RunSpace:
             self.robot_bodies.append(body)
             self.robot_shapes.append(shape)
             self.filters.append(pymunk.ShapeFilter(group=i + 1))
-        self._robot_index = {s: i for i, s in enumerate(self.robot_shapes)}
+        self._robot_index: dict[pymunk.Shape, int] = {s: i for i, s in enumerate(self.robot_shapes)}
         self._keys: dict[pymunk.Shape, int] | None = None
         self.dynamic = np.full(len(self.robot_bodies), body_type == "dynamic")  # (N,) bool: not disabled
         self._read, self._write = pymunk.batch.Buffer(), pymunk.batch.Buffer()
@@ -499,14 +499,15 @@ class RunSpace:
 
     def contacts_of(self, i: int, tol: float = 0.0) -> list[int | None]:
         """Bodies within ``tol`` of robot ``i``'s surface: robot indices, or None for obstacles."""
-        hits = self.space.point_query(tuple(self.robot_bodies[i].position), self.robot_radius + tol, self.filters[i])
+        x, y = self.robot_bodies[i].position
+        hits = self.space.point_query((x, y), self.robot_radius + tol, self.filters[i])
         return [self.robot_of(h.shape) for h in hits]
 
     def touching(self, tol: float = 0.0) -> np.ndarray:
         """(N,) bool: robot i is within ``tol`` m of (or overlapping) any other body."""
         q = self.space.point_query_nearest
         return np.array(
-            [q(tuple(b.position), self.robot_radius + tol, f) is not None
+            [q((b.position[0], b.position[1]), self.robot_radius + tol, f) is not None
              for b, f in zip(self.robot_bodies, self.filters)],
             dtype=bool,
         )
@@ -539,12 +540,14 @@ class RunSpace:
         """Move obstacle ``index`` to (x, y) (polygon: its vertex mean), keeping its index."""
         spec = self._spec.moved_obstacle(index, x, y)
         m = len(self.circle_shapes)
+        old: pymunk.Shape
+        new: pymunk.Shape
         if index < m:
-            old, new = self.circle_shapes[index], self._circle_shape(*spec.circles[index])
-            self.circle_shapes[index] = new
+            old, circle = self.circle_shapes[index], self._circle_shape(*spec.circles[index])
+            self.circle_shapes[index] = new = circle
         else:
-            old, new = self.polygon_shapes[index - m], self._poly_shape(spec.polygons[index - m])
-            self.polygon_shapes[index - m] = new
+            old, poly = self.polygon_shapes[index - m], self._poly_shape(spec.polygons[index - m])
+            self.polygon_shapes[index - m] = new = poly
         self.space.remove(old)
         self.space.add(new)
         self._spec, self._keys = spec, None

@@ -166,8 +166,8 @@ class Localiser:
             triangle = round_trip = None
         else:  # CSS, and the others fall back on it
             base = (loc.est, loc.kind)
-            new, kind, triangle, round_trip = SELECTIONS[p.selection].select(loc.candidates, adjacency, ranges, base,
-                                                                             p)
+            new, kind, triangle, round_trip = SELECTIONS[p.selection].select(
+                loc.candidates, adjacency, ranges, base, p)  # type: ignore[arg-type]  # (None: a selection reads none)
         # non-neighbours: dead reckoning x3 = x̂(t−1) + v*_j − v*_i [3.4], or the stale estimate
         est, kind = carry(adjacency, new, kind, b.est, v_meas, p.entry_policy == "dead_reckoning")
         return Beliefs(

@@ -140,7 +140,7 @@ def rts(
     sets = _masked_points(c).copy()  # S_e: candidates, or the resolved value at index 2
     smask = c.mask.copy()
     tri = triangles(adjacency)
-    has = tri.any(axis=-1)
+    has = np.asarray(tri.any(axis=-1))
     cfirst = np.argmax(tri, axis=-1)
     resolved = adjacency & (c.mask.sum(axis=-1) == 1)
     est = np.where(resolved[..., None], c.x3, fallback[0])
@@ -191,9 +191,14 @@ def rts(
 class RTSOptions(Protocol):
     """The localisation choices a selection may read (:class:`~.beliefs.LocaliserParams`)."""
 
-    rts_triangle: RTSTriangle
-    rts_prefer_geometric: bool
-    rts_tolerance: float
+    @property
+    def rts_triangle(self) -> RTSTriangle: ...
+
+    @property
+    def rts_prefer_geometric(self) -> bool: ...
+
+    @property
+    def rts_tolerance(self) -> float: ...
 
 
 Chosen = tuple[np.ndarray, np.ndarray, "np.ndarray | None", "np.ndarray | None"]  # est, kind, triangle, e_r

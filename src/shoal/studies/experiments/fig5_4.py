@@ -109,7 +109,9 @@ def run(
     jobs = [ch.fleet_job(c, "", runs, duration, positions=True) for c in CASES]
     res = run_jobs(jobs, workers=workers, progress=progress, desc="fig5-4", simulate=ch.simulate_fleet,
                    merge=ch.merge)
-    world = world_for(CASES[0].scenario().world)
+    world_model = CASES[0].scenario().world
+    assert world_model is not None  # (a fleet's case)
+    world = world_for(world_model)
     rows, stats = [], {}
     for c in CASES:
         b = res[(c.name, "")]

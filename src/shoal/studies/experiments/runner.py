@@ -285,7 +285,7 @@ def iter_jobs(
     for c in chunks:
         expected[c.job.key] += 1
     with _Progress(sum(j.runs for j in jobs), progress, desc) as bar, \
-            closing(sched.map_unordered(_simulate_chunk, chunks)) as results:
+            closing(sched.map_unordered(_simulate_chunk, chunks)) as results:  # type: ignore[type-var]
         for i, (key, res) in results:
             parts[key].append(res)
             bar.update(chunks[i].runs)

@@ -110,7 +110,7 @@ class SLOBatch:
 def simulate_slo(job: SLOJob, first_run: int, runs: int) -> SLOBatch:
     """Runs ``first_run … first_run + runs − 1`` of ``job`` (``simulate`` for ``run_jobs``)."""
     swarm = build_slo(load(job.preset, list(job.overrides)), runs=runs, seed=job.seed, first_run=first_run)
-    hist = swarm.run(job.generations, KEPT)  # only the kept series are worked out
+    hist = swarm.run(job.generations, KEPT)  # type: ignore[attr-defined]  # (an SLOSwarm: only the kept series)
     return SLOBatch(job.seed, first_run, {k: hist[k] for k in KEPT})
 
 

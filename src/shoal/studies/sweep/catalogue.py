@@ -1,7 +1,8 @@
 """What a sweep of a scene can vary and what it measures, for the app's Experiment tab.
 
 :func:`fields` lists the preset fields of a scenario that make sense to vary: the ones its
-scene kind's build function reads (:data:`READS`, only the controller fields of its mode),
+scene kind's build function reads (its registry entry's ``read_fields``, only the controller
+fields of its mode),
 with their range or choices from the preset model. Names, seeds, ``sim.runs`` (the runs per
 cell), the view and the arena are never offered, nor anything that is not a number, a choice
 or a flag (vectors, schedules). A choice is offered only with the values the model accepts in
@@ -26,28 +27,13 @@ from typing import Any, Literal
 import annotated_types as at
 from pydantic import BaseModel
 
-from shoal.presets.build import kind_of
 from shoal.presets.io import PresetError, set_dotted, validate
-from shoal.presets.models import Scenario
+from shoal.presets.kinds import kind_for, metric_columns, plugin_sections
+from shoal.presets.models import Registered, Scenario
 
 from .grid import label
 from .outcomes import FIRST_PASSAGE, CellJob, simulate_cell
 
-# The fields each scene kind's build function reads (presets/build.py), by section; None = all.
-# Listed in the order offered, the kind's own controls first (the first is the default axis).
-READS: dict[str, dict[str, tuple[str, ...] | None]] = {
-    "swarm": {"controller": ("U", "A_plus", "omega", "c1", "c2", "c1_share", "dt", "law", "mode", "smooth_width"),
-              "objective": None, "bests": None, "init": None, "sim": ("robots", "d", "steps")},
-    "fleet": {"controller": ("beta", "alpha", "omega", "c1", "c2", "c3", "gamma", "c1_share", "dt", "law", "mode",
-                             "r_min", "s_min", "update", "guard", "rotational_energy"),
-              "robot": None, "sensing": None, "world": ("kind", "layers", "length", "width", "density", "start_size"),
-              "sim": ("robots", "steps")},
-    "sonar": {"acoustics": None, "sim": ("robots", "steps")},
-    "slo_swarm": {"slo": ("errors", "error_values", "selection", "neighbourhood", "neighbourhood_param", "motion",
-                          "objective", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1", "entry_policy",
-                          "walk_speed", "quality_threshold"),
-                  "sim": ("robots", "steps")},
-}
 # A swarm, fleet or acoustic swarm with an [slo] section (slo.swarm = "host") also reads these.
 SLO_HOST = ("positions", "selection", "errors", "error_values", "prediction_weight", "delta_cos", "delta_v",
             "literal_eq_3_1", "entry_policy", "neighbourhood", "neighbourhood_param", "unit")
@@ -149,13 +135,13 @@ def _bounds(metadata: list[Any]) -> dict[str, Any]:
     out: dict[str, Any] = {"lo": -math.inf, "hi": math.inf, "lo_open": False, "hi_open": False}
     for m in metadata:
         if isinstance(m, at.Ge):
-            out.update(lo=float(m.ge), lo_open=False)
+            out.update(lo=float(m.ge), lo_open=False)  # type: ignore[arg-type]  # (the model's bounds are numbers)
         elif isinstance(m, at.Gt):
-            out.update(lo=float(m.gt), lo_open=True)
+            out.update(lo=float(m.gt), lo_open=True)  # type: ignore[arg-type]
         elif isinstance(m, at.Le):
-            out.update(hi=float(m.le), hi_open=False)
+            out.update(hi=float(m.le), hi_open=False)  # type: ignore[arg-type]
         elif isinstance(m, at.Lt):
-            out.update(hi=float(m.lt), hi_open=True)
+            out.update(hi=float(m.lt), hi_open=True)  # type: ignore[arg-type]
     return out
 
 
@@ -185,8 +171,9 @@ def _leaves(model: type[BaseModel], obj: Any, prefix: str, names: tuple[str, ...
             continue
         kind = _scalar(info.annotation)
         text = info.description or name
-        if kind is bool or typing.get_origin(kind) is Literal:
-            options = (False, True) if kind is bool else typing.get_args(kind)
+        named = next((m for m in info.metadata if isinstance(m, Registered)), None)  # a registry's names
+        if kind is bool or typing.get_origin(kind) is Literal or named is not None:
+            options = named.names() if named is not None else (False, True) if kind is bool else typing.get_args(kind)
             choices = _valid_choices(raw, key, options)
             if len(choices) > 1:
                 out.append(Field(key, text, "choice", value, choices=choices))
@@ -197,7 +184,7 @@ def _leaves(model: type[BaseModel], obj: Any, prefix: str, names: tuple[str, ...
 
 def reads(scenario: Scenario) -> dict[str, tuple[str, ...] | None]:
     """The section → field names that the scenario's kind reads (its mode's controller fields)."""
-    sections = dict(READS[kind_of(scenario)])
+    sections = dict(kind_for(scenario).read_fields())
     if scenario.slo is not None and "slo" not in sections:
         sections = {"slo": SLO_HOST, **sections}
     names = sections.get("controller")
@@ -218,8 +205,10 @@ def _fields(scenario_json: str) -> tuple[Field, ...]:
     raw = scenario.model_dump(mode="json")
     out: list[Field] = []
     for section, names in reads(scenario).items():
-        model = _model_of(Scenario.model_fields[section].annotation)
-        out += _leaves(model, getattr(scenario, section), section, names, raw)
+        field = Scenario.model_fields.get(section)
+        model = _model_of(field.annotation) if field is not None else plugin_sections()[section]
+        assert model is not None, section  # (every section a kind reads is a model)
+        out += _leaves(model, scenario.section(section), section, names, raw)
     return tuple(out)
 
 
@@ -304,4 +293,5 @@ def outcomes(scenario: Scenario) -> list[Outcome]:
 def _outcomes(scenario_json: str) -> tuple[Outcome, ...]:
     columns = simulate_cell(CellJob(0, scenario_json, 0, 1, 0), 0, 1).columns  # built, not stepped
     names = [n for n in columns if n not in HIDDEN and not n.endswith(HIDDEN_SUFFIXES)]
-    return tuple(Outcome(n, *LABELS.get(n, (n.replace("_", " "), ""))) for n in names)
+    schema = {c.name: (c.description, "" if c.unit in ("", "objective") else c.unit) for c in metric_columns()}
+    return tuple(Outcome(n, *LABELS.get(n) or schema.get(n) or (n.replace("_", " "), "")) for n in names)

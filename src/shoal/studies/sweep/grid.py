@@ -101,7 +101,20 @@ def parse_axes(texts: Sequence[str], fixed: Sequence[str] = ()) -> list[Axis]:
     (``--set``, ``--steps``, ...); ``sim.runs`` is ``--runs``, not a grid axis."""
     if not texts:
         raise SweepError(["give at least one --grid dotted.key=v1,v2,..."])
-    axes = [parse_axis(t) for t in texts]
+    return check_axes([parse_axis(t) for t in texts], fixed)
+
+
+def check_axes(axes: Sequence[Axis], fixed: Sequence[str] = ()) -> list[Axis]:
+    """``axes`` if each key appears once, not among ``fixed`` and not ``sim.runs``, each with
+    distinct values (:class:`SweepError` naming the axis otherwise)."""
+    if not axes:
+        raise SweepError(["give at least one --grid dotted.key=v1,v2,..."])
+    for a in axes:
+        labels = a.labels
+        if not labels:
+            raise SweepError([f"--grid {a.key}: no values"])
+        if len(set(labels)) != len(labels):
+            raise SweepError([f"--grid {a.key}: a value is repeated ({', '.join(labels)})"])
     seen: set[str] = set()
     for a in axes:
         if a.key in seen:
@@ -111,7 +124,7 @@ def parse_axes(texts: Sequence[str], fixed: Sequence[str] = ()) -> list[Axis]:
         if a.key in fixed:
             raise SweepError([f"--grid {a.key}: also fixed by --set/--steps/--seed; give it once"])
         seen.add(a.key)
-    return axes
+    return list(axes)
 
 
 def cells(axes: Sequence[Axis]) -> list[tuple[Any, ...]]:

@@ -8,20 +8,37 @@ leave the worker: a cell never holds trajectories.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
 
 from shoal.engine.core.recorder import metric_table
+from shoal.engine.core.schema import Column, Schema
 from shoal.presets.build import build
+from shoal.presets.kinds import integer_columns
 from shoal.presets.models import Scenario
 
 from ..cost import run_cost
 from ..medians import FIRST_PASSAGE, MEDIAN_LEVEL, median, median_interval  # noqa: F401 (the Sweep tab's names)
 
-INTEGER = frozenset({"step", "collided", "stalled", "operational", "layers_passed", "converged", "steps_to_converge",
-                     "contacts"})
+# The per-run outcomes a cell adds to its kind's last metric row.
+SWEEP_COLUMNS: Schema = (
+    Column("peak_speed", "m/s", "float", "highest speed of any robot over the run"),
+    Column("time_to_converge_s", "s", "float", "an acoustic swarm's steps_to_converge × Δt (empty if it never did)"),
+)
+
+
+def integer_outcomes() -> frozenset[str]:
+    """The outcomes that are whole numbers: the int metric columns of every kind (their schemas,
+    :mod:`shoal.presets.kinds`) but ``run``, which a cell file writes itself."""
+    return _integer_outcomes(integer_columns())
+
+
+@functools.lru_cache(maxsize=4)
+def _integer_outcomes(columns: frozenset[str]) -> frozenset[str]:
+    return columns - {"run"}
 
 
 @dataclass(frozen=True)
@@ -66,9 +83,9 @@ def simulate_cell(job: CellJob, first_run: int, runs: int) -> CellBatch:
 
     peak = speed()
     info = sim.info()
-    running = getattr(sim, "running", None)
+    running = getattr(sim, "running", None)  # (an acoustic swarm's runs stop at convergence)
     for _ in range(job.steps):
-        if running is not None and not np.any(sim.running):
+        if running is not None and not np.any(sim.running):  # type: ignore[attr-defined]
             break
         info = sim.step()
         peak = np.maximum(peak, speed())

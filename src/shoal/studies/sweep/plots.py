@@ -74,7 +74,7 @@ def heat_figure(axes: Sequence[Axis], name: str, z: np.ndarray, runs: int, *, ti
     vmin, vmax = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
     im = None
     for ax, idx in zip(panels, facets):
-        zz = z[(slice(None), slice(None), *idx)].T  # rows: second axis, columns: first axis
+        zz = z[(slice(None), slice(None), *idx)].T  # type: ignore[arg-type]  # rows: second axis, columns: first axis
         im = ax.imshow(np.where(np.isfinite(zz), zz, np.nan), origin="lower", cmap="viridis", vmin=vmin,
                        vmax=vmax, aspect="auto")
         nc = np.isinf(zz)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -22,7 +22,7 @@ from shoal.presets.io import PresetError, apply_overrides, read_raw, validate
 from ..experiments.runner import Simulate, iter_jobs
 from ..experiments.schedulers import Scheduler
 from . import outcomes
-from .grid import Axis, SweepError, parse_axes
+from .grid import Axis, SweepError, cells, check_axes, parse_axes
 from .plan import SweepPlan
 from .plots import plot_medians
 from .store import MEDIANS, RESULTS, SweepDir, cell_id, fmt
@@ -56,8 +56,8 @@ def _medians(store: SweepDir, axes: Sequence[Axis], n_cells: int) -> tuple[list[
     names: list[str] = []
     medians: dict[str, np.ndarray] = {}
     for i in range(n_cells):
-        header, rows = store.read_cell(i)
-        rows = list(rows)
+        header, cell = store.read_cell(i)
+        rows = list(cell)
         for name in header:
             if name in keys or name in NOT_MEDIANS:
                 continue
@@ -67,6 +67,51 @@ def _medians(store: SweepDir, axes: Sequence[Axis], n_cells: int) -> tuple[list[
             v = np.array([float(r[name]) if r[name] not in ("", None) else np.nan for r in rows])
             medians[name][np.unravel_index(i, shape)] = outcomes.median(name, v)
     return names, medians
+
+
+def plan_sweep(preset: str | Path | Mapping[str, Any], grid: Sequence[str] | Mapping[str, Sequence[Any]], *,
+               runs: int | None = None, seed: int | None = None, steps: int | None = None,
+               sets: Sequence[str] = ()) -> SweepPlan:
+    """The validated cells of a sweep: ``preset`` (a name, a file or a raw preset dict) with
+    ``sets`` and the ``runs``/``seed``/``steps`` given, over ``grid`` (``--grid`` strings, or
+    dotted key → values). :class:`SweepError` names every bad argument or field."""
+    fixed = _fixed(sets, runs, seed, steps)
+    try:
+        raw = dict(preset) if isinstance(preset, Mapping) else read_raw(preset)
+        base_raw = apply_overrides(raw, fixed)
+        validate(base_raw)  # a bad preset is named before the grid
+    except PresetError as err:
+        raise SweepError(err.messages) from None
+    if isinstance(grid, Mapping):
+        axes = check_axes([Axis(str(k), tuple(v)) for k, v in grid.items()], [_key(f) for f in fixed])
+    else:
+        axes = parse_axes(grid, [_key(f) for f in fixed])
+    return SweepPlan.resolve(base_raw, axes)
+
+
+def sweep_rows(plan: SweepPlan, *, workers: int = 1, scheduler: Scheduler | None = None,
+               simulate: Simulate = outcomes.simulate_cell) -> dict[str, list[Any]]:
+    """Every cell of ``plan`` simulated in memory, as the columns of ``results.csv``: the grid
+    values (as given), ``run``, ``seed``, then the outcomes (full precision; the file holds them to
+    12 significant digits), a cell without an outcome another has: NaN."""
+    batches: dict[int, outcomes.CellBatch] = dict(iter_jobs(
+        [plan.job(i) for i in range(len(plan))], workers=workers, scheduler=scheduler, simulate=simulate,
+        merge=outcomes.merge, desc="sweep"))  # type: ignore[arg-type]
+    names: list[str] = []
+    for i in range(len(plan)):
+        names += [n for n in batches[i].columns if n not in names]
+    table: dict[str, list[Any]] = {k: [] for k in (*plan.keys, "run", "seed", *names)}
+    for i, values in enumerate(cells(plan.axes)):
+        batch, sc = batches[i], plan.scenarios[i]
+        for r in range(batch.runs):
+            for key, v in zip(plan.keys, values):
+                table[key].append(v)
+            table["run"].append(batch.first_run + r)
+            table["seed"].append(sc.sim.seed)
+            for n in names:
+                col = batch.columns.get(n)
+                table[n].append(float(col[r]) if col is not None else float("nan"))
+    return table
 
 
 def run_sweep(
@@ -93,15 +138,8 @@ def run_sweep(
     t0 = time.perf_counter()
     if workers < 1:
         raise SweepError([f"--workers must be >= 1, got {workers}"])
-    fixed = _fixed(sets, runs, seed, steps)
-    try:
-        base_raw = apply_overrides(read_raw(preset), fixed)
-        validate(base_raw)  # a bad preset is named before the grid
-    except PresetError as err:
-        raise SweepError(err.messages) from None
-    axes = parse_axes(grid, [_key(f) for f in fixed])
-    plan = SweepPlan.resolve(base_raw, axes)
-    base, scenarios, runs = plan.base, plan.scenarios, plan.runs
+    plan = plan_sweep(preset, grid, runs=runs, seed=seed, steps=steps, sets=sets)
+    base, scenarios, runs, axes = plan.base, plan.scenarios, plan.runs, plan.axes
     store = SweepDir(out)
     values = plan.labels
     identity = {
@@ -128,7 +166,8 @@ def run_sweep(
                   unit="run", disable=not progress) as bar:
             for key, batch in iter_jobs(jobs, workers=workers, scheduler=scheduler, progress=bar.update,
                                         simulate=simulate, merge=outcomes.merge, desc="sweep"):
-                store.write_cell(key, plan.prefix(key), batch.first_run, scenarios[key].sim.seed, batch.columns)
+                i = int(key)  # type: ignore[call-overload]  # (a cell's key is its index)
+                store.write_cell(i, plan.prefix(i), batch.first_run, scenarios[i].sim.seed, batch.columns)
         indices = list(range(len(scenarios)))
         columns = store.assemble(indices)
         names, medians = _medians(store, axes, len(scenarios))

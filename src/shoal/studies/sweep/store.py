@@ -14,7 +14,7 @@ import csv
 import io
 import json
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Sequence, TextIO
+from typing import IO, Any, Iterable, Iterator, Sequence
 
 import numpy as np
 from filelock import FileLock, Timeout
@@ -22,7 +22,7 @@ from filelock import FileLock, Timeout
 from shoal.engine.core.atomic import atomic_text_writer, atomic_write_text
 
 from .grid import SweepError
-from .outcomes import INTEGER
+from .outcomes import integer_outcomes
 
 MANIFEST = "sweep.json"
 RESULTS = "results.csv"
@@ -42,7 +42,7 @@ def fmt(name: str, v: float) -> str:
         return ""
     if np.isinf(v):
         return "inf" if v > 0 else "-inf"
-    if name in INTEGER and v == int(v):
+    if v == int(v) and name in integer_outcomes():
         return str(int(v))
     return f"{v + 0.0:.12g}"
 
@@ -61,7 +61,7 @@ def cell_rows(prefix: dict[str, str], first_run: int, seed: int,
     return [*prefix, "run", "seed", *columns], rows
 
 
-def write_tidy(fh: TextIO, columns: Sequence[str], rows: Iterable[dict[str, str]]) -> None:
+def write_tidy(fh: IO[str], columns: Sequence[str], rows: Iterable[dict[str, str]]) -> None:
     """The tidy table (``results.csv``): ``columns`` as header, a missing value left empty."""
     w = csv.DictWriter(fh, columns, restval="", lineterminator="\n")
     w.writeheader()

@@ -1,0 +1,196 @@
+"""A scene as a Python object: :func:`make` builds one from a preset name, a file, a dict or a
+:class:`~shoal.presets.models.Scenario`, with keyword overrides; :class:`Scene` steps it, reads
+its state and metrics, retunes it live and collects its metrics as a table.
+
+    scene = shoal.make("course-dvc", runs=4, seed=7, controller={"alpha": 0.8})
+    scene.run(200)                       # advance 200 ticks, recording a metric row per run and tick
+    scene.retune(controller={"beta": 0.5})
+    table = scene.metrics()              # pandas DataFrame (or numpy record array): metrics.csv's rows
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from shoal.engine.core.contract import Engine, Info, State
+from shoal.engine.core.objectives import OBJECTIVES, ObjectiveFunction
+from shoal.engine.core.recorder import metric_table
+from shoal.engine.core.schema import Schema
+from shoal.presets.io import PresetError, apply_overrides, read_raw, set_dotted, validate
+from shoal.presets.kinds import SceneKind, kind_for
+from shoal.presets.models import Scenario
+
+from .tables import as_table
+
+SIM_KEYWORDS = ("runs", "seed", "steps", "robots", "d")  # make(..., runs=4) sets sim.runs
+
+
+def scenario_of(preset: str | Path | Mapping[str, Any] | Scenario = "default", overrides: Sequence[str] = (),
+                **sections: Any) -> Scenario:
+    """A validated scenario: ``preset`` (a shipped name, a TOML/JSON file, a raw dict or a
+    scenario) with ``overrides`` (``"dotted.key=value"`` strings, as ``--set``) and keyword
+    overrides: ``runs``, ``seed``, ``steps``, ``robots`` and ``d`` set ``sim``'s fields, any other
+    keyword is a section, given as a dict of fields (``controller={"alpha": 0.8}``) or, for
+    ``objective``, a name or a vectorised function (registered under its ``__name__``)."""
+    if isinstance(preset, Scenario):
+        raw = preset.model_dump(mode="json")
+    elif isinstance(preset, Mapping):
+        raw = copy.deepcopy(dict(preset))
+    else:
+        raw = read_raw(preset)
+    raw = apply_overrides(raw, list(overrides))
+    for key, value in sections.items():
+        if key in SIM_KEYWORDS:
+            set_dotted(raw, f"sim.{key}", value)
+        elif key == "objective" and (callable(value) or isinstance(value, str)):
+            set_dotted(raw, "objective.kind", _objective_name(value))
+        elif isinstance(value, Mapping):
+            for field, v in value.items():
+                set_dotted(raw, f"{key}.{field}", _objective_name(v) if (key, field) == ("objective", "kind") else v)
+        else:
+            raise PresetError([f"{key}: give a section as a dict of its fields (e.g. {key}={{...}}), got "
+                               f"{type(value).__name__}"])
+    return validate(raw)
+
+
+def _objective_name(value: Any) -> Any:
+    """A function given as an objective: its registered name (registering it under ``__name__``)."""
+    if not callable(value):
+        return value
+    for name, entry in OBJECTIVES.items():
+        if entry.f is value:
+            return name
+    name = getattr(value, "__name__", "")
+    if not name or name == "<lambda>":
+        raise PresetError(["objective: register a lambda first (shoal.register_objective(name, f)) or pass a "
+                           "named function"])
+    if name in OBJECTIVES:
+        raise ValueError(f"objective: {name!r} names another objective already; register yours under a name of its "
+                         "own (shoal.register_objective(name, f)) and give that name")
+    OBJECTIVES.register(ObjectiveFunction(name, name, value))
+    return name
+
+
+def make(preset: str | Path | Mapping[str, Any] | Scenario = "default", overrides: Sequence[str] = (),
+         **sections: Any) -> Scene:
+    """A :class:`Scene` of ``preset`` with overrides (see :func:`scenario_of`), at step 0.
+
+    >>> scene = make("default", runs=2, seed=7, controller={"mode": "raw", "omega": 0.6})
+    >>> scene.step().t
+    0.1
+    """
+    return Scene(scenario_of(preset, overrides, **sections))
+
+
+class Scene:
+    """One scenario's engine: ``runs`` seeded runs of its scene kind, stepped together.
+
+    Every step records one metric row per run (the columns of ``metrics.csv``); :meth:`metrics`
+    gives them as a table. ``record=False`` keeps none (for long runs where only the end matters).
+    """
+
+    def __init__(self, scenario: Scenario, *, record: bool = True) -> None:
+        self.scenario = scenario
+        self.kind: SceneKind = kind_for(scenario)
+        self.engine: Engine = self.kind.build(scenario)
+        self.record = record
+        self._rows: list[dict[str, np.ndarray]] = []
+        self._note(self.engine.info())
+
+    # ------------------------------------------------------------------ reading
+    @property
+    def state(self) -> State:
+        """The engine's state: ``x``, ``u`` (runs, robots, d), ``heading``, ``status`` (runs, robots), ``k``."""
+        return self.engine.state
+
+    @property
+    def t(self) -> float:
+        return self.engine.t
+
+    @property
+    def k(self) -> int:
+        return self.engine.state.k
+
+    @property
+    def columns(self) -> Schema:
+        """The metric columns (name, unit, dtype, description), in order."""
+        return self.kind.columns
+
+    def info(self) -> Info:
+        """The engine's metrics of the current step."""
+        return self.engine.info()
+
+    def row(self) -> dict[str, np.ndarray]:
+        """The current step's metrics, one value per run in each column."""
+        return metric_table(self.engine.state, self.engine.info(), self.engine.t)
+
+    def metrics(self, *, pandas: bool | None = None) -> Any:
+        """Every recorded step's metrics, one row per run and step (step 0 first): a pandas
+        DataFrame when pandas is installed, else a numpy record array (``pandas`` forces either)."""
+        rows = self._rows or [self.row()]
+        names = list(rows[-1])
+        return as_table({n: np.concatenate([np.asarray(r[n]) for r in rows]) for n in names}, pandas=pandas)
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, n: int = 1) -> Info:
+        """Advance every run by ``n`` control ticks; the last tick's :class:`Info`."""
+        if n < 1:
+            raise ValueError(f"n: must be >= 1, got {n}")
+        info = self.engine.info()
+        for _ in range(n):
+            info = self.engine.step()
+            self._note(info)
+        return info
+
+    def run(self, steps: int | None = None, *, until: Callable[[Scene], bool] | None = None) -> Any:
+        """Advance ``steps`` ticks (default: the preset's ``sim.steps`` less those done), stopping
+        early once ``until(scene)`` is true; the recorded metrics as a table."""
+        left = max(self.scenario.sim.steps - self.k, 0) if steps is None else steps
+        for _ in range(left):
+            self._note(self.engine.step())
+            if until is not None and until(self):
+                break
+        return self.metrics()
+
+    def reset(self, seed: int | None = None) -> None:
+        """Back to step 0 (with ``seed``, or the current one); the recorded metrics start again."""
+        self.engine.reset(seed)
+        self._rows = []
+        self._note(self.engine.info())
+
+    def _note(self, info: Info) -> None:
+        if self.record:
+            self._rows.append({k: np.array(v, copy=True) for k, v in
+                               metric_table(self.engine.state, info, self.engine.t).items()})
+
+    # ------------------------------------------------------------------ changing
+    def retune(self, **changes: Any) -> list[str]:
+        """Change the running scene from the next tick on; the names that changed.
+
+        Sections as dicts of preset fields (``controller={"alpha": 0.5}``; validated like a
+        preset, the scene's :attr:`scenario` follows), or the engine's own keywords (its ``LIVE``
+        set, e.g. ``alpha=0.5`` for a fleet). A change the running engine cannot take (another
+        world, a dimension, …) is refused with a ``ValueError`` and nothing changes: make a new
+        scene for it."""
+        sections = {k: v for k, v in changes.items() if isinstance(v, Mapping) and k not in self.engine.LIVE}
+        engine_keywords = {k: v for k, v in changes.items() if k not in sections}
+        if sections and engine_keywords:
+            raise ValueError("retune: give preset sections or engine keywords, not both in one call")
+        if engine_keywords:
+            return self.engine.retune(**engine_keywords)
+        new = scenario_of(self.scenario, (), **sections)
+        live = self.kind.live(self.scenario, new) if self.kind.live is not None else None
+        if kind_for(new) is not self.kind or live is None:
+            raise ValueError(f"{', '.join(sections)}: this change needs a new engine (cannot change mid-run); "
+                             "make a new scene with shoal.make")
+        changed = self.engine.retune(**live)
+        self.scenario = new
+        return changed
+
+    def __repr__(self) -> str:
+        return (f"<Scene {self.scenario.name!r}: {self.kind.label}, {self.engine.runs} run(s) of "
+                f"{self.engine.robots} robots, step {self.k}>")
