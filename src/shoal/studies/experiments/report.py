@@ -196,8 +196,9 @@ def render(outcomes: Sequence[Outcome], *, image_prefix: str = "") -> str:
     quick = [o.name for o in outcomes if (o.summary or {}).get("quick")]
     if quick:
         lines += [f"**Quick (classroom) size:** {'every target' if len(quick) == len(outcomes) else ', '.join(quick)} "
-                  "ran with `--quick`: few runs per case (marked \"quick\" below), the same checks. The numbers are "
-                  "noisier than at full size; `shoal reproduce --all` regenerates the full report.", ""]
+                  "ran with `--quick`: few runs per case (marked \"quick\" below), the same checks. A check that so "
+                  "few runs cannot settle is reported undecided, never turned over; `shoal reproduce --all` "
+                  "regenerates the full report.", ""]
     lines += ["| target | thesis | runs | checks | hold | fail | undecided | time (s) | CPU (s) | workers |",
               "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for o in outcomes:
