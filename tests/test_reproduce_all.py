@@ -147,7 +147,14 @@ def test_two_reproductions_are_compared_check_by_check(tmp_path: Path) -> None:
 
     write(tmp_path / "quick", ["holds", "undecided", "fails", "holds"])
     write(tmp_path / "full", ["holds", "fails", "holds", "holds"])
+    full = json.loads((tmp_path / "full" / "fig4-6" / "summary.json").read_text())
+    full["checks"][3]["name"], full["checks"][3]["verdict"] = "c3 (runs 0-49)", "fails"
+    full["checks"][3]["pass"] = False
+    (tmp_path / "full" / "fig4-6" / "summary.json").write_text(json.dumps(full))
+    quick = json.loads((tmp_path / "quick" / "fig4-6" / "summary.json").read_text())
+    quick["checks"][3]["name"] = "c3 (runs 0-3)"  # the same check at another run count
+    (tmp_path / "quick" / "fig4-6" / "summary.json").write_text(json.dumps(quick))
     got = disagreements(tmp_path / "quick", tmp_path / "full")
-    assert got["decided"] == [("fig4-6", "c2", "fails", "holds")]
+    assert got["decided"] == [("fig4-6", "c2", "fails", "holds"), ("fig4-6", "c3 (runs 0-3)", "holds", "fails")]
     assert got["undecided"] == [("fig4-6", "c1", "undecided", "fails")]
 

@@ -286,17 +286,28 @@ def write_report(out_dir: Path, names: Iterable[str] | None = None, *, dest: Pat
 
 def disagreements(a: Path, b: Path) -> dict[str, list[tuple[str, str, str, str]]]:
     """Compare two reproductions of the same targets (e.g. ``--quick`` against a full run), check
-    by check: ``decided`` lists the checks that one holds and the other fails (target, check,
-    verdict in a, verdict in b); ``undecided`` those decided in one and undecided in the other;
-    checks only one of them ran are left out."""
+    by check: ``decided`` lists the checks that one holds and the other fails (target, check
+    as named in ``a``, verdict in a, verdict in b); ``undecided`` those decided in one and
+    undecided in the other; checks only one of them ran are left out."""
     def verdicts(folder: Path) -> dict[tuple[str, str], str]:
         return {(o.name, c["name"]): verdict_of(c) for o in collect(folder) for c in o.checks}
 
+    def by_shape(v: dict[tuple[str, str], str], keys: set) -> dict[tuple[str, str], tuple[str, str]]:
+        """A name whose only difference is a count that follows the run count ("runs 0-49",
+        "82200 samples") is the same check: key by the name with its numbers blanked, where unique."""
+        shapes: dict[tuple[str, str], list[tuple[str, str]]] = {}
+        for key in keys:
+            shapes.setdefault((key[0], re.sub(r"\d+", "#", key[1])), []).append(key)
+        return {shape: ks[0] for shape, ks in shapes.items() if len(ks) == 1}
+
     va, vb = verdicts(Path(a)), verdicts(Path(b))
+    pairs = [(k, k) for k in set(va) & set(vb)]
+    sa, sb = by_shape(va, set(va) - set(vb)), by_shape(vb, set(vb) - set(va))
+    pairs += [(sa[shape], sb[shape]) for shape in set(sa) & set(sb)]
     out: dict[str, list[tuple[str, str, str, str]]] = {"decided": [], "undecided": []}
-    for key in sorted(set(va) & set(vb)):
-        x, y = va[key], vb[key]
+    for ka, kb in sorted(pairs):
+        x, y = va[ka], vb[kb]
         if x != y:
-            out["undecided" if UNDECIDED in (x, y) else "decided"].append((*key, x, y))
+            out["undecided" if UNDECIDED in (x, y) else "decided"].append((*ka, x, y))
     return out
 
