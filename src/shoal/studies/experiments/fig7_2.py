@@ -271,9 +271,9 @@ def _readme(runs: int, steps: int, mode: str, summary: dict[str, Any]) -> str:
 A-, X-, B- and XB-PSO with the Adapted PSO controller (Table 7.1), {runs} seeded runs per
 algorithm, SNR0 and split of ĉ = c1 + c2, horizon {steps} timesteps, acoustics mode `{mode}`.
 Every case is the preset `sonar-xb-pso` with `--set` overrides (see `summary.json` →
-`cases.*.command`). Chapter 7 gives U = 2 m/s but neither β nor the split c1:c2; β = 0.9 as
-in Chapters 4–5. Both splits run as cases; the preset's c1:c2 = {own} is judged by the
-checks, the other is reported as information ({evidence}).
+`cases.*.command`). Chapter 7 gives U = 2 m/s but neither β nor the split c1:c2; β is read as
+in Chapters 4–5 (docs/readings.md, "β in Chapter 7"). Both splits run as cases; the preset's
+c1:c2 = {own} is judged by the checks, the other is reported as information ({evidence}).
 
 ## Files
 
@@ -281,12 +281,12 @@ checks, the other is reported as information ({evidence}).
   |CoM − source| ≤ d_c = 50 m, empty when the run never got there within the horizon.
   Run `run` uses child `run` of `SeedSequence(seed)`; all algorithms and splits at one SNR0
   share `seed`.
-- `series.csv`: per case, SNR0 and split, every {SERIES_EVERY} steps, the median and
-  5/25/75/95th percentiles of |CoM − source| in metres (a run is stopped when it converges
+- `series.csv`: per case, SNR0 and split, every {SERIES_EVERY} steps, the median and the
+  percentiles of |CoM − source| that its columns name, in metres (a run is stopped when it converges
   and its distance is held from then on).
 - `{ROUTES}`: the CoM routes of the 10 dB runs of the preset's split, every {ROUTE_EVERY} steps,
   in a frame with the source on +x (target fig7-3 draws Fig. 7-3 from them).
-- `fig7-2.png`: median |CoM − source| in spatial steps (R_ref = 1000 m) with 5–95 % bands,
+- `fig7-2.png`: median |CoM − source| in spatial steps (R_ref = 1000 m) with percentile bands,
   one panel per SNR0, one row per split; ▼ marks the thesis median time at d_c.
 - `summary.json`: checks, per-case median and mean times, mean CoM speeds, converged
   fractions, seeds and cost.

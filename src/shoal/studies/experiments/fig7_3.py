@@ -282,7 +282,7 @@ Each route is turned so that the source lies on +x and ends where the swarm conv
   (R_ref = 1000 m); straightness = progress toward the source / path length.
 - `density.csv`: per algorithm, every cell of {CELL:g} × {CELL:g} spatial steps that some route
   passed, with the fraction of swarms that passed it.
-- `fig7-3.png`: top, the fraction of swarms that passed each cell (log colour), the 50 %
+- `fig7-3.png`: top, the fraction of swarms that passed each cell (log colour), the half
   contour (white), three random swarms (red, green, blue), the source (star) and the
   convergence circle; bottom, the same swarms' progress toward the source in time.
 - `summary.json`: checks, medians of the measures, x50 per algorithm, the example runs.

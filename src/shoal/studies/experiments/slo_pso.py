@@ -223,8 +223,8 @@ def _readme(summary: dict[str, Any]) -> str:
     return f"""# Table 4.4 and Figs. 4.11-4.13 reproduction: SLO with PSO motion
 
 20 particles, SPSO 2011 in each robot's own frame on SLO-estimated positions, knn 5, c3 = 1,
-c4 = 0, start area [-50, 50]^2; seven DEAP benchmarks x {{Akcan, CSS, RTS}} x {{None, Low, High}}
-(Tab. 4.3). Every case is `shoal run slo-pso-sphere` with `--set` overrides (see
+c4 = 0, the start area of docs/readings.md ("Initial area of the PSO experiment"); seven DEAP
+benchmarks x {{Akcan, CSS, RTS}} x {{None, Low, High}} (Tab. 4.3). Every case is `shoal run slo-pso-sphere` with `--set` overrides (see
 `summary.json` -> `commands`).
 
 ## Files
