@@ -176,7 +176,7 @@ def test_the_notes_mark_where_each_value_comes_from(tab):
     p = tab.panels
     p.preset.value = "sonar-xb-pso"
     text = tab.panels.marks.content
-    assert "| `acoustics.fs` | 4000.0 | fitted |" in text and "| `acoustics.c1_share` | 0.25 | fitted |" in text
-    assert "| `acoustics.f_c` | 1000.0 | stated |" in text and "unmarked" not in text
+    assert "- `acoustics.fs` = 4000.0: **fitted**" in text and "- `acoustics.c1_share` = 0.25: **fitted**" in text
+    assert "- `acoustics.f_c` = 1000.0: **stated**, Rossides Table 7.1" in text and "unmarked" not in text
     tab.panels.preset.value = "sonar-gt-pso"
-    assert "| `acoustics.c1_share` | 0.5 | stated |" in tab.panels.marks.content
+    assert "- `acoustics.c1_share` = 0.5: **stated**, Rossides Algorithm 2" in tab.panels.marks.content

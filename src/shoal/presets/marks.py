@@ -334,12 +334,13 @@ def values(scenario: Any) -> dict[str, Any]:
 
 
 def markdown(scenario: Any) -> str:
-    """The marks as a markdown table: field, value, mark, source."""
+    """The marks as a markdown list, one line per field: value, **mark**, source (it wraps in a
+    narrow panel, where a table would not)."""
     vals = values(scenario)
-    rows = [f"| `{p}` | {_show(vals[p])} | {m.kind if m else '**unmarked**'} | "
-            f"{(m.source + (f'; evidence: {m.evidence}' if m.evidence else '')) if m else ''} |"
+    rows = [f"- `{p}` = {_show(vals[p])}: **{m.kind if m else 'unmarked'}**"
+            + (f", {m.source}" + (f"; evidence: {m.evidence}" if m.evidence else "") if m else "")
             for p, m in provenance(scenario).items()]
-    return "| field | value | mark | source |\n|---|---|---|---|\n" + "\n".join(rows)
+    return "\n".join(rows)
 
 
 def text(scenario: Any) -> str:
