@@ -16,6 +16,8 @@ from shoal.app.kinds import sonar
 from shoal.app.kinds.sonar import corr_data, corr_range, true_ray_index
 from shoal.engine.kinds.sonar import AcousticSwarm
 
+from app_helpers import shown as shown_text
+
 
 @dataclass
 class Drag:
@@ -208,3 +210,13 @@ def test_corr_note_says_the_sample_rate_and_why_the_curve_is_coarse():
     s.step(1)
     text = corr_note(s)
     assert "f_s = 4 kHz" in text and "7 lags" in text and "±D/c = ±0.5 ms" in text and "coarse" in text
+
+
+def test_the_notes_mark_where_each_value_comes_from(tab):
+    p = tab.panels
+    p.preset.value = "sonar-xb-pso"
+    text = shown_text(tab.panels.marks.content)
+    assert "- acoustics.fs = 4000.0: **fitted**" in text and "- acoustics.c1_share = 0.25: **fitted**" in text
+    assert "- acoustics.f_c = 1000.0: **stated**, Rossides Table 7.1" in text and "unmarked" not in text
+    tab.panels.preset.value = "sonar-gt-pso"
+    assert "- acoustics.c1_share = 0.5: **stated**, Rossides Algorithm 2" in shown_text(tab.panels.marks.content)

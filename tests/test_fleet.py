@@ -4,6 +4,7 @@ clearance as a property, and contact accounting (collisions beyond a tolerance, 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -13,7 +14,8 @@ from shoal.engine.robots.motion import Kinematic, Physics
 from shoal.engine.robots.sensing import sense
 from shoal.engine.robots.world import RunSpace, WorldSpec, box_walls
 from shoal.presets.build import build_fleet
-from shoal.presets.io import load
+from shoal.presets.io import PresetError, load
+from shoal.presets.models import Robot
 
 ALPHA = 0.9
 
@@ -165,31 +167,75 @@ def test_without_the_guard_dvc_can_reach_the_nearest_body():
 
 
 # ---------------------------------------------------------------------- contact accounting
+TOLERANCE = Robot().contact_tolerance  # the presets' float-noise allowance
+
+
 def _one_robot_towards_a_circle(step: float, gap: float, motion: str = "kinematic") -> bool:
     """A robot ``gap`` m from a circle's surface moves ``step`` m straight at it; hit?"""
     world = _world(np.array([[2.0, 0.0, 0.5]]))
     x = np.array([[1.0 - gap, 0.0]])
     if motion == "kinematic":
         sp = RunSpace(world, x, robot_radius=0.5)
-        mover = Kinematic("holonomic", 3.0, tolerance=1e-3)
+        mover = Kinematic("holonomic", 3.0, tolerance=TOLERANCE)
     else:
         sp = RunSpace(world, x, robot_radius=0.5, body_type="dynamic")
-        mover = Physics("holonomic", 3.0, a_max=1e3, tolerance=1e-3)
+        mover = Physics("holonomic", 3.0, a_max=1e3, tolerance=TOLERANCE)
     moved = mover.move([sp], x[None], np.zeros((1, 1)), np.array([[[step, 0.0]]]), np.ones((1, 1), bool), 1.0)
     return bool(moved.hit[0, 0])
 
 
-def test_a_touch_within_the_contact_tolerance_is_not_a_collision():
-    # the guard's geometric approach leaves gaps of ~1e-16 m; a step of a fraction of a
-    # millimetre into the body stops the robot but does not disable it
-    assert not _one_robot_towards_a_circle(step=5e-4, gap=1e-16)
-    assert _one_robot_towards_a_circle(step=5e-3, gap=1e-16)  # 5 mm into the body: a collision
+def test_the_contact_tolerance_is_a_float_noise_allowance():
+    # docs/readings.md, "What counts as a collision, and stalls": at most a micrometre
+    assert 0.0 < TOLERANCE <= 1e-6
+    with pytest.raises(PresetError, match="robot.contact_tolerance"):
+        load("course-dvc", ["robot.contact_tolerance=0.001"])
+
+
+def test_a_float_touch_is_not_a_collision_but_a_sub_millimetre_overlap_is():
+    # the guard's geometric approach leaves gaps of ~1e-16 m; a path that ends within
+    # rounding of the body stops the robot but does not disable it ...
+    assert not _one_robot_towards_a_circle(step=1e-13, gap=1e-16)
+    # ... while a path 10 µm (or 0.5 mm) into the body is a collision
+    assert _one_robot_towards_a_circle(step=1e-5, gap=1e-16)
+    assert _one_robot_towards_a_circle(step=5e-4, gap=1e-16)
     assert _one_robot_towards_a_circle(step=0.5, gap=0.2)
 
 
-def test_physics_counts_a_collision_only_beyond_the_contact_tolerance():
-    assert not _one_robot_towards_a_circle(step=2e-3, gap=1.5e-3, motion="physics")  # ≤ 0.5 mm deep
+def test_physics_counts_a_sub_millimetre_overlap_as_a_collision():
+    assert _one_robot_towards_a_circle(step=2e-3, gap=1.5e-3, motion="physics")  # ≤ 0.5 mm deep
     assert _one_robot_towards_a_circle(step=0.5, gap=0.2, motion="physics")
+    assert not _one_robot_towards_a_circle(step=1e-3, gap=0.2, motion="physics")  # stops short
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_both_robots_of_a_robot_robot_collision_are_disabled(compiled: bool):
+    # robot 0 drives at 3 m/s at robot 1, which stands 0.5 m away: "a robot that touches
+    # anything is disabled" (Algorithm 1) holds for the robot it hits as well
+    world = _world(np.zeros((0, 3)))
+    f = Fleet(world=world, robots=2, runs=1, seed=0, compiled=compiled,
+              params=FleetParams(law="adapted-rpso", dvc=False, omega=1.0 - 1e-9, c=(0.0, 0.0, 0.0)))
+    s = f.state
+    s.x[0] = ((0.0, 0.0), (1.5, 0.0))
+    s.u[0] = s.cmd[0] = ((3.0, 0.0), (0.0, 0.0))
+    s.y = s.x.copy()
+    s.f_y = f.cost(s.y)
+    for sp, x in zip(f.spaces, s.x):
+        sp.set_positions(x)
+    f.step()
+    assert f.state.status[0].tolist() == [COLLIDED, COLLIDED]
+    gap = np.hypot(*(f.state.x[0, 1] - f.state.x[0, 0])) - 1.0
+    assert 0.0 <= gap < 1e-5  # the mover stopped at the contact
+
+
+def test_kinematic_move_reports_the_robot_a_mover_struck():
+    world = _world(np.zeros((0, 3)))
+    x = np.array([[0.0, 0.0], [1.5, 0.0], [10.0, 0.0]])
+    sp = RunSpace(world, x, robot_radius=0.5)
+    moved = Kinematic("holonomic", 3.0, tolerance=TOLERANCE).move(
+        [sp], x[None], np.zeros((1, 3)), np.array([[[3.0, 0.0], [0.0, 0.0], [0.0, 0.0]]]),
+        np.array([[True, False, False]]), 1.0)
+    assert moved.hit[0].tolist() == [True, False, False]
+    assert moved.struck[0].tolist() == [False, True, False]
 
 
 def test_a_robot_standing_still_counts_as_stalled_after_stall_steps_ticks():

@@ -63,7 +63,8 @@ def test_outputs_exist_with_the_exact_runs_header(fixture, files, request):
     assert summary["target"] == out.name and summary["runs"] == 3 and summary["elapsed_s"] >= 0
     assert summary["cpu_s"] > 0
     for c in summary["checks"]:
-        assert set(c) == {"name", "thesis", "measured", "pass"} and isinstance(c["pass"], bool)
+        assert set(c) == {"name", "thesis", "measured", "pass", "verdict", "runs"} and isinstance(c["pass"], bool)
+        assert c["verdict"] in ("holds", "fails", "undecided") and c["runs"] in (None, 3)
     assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]  # no partial folders left
 
 

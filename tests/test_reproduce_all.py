@@ -37,9 +37,9 @@ def test_every_target_gets_a_folder_and_a_section(reproduced: Path) -> None:
     text = (reproduced / REPORT).read_text(encoding="utf-8")
     for name in QUICK:
         summary = json.loads((reproduced / name / "summary.json").read_text(encoding="utf-8"))
-        passed = sum(c["pass"] for c in summary["checks"])
+        counts = [sum(c["verdict"] == v for c in summary["checks"]) for v in ("holds", "fails", "undecided")]
         assert f"| [{name}](#{name}) |" in text
-        assert f"{passed}/{len(summary['checks'])}" in text
+        assert f"| {len(summary['checks'])} | {counts[0]} | {counts[1]} | {counts[2]} |" in text
         assert f"## {name}:" in text
         for check in summary["checks"]:  # every check is beside the thesis' claim
             assert check["name"].replace("|", "\\|") in text
@@ -94,15 +94,36 @@ def test_cli_report_and_all_refuse_bad_input(reproduced: Path, tmp_path: Path) -
 def test_information_is_shown_beside_the_checks_but_not_counted() -> None:
     from shoal.studies.experiments.output import check, info
     from shoal.studies.experiments.report import Outcome, render
+    from shoal.studies.experiments.verdict import exact
 
-    summary = {"runs": 3, "elapsed_s": 1.0, "checks": [check("median run collision-free", "none", "0", True)],
+    free = check("median run collision-free", "none", "0", True, exact(True))
+    summary = {"runs": 3, "elapsed_s": 1.0, "checks": [free],
                "information": [info("every run collision-free", "none", "2 robots in 1 run", False)]}
     text = render([Outcome("fig4-6", summary=summary)])
-    assert "| [fig4-6](#fig4-6) | Rossides, Figs. 4-6 and 4-7 | 3 | 1/1 | 1.0 |" in text
-    assert "In all: 1 of 1 checks pass" in text
+    assert "| [fig4-6](#fig4-6) | Rossides, Figs. 4-6 and 4-7 | 3 | 1 | 1 | 0 | 0 | 1.0 |" in text
+    assert "of 1 checks 1 hold, 0 fail and 0 are undecided" in text
     assert "information, not counted as checks" in text
     assert "| every run collision-free | none | 2 robots in 1 run | no |" in text
     assert "Every check holds." in text
+
+
+def test_undecided_checks_are_counted_and_named_apart_from_failures() -> None:
+    from shoal.studies.experiments.output import check
+    from shoal.studies.experiments.report import Outcome, render
+    from shoal.studies.experiments.verdict import Estimate, at_least, exact
+
+    few = Estimate.median([1.0, 2.0, 3.0])  # three runs: no 95 % interval of a median
+    many = Estimate.median(list(range(10, 40)))
+    checks = [check("a claim three runs cannot settle", "≥ 1", "2", True, at_least(few, 1.0)),
+              check("a claim thirty runs settle", "≥ 1", "24.5", True, at_least(many, 1.0)),
+              check("an identity that breaks", "equal", "0.5", False, exact(False))]
+    text = render([Outcome("fig4-6", summary={"runs": 3, "elapsed_s": 1.0, "checks": checks})])
+    assert "| 3 | 1 | 1 | 1 |" in text
+    assert "| a claim three runs cannot settle | ≥ 1 | 2 | undecided (3 runs) |" in text
+    assert "| a claim thirty runs settle | ≥ 1 | 24.5 | yes (30 runs) |" in text
+    assert "| an identity that breaks | equal | 0.5 | **no** (exact) |" in text
+    assert "1 of 3 checks fail: *an identity that breaks*" in text
+    assert "1 of 3 checks are undecided at 3 runs" in text and "*a claim three runs cannot settle*" in text
 
 
 def test_the_report_gives_each_targets_wall_and_cpu_time_and_their_totals() -> None:
@@ -111,5 +132,29 @@ def test_the_report_gives_each_targets_wall_and_cpu_time_and_their_totals() -> N
     a = {"runs": 3, "elapsed_s": 12.5, "cpu_s": 20.25, "workers": 2, "checks": []}
     b = {"runs": 31, "elapsed_s": 100.0, "cpu_s": 190.0, "workers": 2, "checks": []}
     text = render([Outcome("fig4-6", summary=a), Outcome("slo-pso", summary=b), Outcome("fig3-4", error="boom")])
-    assert "| 3 | 0/0 | 12.5 | 20.25 | 2 |" in text and "| 31 | 0/0 | 100.0 | 190.0 | 2 |" in text
-    assert "| all | | | | 112 | 210 | |" in text
+    assert "| 3 | 0 | 0 | 0 | 0 | 12.5 | 20.25 | 2 |" in text and "| 31 | 0 | 0 | 0 | 0 | 100.0 | 190.0 | 2 |" in text
+    assert "| all | | | 0 | 0 | 0 | 0 | 112 | 210 | |" in text
+
+
+def test_two_reproductions_are_compared_check_by_check(tmp_path: Path) -> None:
+    from shoal.studies.experiments.report import disagreements
+
+    def write(folder: Path, verdicts: list[str]) -> None:
+        (folder / "fig4-6").mkdir(parents=True)
+        checks = [{"name": f"c{i}", "thesis": "", "measured": "", "pass": v == "holds", "verdict": v, "runs": 3}
+                  for i, v in enumerate(verdicts)]
+        (folder / "fig4-6" / "summary.json").write_text(json.dumps({"target": "fig4-6", "runs": 3, "checks": checks}))
+
+    write(tmp_path / "quick", ["holds", "undecided", "fails", "holds"])
+    write(tmp_path / "full", ["holds", "fails", "holds", "holds"])
+    full = json.loads((tmp_path / "full" / "fig4-6" / "summary.json").read_text())
+    full["checks"][3]["name"], full["checks"][3]["verdict"] = "c3 (runs 0-49)", "fails"
+    full["checks"][3]["pass"] = False
+    (tmp_path / "full" / "fig4-6" / "summary.json").write_text(json.dumps(full))
+    quick = json.loads((tmp_path / "quick" / "fig4-6" / "summary.json").read_text())
+    quick["checks"][3]["name"] = "c3 (runs 0-3)"  # the same check at another run count
+    (tmp_path / "quick" / "fig4-6" / "summary.json").write_text(json.dumps(quick))
+    got = disagreements(tmp_path / "quick", tmp_path / "full")
+    assert got["decided"] == [("fig4-6", "c2", "fails", "holds"), ("fig4-6", "c3 (runs 0-3)", "holds", "fails")]
+    assert got["undecided"] == [("fig4-6", "c1", "undecided", "fails")]
+

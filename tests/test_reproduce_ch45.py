@@ -64,7 +64,7 @@ def test_fig4_6_outputs_and_exact_runs_header(fig46):
     summary = _summary(fig46)
     assert summary["target"] == "fig4-6" and summary["runs"] == 4
     for c in summary["checks"]:
-        assert set(c) == {"name", "thesis", "measured", "pass"} and isinstance(c["pass"], bool)
+        assert set(c) == {"name", "thesis", "measured", "pass", "verdict", "runs"} and isinstance(c["pass"], bool)
     # the thesis' measure (the median run) is judged; the stricter one over every run is information
     assert any(c["name"].startswith("[kinematic] adapted-dvc: no robot collided at the end of the median run")
                for c in summary["checks"])

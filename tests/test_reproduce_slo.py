@@ -35,7 +35,7 @@ def test_slo_pso_runs_csv_header_and_determinism(tmp_path):
         assert (tmp_path / "a" / f).is_file()
     summary = json.loads((tmp_path / "a" / "summary.json").read_text(encoding="utf-8"))
     assert summary["target"] == "slo-pso" and summary["runs"] == 2
-    assert all(set(c) == {"name", "thesis", "measured", "pass"} for c in summary["checks"])
+    assert all(set(c) == {"name", "thesis", "measured", "pass", "verdict", "runs"} for c in summary["checks"])
     # cheap qualitative claim: without error Sphere goes far below the Low-error runs (precision floor)
     end = {(r[4], r[5]): float(r[8]) for r in rows[1:] if r[1] == "0"}
     assert end[("css", "none")] < 1e-100 < end[("css", "low")]
@@ -55,11 +55,12 @@ def test_fig4_8_runs_every_entry_reading_and_they_differ(tmp_path):
     rows = _rows(tmp_path / "runs.csv")
     head = rows[0]
     err = {(r[0], r[1]): float(r[head.index("e_abs_avg")]) for r in rows[1:]}
-    default, stale, geo = ("css/random=0.3/low" + t for t in ("", "/stale", "/geometric_random"))
-    assert all((c, "0") in err for c in (default, stale, geo))
-    assert len({err[(c, "0")] for c in (default, stale, geo)}) == 3  # the entry rule changes the run
+    policies = ("", "/stale", "/geometric_random", "/dead_reckoning")
+    cases = ["css/random=0.3/low" + t for t in policies]
+    assert all((c, "0") in err for c in cases)
+    assert len({err[(c, "0")] for c in cases}) == 4  # the entry rule changes the run
     summary = json.loads((tmp_path / "summary.json").read_text(encoding="utf-8"))
-    for policy in ("stale", "geometric_random"):
+    for policy in ("stale", "geometric_random", "dead_reckoning"):
         assert f"slo.entry_policy={policy}" in json.dumps(summary["commands"])
-    for png in ("fig4-8.png", "fig4-8-stale.png", "fig4-8-geometric-entry.png"):
+    for png in ("fig4-8.png", "fig4-8-stale.png", "fig4-8-geometric-entry.png", "fig4-8-dead-reckoning.png"):
         assert (tmp_path / png).is_file()

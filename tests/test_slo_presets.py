@@ -34,8 +34,9 @@ def test_slo_fields_reach_the_engine():
     cfg = sw.config
     chosen = (cfg.selection, cfg.neighbourhood, cfg.neighbourhood_param, cfg.prediction_weight)
     assert chosen == ("rts", "ring", 3, 0.25)
-    assert cfg.entry_policy == "geometric_random" and build(load("slo-walk")).config.entry_policy == "dead_reckoning"
-    assert build(load("slo-walk", ["slo.entry_policy=stale"])).config.entry_policy == "stale"  # the old reading
+    assert cfg.entry_policy == "geometric_random" and build(load("slo-walk")).config.entry_policy == "geometric_nearest"
+    for other in ("stale", "dead_reckoning"):  # an older reading, an extension
+        assert build(load("slo-walk", [f"slo.entry_policy={other}"])).config.entry_policy == other
     assert cfg.motion == "random_walk" and sw.errors.range.sigma_m == 0.4
     assert sw.errors.range.sigma_a == 0.30  # the rest of the High set stays
 

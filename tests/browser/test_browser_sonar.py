@@ -92,3 +92,17 @@ def test_dragging_the_source_with_the_mouse_moves_it_in_the_engine(server, page,
             if attempt == 2:
                 raise
     assert np.hypot(*(session.sim.state.source[0] - start)) > 100.0
+
+
+def test_the_lessons_tab_marks_where_the_scenes_values_come_from(server, page, cid, tmp_path):
+    tab = server.tabs[cid]
+    dismiss_toasts(page)
+    choose(page, "preset", "sonar-xb-pso")
+    wait_until(lambda: tab.session.scenario.name == "sonar-xb-pso", what="the Chapter 7 preset")
+    page.get_by_role("tab", name="Lessons").click()
+    open_folder(page, "Where this scene's values come from", "acoustics.fs")
+    row = page.locator("li", has_text="acoustics.fs").first
+    wait_until(lambda: row.count() and "fitted" in row.inner_text(), what="the mark of acoustics.fs")
+    row.scroll_into_view_if_needed()
+    assert "4000" in row.inner_text() and "sample rate" in row.inner_text()
+    page.screenshot(path=str(tmp_path / "marks.png"))

@@ -260,7 +260,10 @@ def _cmd_presets(args: argparse.Namespace) -> int:
         print("\n".join(e.messages), file=sys.stderr)
         return 1 if args.action == "validate" else EXIT_USAGE
     if args.action == "show":
+        from shoal.presets.marks import text
+
         print(to_toml(scenario), end="")
+        print("\n" + text(scenario), end="")
     else:
         print(f"{args.name}: valid ({scenario.name})")
     return 0

@@ -26,6 +26,7 @@ from shoal.engine.core.objectives import OBJECTIVES
 from shoal.engine.core.registry import Registry
 from shoal.engine.pso.laws import LAWS
 from shoal.engine.robots.laws import ROBOT_LAWS
+from shoal.engine.slo.beliefs import EntryPolicy
 from shoal.engine.slo.selection import SELECTIONS
 
 
@@ -201,8 +202,9 @@ class Robot(_Model):
     motion: Literal["kinematic", "physics"] = "kinematic"
     drive: Literal["holonomic", "mecanum", "differential"] = "holonomic"
     spawn_gap: Annotated[float, Field(ge=0.0, le=10.0, description="free space between robots at the start [m]")] = 0.3
-    contact_tolerance: Annotated[float, Field(ge=0.0, le=0.1, description=(
-        "a collision is an overlap deeper than this [m]; a shallower touch only stops the robot"))] = 1e-3
+    contact_tolerance: Annotated[float, Field(ge=0.0, le=1e-6, description=(
+        "float-noise allowance [m]: a collision is an overlap deeper than this, a shallower touch only stops the "
+        "robot (at most a micrometre, so it never hides a real contact; docs/readings.md)"))] = 1e-9
 
 
 class Sensing(_Model):
@@ -356,9 +358,11 @@ class SLO(_Model):
     delta_v: Annotated[float, Field(ge=0.0, le=10.0, description="mitigation threshold δ_v [3.6]")] = 0.03
     literal_eq_3_1: bool = Field(
         False, description="use [3.1] as printed (known slip) instead of the corrected law of cosines")
-    entry_policy: Literal["dead_reckoning", "stale", "geometric_random"] = Field(
-        "dead_reckoning", description="estimates of robots outside the neighbourhood: carried by odometry (exact with "
-        "perfect sensors), frozen, or frozen with an arriving neighbour placed on a random mirror candidate")
+    entry_policy: EntryPolicy = Field(
+        "geometric_nearest", description="estimates of robots outside the neighbourhood and where an arriving "
+        "neighbour starts: frozen, then the geometric candidate nearest the old estimate (our reading of Mai §4.5, "
+        "§4.5.4); frozen and blended; frozen, then a random mirror candidate; or carried by odometry (an extension "
+        "that assumes every robot's odometry is heard)")
     neighbourhood: Literal["knn", "radius", "full", "random", "ring"] = Field("knn", description="who localises whom")
     neighbourhood_param: Annotated[float | None, Field(
         ge=0.0, le=1e4, description="k (knn), r (radius), n (ring), p (random); unset = 5, 25, 2, 0.5")] = None
@@ -428,6 +432,13 @@ class Scenario(_Model):
     robot: Robot = Field(default_factory=Robot)
     sensing: Sensing = Field(default_factory=Sensing)
     view: View = Field(default_factory=View)
+
+    def marks(self) -> dict[str, Any]:
+        """Where each value that shapes this scene's runs comes from: stated, read, fitted or
+        ours, with its source (:func:`shoal.presets.marks.provenance`; None: unmarked)."""
+        from .marks import provenance
+
+        return provenance(self)
 
     @model_validator(mode="after")
     def _across_sections(self) -> "Scenario":

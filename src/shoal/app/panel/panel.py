@@ -100,6 +100,21 @@ def notes_text(name: str = "ch3") -> str:
                 "Move the sliders and watch the arena and the *Plots* tab.")
 
 
+def marks_text(scenario: Scenario) -> str:
+    """The scene's values that shape a run, one line each (a table would not fit the narrow
+    panel), each marked stated, read (our reading of stated text), fitted (chosen to match
+    the thesis' outcomes) or ours, with its source."""
+    from shoal.presets.marks import provenance, shown_value, values
+
+    vals, rows = values(scenario), []
+    for path, m in provenance(scenario).items():
+        source = (f", {escape(m.source)}" + (f"; evidence: {escape(m.evidence)}" if m.evidence else "")) if m else ""
+        rows.append(f"- {escape(path)} = {escape(shown_value(vals[path]))}: "
+                    f"**{escape(m.kind) if m else 'unmarked'}**{source}")
+    return ("Each value is **stated** by the thesis, **read** from its text, **fitted** to its outcomes, or **ours**; "
+            "the sources name the thesis' tables and the sections of docs/readings.md.\n\n" + "\n".join(rows))
+
+
 def _coerce(control: Any, value: Any) -> Any:
     if isinstance(control, Slider):
         return int(round(value)) if control.integer else float(value)
@@ -267,6 +282,8 @@ class Panel:
                                         measure=LessonRun(self.session))
             with self.gui.add_folder("Notes on this chapter", expand_by_default=False):
                 self.notes = self.gui.add_markdown(notes_text(notes))
+            with self.gui.add_folder("Where this scene's values come from", expand_by_default=False):
+                self.marks = self.gui.add_markdown(marks_text(self.session.scenario))
 
     def _build(self, item: Control) -> Any:
         """A handle for ``item`` (a folder with its items), kept as ``handles[key]`` and wired."""
@@ -396,6 +413,9 @@ class Panel:
             if (choice := menu.label_for(sc)) is not None:
                 self.set_quietly(self.preset, choice)
         self.compare_gui.sync()
+        if (marks := getattr(self, "marks", None)) is not None and marks.content != (
+                text := marks_text(sc)):
+            marks.content = text
         self.refresh_readout()
 
     def _sync_one(self, item: Any, h: Any, s: Session, sc: Scenario) -> None:

@@ -57,7 +57,7 @@ class FleetParams:
     update: Literal["sequential", "simultaneous"] = "sequential"
     guard: bool = False  # DVC inertia guard (ours): see dvc.approach_guard
     spawn_gap: float = 0.3  # free space between robots at the start [m]
-    contact_tolerance: float = 1e-3  # a collision is an overlap deeper than this [m] (ours)
+    contact_tolerance: float = 1e-9  # [m] float-noise allowance: a deeper overlap is a collision (docs/readings.md)
 
     def __post_init__(self) -> None:
         if ROBOT_LAWS.pick(self.law).dvc is None and self.dvc:
@@ -500,7 +500,8 @@ class Fleet:
             s.heading = np.where(m, moved.heading, s.heading)
             s.u = np.where(m[..., None], moved.velocity, s.u)
             s.cmd = np.where(m[..., None], cmd, s.cmd)
-            s.status = np.where(moved.hit | self._touching(m), COLLIDED, s.status).astype(np.int8)
+            struck = moved.hit if moved.struck is None else moved.hit | moved.struck
+            s.status = np.where(struck | self._touching(m), COLLIDED, s.status).astype(np.int8)
             out.omega[m], out.c[:, m], out.force[m] = omega[m], c[:, m], force[m]
             out.gap[m], out.point[m], out.centre[m], out.hit[m] = (
                 reading.gap[m], reading.point[m], reading.centre[m], reading.hit[m])

@@ -76,7 +76,7 @@ class SLOConfig:
     init_area: tuple[float, float] | None = None  # S = [lo, hi]²; None: [−50, 50]² PSO, [0, 100]² walk
     # ("Initial area of the PSO experiment")
     walk_speed: float = 5.0
-    entry_policy: EntryPolicy = "dead_reckoning"  # docs/readings.md
+    entry_policy: EntryPolicy = "geometric_nearest"  # "Estimates of robots outside the neighbourhood (SLO)"
     initial_estimates: InitialEstimates = "random"  # "Initial estimates x̂(−1)"
     measure_all_ranges: bool = True
     max_range: float = np.inf

@@ -488,15 +488,20 @@ def _target(xi: float, yi: float, heading: float, c0: float, c1: float,
     return xi + p.dt * c0, yi + p.dt * c1, _wrap(heading)
 
 
+ROBOT_BODY, CIRCLE_BODY, WALL_BODY = range(3)  # what _first_contact touched
+
+
 @kernel
 def _first_contact(i: int, sx: float, sy: float, ex: float, ey: float, rad: float, xr: np.ndarray,
                    p: TickParams, w: WorldArrays, g: Grid, head: np.ndarray, nxt: np.ndarray,
-                   stamp: np.ndarray) -> float:
+                   stamp: np.ndarray) -> tuple[float, int, int]:
     """motion.first_contact: the smallest fraction of the step at which robot i's disc (radius
-    ``rad``) touches a body whose box meets the swept box; −1 for a free path."""
+    ``rad``) touches a body whose box meets the swept box (−1 for a free path), and that
+    body: its kind (``ROBOT_BODY``, ``CIRCLE_BODY``, ``WALL_BODY``) and index."""
     lo_x, hi_x = min(sx, ex) - rad, max(sx, ex) + rad
     lo_y, hi_y = min(sy, ey) - rad, max(sy, ey) + rad
     best = -1.0
+    kind, idx = -1, -1
     r = p.radius
     ix0, iy0, ix1, iy1 = _cells(lo_x - r, lo_y - r, hi_x + r, hi_y + r, g)
     for iy in range(iy0, iy1 + 1):
@@ -508,7 +513,7 @@ def _first_contact(i: int, sx: float, sy: float, ex: float, ey: float, rad: floa
                     if bb_overlap(lo_x, lo_y, hi_x, hi_y, cx - r, cy - r, cx + r, cy + r):
                         t = circle_sweep(cx, cy, r, sx, sy, ex, ey, rad)
                         if t >= 0.0 and (best < 0.0 or t < best):
-                            best = t
+                            best, kind, idx = t, ROBOT_BODY, j
                 j = nxt[j]
     stamp[0] += 1
     mark = stamp[0]
@@ -525,7 +530,7 @@ def _first_contact(i: int, sx: float, sy: float, ex: float, ey: float, rad: floa
                 if bb_overlap(lo_x, lo_y, hi_x, hi_y, cx - cr, cy - cr, cx + cr, cy + cr):
                     t = circle_sweep(cx, cy, cr, sx, sy, ex, ey, rad)
                     if t >= 0.0 and (best < 0.0 or t < best):
-                        best = t
+                        best, kind, idx = t, CIRCLE_BODY, j
     for k in range(w.walls.shape[0]):
         b = w.wall_box[k]
         if bb_overlap(lo_x, lo_y, hi_x, hi_y, b[0], b[1], b[2], b[3]):
@@ -533,8 +538,21 @@ def _first_contact(i: int, sx: float, sy: float, ex: float, ey: float, rad: floa
             t = segment_sweep(a[0], a[1], a[2], a[3], w.wall_radius, w.wall_normal[k, 0], w.wall_normal[k, 1],
                               sx, sy, ex, ey, rad)
             if t >= 0.0 and (best < 0.0 or t < best):
-                best = t
-    return best
+                best, kind, idx = t, WALL_BODY, k
+    return best, kind, idx
+
+
+@kernel
+def _sweep_body(kind: int, idx: int, sx: float, sy: float, ex: float, ey: float, rad: float, xr: np.ndarray,
+                p: TickParams, w: WorldArrays) -> float:
+    """The sweep of a disc of radius ``rad`` from s to e against one body (motion.deeper_than)."""
+    if kind == ROBOT_BODY:
+        return circle_sweep(xr[idx, 0], xr[idx, 1], p.radius, sx, sy, ex, ey, rad)
+    if kind == CIRCLE_BODY:
+        return circle_sweep(w.circles[idx, 0], w.circles[idx, 1], w.circles[idx, 2], sx, sy, ex, ey, rad)
+    a = w.walls[idx]
+    return segment_sweep(a[0], a[1], a[2], a[3], w.wall_radius, w.wall_normal[idx, 0], w.wall_normal[idx, 1],
+                         sx, sy, ex, ey, rad)
 
 
 @kernel
@@ -666,6 +684,7 @@ def phase_b(x: np.ndarray, heading: np.ndarray, u: np.ndarray, cmd: np.ndarray, 
                 for n in range(p.terms):
                     out.c[n, r, i] = c[n]
                 out.force[r, i, 0], out.force[r, i, 1] = fx, fy
+            touched[:] = False  # robots a mover collides with, then whoever overlaps a body
             for s in range(m):  # ... then they move one after another ...
                 i = members[s]
                 sx, sy = xr[i, 0], xr[i, 1]
@@ -673,20 +692,21 @@ def phase_b(x: np.ndarray, heading: np.ndarray, u: np.ndarray, cmd: np.ndarray, 
                 nx_, ny_ = ex, ey
                 hit[i] = False
                 if sx != ex or sy != ey:
-                    t = _first_contact(i, sx, sy, ex, ey, p.radius, xr, p, w, g, head, nxt, ostamp)
+                    t, kind, idx = _first_contact(i, sx, sy, ex, ey, p.radius, xr, p, w, g, head, nxt, ostamp)
                     if t >= 0.0:  # stop where the swept disc first touches
                         f = max(t - STOP_SHORT, 0.0)
                         nx_, ny_ = sx + f * (ex - sx), sy + f * (ey - sy)
-                        hit[i] = p.tolerance <= 0 or _first_contact(i, sx, sy, ex, ey, p.radius - p.tolerance, xr,
-                                                                    p, w, g, head, nxt, ostamp) >= 0.0
+                        hit[i] = p.tolerance <= 0 or _sweep_body(kind, idx, sx, sy, ex, ey, p.radius - p.tolerance,
+                                                                 xr, p, w) >= 0.0
+                        if hit[i] and kind == ROBOT_BODY:  # both robots of a collision are disabled
+                            touched[idx] = True
                     _grid_remove(i, head, nxt, prv, cell)
                     xr[i, 0], xr[i, 1] = nx_, ny_
                     _grid_insert(i, _grid_cell(nx_, ny_, g), head, nxt, prv, cell)
                 heading[r, i] = new_heading
                 u[r, i, 0], u[r, i, 1] = (nx_ - sx) / p.dt, (ny_ - sy) / p.dt
                 cmd[r, i, 0], cmd[r, i, 1] = new_cmd[i, 0], new_cmd[i, 1]
-            touched[:] = False  # ... and whoever overlaps a body beyond the tolerance has collided
-            for s in range(m):
+            for s in range(m):  # ... and whoever overlaps a body beyond the tolerance has collided
                 _touching(members[s], xr, p, w, g, head, nxt, ostamp, touched)
             for s in range(m):
                 if hit[members[s]]:

@@ -38,13 +38,14 @@ class Moved:
     heading: np.ndarray  # (R, N)
     velocity: np.ndarray  # (R, N, 2) realised world-frame velocity
     hit: np.ndarray  # (R, N) bool, collided this tick (overlap beyond the contact tolerance)
+    struck: np.ndarray | None = None  # (R, N) bool, robots a mover collided with this tick (kinematic)
 
 
 def first_contact(sp: RunSpace, start: tuple[float, float], end: tuple[float, float], i: int,
-                  inset: float = 0.0) -> float | None:
+                  inset: float = 0.0) -> tuple[float, pymunk.Shape] | None:
     """Fraction of the way from ``start`` to ``end`` at which robot ``i``'s disc, shrunk by
-    ``inset`` metres, first touches another body of ``sp`` (None: a free path). With an
-    inset it answers whether the full disc would overlap a body by more than ``inset``.
+    ``inset`` metres, first touches another body of ``sp``, and that body's shape (None: a
+    free path).
 
     ``Space.segment_query_first`` with a radius is not used: its broad phase tests the bare
     centre line against the bounding boxes, so it misses a body that the disc grazes while
@@ -54,12 +55,19 @@ def first_contact(sp: RunSpace, start: tuple[float, float], end: tuple[float, fl
     rad = sp.robot_radius - inset
     bb = pymunk.BB(min(start[0], end[0]) - rad, min(start[1], end[1]) - rad,
                    max(start[0], end[0]) + rad, max(start[1], end[1]) + rad)
-    best = None
+    best: tuple[float, pymunk.Shape] | None = None
     for shape in sp.space.bb_query(bb, sp.filters[i]):
         q = shape.segment_query(start, end, rad)
-        if q is not None and (best is None or q.alpha < best):
-            best = q.alpha
+        if q is not None and (best is None or q.alpha < best[0]):
+            best = (q.alpha, shape)
     return best
+
+
+def deeper_than(sp: RunSpace, shape: pymunk.Shape, start: tuple[float, float], end: tuple[float, float],
+                tolerance: float) -> bool:
+    """Would the path carry the robot's disc more than ``tolerance`` metres into ``shape``?
+    (docs/readings.md, "What counts as a collision, and stalls")"""
+    return tolerance <= 0 or shape.segment_query(start, end, sp.robot_radius - tolerance) is not None
 
 
 class Kinematic:
@@ -68,9 +76,11 @@ class Kinematic:
     Contacts: each robot's path is swept as a disc against the world and the other
     robots (:func:`first_contact`) and stops at the first contact. The contact is a
     collision (``hit``) only when the path would have carried the disc more than
-    ``tolerance`` metres into the body; a shallower touch just stops the robot. Robots are
-    moved one after another in the space, so a later sweep sees an earlier robot's new
-    position; the space must hold every robot at ``x`` when ``move`` is called.
+    ``tolerance`` metres into the body it touched (:func:`deeper_than`); a shallower touch
+    just stops the robot. A robot the mover collided with has collided too (``struck``):
+    "a robot that touches anything is disabled" holds for both of them. Robots are moved one
+    after another in the space, so a later sweep sees an earlier robot's new position; the
+    space must hold every robot at ``x`` when ``move`` is called.
     """
 
     def __init__(self, drive: Drive = "holonomic", v_max: float = 3.0, tolerance: float = 0.0) -> None:
@@ -89,17 +99,22 @@ class Kinematic:
             target, new_heading = x + dt * u, heading  # [4.6]
         new_x = target.copy()
         hit = np.zeros(active.shape, dtype=bool)
+        struck = np.zeros(active.shape, dtype=bool)
         for r, sp in enumerate(spaces):  # the space holds every robot at x (kept in sync)
             for i in map(int, np.flatnonzero(active[r])):
                 start, end = tuple(x[r, i]), tuple(target[r, i])
                 if start != end:
-                    alpha = first_contact(sp, start, end, i)
-                    if alpha is not None:  # stop where the swept disc first touches
+                    contact = first_contact(sp, start, end, i)
+                    if contact is not None:  # stop where the swept disc first touches
+                        alpha, body = contact
                         new_x[r, i] = x[r, i] + max(alpha - 1e-6, 0.0) * (target[r, i] - x[r, i])
-                        hit[r, i] = self.tolerance <= 0 or first_contact(sp, start, end, i, self.tolerance) is not None
+                        hit[r, i] = deeper_than(sp, body, start, end, self.tolerance)
+                        j = sp.robot_of(body)
+                        if hit[r, i] and j is not None:
+                            struck[r, j] = True
                     sp.move_robot(i, new_x[r, i])
         velocity = (new_x - x) / dt
-        return Moved(new_x, wrap_angle(new_heading), velocity, hit)
+        return Moved(new_x, wrap_angle(new_heading), velocity, hit, struck)
 
 
 class Physics:

@@ -25,10 +25,13 @@ PERFECT = "perfect"  # the oracle baseline: every estimate is the truth
 Selection = str  # a key of selection.SELECTIONS, or PERFECT
 # How a robot's estimate of a non-neighbour is kept, and so where a neighbour that arrives
 # starts (docs/readings.md, "Estimates of robots outside the neighbourhood"):
-# "dead_reckoning" carries it by odometry, x̂ + v*_j − v*_i [3.4]; "stale" freezes it;
-# "geometric_random" freezes it and starts an arriving neighbour on x1 or x2 at random.
-EntryPolicy = Literal["dead_reckoning", "stale", "geometric_random"]
-ENTRY_POLICIES = ("dead_reckoning", "stale", "geometric_random")
+# "geometric_nearest" (the default, our reading of Mai §3.5.3, §4.5, §4.5.4) freezes it and starts
+# an arriving neighbour on the geometric candidate x1 or x2 nearest its frozen x3, unblended;
+# "stale" freezes it and blends as usual; "geometric_random" freezes it and starts an arriving
+# neighbour on x1 or x2 at random; "dead_reckoning" (an extension: it assumes every robot's
+# odometry is heard) carries it by odometry, x̂ + v*_j − v*_i [3.4].
+EntryPolicy = Literal["geometric_nearest", "stale", "geometric_random", "dead_reckoning"]
+ENTRY_POLICIES = ("geometric_nearest", "stale", "geometric_random", "dead_reckoning")
 
 
 @dataclass(frozen=True)
@@ -41,7 +44,7 @@ class LocaliserParams:
     delta_cos: float = 0.03  # [3.5]; −inf = clip only
     delta_v: float = 0.03  # [3.6]
     literal_eq_3_1: bool = False  # True: the printed denominator d_{t−1}; "The denominator of [3.1]"
-    entry_policy: EntryPolicy = "dead_reckoning"
+    entry_policy: EntryPolicy = "geometric_nearest"
     measure_all_ranges: bool = True  # range to every particle, not only neighbours
     # ("Estimates of robots outside the neighbourhood (SLO)")
     max_range: float = np.inf  # ranging sensor reach (0 beyond)
@@ -147,8 +150,9 @@ class Localiser:
         ranges = self._ranges(x, adjacency)
         v_meas = measure_odometry(x - x_prev, self.errors.odometry, self.permanent, self._odometry_draws)
         entry = coin = None
-        if p.entry_policy == "geometric_random":
+        if p.entry_policy in ("geometric_random", "geometric_nearest"):
             entry = adjacency & ~b.adjacency
+        if p.entry_policy == "geometric_random":
             coin = np.stack([g.random(adjacency.shape[1:]) < 0.5 for g in self.streams["entry"]])
         # candidates [3.1]–[3.6] of every pair from v*_j − v*_i, and their CSS choice [3.7], compiled
         reads = p.selection != PERFECT and SELECTIONS[p.selection].reads_candidates

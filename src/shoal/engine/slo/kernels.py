@@ -22,7 +22,7 @@ from .selection import Kind
 
 @kernel
 def _pairs(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, delta_cos: float, delta_v: float,
-           literal: bool, w: float, entry: np.ndarray, coin: np.ndarray, use_entry: bool, full: bool,
+           literal: bool, w: float, entry: np.ndarray, coin: np.ndarray, use_entry: bool, use_coin: bool, full: bool,
            points: np.ndarray, mask: np.ndarray, flag: np.ndarray, cos_alpha: np.ndarray, thinness: np.ndarray,
            est: np.ndarray, kind: np.ndarray) -> None:
     R, n = d0.shape[0], d0.shape[1]
@@ -77,7 +77,7 @@ def _pairs(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, delt
                 q1, q2 = e1x * e1x + e1y * e1y, e2x * e2x + e2y * e2y
                 pick1 = q1 <= q2 or math.sqrt(q1) <= math.sqrt(q2)
                 new = use_entry and entry[r, i, j]
-                if new:
+                if new and use_coin:
                     pick1 = coin[r, i, j]
                 xcx, xcy = (x1x, x1y) if pick1 else (x2x, x2y)
                 if new:
@@ -111,11 +111,12 @@ def localise(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, *,
     points, mask = np.empty(shape + (3, 2)), np.empty(shape + (3,), bool)
     cos_alpha, thinness = np.empty(shape), np.empty(shape)
     flag, kind, est = np.empty((R, n, n), np.int8), np.empty((R, n, n), np.int8), np.empty((R, n, n, 2))
-    use_entry = entry is not None and coin is not None
+    use_entry, use_coin = entry is not None, coin is not None
     e = np.ascontiguousarray(entry if use_entry else np.zeros((1, 1, 1)), dtype=bool)
-    k = np.ascontiguousarray(coin if use_entry else np.zeros((1, 1, 1)), dtype=bool)
+    k = np.ascontiguousarray(coin if use_entry and use_coin else np.zeros((1, 1, 1)), dtype=bool)
     _pairs(f64(d0), f64(d1), f64(v), f64(prev), float(delta_cos), float(delta_v), bool(literal_eq_3_1),
-           float(prediction_weight), e, k, use_entry, candidates, points, mask, flag, cos_alpha, thinness, est, kind)
+           float(prediction_weight), e, k, use_entry, use_entry and use_coin, candidates, points, mask, flag,
+           cos_alpha, thinness, est, kind)
     return Localised(est, kind, flag, Candidates(points, mask, flag, cos_alpha, thinness) if candidates else None)
 
 

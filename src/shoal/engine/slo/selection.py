@@ -38,7 +38,7 @@ def css(
     xc = np.where(pick1[..., None], x1, x2)
     w = float(prediction_weight)
     blended = w * x3 + (1.0 - w) * xc
-    if entry is not None and coin is not None:
+    if entry is not None:
         blended = np.where(entry[..., None], xc, blended)
     geo = c.geometric
     est = np.where(geo[..., None], blended, x3)

@@ -209,7 +209,8 @@ RUNS_COLUMNS = ("case", "run", "seed", "mode", "com_fitness_final", "layers_pass
 SERIES_COLUMNS = ("case", "mode", "t", "com_fitness_median", "com_fitness_p05", "com_fitness_p95",
                   "collided_mean", "layers_passed_median", "stalled_mean")
 CONTACTS = (f"A collision is an overlap deeper than the contact tolerance (`robot.contact_tolerance`, "
-            f"{1e3 * Robot().contact_tolerance:g} mm; a shallower touch stops the robot without disabling it). A robot "
+            f"{Robot().contact_tolerance:g} m, a float-noise allowance; a shallower touch stops the robot without "
+            "disabling it), and both robots of a robot-robot collision are disabled. A robot "
             f"is stalled while it has moved slower than {STALL_SPEED:g} m/s for {STALL_STEPS} ticks in a row "
             "(counted among the operational robots, ours).")
 

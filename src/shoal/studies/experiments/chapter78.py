@@ -30,6 +30,7 @@ from shoal.presets.models import Scenario
 from ..cost import run_cost
 from .output import num, percentile_band, write_csv
 from .runner import run_jobs
+from .verdict import Estimate
 
 ALGORITHMS = ("a-pso", "x-pso", "b-pso", "xb-pso")  # Chapter 7 order
 LABELS = {name: strategy.label for name, strategy in STRATEGIES.items()}
@@ -120,6 +121,11 @@ class SonarBatch:
         (the thesis' "on average" read as the median its figures plot); ``inf`` when fewer
         than half converged."""
         return median_time(self.first_converged)
+
+    def steps(self) -> "Estimate":
+        """:meth:`median_steps` with its interval (a never-converged run as +∞)."""
+        first = np.where(self.first_converged >= 0, self.first_converged.astype(float), np.inf)
+        return Estimate.median(first, first_passage=True)
 
     def window_mean(self, values: np.ndarray) -> np.ndarray:
         """(R,) mean of a per-tick series over the window, ticks ``window …`` K."""
@@ -295,6 +301,27 @@ def occupancy_probability(b: SonarBatch) -> np.ndarray:
     occ = b.occupancy.sum(axis=0).astype(float)
     window = b.com_dist.shape[0] - b.window  # ticks window … K
     return occ / max(b.robots * b.runs * window, 1)  # robots outside the mapped square count too
+
+
+def escort_estimates(b: SonarBatch) -> dict[str, Estimate]:
+    """Medians over runs with their intervals: the window means of the fraction inside the
+    ring (``frac``), the mean robot–source distance (``dist``) and |CoM − source| (``com``),
+    and the mean robot–source distance at the end (``final``)."""
+    return {"frac": Estimate.median(b.window_mean(b.frac_inside)), "dist": Estimate.median(b.window_mean(b.mean_dist)),
+            "com": Estimate.median(b.window_mean(b.com_dist)), "final": Estimate.median(b.mean_dist[-1])}
+
+
+def inside_peak(b: SonarBatch, r: float) -> Estimate:
+    """The highest occupancy of a cell lying wholly inside the ring r (all runs pooled, as
+    the maps), as the mean over runs of that cell's per-run occupancy, with its interval."""
+    p = occupancy_probability(b)
+    centres = -b.extent + (np.arange(p.shape[0]) + 0.5) * b.cell
+    inside = np.hypot(*np.meshgrid(centres, centres, indexing="ij")) + b.cell / np.sqrt(2) < r
+    if not inside.any():
+        return Estimate.exact(0.0)
+    i, j = np.unravel_index(np.argmax(np.where(inside, p, -1.0)), p.shape)
+    window = b.com_dist.shape[0] - b.window
+    return Estimate.mean(b.occupancy[:, i, j] / max(b.robots * window, 1))
 
 
 def occupancy_rows(case: EscortCase, b: SonarBatch) -> list[list[str]]:

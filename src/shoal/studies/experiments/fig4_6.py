@@ -20,8 +20,10 @@ from typing import Any, Sequence
 import numpy as np
 
 from . import chapter45 as ch
+from . import verdict as vd
 from .output import check, checks_table, info, information_table, new_figure, r3, save, write_csv
 from .runner import run_jobs
+from .verdict import Estimate
 
 DEFAULT_RUNS = 100  # kinematic runs, as the thesis' 100 MATLAB repeats
 DURATION = 600.0  # s; long enough for DVC's CoM to pass the 5th of 6 layers on our course
@@ -99,8 +101,12 @@ def run(
         "nonomni_dvc": "the non-omnidirectional DVC controller is compared on this course in target fig5-5",
         "outcomes": {m: {n: o.as_dict() for n, o in out[m].items()} for m in modes},
     }
-    (out_dir / "README.md").write_text(_readme(summary, n_runs, duration), encoding="utf-8")
     return summary
+
+
+def readme(summary: dict[str, Any]) -> str:
+    """README.md from the summary alone (``shoal reproduce --report`` renders it again)."""
+    return _readme(summary, summary["runs_per_mode"], summary["duration_s"])
 
 
 # ---------------------------------------------------------------------- checks
@@ -121,12 +127,25 @@ def _checks(mode: str, res: dict, out: dict[str, ch.Outcome],
     coll_med = {n: o.collided_median_run for n, o in out.items()}
     coll_mean = {n: r3(o.collided_mean) for n, o in out.items()}
     best_const = max(CONSTANT, key=lambda n: com[n])
+    batch = {n: res[(n, mode)] for n in CASE_NAMES}
+    com_e = {n: Estimate.median(b.com[-1]) for n, b in batch.items()}
+    layers_e = {n: Estimate.median(b.layers[-1]) for n, b in batch.items()}
+    runs = batch["adapted-dvc"].runs
+
+    def at_median_runs(n: str) -> np.ndarray:
+        """Collided robots at the end of every run that could be the median run of case n."""
+        return batch[n].collided[-1][vd.median_runs(batch[n].com[-1])]
+
+    def free(n: str) -> vd.Verdict:
+        return vd.over_choices(lambda c: c == 0, at_median_runs(n), runs=runs)
+
     checks: list[dict[str, Any]] = []
     information: list[dict[str, Any]] = []
     checks.append(check(
         f"{tag} adapted-dvc: no robot collided at the end of the median run (Fig. {fig})",
         f"{sim}: Adapted RPSO + DVC is collision-free",
-        f"{dvc.collided_median_run} collided ({dvc.stalled_median_run} stalled)", dvc.collided_median_run == 0))
+        f"{dvc.collided_median_run} collided ({dvc.stalled_median_run} stalled)", dvc.collided_median_run == 0,
+        free("adapted-dvc")))
     information.append(info(
         f"{tag} adapted-dvc: no robot collided in any run (stricter than the thesis figure, which shows the "
         "median run)", "collision-free", f"{dvc.collided_total} robots collided, in {dvc.runs_with_collision} "
@@ -137,50 +156,58 @@ def _checks(mode: str, res: dict, out: dict[str, ch.Outcome],
                                          else ""),
         f"adapted-dvc {com['adapted-dvc']} m (mean {r3(np.mean(res[('adapted-dvc', mode)].com[-1]))} m); "
         f"best constant case {best_const} {com[best_const]} m",
-        all(com["adapted-dvc"] > com[n] for n in CONSTANT)))
+        all(com["adapted-dvc"] > com[n] for n in CONSTANT),
+        vd.all_of(vd.less(com_e[n], com_e["adapted-dvc"]) for n in CONSTANT)))
     checks.append(check(
         f"{tag} adapted-dvc: median CoM passes the 5th layer by the end (median layers passed >= 5; "
         f"layer 5 at x = {layer_x[4]:.2f} m)" if len(layer_x) >= 5 else f"{tag} adapted-dvc passes the 5th layer",
         "the DVC CoM passes the 5th obstacle layer before the end",
-        f"{layers['adapted-dvc']:g} layers (median CoM {com['adapted-dvc']} m)", layers["adapted-dvc"] >= 5))
+        f"{layers['adapted-dvc']:g} layers (median CoM {com['adapted-dvc']} m)", layers["adapted-dvc"] >= 5,
+        vd.at_least(layers_e["adapted-dvc"], 5)))
     worst = max(CONSTANT, key=lambda n: layers[n])
     checks.append(check(
         f"{tag} every constant-coefficient case stays short of the 3rd layer (median layers passed <= 2)",
         "every other case stays short of the 3rd layer", _fmt({n: layers[n] for n in CONSTANT}),
-        layers[worst] <= 2))
+        layers[worst] <= 2, vd.all_of(vd.at_most(layers_e[n], 2) for n in CONSTANT)))
     checks.append(check(
         f"{tag} adapted-dvc passes at least two more layers than any constant case (median layers passed)",
         "DVC passes the 5th layer, the others stay short of the 3rd",
         f"adapted-dvc {layers['adapted-dvc']:g} vs {worst} {layers[worst]:g}",
-        layers["adapted-dvc"] >= layers[worst] + 2))
+        layers["adapted-dvc"] >= layers[worst] + 2,
+        vd.all_of(vd.at_most_of(layers_e[n].shifted(2), layers_e["adapted-dvc"]) for n in CONSTANT)))
     low, equal, high = (coll_med[n] for n in ADAPTED_CONST)
     checks.append(check(
         f"{tag} Adapted RPSO collisions fall as c3/(c1 + c2) rises, end of the median run: "
         "c3-low >= c3-equal >= c3-high", "collisions fall as c3/(c1 + c2) rises",
         f"{low} >= {equal} >= {high} collided (mean over runs {coll_mean['adapted-c3-low']}, "
-        f"{coll_mean['adapted-c3-equal']}, {coll_mean['adapted-c3-high']})", low >= equal >= high))
+        f"{coll_mean['adapted-c3-equal']}, {coll_mean['adapted-c3-high']})", low >= equal >= high,
+        vd.over_choices(lambda a, b, c: a >= b >= c, *(at_median_runs(n) for n in ADAPTED_CONST), runs=runs)))
     ml, me, mh = (coll_mean[n] for n in ADAPTED_CONST)
     information.append(info(
         f"{tag} the same, mean collided robots over all runs strictly falling (ours, less noisy than one run)",
         "collisions fall as c3/(c1 + c2) rises", f"{ml} > {me} > {mh}", ml > me > mh))
     checks.append(check(
         f"{tag} adapted-c3-low: all 6 robots collided at the end of the median run",
-        "all robots collide", f"{low} of 6 (mean over runs {ml})", low == 6))
+        "all robots collide", f"{low} of 6 (mean over runs {ml})", low == 6,
+        vd.over_choices(lambda c: c == 6, at_median_runs("adapted-c3-low"), runs=runs)))
     checks.append(check(
         f"{tag} adapted-c3-high: no robot collided at the end of the median run",
         "no collisions", f"{high} (mean over runs {mh}, runs with a collision: "
-        f"{out['adapted-c3-high'].runs_with_collision} of {out['adapted-c3-high'].runs})", high == 0))
+        f"{out['adapted-c3-high'].runs_with_collision} of {out['adapted-c3-high'].runs})", high == 0,
+        free("adapted-c3-high")))
     op = {n: out[n].operational_median for n in RPSO}
     checks.append(check(
         f"{tag} Original RPSO survives poorly in every case: median operational robots at the end <= 3 of 6",
         "very low survival in every Original RPSO case",
         _fmt(op) + " operational (median over runs); median run: "
-        + _fmt({n: out[n].operational_median_run for n in RPSO}), all(v <= 3 for v in op.values())))
-    free = sorted(n for n in CASE_NAMES if coll_med[n] == 0)
+        + _fmt({n: out[n].operational_median_run for n in RPSO}), all(v <= 3 for v in op.values()),
+        vd.all_of(vd.at_most(Estimate.median(batch[n].robots - batch[n].collided[-1]), 3) for n in RPSO)))
+    free_cases = sorted(n for n in CASE_NAMES if coll_med[n] == 0)
     checks.append(check(
         f"{tag} the only collision-free cases (end of the median run) are adapted-c3-high and adapted-dvc",
-        "only Adapted c3-high and Adapted + DVC are collision-free", ", ".join(free) or "none",
-        set(free) == {"adapted-c3-high", "adapted-dvc"}))
+        "only Adapted c3-high and Adapted + DVC are collision-free", ", ".join(free_cases) or "none",
+        set(free_cases) == {"adapted-c3-high", "adapted-dvc"},
+        vd.all_of(free(n) if n in ("adapted-c3-high", "adapted-dvc") else vd.negate(free(n)) for n in CASE_NAMES)))
     k = ch.at_time(res[("adapted-dvc", mode)], EARLY)
     early = {n: r3(np.median(res[(n, mode)].com[k])) for n in CASE_NAMES}
     best_rpso = max(RPSO, key=lambda n: early[n])
@@ -189,12 +216,15 @@ def _checks(mode: str, res: dict, out: dict[str, ch.Outcome],
         f"{tag} Original RPSO moves fastest at first: at t = {EARLY:g} s the best Original RPSO median CoM "
         "is above every Adapted case", "Original RPSO moves fastest at first (it runs at the speed limit)",
         f"{best_rpso} {early[best_rpso]} m vs {best_adapted} {early[best_adapted]} m",
-        early[best_rpso] > early[best_adapted]))
+        early[best_rpso] > early[best_adapted],
+        vd.all_of(vd.less(Estimate.median(batch[n].com[k]), Estimate.median(batch[best_rpso].com[k]))
+                  for n in CASE_NAMES if n not in RPSO)))
     lowest = min(CASE_NAMES, key=lambda n: com[n])
     checks.append(check(
         f"{tag} adapted-c3-high has the lowest median final CoM fitness of all cases",
         "Adapted RPSO with large c3 has the lowest fitness", f"lowest {lowest} {com[lowest]} m; "
-        f"adapted-c3-high {com['adapted-c3-high']} m", lowest == "adapted-c3-high"))
+        f"adapted-c3-high {com['adapted-c3-high']} m", lowest == "adapted-c3-high",
+        vd.all_of(vd.less(com_e["adapted-c3-high"], com_e[n]) for n in CASE_NAMES if n != "adapted-c3-high")))
     return checks, information
 
 
@@ -203,6 +233,11 @@ def _physics_vs_kinematic(res: dict, out: dict, n_phys: int) -> tuple[list[dict[
     the check on the median run (the thesis compares Figs. 4-7a and b), the mean over runs
     as information."""
     same = {n: res[(n, "kinematic")].head(n_phys) for n in CASE_NAMES}
+    phys = {n: res[(n, "physics")] for n in CASE_NAMES}
+
+    def at_median(b: ch.FleetBatch) -> np.ndarray:
+        return b.collided[-1][vd.median_runs(b.com[-1])]
+
     kin = {n: r3(np.median(b.com[-1])) for n, b in same.items()}
     phy = {n: r3(out["physics"][n].com_median) for n in CASE_NAMES}
     adapted = [n for n in CASE_NAMES if n.startswith("adapted")]
@@ -218,13 +253,17 @@ def _physics_vs_kinematic(res: dict, out: dict, n_phys: int) -> tuple[list[dict[
             f"physics vs kinematic (runs 0-{n_phys - 1} of both): the Adapted cases do no better with physics "
             "(median final CoM fitness, physics <= kinematic)",
             "Adapted cases do slightly worse in Gazebo (direction-dependent mecanum top speed)",
-            "; ".join(f"{n} {phy[n]} vs {kin[n]} m" for n in adapted), all(phy[n] <= kin[n] for n in adapted)),
+            "; ".join(f"{n} {phy[n]} vs {kin[n]} m" for n in adapted), all(phy[n] <= kin[n] for n in adapted),
+            vd.all_of(vd.at_most_of(Estimate.median(phys[n].com[-1]), Estimate.median(same[n].com[-1]))
+                      for n in adapted)),
         check(
             f"physics vs kinematic (runs 0-{n_phys - 1}): collision counts almost the same at the end of the median "
             "run (differ by <= 1 robot in every case; threshold ours)",
             "Gazebo collision counts almost the same as MATLAB (Figs. 4-7a, b)",
             f"largest difference {worst_m}: {pm[worst_m]} vs {km[worst_m]}; all: "
-            + "; ".join(f"{n} {pm[n]} vs {km[n]}" for n in CASE_NAMES), abs(pm[worst_m] - km[worst_m]) <= 1),
+            + "; ".join(f"{n} {pm[n]} vs {km[n]}" for n in CASE_NAMES), abs(pm[worst_m] - km[worst_m]) <= 1,
+            vd.all_of(vd.over_choices(lambda a, b: abs(a - b) <= 1, at_median(phys[n]), at_median(same[n]),
+                                      runs=n_phys) for n in CASE_NAMES)),
     ]
     information = [info(
         f"physics vs kinematic (runs 0-{n_phys - 1}): mean collided robots per run differ by <= 1 in every case",
@@ -294,7 +333,7 @@ def _readme(summary: dict[str, Any], n_runs: dict[str, int], duration: float) ->
     cmds = "\n".join(f"- `{n}`: `{summary['commands'][n][next(iter(summary['commands'][n]))]}`" for n in CASE_NAMES)
     return f"""# Figs. 4-6 and 4-7 reproduction: seven Chapter 4 cases on the obstacle course
 
-Six omnidirectional robots (1 m diameter, 3 m/s, 3 m sensing in six 60° sectors) seek the
+Six omnidirectional robots (1 m diameter, 3 m/s, 3 m sensing in six equal sectors) seek the
 source through six layers of circular obstacles that get denser toward the source (our
 course in the spirit of Fig. 4-1; the thesis gives no dimensions). {duration:g} s of
 simulated time with Δt = 1 s; {modes}. Every case is a shipped preset plus `--set`
@@ -325,7 +364,7 @@ overrides, e.g.:
 
 ## Differences from the thesis
 
-- The course is ours: layer positions {summary['layer_x_m']} m, source at x = 56 m. The
+- The course is ours: layer positions {summary['layer_x_m']} m, the source beyond the last. The
   thesis' absolute numbers (e.g. the Gazebo DVC fitness of 47) belong to its own course.
 - `physics` is pymunk with mecanum wheels, not Gazebo/ROS; it runs fewer repeats than the
   kinematic mode because it is slower (the thesis does not state its Gazebo repeat count).

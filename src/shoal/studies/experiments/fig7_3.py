@@ -24,16 +24,18 @@ Measures (ours; the thesis states no numbers but 0.25 and 0.1):
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
 from shoal.presets.build import sonar_params_for
 
 from . import chapter78 as ch
+from . import verdict as vd
 from .fig7_2 import DEFAULT_RUNS, HORIZON, PRESET, ROUTES, ROUTES_SNR, make_jobs, split_label, write_routes
 from .output import check, checks_table, info, information_table, new_figure, num, r3, save, write_csv
 from .runner import run_jobs
+from .verdict import LEVEL, Estimate
 
 CELL = 0.02  # spatial steps (20 m) per side of a density cell
 EXAMPLES = 3  # randomly chosen swarms drawn over the map, as in the thesis
@@ -86,6 +88,19 @@ def route_stats(route: np.ndarray) -> tuple[float, float, float]:
     return length, progress / length if length > 0 else 0.0, float(np.sqrt(np.mean(route[:, 1] ** 2)))
 
 
+def half_floors(runs: int) -> tuple[float, float]:
+    """The fractions of ``runs`` swarms from which more than half of all swarms may pass a
+    cell, and from which they surely do (the 95 % interval of the proportion, as the
+    interval of a median of 0/1 values, lies partly / wholly above 0.5); inf: never."""
+    from scipy.stats import binomtest
+
+    def first(ok) -> float:
+        k = next((k for k in range(runs + 1) if ok(binomtest(k, runs).proportion_ci(LEVEL))), None)
+        return np.inf if k is None else k / runs
+
+    return first(lambda ci: ci.high > 0.5), first(lambda ci: ci.low > 0.5)
+
+
 def density(routes: list[np.ndarray], lo: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     """(nx, ny) fraction of routes that pass each cell of side ``CELL`` from corner ``lo``."""
     count = np.zeros(shape, np.int64)
@@ -97,15 +112,31 @@ def density(routes: list[np.ndarray], lo: np.ndarray, shape: tuple[int, int]) ->
     return count / max(len(routes), 1)
 
 
-def x50(dens: np.ndarray, xs: np.ndarray, x0: float, x1: float) -> float:
-    """Smallest x in [x0, x1] from which every column up to x1 has a cell above 50 %."""
+def x50(dens: np.ndarray, xs: np.ndarray, x0: float, x1: float, floor: float | None = None) -> float:
+    """Smallest x in [x0, x1] from which every column up to x1 has a cell above 50 % (with
+    ``floor``: a cell of at least that fraction)."""
     cols = np.flatnonzero((xs >= x0) & (xs <= x1))
-    high = dens[cols].max(axis=1) > 0.5
+    high = dens[cols].max(axis=1) > 0.5 if floor is None else dens[cols].max(axis=1) >= floor - 1e-12
     if not high.size or not high[-1]:
         return float("nan")
     last_low = np.flatnonzero(~high)
     start = cols[last_low[-1] + 1] if last_low.size else cols[0]
     return float(xs[start])
+
+
+def _reach_verdict(dens: dict, xs: np.ndarray, x0: float, x1: float, runs: int, near: Sequence[str],
+                   far: Sequence[str]) -> vd.Verdict:
+    """x50 of B/XB-PSO (``far``) reached and nearer the origin than A/X-PSO's (``near``; never
+    reached counts as farthest), judged on x50 with the cells that more than half of all
+    swarms may pass (earliest) and surely pass (latest)."""
+    may, sure = half_floors(runs)
+    early = {a: x50(dens[a], xs, x0, x1, may) for a in dens}  # nan: never
+    late = {a: x50(dens[a], xs, x0, x1, sure) for a in dens}
+    inf = lambda v: np.inf if np.isnan(v) else v  # noqa: E731
+    holds = all(np.isfinite(late[f]) for f in far) and all(inf(early[n]) > max(late[f] for f in far) for n in near)
+    fails = any(np.isnan(early[f]) for f in far) or any(
+        np.isfinite(late[n]) and late[n] <= max(inf(early[f]) for f in far) for n in near)
+    return vd.Verdict(vd.HOLDS if holds else vd.FAILS if fails else vd.UNDECIDED, runs)
 
 
 def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: bool = True, *,
@@ -146,17 +177,22 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
         check("B-PSO and XB-PSO run straighter than A-PSO and X-PSO (median over runs of progress toward the source "
               "over path length; measure ours)", "A/X-PSO zig-zag, B/XB-PSO fairly straight routes",
               ", ".join(f"{ch.LABELS[a]} {straight[a]}" for a in ch.ALGORITHMS),
-              min(straight[a] for a in far) > max(straight[a] for a in near)),
+              min(straight[a] for a in far) > max(straight[a] for a in near),
+              vd.all_of(vd.less(Estimate.median(stats[n][:, 1]), Estimate.median(stats[f][:, 1]))
+                        for n in near for f in far)),
         check("A-PSO and X-PSO spread more (median over runs of the RMS distance of the route from the origin–source "
               "line, spatial steps; measure ours)", "A/X-PSO spread more in the area",
               ", ".join(f"{ch.LABELS[a]} {spread[a]}" for a in ch.ALGORITHMS),
-              min(spread[a] for a in near) > max(spread[a] for a in far)),
+              min(spread[a] for a in near) > max(spread[a] for a in far),
+              vd.all_of(vd.less(Estimate.median(stats[f][:, 2]), Estimate.median(stats[n][:, 2]))
+                        for n in near for f in far)),
         check(f"places passed by more than half of the swarms begin nearer the origin for B/XB-PSO than for A/X-PSO "
               f"(x50 in spatial steps, {CELL:g} cells; measure ours)",
               "A/X from ≈ 0.25, B/XB from ≈ 0.1 spatial steps",
               ", ".join(f"{ch.LABELS[a]} {_x(reach[a])}" for a in ch.ALGORITHMS),
               all(np.isfinite(reach[a]) for a in far) and all(
-                  not np.isfinite(reach[n]) or reach[n] > max(reach[a] for a in far) for n in near)),
+                  not np.isfinite(reach[n]) or reach[n] > max(reach[a] for a in far) for n in near),
+              _reach_verdict(dens, xs, d0, d_s - dc, runs, near, far)),
     ]
     information = [info(f"{ch.LABELS[a]}: x50 near the thesis' value (within 0.05 spatial steps)",
                         f"≈ {THESIS_X50[a]:g}", _x(reach[a]),
@@ -180,8 +216,12 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
                    for a in ch.ALGORITHMS},
         "commands": {a: j.command() for a, j in zip(ch.ALGORITHMS, jobs)},
     }
-    (out_dir / "README.md").write_text(_readme(summary, runs, steps), encoding="utf-8")
     return summary
+
+
+def readme(summary: dict[str, Any]) -> str:
+    """README.md from the summary alone (``shoal reproduce --report`` renders it again)."""
+    return _readme(summary, summary["runs"], summary["horizon"])
 
 
 def _x(v: float) -> str:
@@ -242,7 +282,7 @@ Each route is turned so that the source lies on +x and ends where the swarm conv
   (R_ref = 1000 m); straightness = progress toward the source / path length.
 - `density.csv`: per algorithm, every cell of {CELL:g} × {CELL:g} spatial steps that some route
   passed, with the fraction of swarms that passed it.
-- `fig7-3.png`: top, the fraction of swarms that passed each cell (log colour), the 50 %
+- `fig7-3.png`: top, the fraction of swarms that passed each cell (log colour), the half
   contour (white), three random swarms (red, green, blue), the source (star) and the
   convergence circle; bottom, the same swarms' progress toward the source in time.
 - `summary.json`: checks, medians of the measures, x50 per algorithm, the example runs.

@@ -27,9 +27,11 @@ import numpy as np
 from shoal.presets.io import load
 
 from . import chapter78 as ch
+from . import verdict as vd
 from .fig7_2 import PRESET, seed_for, split_label
 from .output import check, checks_table, information_table, new_figure, num, save, write_csv
 from .runner import run_jobs
+from .verdict import Estimate
 
 DEFAULT_RUNS = 20
 HORIZON = 6000
@@ -135,6 +137,17 @@ def med(res: dict[tuple, ch.SonarBatch], alg: str, q: float, d: float = D0, u: f
     return res[(alg, q, d, u, share)].median_steps()
 
 
+def est(res: dict[tuple, ch.SonarBatch], alg: str, q: float, d: float = D0, u: float = U0,
+        share: float = C1_SHARE) -> Estimate:
+    """:func:`med` with its interval."""
+    return res[(alg, q, d, u, share)].steps()
+
+
+def converges(e: Estimate) -> vd.Verdict:
+    """The median time is reached (its interval is finite)."""
+    return vd.below(e, np.inf)
+
+
 def final(res: dict[tuple, ch.SonarBatch], alg: str, q: float, d: float = D0, u: float = U0,
           share: float = C1_SHARE) -> float:
     return float(np.median(res[(alg, q, d, u, share)].com_dist[-1]))
@@ -145,6 +158,10 @@ def unaffected(res, alg: str, pts: Sequence[Point], what: str, steps: int, share
     converge, else median final distances within ±20 % (thresholds ours)."""
     t = [res[(alg, *p, share)].median_steps() for p in pts]
     f = [float(np.median(res[(alg, *p, share)].com_dist[-1])) for p in pts]
+    te = [res[(alg, *p, share)].steps() for p in pts]
+    fe = [Estimate.median(res[(alg, *p, share)].com_dist[-1]) for p in pts]
+    verdict = vd.any_of(vd.all_of(*(converges(e) for e in te), vd.ratio_at_most(te, 1.3)),
+                        vd.all_of(*(vd.negate(converges(e)) for e in te), vd.ratio_at_most(fe, 1.2)))
     if all(np.isfinite(t)):
         shown, ok = ", ".join(f"{v:.0f}" for v in t) + " steps", max(t) <= 1.3 * min(t)
     else:
@@ -152,7 +169,7 @@ def unaffected(res, alg: str, pts: Sequence[Point], what: str, steps: int, share
             f"{v:.0f}" for v in f) + " m"
         ok = not any(np.isfinite(t)) and max(f) <= 1.2 * min(f)
     return check(f"{ch.LABELS[alg]} is not affected by {what} (median times within ×1.3, or if none converges the "
-                 "median final distances within ±20 %; thresholds ours)", "no effect", shown, ok)
+                 "median final distances within ±20 %; thresholds ours)", "no effect", shown, ok, verdict)
 
 
 def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: bool = True, *,
@@ -179,13 +196,14 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
                             f"Q = {qlo:g})",
                             "performance decreases as Q increases",
                             f"{ch.time_text(med(res, alg, qhi), steps)} vs {ch.time_text(med(res, alg, qlo), steps)}",
-                            med(res, alg, qhi) > med(res, alg, qlo)))
+                            med(res, alg, qhi) > med(res, alg, qlo), vd.less(est(res, alg, qlo), est(res, alg, qhi))))
     pairs = [(med(res, "xb-pso", x), med(res, "b-pso", x)) for x in q]
     checks.append(check("XB-PSO at least as fast as B-PSO at every Q (D = λ_c/2; pass: XB ≤ 1.05 × B; threshold ours)",
                         "XB-PSO slightly faster than B-PSO at every Q",
                         "; ".join(f"Q {x:g}: {ch.time_text(a, steps)} vs {ch.time_text(b, steps)}"
                                   for x, (a, b) in zip(q, pairs)),
-                        all(a <= 1.05 * b for a, b in pairs)))
+                        all(a <= 1.05 * b for a, b in pairs),
+                        vd.all_of(vd.at_most_of(est(res, "xb-pso", x), est(res, "b-pso", x).scaled(1.05)) for x in q)))
     for alg in ("b-pso", "xb-pso"):
         checks.append(unaffected(res, alg, [(qlo, y, U0) for y in d],
                                  f"D at low Q (Q = {qlo:g}, D/λ_c {d[0]:g}–{d[-1]:g})", steps))
@@ -193,10 +211,12 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
             t_half, t_one, t_far = med(res, alg, qhi, D0), med(res, alg, qhi, 1.0), med(res, alg, qhi, d[-1])
             checks.append(check(f"{ch.LABELS[alg]} at Q = {qhi:g}: worse as D → λ (median time at D = λ above D = λ/2)",
                                 "worse as D approaches λ at high Q",
-                                f"{ch.time_text(t_one, steps)} vs {ch.time_text(t_half, steps)}", t_one > t_half))
+                                f"{ch.time_text(t_one, steps)} vs {ch.time_text(t_half, steps)}", t_one > t_half,
+                                vd.less(est(res, alg, qhi, D0), est(res, alg, qhi, 1.0))))
             checks.append(check(f"{ch.LABELS[alg]} at Q = {qhi:g}: recovers toward D = {d[-1]:g}λ (median time "
                                 f"at {d[-1]:g}λ below λ)", "convergence time reduced again toward 10λ",
-                                f"{ch.time_text(t_far, steps)} vs {ch.time_text(t_one, steps)}", t_far < t_one))
+                                f"{ch.time_text(t_far, steps)} vs {ch.time_text(t_one, steps)}", t_far < t_one,
+                                vd.less(est(res, alg, qhi, d[-1]), est(res, alg, qhi, 1.0))))
     summary = {
         "checks": checks,
         "mode": mode, "horizon": steps, "snr0_db": SNR0, "q_grid": list(q), "d_over_lambda_grid": list(d),
@@ -204,9 +224,13 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
         "seed_rule": "every point uses child i of SeedSequence(seed) for run i, seed = the Fig. 7-2 seed of 10 dB",
         "cost": cost,
     }
-    (out_dir / "README.md").write_text(_readme("Fig. 7-4", "fig7-4.png", "(Q, D/λ_c)", runs, steps, mode, summary),
-                                       encoding="utf-8")
     return summary
+
+
+def readme(summary: dict[str, Any]) -> str:
+    """README.md from the summary alone (``shoal reproduce --report`` renders it again)."""
+    return _readme("Fig. 7-4", "fig7-4.png", "(Q, D/λ_c)", summary["runs"], summary["horizon"], summary["mode"],
+                   summary)
 
 
 def _readme(fig: str, png: str, grid: str, runs: int, steps: int, mode: str, summary: dict[str, Any]) -> str:

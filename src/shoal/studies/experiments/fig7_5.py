@@ -15,8 +15,9 @@ from typing import Any, Sequence
 import numpy as np
 
 from . import chapter78 as ch
+from . import verdict as vd
 from .fig7_2 import SPLITS, split_label
-from .fig7_4 import C1_SHARE, D0, HORIZON, Q0, U0, _readme, final, heatmaps, med, sweep, unaffected
+from .fig7_4 import C1_SHARE, D0, HORIZON, Q0, U0, _readme, converges, est, final, heatmaps, med, sweep, unaffected
 from .output import check, info
 
 DEFAULT_RUNS = 20
@@ -51,15 +52,19 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
         "seed_rule": "every point uses child i of SeedSequence(seed) for run i, seed = the Fig. 7-2 seed of 10 dB",
         "cost": cost,
     }
-    (out_dir / "README.md").write_text(_readme("Fig. 7-5", "fig7-5.png", "(Q, U)", runs, steps, mode, summary),
-                                       encoding="utf-8")
     return summary
+
+
+def readme(summary: dict[str, Any]) -> str:
+    """README.md from the summary alone (``shoal reproduce --report`` renders it again)."""
+    return _readme("Fig. 7-5", "fig7-5.png", "(Q, U)", summary["runs"], summary["horizon"], summary["mode"], summary)
 
 
 def _checks(res: dict, q: Sequence[float], u: Sequence[float], steps: int, sh: float) -> list[dict[str, Any]]:
     """The thesis' claims about Fig. 7-5 for one split of ĉ."""
     qlo, qhi, ulo, uhi = q[0], q[-1], u[0], u[-1]
     m = lambda alg, x, y: med(res, alg, x, D0, y, sh)  # noqa: E731
+    e = lambda alg, x, y: est(res, alg, x, D0, y, sh)  # noqa: E731
     checks = []
     for alg in ch.ALGORITHMS:
         a, b = m(alg, Q0, ulo), m(alg, Q0, uhi)
@@ -68,7 +73,9 @@ def _checks(res: dict, q: Sequence[float], u: Sequence[float], steps: int, sh: f
                             f"pass: within ×1.5 of {ideal:g}; threshold ours)", f"time ∝ d_s/U, ratio {ideal:g}",
                             f"{ch.time_text(a, steps)} / {ch.time_text(b, steps)}" + (
                                 f" = {a / b:.2f}" if np.isfinite(a) and np.isfinite(b) else ""),
-                            bool(np.isfinite(a) and np.isfinite(b) and ideal / 1.5 <= a / b <= ideal * 1.5)))
+                            bool(np.isfinite(a) and np.isfinite(b) and ideal / 1.5 <= a / b <= ideal * 1.5),
+                            vd.all_of(converges(e(alg, Q0, ulo)), converges(e(alg, Q0, uhi)),
+                                      vd.within(e(alg, Q0, ulo).ratio(e(alg, Q0, uhi)), ideal / 1.5, ideal * 1.5))))
     for alg in ("a-pso", "x-pso"):
         reached = [x for x in u if np.isfinite(m(alg, Q0, x))]
         if len(reached) >= 2 and reached[0] != ulo:
@@ -77,23 +84,34 @@ def _checks(res: dict, q: Sequence[float], u: Sequence[float], steps: int, sh: f
             checks.append(check(f"{ch.LABELS[alg]}: time ∝ 1/U over the speeds where it converges (U = {reached[0]:g} "
                                 f"over U = {reached[-1]:g}; pass: within ×1.5 of {ideal:g}; check and threshold ours)",
                                 "time ∝ d_s/U", f"{a:.0f} / {b:.0f} = {a / b:.2f}",
-                                ideal / 1.5 <= a / b <= ideal * 1.5))
+                                ideal / 1.5 <= a / b <= ideal * 1.5,
+                                vd.all_of(converges(e(alg, Q0, reached[0])), converges(e(alg, Q0, reached[-1])),
+                                          vd.within(e(alg, Q0, reached[0]).ratio(e(alg, Q0, reached[-1])),
+                                                    ideal / 1.5, ideal * 1.5))))
         checks.append(unaffected(res, alg, [(qlo, D0, uhi), (qhi, D0, uhi)], f"Q at U = {uhi:g} m/s", steps, sh))
     both = [x for x in u if np.isfinite(m("a-pso", Q0, x)) and np.isfinite(m("x-pso", Q0, x))]
     checks.append(check(f"X-PSO faster than A-PSO wherever both converge (Q = {Q0:g}, median times)",
                         "3400 < 4500 at U = 2 m/s (Fig. 7-2)",
                         "; ".join(f"U {x:g}: X {m('x-pso', Q0, x):.0f} vs A {m('a-pso', Q0, x):.0f}"
                                   for x in both) or "neither converges at any U",
-                        bool(both) and all(m("x-pso", Q0, x) < m("a-pso", Q0, x) for x in both)))
+                        bool(both) and all(m("x-pso", Q0, x) < m("a-pso", Q0, x) for x in both),
+                        vd.all_of(vd.less(e("x-pso", Q0, x), e("a-pso", Q0, x)) for x in both) if both else
+                        vd.Verdict(vd.FAILS if all(vd.negate(converges(e(a, Q0, x))).outcome == vd.HOLDS
+                                                   for a in ("a-pso", "x-pso") for x in u) else vd.UNDECIDED,
+                                   e("a-pso", Q0, ulo).runs)))
     b_hi = [m("b-pso", qhi, x) for x in u]
     xb_hi = [m("xb-pso", qhi, x) for x in u]
     checks.append(check(f"B-PSO never converges at large U with Q = {qhi:g} "
                         f"(median not reached at U ≥ {u[len(u) // 2]:g})",
                         "B-PSO unable to converge however much U increases",
                         "; ".join(f"U {x:g}: {ch.time_text(t, steps)}" for x, t in zip(u, b_hi)),
-                        not any(np.isfinite(t) for x, t in zip(u, b_hi) if x >= u[len(u) // 2])))
+                        not any(np.isfinite(t) for x, t in zip(u, b_hi) if x >= u[len(u) // 2]),
+                        vd.all_of(vd.negate(converges(e("b-pso", qhi, x))) for x in u if x >= u[len(u) // 2])))
     checks.append(check(f"XB-PSO keeps improving with U at Q = {qhi:g} (median time falls with U and is reached at "
                         f"U = {uhi:g})", "XB-PSO's performance improves as U increases",
                         "; ".join(f"U {x:g}: {ch.time_text(t, steps)}" for x, t in zip(u, xb_hi)),
-                        bool(np.isfinite(xb_hi[-1]) and all(b <= a for a, b in zip(xb_hi, xb_hi[1:])))))
+                        bool(np.isfinite(xb_hi[-1]) and all(b <= a for a, b in zip(xb_hi, xb_hi[1:]))),
+                        vd.all_of(converges(e("xb-pso", qhi, uhi)),
+                                  *(vd.at_most_of(e("xb-pso", qhi, y), e("xb-pso", qhi, x))
+                                    for x, y in zip(u, u[1:])))))
     return checks

@@ -19,8 +19,10 @@ from typing import Any, Sequence
 import numpy as np
 
 from . import chapter78 as ch
+from . import verdict as vd
 from .output import check, checks_table, new_figure, r3, save, write_csv
 from .runner import run_jobs
+from .verdict import Estimate
 
 PRESET = "escort-stationary"
 DEFAULT_RUNS = 20
@@ -67,19 +69,29 @@ def run_escort(out_dir: Path, target: str, preset: str, cases: Sequence[ch.Escor
     fig.suptitle(title.format(w=w, K=steps) + f", {runs} runs per panel", fontsize=10)
     save(fig, out_dir / f"{target}.png")
     stats = {c.name: _stats(c, b[c.name]) for c in cases}
-    checks = make_checks(stats, cases)
+    checks = make_checks(stats, cases, {c.name: ch.escort_estimates(b[c.name]) for c in cases}, b)
     robot_steps = sum(x.robot_steps for x in res.values())
     summary = {
         "checks": checks,
+        "preset": preset,
         "mode": mode,
         "horizon": steps,
         "window": [w, steps],
+        "cell_m": jobs[0].cell,
+        "series_every": 10,
         "cases": {c.name: {**stats[c.name], "command": j.command()} for c, j in zip(cases, jobs)},
         "seed_rule": "run i of every panel uses child i of SeedSequence(seed), seed = the preset seed",
         "cost": {"simulation_wall_s": round(wall, 1), "robot_steps": robot_steps,
                  "wall_us_per_robot_step": round(wall / max(robot_steps, 1) * 1e6, 2), "workers": workers},
     }
-    (out_dir / "README.md").write_text(f"""# {target} reproduction: source escorting
+    return summary
+
+
+def readme(summary: dict[str, Any]) -> str:
+    """README.md from the summary alone (``shoal reproduce --report`` renders it again)."""
+    runs, steps, mode, preset, target = (summary[k] for k in ("runs", "horizon", "mode", "preset", "target"))
+    w, cell = summary["window"][0], summary["cell_m"]
+    return f"""# {target} reproduction: source escorting
 
 GT-PSO with the non-omnidirectional DVC controller; y_g is a ring obstacle of radius r (Rossides §8.2, p. 182).
 {runs} seeded runs per panel, {steps} steps, acoustics mode `{mode}`; preset `{preset}` with `--set`
@@ -91,17 +103,16 @@ Collisions are not enforced (robots may overlap; `summary.json` does not count t
 - `runs.csv`: `{",".join(ch.ESCORT_COLUMNS)}`. `frac_inside_ring` is the fraction of robots closer
   than r to the true source, `mean_dist_to_source` the mean robot–source distance (m), both
   averaged over the window.
-- `series.csv`: per panel every 10 steps, medians over runs of the mean robot–source distance,
+- `series.csv`: per panel every {summary["series_every"]} steps, medians over runs of the mean robot–source distance,
   |CoM − source| and the fraction inside the ring.
-- `occupancy.csv`: non-empty 5 × 5 m cells (centre, source frame) with the fraction of all
+- `occupancy.csv`: non-empty {cell:g} × {cell:g} m cells (centre, source frame) with the fraction of all
   robot-steps of the window (all runs) in the cell.
 - `{target}.png`: the occupancy maps (log colour), the ring r (red dashed) and the contour.
 
 ## Checks
 
-{checks_table(checks)}
-""", encoding="utf-8")
-    return summary
+{checks_table(summary["checks"])}
+"""
 
 
 def _stats(c: ch.EscortCase, b: ch.SonarBatch) -> dict[str, Any]:
@@ -124,31 +135,36 @@ def _inside_peak(b: ch.SonarBatch, r: float) -> float:
     return float(p[far].max()) if far.any() else 0.0
 
 
-def _checks(stats: dict[str, dict[str, Any]], cases: Sequence[ch.EscortCase]) -> list[dict[str, Any]]:
+def _checks(stats: dict[str, dict[str, Any]], cases: Sequence[ch.EscortCase], est: dict[str, dict[str, Estimate]],
+            batches: dict[str, ch.SonarBatch]) -> list[dict[str, Any]]:
     s = lambda n, r, k: stats[f"n{n}-r{r:g}"][k]  # noqa: E731
+    e = lambda n, r, k: est[f"n{n}-r{r:g}"][k]  # noqa: E731
     have = {c.name for c in cases}
     checks = []
     radii = [r for r in (25.0, 50.0, 75.0) if f"n10-r{r:g}" in have]
     if radii:
-        peaks = {r: stats[f"n10-r{r:g}"]["max_occupancy_inside_ring"] for r in radii}
+        peaks = {r: ch.inside_peak(batches[f"n10-r{r:g}"], r) for r in radii}
         checks.append(check("10 robots sometimes cross the ring: some cell wholly inside r has occupancy ≥ 0.1 %",
                             "0.1 % contour inside the ring for every r", "; ".join(
-                                f"r = {r:g}: peak inside {100 * v:.2f} %" for r, v in peaks.items()),
-                            all(v >= LEVEL for v in peaks.values())))
+                                f"r = {r:g}: peak inside {100 * v.value:.2f} %" for r, v in peaks.items()),
+                            all(v.value >= LEVEL for v in peaks.values()),
+                            vd.all_of(vd.at_least(v, LEVEL) for v in peaks.values())))
     for r in (50.0, 75.0):
         if {f"n10-r{r:g}", f"n40-r{r:g}"} <= have:
             f10, f40 = s(10, r, "median_frac_inside_ring"), s(40, r, "median_frac_inside_ring")
             checks.append(check(f"40 robots hold r = {r:g} m better than 10: median fraction of robots inside the ring",
                                 "40 robots hold the distance well, 10 robots cross the ring",
-                                f"40: {f40:.3f} vs 10: {f10:.3f}", f40 < f10))
+                                f"40: {f40:.3f} vs 10: {f10:.3f}", f40 < f10,
+                                vd.less(e(40, r, "frac"), e(10, r, "frac"))))
     if {"n40-r25", "n40-r50", "n40-r75"} <= have:
         f = {r: s(40, r, "median_frac_inside_ring") for r in (25.0, 50.0, 75.0)}
         checks.append(check("40 robots hold r = 25 m worse than 50 and 75 m (median fraction inside the ring)",
                             "r = 25 m is not held (near-field curvature); 50 and 75 m are held well",
-                            "; ".join(f"r = {r:g}: {v:.3f}" for r, v in f.items()), f[25.0] > max(f[50.0], f[75.0])))
+                            "; ".join(f"r = {r:g}: {v:.3f}" for r, v in f.items()), f[25.0] > max(f[50.0], f[75.0]),
+                            vd.all_of(vd.less(e(40, r, "frac"), e(40, 25.0, "frac")) for r in (50.0, 75.0))))
     for c in cases:
         d = stats[c.name]["median_mean_dist_to_source"]
         checks.append(check(f"{c.name}: the swarm stays at the ring (median mean robot–source distance within "
                             "r ± 50 %; threshold ours)", f"robots keep r = {c.r:g} m", f"{d:.1f} m",
-                            0.5 * c.r <= d <= 1.5 * c.r))
+                            0.5 * c.r <= d <= 1.5 * c.r, vd.within(est[c.name]["dist"], 0.5 * c.r, 1.5 * c.r)))
     return checks

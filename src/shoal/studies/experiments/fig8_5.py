@@ -14,8 +14,10 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from . import chapter78 as ch
+from . import verdict as vd
 from .fig8_4 import run_escort
 from .output import check
+from .verdict import Estimate
 
 PRESET = "escort-moving"
 DEFAULT_RUNS = 20
@@ -38,19 +40,23 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
                       "(1 % contour white, ring r red)")
 
 
-def _checks(stats: dict[str, dict[str, Any]], cases: Sequence[ch.EscortCase]) -> list[dict[str, Any]]:
+def _checks(stats: dict[str, dict[str, Any]], cases: Sequence[ch.EscortCase], est: dict[str, dict[str, Estimate]],
+            batches: dict[str, ch.SonarBatch]) -> list[dict[str, Any]]:
     checks = []
     by = {(c.r, c.psd_s, c.v_n): c for c in cases}
     for c in cases:
         st = stats[c.name]
         d, final, com = st["median_mean_dist_to_source"], st["median_final_mean_dist"], st["median_com_dist"]
+        e = est[c.name]
         if c.v_n <= 0.1:
             checks.append(check(f"{c.name}: v_n = {c.v_n:g} is tracked (median mean robot–source distance ≤ 1.5 r "
                                 "over the window and at the end; threshold ours)", "follows and surrounds the source",
                                 f"window {d:.1f} m, end {final:.1f} m (r = {c.r:g} m)",
-                                d <= 1.5 * c.r and final <= 1.5 * c.r))
+                                d <= 1.5 * c.r and final <= 1.5 * c.r,
+                                vd.all_of(vd.at_most(e["dist"], 1.5 * c.r), vd.at_most(e["final"], 1.5 * c.r))))
             checks.append(check(f"{c.name}: the source stays inside the swarm (median |CoM − source| < r)",
-                                "surrounds the source", f"{com:.1f} m (r = {c.r:g} m)", com < c.r))
+                                "surrounds the source", f"{com:.1f} m (r = {c.r:g} m)", com < c.r,
+                                vd.below(e["com"], c.r)))
             continue
         slow = by.get((c.r, c.psd_s, 0.1))
         if slow is not None:
@@ -59,15 +65,19 @@ def _checks(stats: dict[str, dict[str, Any]], cases: Sequence[ch.EscortCase]) ->
                                 "and mean robot–source distance both larger)", "at v_n = 0.25 the swarm always lags",
                                 f"CoM {com:.1f} vs {s0['median_com_dist']:.1f} m; mean distance {d:.1f} vs "
                                 f"{s0['median_mean_dist_to_source']:.1f} m",
-                                com > s0["median_com_dist"] and d > s0["median_mean_dist_to_source"]))
+                                com > s0["median_com_dist"] and d > s0["median_mean_dist_to_source"],
+                                vd.all_of(vd.less(est[slow.name]["com"], e["com"]),
+                                          vd.less(est[slow.name]["dist"], e["dist"]))))
         if c.r == 50.0 and c.psd_s == 120.0:
             checks.append(check(f"{c.name}: contact is lost (median mean robot–source distance at the end > "
                                 f"{LOST:g} r and above its window mean; threshold ours)",
                                 "lags badly and loses contact",
                                 f"end {final:.1f} m, window {d:.1f} m (r = {c.r:g} m)",
-                                final > LOST * c.r and final > d))
+                                final > LOST * c.r and final > d,
+                                vd.all_of(vd.above(e["final"], LOST * c.r), vd.less(e["dist"], e["final"]))))
         else:
             checks.append(check(f"{c.name}: lags without runaway (median mean robot–source distance at the end ≤ "
                                 f"{LOST:g} r; threshold ours)", "lags and cannot encircle, but no loss of contact",
-                                f"end {final:.1f} m (r = {c.r:g} m)", final <= LOST * c.r))
+                                f"end {final:.1f} m (r = {c.r:g} m)", final <= LOST * c.r,
+                                vd.at_most(e["final"], LOST * c.r)))
     return checks

@@ -14,6 +14,8 @@ import numpy as np
 
 from shoal.engine.core.atomic import atomic_write_bytes
 
+from .verdict import FAILS, HOLDS, UNDECIDED, Verdict
+
 
 def num(v: float) -> str:
     """A number for a CSV cell: 12 significant digits, ``-0`` written as ``0``."""
@@ -27,10 +29,28 @@ def write_csv(path: Path, header: Sequence[str], rows: Sequence[Sequence[str]]) 
         w.writerows(rows)
 
 
-def check(name: str, thesis: Any, measured: Any, passed: bool) -> dict[str, Any]:
+def check(name: str, thesis: Any, measured: Any, passed: bool, verdict: Verdict) -> dict[str, Any]:
     """One entry of ``summary.json`` → ``checks``: a thesis claim beside what was measured,
-    judged by the thesis' own metric."""
-    return {"name": name, "thesis": thesis, "measured": measured, "pass": bool(passed)}
+    judged by the thesis' own metric. ``passed`` is the point estimate; ``verdict`` says
+    whether the claim holds, fails or is undecided at this run count
+    (:mod:`.verdict`), and ``runs`` how many runs decided it (None: exact)."""
+    if verdict.outcome == HOLDS and not passed or verdict.outcome == FAILS and passed:
+        raise ValueError(f"check {name!r}: verdict {verdict.outcome!r} contradicts the point estimate")
+    return {"name": name, "thesis": thesis, "measured": measured, "pass": bool(passed), "verdict": verdict.outcome,
+            "runs": verdict.runs}
+
+
+def verdict_of(c: dict[str, Any]) -> str:
+    """A check's verdict (a summary written before verdicts existed: its point estimate)."""
+    return c.get("verdict") or (HOLDS if c.get("pass") else FAILS)
+
+
+def verdict_cell(c: dict[str, Any]) -> str:
+    """The "holds" cell of a check: yes, **no** or undecided, with the runs that decided it."""
+    v = verdict_of(c)
+    word = {HOLDS: "yes", FAILS: "**no**", UNDECIDED: "undecided"}[v]
+    runs = c.get("runs")
+    return f"{word} ({'exact' if runs is None else f'{runs} runs'})" if "verdict" in c else word
 
 
 def info(name: str, thesis: Any, measured: Any, holds: bool) -> dict[str, Any]:
@@ -51,9 +71,9 @@ def cell(v: Any) -> str:
 
 def checks_table(checks: Sequence[dict[str, Any]]) -> str:
     """The checks as a markdown table (for a target's README.md)."""
-    rows = [f"| {cell(c['name'])} | {cell(c['thesis'])} | {cell(c['measured'])} | {'yes' if c['pass'] else 'no'} |"
+    rows = [f"| {cell(c['name'])} | {cell(c['thesis'])} | {cell(c['measured'])} | {verdict_cell(c)} |"
             for c in checks]
-    return "| check | thesis | measured | pass |\n|---|---|---|---|\n" + "\n".join(rows)
+    return "| check | thesis | measured | holds |\n|---|---|---|---|\n" + "\n".join(rows)
 
 
 def information_table(entries: Sequence[dict[str, Any]]) -> str:

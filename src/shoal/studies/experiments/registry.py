@@ -28,6 +28,23 @@ class Target:
     default_runs: int
     _run: Callable[..., dict[str, Any]]
     quick: dict[str, Any] = field(default_factory=dict)
+    module: str = ""  # the module of ``readme(summary)``, e.g. "fig3_4"
+
+    def readme(self, summary: dict[str, Any]) -> str:
+        """The target's README.md, rendered from its ``summary.json`` alone (so it never
+        describes another run than the one beside it)."""
+        return self._template().readme(summary)
+
+    def why(self, summary: dict[str, Any]) -> str:
+        """Why Shoal and the thesis differ, written from the measured numbers ("" if none)."""
+        from .why import why
+
+        return why(self.name, summary)
+
+    def _template(self) -> Any:
+        from importlib import import_module
+
+        return import_module(f".{self.module}", __package__)
 
     @property
     def quick_runs(self) -> int:
@@ -134,42 +151,45 @@ TARGETS: dict[str, Target] = {
     t.name: t
     for t in (
         Target("fig3-4", "Ch. 3 Fig. 3-4: highest speed at constant U, A+, dt (cases a-d, ahead and literal)",
-               100, _fig3_4, {"runs": 20}),
+               100, _fig3_4, {"runs": 20}, module="fig3_4"),
         Target("fig3-5", "Ch. 3 Fig. 3-5: response of the highest speed to step changes of U and A+ (a-c)",
-               100, _fig3_5, {"runs": 20}),
+               100, _fig3_5, {"runs": 20}, module="fig3_5"),
         Target("fig4-6", "Ch. 4 Figs. 4-6/4-7: seven RPSO/Adapted RPSO/DVC cases on the obstacle course, "
-               "kinematic and physics (CoM fitness, collisions)", 100, _fig4_6, {"runs": 8}),
+               "kinematic and physics (CoM fitness, collisions)", 100, _fig4_6, {"runs": 8}, module="fig4_6"),
         Target("fig5-4", "Ch. 5 Fig. 5-4: 20 non-omni DVC robots in an empty arena, with and without our guard "
-               "(collisions, roaming, trails of the last 15 s)", 20, _fig5_4, {"runs": 5}),
+               "(collisions, roaming, trails of the last 15 s)", 20, _fig5_4, {"runs": 6}, module="fig5_4"),
         Target("fig5-5", "Ch. 5 Fig. 5-5: omni vs non-omni DVC on the obstacle course (median CoM fitness, "
-               "5th-95th percentile bands)", 100, _fig5_5, {"runs": 10}),
+               "5th-95th percentile bands)", 100, _fig5_5, {"runs": 10}, module="fig5_5"),
         Target("fig7-2", "Ch. 7 Fig. 7-2: A-/X-/B-/XB-PSO convergence from SNR0 = 10, 4, 0 dB (waveform level, "
-               "10 robots, 6000 steps; c1:c2 1:3 and 1:1)", 100, _fig7_2, {"runs": 4}),
+               "10 robots, 6000 steps; c1:c2 1:3 and 1:1)", 100, _fig7_2, {"runs": 6}, module="fig7_2"),
         Target("fig7-3", "Ch. 7 Fig. 7-3: CoM routes of the 10 dB swarms of Fig. 7-2 and where they passed "
-               "(routes from a fig7-2 run beside it, else the same runs simulated)", 100, _fig7_3, {"runs": 4}),
+               "(routes from a fig7-2 run beside it, else the same runs simulated)", 100, _fig7_3, {"runs": 6},
+               module="fig7_3"),
         Target("fig7-4", "Ch. 7 Fig. 7-4: median time to convergence over (Q, D/lambda_c) at 10 dB "
                "(20 runs per point by default)", 20, _fig7_4,
-               {"runs": 3, "q": (1.0, 1.5, 50.0), "d": (0.5, 1.0, 10.0)}),
+               {"runs": 3, "q": (1.0, 1.5, 50.0), "d": (0.5, 1.0, 10.0)}, module="fig7_4"),
         Target("fig7-5", "Ch. 7 Fig. 7-5: median time to convergence over (Q, U) at 10 dB, D = lambda_c/2 "
                "(20 runs per point by default; c1:c2 1:3 and 1:1)", 20, _fig7_5,
-               {"runs": 3, "q": (1.5, 50.0), "u": (2.0, 4.0, 12.0)}),
+               {"runs": 3, "q": (1.5, 50.0), "u": (2.0, 4.0, 12.0)}, module="fig7_5"),
         Target("fig8-2", "Ch. 8 Fig. 8-2: GT-PSO vs XB-PSO with the non-omni DVC controller from SNR0 = 10, 6, 4, 0 dB "
-               "(2000 steps)", 100, _fig8_2, {"runs": 10}),
+               "(2000 steps)", 100, _fig8_2, {"runs": 10}, module="fig8_2"),
         Target("fig8-4", "Ch. 8 Fig. 8-4: escorting a stationary source, 10 and 40 robots at r = 25, 50, 75 m "
-               "(GT-PSO, occupancy maps)", 20, _fig8_4, {"runs": 3}),
+               "(GT-PSO, occupancy maps)", 20, _fig8_4, {"runs": 3}, module="fig8_4"),
         Target("fig8-5", "Ch. 8 Fig. 8-5: escorting a source moving at v_n = 0.1 and 0.25, 40 robots, r = 25/50 m, "
-               "louder source", 20, _fig8_5, {"runs": 3}),
+               "louder source", 20, _fig8_5, {"runs": 3}, module="fig8_4"),
         Target("slo-errors", "SLO Figs. 4.1-4.3: localisation error vs single sensor errors, velocity offset per "
-               "neighbourhood x selection, failures (random walk)", 31, _slo("slo-errors"), {"runs": 5}),
+               "neighbourhood x selection, failures (random walk)", 31, _slo("slo-errors"), {"runs": 6},
+               module="slo_walk"),
         Target("slo-mitigation", "SLO Figs. 4.4-4.6: error at generation 100 over a delta_cos x delta_v grid "
-               "(knn None/Low/High, ring Low CSS/RTS, random None)", 31, _slo("slo-mitigation"), {"runs": 5}),
+               "(knn None/Low/High, ring Low CSS/RTS, random None)", 31, _slo("slo-mitigation"), {"runs": 6},
+               module="slo_walk"),
         Target("slo-neighbourhood", "SLO Figs. 4.7-4.8: ring n sweep (CSS) and random p in {0.3, 0.5, 0.9} "
-               "(CSS, RTS), Low error", 31, _slo("slo-neighbourhood"), {"runs": 5}),
+               "(CSS, RTS), Low error", 31, _slo("slo-neighbourhood"), {"runs": 6}, module="slo_walk"),
         Target("slo-weight", "SLO Figs. 4.9-4.10: prediction weight w in {0, 0.25, 0.5, 0.75}, knn and ring, CSS, "
-               "Low error", 31, _slo("slo-weight"), {"runs": 5}),
+               "Low error", 31, _slo("slo-weight"), {"runs": 6}, module="slo_walk"),
         Target("slo-pso", "SLO Table 4.4 and Figs. 4.11-4.13: SLO-PSO on seven benchmarks x 3 selections x 3 error "
                "levels, 1000 generations, 31 runs per case as in the thesis", 31, _slo("slo-pso"),
-               {"runs": 2, "short": 200}),
+               {"runs": 2, "short": 200}, module="slo_pso"),
     )
 }
 
@@ -247,4 +267,5 @@ def reproduce(
             summary["scheduler"] = used.describe()
         summary["files"] = sorted(p.name for p in tmp.iterdir())  # what a rerun into out_dir may replace
         (tmp / "summary.json").write_text(json.dumps(summary, indent=2, ensure_ascii=False) + "\n", encoding="utf-8")
+        (tmp / "README.md").write_text(spec.readme(json.loads(json.dumps(summary))), encoding="utf-8")
     return summary

@@ -114,6 +114,28 @@ def simulate_slo(job: SLOJob, first_run: int, runs: int) -> SLOBatch:
     return SLOBatch(job.seed, first_run, {k: hist[k] for k in KEPT})
 
 
+def simulate_entry(job: SLOJob, first_run: int, runs: int) -> SLOBatch:
+    """Runs of ``job`` recording, per generation, the mean absolute error of the neighbour
+    pairs that have just entered the neighbourhood (``e_abs_entering``) and of those that were
+    neighbours the generation before too (``e_abs_staying``); NaN when a run has none."""
+    swarm = build_slo(load(job.preset, list(job.overrides)), runs=runs, seed=job.seed, first_run=first_run)
+    before = swarm.state.adjacency.copy()
+    eye = np.eye(before.shape[-1], dtype=bool)
+    rows: dict[str, list[np.ndarray]] = {"e_abs_entering": [], "e_abs_staying": []}
+    for _ in range(job.generations):
+        swarm.step()
+        s = swarm.state
+        err = np.linalg.norm(s.est - (s.x[:, None] - s.x[:, :, None]), axis=-1)
+        now = s.adjacency & ~eye
+        for name, mask in (("e_abs_entering", now & ~before), ("e_abs_staying", now & before)):
+            count = mask.sum(axis=(1, 2))
+            total = np.where(mask, err, 0.0).sum(axis=(1, 2))
+            with np.errstate(invalid="ignore", divide="ignore"):
+                rows[name].append(np.where(count > 0, total / np.maximum(count, 1), np.nan))
+        before = s.adjacency.copy()
+    return SLOBatch(job.seed, first_run, {k: np.array(v) for k, v in rows.items()})
+
+
 def merge(parts: Sequence[SLOBatch]) -> SLOBatch:
     """Glue chunks of consecutive runs (in any order) into one batch (``merge`` for ``run_jobs``)."""
     parts = sorted(parts, key=lambda p: p.first_run)
