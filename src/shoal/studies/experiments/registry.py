@@ -11,6 +11,7 @@ from typing import Any, Callable
 from shoal.engine.core.atomic import output_dir
 
 from .schedulers import Scheduler, current, using
+from .verdict import LEVEL, OUTCOMES
 
 
 @dataclass(frozen=True)
@@ -263,6 +264,9 @@ def reproduce(
                    "cpu_s": round(_cpu_seconds() - cpu, 3), **fields}
         summary["workers"] = workers
         summary["quick"] = quick
+        summary["interval_level"] = LEVEL  # the checks' verdicts: the interval of each statistic at this level
+        verdicts = [c.get("verdict") for c in summary.get("checks", [])]
+        summary["verdicts"] = {v: verdicts.count(v) for v in OUTCOMES}
         if (used := scheduler or current()) is not None:
             summary["scheduler"] = used.describe()
         summary["files"] = sorted(p.name for p in tmp.iterdir())  # what a rerun into out_dir may replace
