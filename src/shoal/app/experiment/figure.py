@@ -72,7 +72,7 @@ def page_figure(exp: Experiment, outcome: Outcome) -> go.Figure:
         for i in exp.plan.skipped:
             invalid[np.unravel_index(i, exp.plan.shape)] = True
         cells = [["invalid" if bad else ("" if np.isnan(v) else ("n.c." if np.isinf(v) else f"{v:.3g}"))
-                 for v, bad in zip(row, bad_row)] for row, bad_row in zip(z, invalid.T)]
+                  for v, bad in zip(row, bad_row)] for row, bad_row in zip(z, invalid.T)]
         median = f"median [{outcome.unit}]" if outcome.unit else "median"
         fig.add_trace(go.Heatmap(x=list(ax_x.labels), y=list(ax_y.labels),
                                  z=[_finite(row) for row in z], text=cells, texttemplate="%{text}",

@@ -257,17 +257,17 @@ def layers(part: KindPanel | None) -> tuple[Layer, ...]:
 
 # ---------------------------------------------------------------------------- panel
 SELECTION_LABELS = SELECTIONS.labels()  # label → slo.selection
-
-
-def _slo(s: Session) -> SLO:
-    """The scene's ``[slo]`` (Mai's swarm always has one)."""
-    return required(s.scenario.slo, "slo")
 NEIGHBOURHOODS = ("knn", "radius", "full", "random", "ring")
 OBJECTIVES = ("sphere", "ackley", "griewank", "rastrigin", "rosenbrock", "plane", "line")
 MOTIONS = ("pso", "random_walk")
 PARAM_DEFAULT = {"knn": 5, "radius": 25, "ring": 2, "random": 0.5, "full": math.nan}
 ERROR_FIELDS = tuple(SLOErrorValues.model_fields)
 EXPORT_NOTE = " The JSON export adds the selected robot's estimates of the others."
+
+
+def _slo(s: Session) -> SLO:
+    """The scene's ``[slo]`` (Mai's swarm always has one)."""
+    return required(s.scenario.slo, "slo")
 
 
 def _error_range(name: str) -> tuple[float, float]:

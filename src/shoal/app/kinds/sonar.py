@@ -68,9 +68,10 @@ def _acoustics(s: Session) -> Acoustics:
 
 
 def _params(scenario: Scenario) -> SonarParams:
-    a = required(scenario.acoustics, "acoustics")
+    if scenario.acoustics is None:
+        raise PresetError([f"acoustics: {scenario.name} has no [acoustics] section"])
     try:
-        return sonar_params_for(a)
+        return sonar_params_for(scenario.acoustics)
     except ValueError as err:
         raise PresetError([f"acoustics.{err}"]) from None
 
