@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from shoal.engine.acoustics.band import Band
 from shoal.engine.acoustics.receiver import _project, angle_of_arrival, correlate, lag_table
 from shoal.engine.core.portable import arccos, arctan2, exp, ordered_matmul
+from shoal.engine.slo import metrics
 from shoal.engine.slo.formation import AttractionRepulsion
 from shoal.engine.slo.metrics import angular_errors
 
@@ -75,7 +76,9 @@ def test_arctan2_and_exp_are_the_c_librarys(compiled):
     np.testing.assert_allclose(got, np.arctan2(y, x).reshape(3, 1000), rtol=1e-15, atol=1e-15)
 
 
-def test_slo_angles_use_the_portable_forms():
+@pytest.mark.parametrize("compiled", [True, False])  # False: the path taken where numba would use SVML
+def test_slo_angles_use_the_portable_forms(compiled, monkeypatch):
+    monkeypatch.setattr(metrics, "LIBM_KERNELS", compiled)
     rng = np.random.default_rng(3)
     x, est = rng.uniform(-20.0, 20.0, (2, 6, 2)), rng.uniform(-40.0, 40.0, (2, 6, 6, 2))
     valid = rng.random((2, 6, 6)) < 0.7
