@@ -20,8 +20,9 @@ presets as other CPUs would):
   nearly the same vector; once an arriving neighbour starts exactly on a geometric candidate
   (entry policy ``geometric_nearest``), many errors are a few 1e-15 rad and their per-run
   median printed in metrics.csv shows the last bits of numpy's AVX-512 ``arctan2``. The
-  metric, the headings of the swarm and the attraction–repulsion's ``exp`` use
-  :func:`arctan2` and :func:`exp`. (Candidates, CSS, ranges and the PSO use only IEEE
+  metric calls the C library's ``atan2`` from a compiled loop (``slo/metric_kernels.py``), the
+  headings of the swarm and the attraction–repulsion's ``exp`` use :func:`arctan2` and
+  :func:`exp`. (Candidates, CSS, ranges and the PSO use only IEEE
   arithmetic and ``sqrt``; the odometry's rotation numpy's float64 ``cos`` and ``sin``, whose
   loops give the same bits with and without AVX-512.)
 
