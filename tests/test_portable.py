@@ -106,3 +106,15 @@ def test_receiver_correlation_and_angle_use_the_portable_forms():
     alpha = angle_of_arrival(tau, 0.75, band.c)
     assert np.array_equal(alpha, np.array([math.acos(v) for v in np.clip(band.c * tau / 0.75, -1, 1).ravel()])
                           .reshape(2, 3))
+
+
+def test_slo_swarm_headings_are_the_c_librarys():
+    from shoal.engine.kinds.slo_swarm import SLOSwarm
+
+    sw = SLOSwarm(runs=3, seed=4, particles=20, selection="css", errors="low")
+    sw.step()
+    u, heading = sw.state.u, sw.state.heading
+    moving = np.any(u != 0, axis=-1)
+    assert moving.any()
+    want = np.array([math.atan2(b, a) for a, b in zip(u[..., 0].ravel(), u[..., 1].ravel())]).reshape(heading.shape)
+    assert np.array_equal(heading[moving], want[moving])
