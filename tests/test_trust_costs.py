@@ -48,7 +48,7 @@ def test_every_kind_at_its_robot_cap_fits_a_live_tick():
 
 # ---------------------------------------------------------------------------- the sweep, whatever its fields
 @pytest.mark.parametrize("key, values, words", [
-    ("sim.steps", "10000000, 9999999", "sim.steps = 10,000,000 (cell sim.steps = 10000000): this server runs at most "
+    ("sim.steps", "10000000, 9999999", "cell sim.steps=10000000: sim.steps = 10,000,000: this server runs at most "
                                        "10,000 steps per run"),
     ("sim.steps", "10001", "at most 10,000 steps per run"),
     ("sim.robots", "20, 5000", "sim.robots = 5000: the browser app runs at most 2000 robots"),

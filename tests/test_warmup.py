@@ -154,7 +154,7 @@ def test_a_process_without_a_warmup_compiles_as_before():
 
 
 def test_the_status_line_says_a_scene_is_being_built_and_what_it_waits_for(cold, server):
-    from app_helpers import hand_tab
+    from app_helpers import hand_tab, shown
 
     def status_while_built(tab, preset: str) -> str:
         seen, services = [], tab.panels.services
@@ -170,7 +170,8 @@ def test_the_status_line_says_a_scene_is_being_built_and_what_it_waits_for(cold,
 
     with hand_tab(server) as tab:
         cold.ready["slo"].set()
-        assert status_while_built(tab, "course-dvc") == "**course-dvc** · building the scene …"
+        assert shown(status_while_built(tab, "course-dvc")) == "**course-dvc** · building the scene …"
         cold.ready["slo"].clear()
         said = status_while_built(tab, "slo-walk")
-        assert said.startswith("**slo-walk** · building the scene; waiting for this scene's compiled kernels"), said
+        assert shown(said).startswith("**slo-walk** · building the scene; waiting for this scene's compiled "
+                                      "kernels"), said
