@@ -198,7 +198,7 @@ def test_a_long_export_says_its_cost_and_stops_on_a_signal_writing_nothing(tmp_p
     import sys
 
     out = tmp_path / "long.html"
-    proc = subprocess.Popen([sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(main())",
+    proc = subprocess.Popen([sys.executable, "-m", "shoal",
                              "export-replay", "default", "--steps", "10000000", "--out", str(out)],
                             stderr=subprocess.PIPE,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # (xdist ignores SIGINT)

@@ -17,7 +17,7 @@ import pytest
 from browser.browser_helpers import wait_until
 from viser_wire import WireClient
 
-CLI = [sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(main())"]
+CLI = [sys.executable, "-m", "shoal"]
 
 
 def _serve() -> tuple[subprocess.Popen, list[str], int]:

@@ -175,3 +175,26 @@ def test_the_status_line_says_a_scene_is_being_built_and_what_it_waits_for(cold,
         said = status_while_built(tab, "slo-walk")
         assert shown(said).startswith("**slo-walk** · building the scene; waiting for this scene's compiled "
                                       "kernels"), said
+
+
+ENTRY_WHILE_COMPILING = """
+import threading, time
+from shoal.app import cli
+from shoal.app.warmup import WARMUP
+WARMUP._thread = threading.Thread(target=time.sleep, args=(600,), daemon=True)  # a warm-up still at work
+WARMUP._thread.start()
+import sys
+sys.argv = ["shoal", "presets", "list"]
+cli.entry()
+"""
+
+
+def test_the_command_exits_with_its_code_without_waiting_for_a_warmup_still_compiling():
+    """``shoal`` (cli.entry) leaves at once with the command's code and its output flushed,
+    neither waiting for nor tearing the interpreter down under a compiling warm-up thread."""
+    done = subprocess.run([sys.executable, "-c", ENTRY_WHILE_COMPILING], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "default" in done.stdout and "smooth-tanh" in done.stdout
+    bad = subprocess.run([sys.executable, "-c", ENTRY_WHILE_COMPILING.replace('"list"', '"show", "nope"')],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode != 0 and "nope" in bad.stderr

@@ -101,6 +101,10 @@ class Warmup:
                 self._order.remove(group)
                 self._order.insert(0, group)
 
+    def compiling(self) -> bool:
+        """Whether the warm-up thread is still at work."""
+        return self._thread is not None and self._thread.is_alive()
+
     def busy_seconds(self) -> int | None:
         """Whole seconds since a warm-up started while it runs (None when none runs)."""
         if self.started is None or self.finished is not None:
