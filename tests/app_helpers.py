@@ -25,6 +25,19 @@ def hand_tab(server: Any, cid: int = HAND_TAB) -> Iterator[Any]:
         server.viser.scene.reset()
 
 
+def wire_tab(server: Any, *labels: str) -> tuple[Any, int]:
+    """A new tab of ``server`` opened over the raw websocket (:class:`viser_wire.WireClient`), once
+    its page shows a control of each of ``labels``: the client and the tab's key in ``server.tabs``."""
+    from browser.browser_helpers import wait_until
+    from viser_wire import WireClient
+
+    before = set(server.tabs)
+    c = WireClient(server.port, decode=True)
+    wait_until(lambda: set(server.tabs) - before and all(c.uuid_of(label) for label in labels), what="a tab")
+    (key,) = set(server.tabs) - before
+    return c, key
+
+
 _ESCAPED = re.compile(r"\\([!-/:-@\[-`{-~])")
 
 

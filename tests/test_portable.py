@@ -13,7 +13,10 @@ from hypothesis import strategies as st
 
 from shoal.engine.acoustics.band import Band
 from shoal.engine.acoustics.receiver import _project, angle_of_arrival, correlate, lag_table
-from shoal.engine.core.portable import arccos, ordered_matmul
+from shoal.engine.core.portable import arccos, arctan2, exp, ordered_matmul
+from shoal.engine.slo import metrics
+from shoal.engine.slo.formation import AttractionRepulsion
+from shoal.engine.slo.metrics import angular_errors
 
 
 def _by_index(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -57,6 +60,40 @@ def test_arccos_is_the_c_librarys():
     np.testing.assert_allclose(got, np.arccos(x), rtol=0, atol=1e-15)
 
 
+@pytest.mark.parametrize("compiled", [True, False])
+def test_arctan2_and_exp_are_the_c_librarys(compiled):
+    rng = np.random.default_rng(2)
+    y, x = rng.uniform(-5.0, 5.0, (2, 3000))
+    y[:8], x[:8] = (0.0, -0.0, 0.0, -0.0, 1.0, -1.0, np.inf, np.nan), (0.0, 0.0, -0.0, -0.0, 0.0, 0.0, np.inf, 1.0)
+    got = arctan2(y.reshape(3, 1000), x.reshape(3, 1000), compiled)
+    assert got.dtype == np.float64 and got.shape == (3, 1000)
+    assert np.array_equal(got.ravel(), np.array([math.atan2(a, b) for a, b in zip(y, x)]), equal_nan=True)
+    assert np.array_equal(np.signbit(got.ravel()[:4]), [False, True, False, True])  # atan2's signed zeros and π
+    assert arctan2(np.ones((2, 1)), np.ones(4), compiled).shape == (2, 4)  # broadcast as numpy does
+    assert arctan2(1.0, -2.0, compiled) == math.atan2(1.0, -2.0)
+    e = exp(x * 100.0, compiled)  # overflow to inf and underflow to 0 too
+    assert np.array_equal(e, np.array([math.exp(v) if v < 709 else math.inf for v in x * 100.0]), equal_nan=True)
+    np.testing.assert_allclose(got, np.arctan2(y, x).reshape(3, 1000), rtol=1e-15, atol=1e-15)
+
+
+@pytest.mark.parametrize("compiled", [True, False])  # False: the path taken where numba would use SVML
+def test_slo_angles_use_the_portable_forms(compiled, monkeypatch):
+    monkeypatch.setattr(metrics, "LIBM_KERNELS", compiled)
+    rng = np.random.default_rng(3)
+    x, est = rng.uniform(-20.0, 20.0, (2, 6, 2)), rng.uniform(-40.0, 40.0, (2, 6, 6, 2))
+    valid = rng.random((2, 6, 6)) < 0.7
+    truth = x[:, None] - x[:, :, None]
+    ang = np.array([math.atan2(a, b) - math.atan2(c, d) for a, b, c, d in
+                    zip(est[..., 1].ravel(), est[..., 0].ravel(), truth[..., 1].ravel(), truth[..., 0].ravel())])
+    want = np.abs(np.pi - np.mod(np.pi - ang.reshape(2, 6, 6), 2.0 * np.pi))
+    assert np.array_equal(angular_errors(x, est, valid), np.where(valid, want, np.nan), equal_nan=True)
+    ar = AttractionRepulsion(gain=1.0)
+    y = -est
+    sq = np.sum(y * y, axis=-1)
+    g = -y * (ar.a - ar.b * np.vectorize(math.exp)(-sq / ar.c))[..., None]
+    assert np.array_equal(ar.velocity(est, valid), np.where(valid[..., None], g, 0.0).sum(axis=2))
+
+
 def test_receiver_correlation_and_angle_use_the_portable_forms():
     band = Band(f_c=1000.0, Q=1.5, tbp=100.0, fs=48_000.0)
     rng = np.random.default_rng(5)
@@ -69,3 +106,15 @@ def test_receiver_correlation_and_angle_use_the_portable_forms():
     alpha = angle_of_arrival(tau, 0.75, band.c)
     assert np.array_equal(alpha, np.array([math.acos(v) for v in np.clip(band.c * tau / 0.75, -1, 1).ravel()])
                           .reshape(2, 3))
+
+
+def test_slo_swarm_headings_are_the_c_librarys():
+    from shoal.engine.kinds.slo_swarm import SLOSwarm
+
+    sw = SLOSwarm(runs=3, seed=4, particles=20, selection="css", errors="low")
+    sw.step()
+    u, heading = sw.state.u, sw.state.heading
+    moving = np.any(u != 0, axis=-1)
+    assert moving.any()
+    want = np.array([math.atan2(b, a) for a, b in zip(u[..., 0].ravel(), u[..., 1].ravel())]).reshape(heading.shape)
+    assert np.array_equal(heading[moving], want[moving])

@@ -18,13 +18,12 @@ from shoal.app.experiment.request import AxisRequest, ExperimentRequest, Limits,
 from shoal.app.experiment.service import CANCELLED, FINISHED, RUNNING, ExperimentService, experiment_pool
 from shoal.app.kinds.registry import session_for
 from shoal.app.limits import LIVE_TICK_SECONDS, MAX_ROBOTS, check_app_limits
-from shoal.app.server import start_server
 from shoal.app.share import session_html
 from shoal.presets.io import PresetError, load
 from shoal.studies.cost import TICK_COSTS, cost, tick_cost
 
+from app_helpers import wire_tab
 from browser.browser_helpers import wait_until
-from viser_wire import WireClient
 
 
 # ---------------------------------------------------------------------------- the one cost function
@@ -48,7 +47,7 @@ def test_every_kind_at_its_robot_cap_fits_a_live_tick():
 
 # ---------------------------------------------------------------------------- the sweep, whatever its fields
 @pytest.mark.parametrize("key, values, words", [
-    ("sim.steps", "10000000, 9999999", "sim.steps = 10,000,000 (cell sim.steps = 10000000): this server runs at most "
+    ("sim.steps", "10000000, 9999999", "cell sim.steps=10000000: sim.steps = 10,000,000: this server runs at most "
                                        "10,000 steps per run"),
     ("sim.steps", "10001", "at most 10,000 steps per run"),
     ("sim.robots", "20, 5000", "sim.robots = 5000: the browser app runs at most 2000 robots"),
@@ -69,39 +68,23 @@ def test_an_experiment_is_held_to_a_cpu_budget_over_all_its_cells():
     assert len(plan) == 3
 
 
-@pytest.fixture(scope="module")
-def served():
-    srv = start_server("default", port=0)
-    yield srv
-    srv.stop()
-
-
-def _tab(srv):
-    before = set(srv.tabs)
-    c = WireClient(srv.port, decode=True)
-    wait_until(lambda: set(srv.tabs) - before and c.uuid_of("Run experiment") and c.uuid_of("Load replay"),
-               what="a tab")
-    (key,) = set(srv.tabs) - before
-    return c, key
-
-
-def _field(served, key, c, field: str) -> None:
+def _field(server, key, c, field: str) -> None:
     """Choose ``field`` as field 1 and wait for the panel's suggestion of its values (it would
     overwrite values sent meanwhile)."""
-    axis = served.tabs[key].panels.experiment.axes[0]
+    axis = server.tabs[key].panels.experiment.axes[0]
     c.set_value("field 1", field)
     wait_until(lambda: axis.field.value == field and field.rsplit(".")[-1] in axis.info.content, what="the field")
     time.sleep(0.3)
 
 
-def test_steps_swept_on_the_wire_are_refused_and_queue_nothing(served):
-    c, key = _tab(served)
+def test_steps_swept_on_the_wire_are_refused_and_queue_nothing(server):
+    c, key = wire_tab(server, "Run experiment", "Load replay")
     try:
-        _field(served, key, c, "sim.steps")
+        _field(server, key, c, "sim.steps")
         c.set_value("values 1", "10000000, 9999999")
         c.set_value("Run experiment", True)
         wait_until(lambda: c.saw("at most 10,000 steps per run"), what="the refusal")
-        assert served.experiments.queued_runs() == 0
+        assert server.experiments.queued_runs() == 0
     finally:
         c.close()
 
@@ -151,15 +134,15 @@ def test_stop_ends_a_running_experiment_and_its_workers_within_seconds():
     assert not any(p.is_alive() for p in workers)
 
 
-def test_a_closed_tab_stops_its_running_experiment_within_seconds(served):
-    c, key = _tab(served)
-    _field(served, key, c, "sim.robots")
+def test_a_closed_tab_stops_its_running_experiment_within_seconds(server):
+    c, key = wire_tab(server, "Run experiment", "Load replay")
+    _field(server, key, c, "sim.robots")
     c.set_value("values 1", "1000, 999")
     c.set_value("runs per cell", 60)
     c.set_value("steps per run", 5000)
     c.set_value("Run experiment", True)
     wait_until(lambda: c.saw("running:"), timeout=60, what="the experiment running")
-    exp = served.experiments.experiment(key)
+    exp = server.experiments.experiment(key)
     time.sleep(1.0)
     start = time.monotonic()
     c.close()
@@ -184,12 +167,12 @@ def _replay(robots: int, frames: int = 1, d: int = 2) -> bytes:
     (5_000, 1, "a frame of 5,000 robots; the browser app shows at most 2000"),
     (2_000, 250, "x: 500,000 robot rows"),
 ])
-def test_a_replay_beyond_the_robot_limits_is_refused(served, robots, frames, words):
+def test_a_replay_beyond_the_robot_limits_is_refused(server, robots, frames, words):
     data = _replay(robots, frames)
     assert len(data) < replay.MAX_REPLAY_BYTES
-    c, key = _tab(served)
+    c, key = wire_tab(server, "Run experiment", "Load replay")
     try:
-        tab = served.tabs[key]
+        tab = server.tabs[key]
         c.upload("Load replay", "big.npz", data)
         wait_until(lambda: c.saw(words), timeout=60, what="the refusal")
         assert tab.session.replaying is None
@@ -215,7 +198,7 @@ def test_a_long_export_says_its_cost_and_stops_on_a_signal_writing_nothing(tmp_p
     import sys
 
     out = tmp_path / "long.html"
-    proc = subprocess.Popen([sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(main())",
+    proc = subprocess.Popen([sys.executable, "-m", "shoal",
                              "export-replay", "default", "--steps", "10000000", "--out", str(out)],
                             stderr=subprocess.PIPE,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # (xdist ignores SIGINT)

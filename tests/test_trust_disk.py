@@ -17,7 +17,7 @@ import sys
 
 import pytest
 
-CLI = [sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(main())"]
+CLI = [sys.executable, "-m", "shoal"]
 SIZE_KIB = 128
 
 

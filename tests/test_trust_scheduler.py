@@ -15,7 +15,7 @@ import pytest
 
 from shoal.studies.experiments.schedulers import SchedulerError, scheduler_address
 
-CLI = [sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(main())"]
+CLI = [sys.executable, "-m", "shoal"]
 
 
 @pytest.fixture(scope="module")

@@ -42,7 +42,7 @@ from viser_wire import WireClient
 
 EVIL_NAMES = ["../../x.toml", "/etc/passwd.toml", "..\\..\\x.json", "a\x00b.toml", "x.toml\x00.png",
               "~/.bashrc.toml", "C:\\Windows\\x.toml", "." * 300 + ".toml"]
-CLI = [sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(main())"]
+CLI = [sys.executable, "-m", "shoal"]
 
 
 # ------------------------------------------------------------------ listening

@@ -227,7 +227,7 @@ def test_max_sessions_is_a_serve_option_with_a_checked_value():
     assert build_parser().parse_args(["serve", "--max-sessions", "3"]).max_sessions == 3
     with pytest.raises(ValueError, match="max_sessions"):
         start_server("default", port=0, max_sessions=0)
-    out = subprocess.run([sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(main())",
+    out = subprocess.run([sys.executable, "-m", "shoal",
                           "serve", "--port", "0", "--max-sessions", "0"], capture_output=True, text=True, timeout=120)
     assert out.returncode == 2 and "argument --max-sessions: must be at least 1, got 0" in out.stderr
 

@@ -17,7 +17,7 @@ import pytest
 from browser.browser_helpers import wait_until
 from viser_wire import WireClient
 
-CLI = [sys.executable, "-c", "from shoal.app.cli import main; raise SystemExit(main())"]
+CLI = [sys.executable, "-m", "shoal"]
 
 
 def _serve() -> tuple[subprocess.Popen, list[str], int]:
@@ -36,9 +36,15 @@ def test_a_signal_stops_serve_and_its_workers_while_a_sweep_runs(sig, code):
     started: list[psutil.Process] = []
     try:
         c = WireClient(port, decode=True)
-        wait_until(lambda: c.uuid_of("Run experiment"), what="the Sweep tab")
-        c.set_value("field 1", "sim.robots")
-        wait_until(lambda: c.saw("now 20"), what="the field's description")
+        wait_until(lambda: c.uuid_of("Run experiment"), timeout=60, what="the Sweep tab")  # (serve compiles meanwhile)
+        for _ in range(60):  # (a value sent while a loaded server still builds the tab may come before its callback)
+            c.set_value("field 1", "sim.robots")
+            seen = time.monotonic() + 2.0
+            while not c.saw("now 20") and time.monotonic() < seen:
+                time.sleep(0.05)
+            if c.saw("now 20"):
+                break
+        assert c.saw("now 20"), "the field's description never came"
         time.sleep(0.5)
         c.set_value("values 1", "1000, 999")
         c.set_value("runs per cell", 60)

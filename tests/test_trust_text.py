@@ -13,14 +13,12 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-import pytest
-
 import shoal
 from shoal.app import replay
 from shoal.app.kinds.registry import session_for
-from shoal.app.server import start_server
 from shoal.presets import io as presets_io
 
+from app_helpers import wire_tab
 from browser.browser_helpers import wait_until
 from viser_wire import WireClient
 
@@ -44,22 +42,6 @@ def hostile_replay(name: str = IFRAME, shoal: str = IMG) -> bytes:
                                                           "preset": preset}))
 
 
-@pytest.fixture(scope="module")
-def served():
-    srv = start_server("default", port=0)
-    yield srv
-    srv.stop()
-
-
-def _tab(srv):
-    before = set(srv.tabs)
-    c = WireClient(srv.port, decode=True)
-    wait_until(lambda: set(srv.tabs) - before and c.uuid_of("Upload preset") and c.uuid_of("Load replay"),
-               what="a tab")
-    (key,) = set(srv.tabs) - before
-    return c, srv.tabs[key]
-
-
 def _no_markup(c: WireClient) -> list[str]:
     texts = c.markdown()
     bad = [t for t in texts if any(tag in t.lower() for tag in TAGS)]
@@ -67,8 +49,9 @@ def _no_markup(c: WireClient) -> list[str]:
     return texts
 
 
-def test_a_preset_named_with_html_shows_its_name_escaped(served):
-    c, tab = _tab(served)
+def test_a_preset_named_with_html_shows_its_name_escaped(server):
+    c, key = wire_tab(server, "Upload preset", "Load replay")
+    tab = server.tabs[key]
     try:
         c.upload("Upload preset", "evil.toml", hostile_preset())
         wait_until(lambda: tab.session.scenario.name == IFRAME, what="the hostile preset loaded")
@@ -79,12 +62,12 @@ def test_a_preset_named_with_html_shows_its_name_escaped(served):
         c.close()
 
 
-def test_a_preset_name_that_is_a_markdown_image_reads_no_file(served):
+def test_a_preset_name_that_is_a_markdown_image_reads_no_file(server):
     """Viser turns ``![x](path)`` in markdown into the picture at ``path`` read on the server: a
     preset named so would make the server read any image file it may read and send it to the page."""
     picture = Path(shoal.__file__).parents[2] / "benchmarks" / "memory.png"
     assert picture.is_file()
-    c, tab = _tab(served)
+    c, _ = wire_tab(server, "Upload preset", "Load replay")
     try:
         c.upload("Upload preset", "img.toml", hostile_preset(f"![x]({picture})"))
         wait_until(lambda: any("memory" in t for t in c.markdown()), timeout=20, what="the status line")
@@ -93,8 +76,9 @@ def test_a_preset_name_that_is_a_markdown_image_reads_no_file(served):
         c.close()
 
 
-def test_a_replay_with_html_in_its_metadata_shows_it_escaped(served):
-    c, tab = _tab(served)
+def test_a_replay_with_html_in_its_metadata_shows_it_escaped(server):
+    c, key = wire_tab(server, "Upload preset", "Load replay")
+    tab = server.tabs[key]
     try:
         c.upload("Load replay", "evil.npz", hostile_replay())
         wait_until(lambda: tab.session.replaying is not None, what="the replay loaded")
@@ -105,8 +89,9 @@ def test_a_replay_with_html_in_its_metadata_shows_it_escaped(served):
         c.close()
 
 
-def test_html_typed_into_swarm_b_and_an_experiment_shows_escaped(served):
-    c, tab = _tab(served)
+def test_html_typed_into_swarm_b_and_an_experiment_shows_escaped(server):
+    c, key = wire_tab(server, "Upload preset", "Load replay")
+    tab = server.tabs[key]
     try:
         wait_until(lambda: c.uuid_of("B overrides") and c.uuid_of("values 1"), what="the compare and sweep inputs")
         c.set_value("B overrides", f"controller.omega = 0.6\nname = {IMG}")

@@ -154,7 +154,7 @@ def test_a_process_without_a_warmup_compiles_as_before():
 
 
 def test_the_status_line_says_a_scene_is_being_built_and_what_it_waits_for(cold, server):
-    from app_helpers import hand_tab
+    from app_helpers import hand_tab, shown
 
     def status_while_built(tab, preset: str) -> str:
         seen, services = [], tab.panels.services
@@ -170,7 +170,31 @@ def test_the_status_line_says_a_scene_is_being_built_and_what_it_waits_for(cold,
 
     with hand_tab(server) as tab:
         cold.ready["slo"].set()
-        assert status_while_built(tab, "course-dvc") == "**course-dvc** · building the scene …"
+        assert shown(status_while_built(tab, "course-dvc")) == "**course-dvc** · building the scene …"
         cold.ready["slo"].clear()
         said = status_while_built(tab, "slo-walk")
-        assert said.startswith("**slo-walk** · building the scene; waiting for this scene's compiled kernels"), said
+        assert shown(said).startswith("**slo-walk** · building the scene; waiting for this scene's compiled "
+                                      "kernels"), said
+
+
+ENTRY_WHILE_COMPILING = """
+import threading, time
+from shoal.app import cli
+from shoal.app.warmup import WARMUP
+WARMUP._thread = threading.Thread(target=time.sleep, args=(600,), daemon=True)  # a warm-up still at work
+WARMUP._thread.start()
+import sys
+sys.argv = ["shoal", "presets", "list"]
+cli.entry()
+"""
+
+
+def test_the_command_exits_with_its_code_without_waiting_for_a_warmup_still_compiling():
+    """``shoal`` (cli.entry) leaves at once with the command's code and its output flushed,
+    neither waiting for nor tearing the interpreter down under a compiling warm-up thread."""
+    done = subprocess.run([sys.executable, "-c", ENTRY_WHILE_COMPILING], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "default" in done.stdout and "smooth-tanh" in done.stdout
+    bad = subprocess.run([sys.executable, "-c", ENTRY_WHILE_COMPILING.replace('"list"', '"show", "nope"')],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode != 0 and "nope" in bad.stderr

@@ -12,7 +12,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "src" / "shoal"
-SHIPPED = {".py", ".toml", ".md"}  # code, presets and lesson files, teaching notes
+SHIPPED = {".py", ".toml", ".md", ".typed"}  # code, presets and lesson files, teaching notes, the py.typed marker
 
 
 def _source_files() -> set[str]:
@@ -35,6 +35,6 @@ def test_the_wheel_holds_every_module_and_data_file(tmp_path):
     (wheel,) = (tmp_path / "dist").glob("shoal-*.whl")
     names = set(zipfile.ZipFile(wheel).namelist())
     want = _source_files()
-    assert len(want) > 200 and "shoal/studies/sweep/run.py" in want
+    assert len(want) > 200 and {"shoal/studies/sweep/run.py", "shoal/py.typed"} <= want
     missing = sorted(want - names)
     assert not missing, f"{len(missing)} file(s) of src/shoal are not in the wheel: {missing[:20]}"

@@ -1,3 +1,3 @@
-from shoal.app.cli import main
+from shoal.app.cli import entry
 
-raise SystemExit(main())
+entry()

@@ -5,9 +5,13 @@ from __future__ import annotations
 
 import math
 import re
+import shutil
 import time
+from contextlib import contextmanager
+from typing import Iterator
 
 import numpy as np
+import pytest
 
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
@@ -127,3 +131,21 @@ def open_folder(page, title: str, probe: str) -> None:
     if not (inside.count() and inside.is_visible()):
         page.get_by_text(title, exact=True).first.click()
         inside.wait_for(state="visible", timeout=10000)
+
+
+@contextmanager
+def app_page(server, init_script: str | None = None) -> Iterator:
+    """A Chromium page (1280×800) on ``server``'s app once its panel shows; ``init_script`` runs
+    in the page before the app's own scripts."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=shutil.which("chromium"), args=ARGS)
+        pg = arena_in_view(browser.new_page(viewport=VIEWPORT))
+        if init_script is not None:
+            pg.add_init_script(init_script)
+        pg.goto(f"http://127.0.0.1:{server.port}/")
+        pg.wait_for_selector("label:has-text('robots')", timeout=90000)
+        try:
+            yield pg
+        finally:
+            browser.close()

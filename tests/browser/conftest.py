@@ -2,13 +2,9 @@
 
 from __future__ import annotations
 
-import shutil
-
 import pytest
 
-from browser_helpers import ARGS, VIEWPORT, arena_in_view, wait_until
-
-CHROMIUM = shutil.which("chromium")
+from browser_helpers import app_page, wait_until
 
 
 @pytest.fixture(scope="module")
@@ -22,14 +18,8 @@ def server():
 
 @pytest.fixture(scope="module")
 def page(server):
-    sync_api = pytest.importorskip("playwright.sync_api")
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        pg = arena_in_view(browser.new_page(viewport=VIEWPORT))
-        pg.goto(f"http://127.0.0.1:{server.port}/")
-        pg.wait_for_selector("label:has-text('robots')", timeout=90000)
+    with app_page(server) as pg:
         yield pg
-        browser.close()
 
 
 @pytest.fixture(scope="module")

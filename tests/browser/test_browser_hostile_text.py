@@ -40,17 +40,10 @@ COUNT_SOCKETS = """
 
 @pytest.fixture(scope="module")
 def hostile_page(server):
-    sync_api = pytest.importorskip("playwright.sync_api")
-    from browser_helpers import ARGS, VIEWPORT, arena_in_view
+    from browser_helpers import app_page
 
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        pg = arena_in_view(browser.new_page(viewport=VIEWPORT))
-        pg.add_init_script(COUNT_SOCKETS)
-        pg.goto(f"http://127.0.0.1:{server.port}/")
-        pg.wait_for_selector("label:has-text('robots')", timeout=90000)
+    with app_page(server, COUNT_SOCKETS) as pg:
         yield pg
-        browser.close()
 
 
 def _no_script_ran(page, sockets: int) -> None:

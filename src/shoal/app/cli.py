@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, NoReturn
 
 from shoal import __version__
 
@@ -357,3 +358,18 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:
             print("interrupted", file=sys.stderr)
             return 130
+
+
+def entry() -> NoReturn:
+    """The ``shoal`` command: :func:`main`, then the exit. A warm-up thread still compiling
+    (``shoal run`` starts one) is not waited for, and the interpreter is not torn down under it:
+    a daemon thread inside LLVM while Python finalises can abort the process after its work is
+    written. Every file a command writes is closed (and renamed into place) before it returns."""
+    code = main()
+    from shoal.app.warmup import WARMUP
+
+    if WARMUP.compiling():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    raise SystemExit(code)

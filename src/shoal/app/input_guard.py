@@ -63,7 +63,7 @@ def guard_inputs(gui: Any, refuse: Refuse) -> bool:
     handles = getattr(gui, "_gui_input_handle_from_uuid", None)
     inner = getattr(gui, "_handle_gui_updates", None)
     registered = getattr(interface, "_incoming_handlers", {}).get(_messages.GuiUpdateMessage, [])
-    if not isinstance(handles, dict) or inner is None or inner not in registered:
+    if interface is None or not isinstance(handles, dict) or inner is None or inner not in registered:
         return False
 
     async def checked(client_id: Any, message: _messages.GuiUpdateMessage) -> None:

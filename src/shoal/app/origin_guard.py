@@ -165,17 +165,17 @@ def _guarding(policy: Policy) -> Iterator[threading.Event]:
     event yielded is set once one did."""
     real, installed = ws_server.serve, threading.Event()
 
-    class GuardedServe(real):  # type: ignore[misc, valid-type]
+    class GuardedServe(real):  # type: ignore[misc, valid-type]  # (websockets' serve class, read at run time)
         def __init__(self, *args: Any, process_request: ProcessRequest | None = None, **kwargs: Any) -> None:
             super().__init__(*args, process_request=_guard(policy, process_request), **kwargs)
             installed.set()
 
     with _building:
-        ws_server.serve = GuardedServe  # type: ignore[misc]
+        ws_server.serve = GuardedServe  # type: ignore[misc]  # (websockets' class, replaced while viser starts)
         try:
             yield installed
         finally:
-            ws_server.serve = real  # type: ignore[misc]
+            ws_server.serve = real  # type: ignore[misc]  # (and put back)
 
 
 class HandshakeNoise(logging.Filter):
@@ -197,6 +197,8 @@ class HandshakeNoise(logging.Filter):
         if seen > self.first and seen % self.every:
             return False
         err = record.exc_info[1]
+        if err is None:
+            return True
         why = err.__cause__ or err
         ws = getattr(record, "websocket", None)
         peer = getattr(ws, "remote_address", None)

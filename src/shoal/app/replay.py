@@ -142,7 +142,15 @@ class Recording:
             for name, value in _empty_twin(len(self.k), self.x.shape[1]).items():
                 object.__setattr__(self, name, value)
         object.__setattr__(self, "offsets", _offsets(self.n))
-        object.__setattr__(self, "b_offsets", _offsets(self.b_n))
+        object.__setattr__(self, "b_offsets", _offsets(self.twin_rows[0]))
+
+    @property
+    def twin_rows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Swarm B's ``(b_n, b_x, b_status)``: empty (no robot in any frame) when no B was
+        recorded, as :meth:`__post_init__` fills them."""
+        if self.b_n is None or self.b_x is None or self.b_status is None:
+            raise ValueError("a recording's swarm B is filled in when it is made")
+        return self.b_n, self.b_x, self.b_status
 
     @property
     def frames(self) -> int:
@@ -174,7 +182,8 @@ class Recording:
     def twin(self, i: int) -> tuple[np.ndarray, np.ndarray] | None:
         """Swarm B's (x, status) at frame ``i`` (None where B has no frame)."""
         a, b = self.b_offsets[i], self.b_offsets[i + 1]
-        return (self.b_x[a:b], self.b_status[a:b]) if b > a else None
+        _, b_x, b_status = self.twin_rows
+        return (b_x[a:b], b_status[a:b]) if b > a else None
 
     def scene_at(self, i: int) -> dict[str, np.ndarray]:
         """The recorded parts of the scene as they were at frame ``i``."""
@@ -230,9 +239,11 @@ def to_bytes(rec: Recording) -> bytes:
     for part, columns in SCENE_PARTS.items():
         c = rec.scene.get(part) or Changes(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, columns)))
         scene.update({f"{part}_i": c.i, f"{part}_n": c.n, f"{part}_v": c.v})
-    np.savez_compressed(buf, meta=meta, k=rec.k, t=rec.t, n=rec.n, x=rec.x, heading=rec.heading,
-                        status=rec.status, metrics=rec.metrics, b_n=rec.b_n, b_x=rec.b_x, b_status=rec.b_status,
-                        **scene)
+    b_n, b_x, b_status = rec.twin_rows
+    contents: dict[str, Any] = dict(meta=meta, k=rec.k, t=rec.t, n=rec.n, x=rec.x, heading=rec.heading,
+                                    status=rec.status, metrics=rec.metrics, b_n=b_n, b_x=b_x, b_status=b_status,
+                                    **scene)  # (arrays only, in this order)
+    np.savez_compressed(buf, **contents)
     return buf.getvalue()
 
 
@@ -346,7 +357,8 @@ def _check_values(rec: Recording, where: str) -> list[str]:
     for name in ("x", "heading", "b_x"):  # (metrics may hold NaN: a value not defined at that step)
         if not np.all(np.isfinite(getattr(rec, name))):
             errors.append(f"{name}: {'headings' if name == 'heading' else 'positions'} must be finite numbers")
-    errors += _check_counts(rec.b_n, len(rec.b_x), "b_n", "b_x", 0)
+    b_n, b_x, _ = rec.twin_rows
+    errors += _check_counts(b_n, len(b_x), "b_n", "b_x", 0)
     for part, c in rec.scene.items():
         if len(c.i) and (c.i[0] != 0 or np.any(np.diff(c.i) <= 0) or c.i[-1] >= rec.frames):
             errors.append(f"{part}_i: frames must increase from 0 and stay below the {rec.frames} frames")

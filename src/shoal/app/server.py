@@ -229,21 +229,25 @@ class ShoalServer:
         turn = 0
         while not self._stopping.is_set():
             start = time.monotonic()
-            with self._lock:
-                tabs = [tab for tab in self.tabs.values() if tab.auto_tick]
-            turn = (turn + 1) % max(len(tabs), 1)
-            plots_until = start + PLOT_SHARE * period
-            for tab in tabs[turn:] + tabs[:turn]:
-                try:
-                    tab.tick(start, plots=time.monotonic() < plots_until)
-                except Exception as err:  # one broken tab must not stop the others
-                    if self._errors.get(tab) != repr(err):  # said once per tab and error, not 60 times a second
-                        self._errors[tab] = repr(err)
-                        where = traceback.extract_tb(err.__traceback__)[-3:]
-                        at = " < ".join(f"{f.filename.rsplit('/', 1)[-1]}:{f.lineno} {f.name}" for f in reversed(where))
-                        print(f"shoal: tab update failed: {err!r} at {at}", file=sys.stderr)
-            tabs = tab = None  # a closed tab must not stay referenced from here until a later round
+            turn = self._round(turn, start, period)  # (a closed tab is not referenced from here until a later round)
             self._stopping.wait(max(0.0, period - (time.monotonic() - start)))
+
+    def _round(self, turn: int, start: float, period: float) -> int:
+        """One round of ticks, from one tab further on than the last round (``turn``); the next turn."""
+        with self._lock:
+            tabs = [tab for tab in self.tabs.values() if tab.auto_tick]
+        turn = (turn + 1) % max(len(tabs), 1)
+        plots_until = start + PLOT_SHARE * period
+        for tab in tabs[turn:] + tabs[:turn]:
+            try:
+                tab.tick(start, plots=time.monotonic() < plots_until)
+            except Exception as err:  # one broken tab must not stop the others
+                if self._errors.get(tab) != repr(err):  # said once per tab and error, not 60 times a second
+                    self._errors[tab] = repr(err)
+                    where = traceback.extract_tb(err.__traceback__)[-3:]
+                    at = " < ".join(f"{f.filename.rsplit('/', 1)[-1]}:{f.lineno} {f.name}" for f in reversed(where))
+                    print(f"shoal: tab update failed: {err!r} at {at}", file=sys.stderr)
+        return turn
 
     def stop(self) -> None:
         """Stop the experiments and the ticking, tell the open tabs, then stop the viser server

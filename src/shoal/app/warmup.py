@@ -101,6 +101,10 @@ class Warmup:
                 self._order.remove(group)
                 self._order.insert(0, group)
 
+    def compiling(self) -> bool:
+        """Whether the warm-up thread is still at work."""
+        return self._thread is not None and self._thread.is_alive()
+
     def busy_seconds(self) -> int | None:
         """Whole seconds since a warm-up started while it runs (None when none runs)."""
         if self.started is None or self.finished is not None:
@@ -141,9 +145,9 @@ class Warmup:
         self.scheduled = self.scheduled or set(todo) & set(ORDER)
         self.total = sum(len(v) for v in todo.values())
         try:
-            for group in NUMPY_TICK:  # what building such a scene compiles (spawning a fleet), first: seconds
-                if todo.get(group):
-                    build(load(todo[group][0], ["sim.runs=1"]))
+            for first in NUMPY_TICK:  # what building such a scene compiles (spawning a fleet), first: seconds
+                if todo.get(first):
+                    build(load(todo[first][0], ["sim.runs=1"]))
             while True:
                 with self._lock:
                     group = next((g for g in self._order if g in todo and not self.ready[g].is_set()), None)

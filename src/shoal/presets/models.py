@@ -8,7 +8,7 @@ variants (laws, strategies, selections) and their rules come from the engine's r
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Annotated, Any, ClassVar, Literal, TypeAlias
+from typing import TYPE_CHECKING, Annotated, Any, ClassVar, Literal, TypeAlias, TypeVar
 
 from pydantic import (
     AfterValidator,
@@ -471,3 +471,14 @@ class Scenario(_Model):
         if name in type(self).model_fields:
             return getattr(self, name)
         return (self.model_extra or {}).get(name)
+
+
+_Section = TypeVar("_Section")
+
+
+def required(section: _Section | None, name: str) -> _Section:
+    """An optional section a caller cannot do without (``required(sc.acoustics, "acoustics")``):
+    the section, or a ``ValueError`` saying the scenario has no ``[name]``."""
+    if section is None:
+        raise ValueError(f"this scenario has no [{name}] section")
+    return section

@@ -71,11 +71,11 @@ def page_figure(exp: Experiment, outcome: Outcome) -> go.Figure:
         invalid = np.zeros(exp.plan.shape, dtype=bool)
         for i in exp.plan.skipped:
             invalid[np.unravel_index(i, exp.plan.shape)] = True
-        text = [["invalid" if bad else ("" if np.isnan(v) else ("n.c." if np.isinf(v) else f"{v:.3g}"))
-                 for v, bad in zip(row, bad_row)] for row, bad_row in zip(z, invalid.T)]
+        cells = [["invalid" if bad else ("" if np.isnan(v) else ("n.c." if np.isinf(v) else f"{v:.3g}"))
+                  for v, bad in zip(row, bad_row)] for row, bad_row in zip(z, invalid.T)]
         median = f"median [{outcome.unit}]" if outcome.unit else "median"
         fig.add_trace(go.Heatmap(x=list(ax_x.labels), y=list(ax_y.labels),
-                                 z=[_finite(row) for row in z], text=text, texttemplate="%{text}",
+                                 z=[_finite(row) for row in z], text=cells, texttemplate="%{text}",
                                  colorscale="Viridis", colorbar={"title": {"text": median, "side": "right"}},
                                  hovertemplate=f"{_escape(ax_x.name)} = %{{x}}<br>{_escape(ax_y.name)} = %{{y}}"
                                                "<br>median %{text}<extra></extra>"))

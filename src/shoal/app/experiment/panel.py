@@ -74,14 +74,15 @@ class _AxisGui:
     def show(self, field: Field | None) -> None:
         """Visibility and the field's description, range and value now."""
         chosen = field is not None
-        ranged = chosen and field.numeric and self.given.value == AS_RANGE
-        self.given.visible = chosen and field.numeric
+        numeric = field is not None and field.numeric
+        ranged = numeric and self.given.value == AS_RANGE
+        self.given.visible = numeric
         self.values.visible = chosen and not ranged
         for h in (self.start, self.stop, self.count):
             h.visible = ranged
         now = "unset" if field is None or field.value is None else label(field.value)
         self.info.content = (f"{escape(field.description)} · {escape(field.range_text())} · now {escape(now)}"
-                             if chosen else "")
+                             if field is not None else "")
 
     def suggest(self, field: Field) -> None:
         """Fill the values with a first guess for ``field``."""
@@ -362,16 +363,17 @@ class ExperimentPanel:
     def _describe_cell(self) -> None:
         with self._lock:
             picked = self._selected()
-            if picked is None or picked[2] is None:
+            outcome = None if picked is None else picked[2]
+            if picked is None or outcome is None:
                 self.cell_info.content = ""
                 return
-            exp, index, outcome = picked
+            exp, index, _ = picked
             runs = exp.table.runs_of(index, outcome.name)
             where = np.unravel_index(index, exp.plan.shape)
             med, lo, hi = (float(v[where]) for v in exp.table.summary(outcome.name))
             band = f" (95 % interval {_num(lo)} … {_num(hi)})" if lo == lo else " (too few runs for an interval)"
             self.cell_info.content = (f"median {_num(med)}{band} over {exp.plan.runs:d} runs · "
-                                      f"run 0: {_num(runs[0])} · seed {exp.plan.scenarios[index].sim.seed:d}")
+                                      f"run 0: {_num(runs[0])} · seed {exp.plan.scenario(index).sim.seed:d}")
 
     def open_selected(self) -> bool:
         """Open in arena: the selected cell's scenario (its preset and seed) replaces the scene."""
@@ -381,7 +383,7 @@ class ExperimentPanel:
             self.notify("No cell chosen", "run an experiment and pick a finished cell first", "yellow")
             return False
         exp, index, _ = picked
-        sc = exp.plan.scenarios[index]
+        sc = exp.plan.scenario(index)  # (a finished cell: never a skipped one)
         try:
             self.open_cell(sc)
         except PresetError as err:

@@ -24,7 +24,7 @@ from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.engine.robots.world import WorldSpec
 from shoal.presets.build import build_fleet, check_world, fleet_keywords, fleet_params_for, kind_of, world_for
 from shoal.presets.io import PresetError, kept_fields
-from shoal.presets.models import Scenario
+from shoal.presets.models import Scenario, required
 
 from ..markdown import escape
 from ..panel.panel import TRAIL_SLIDER
@@ -174,7 +174,7 @@ class FleetDriver(BaseDriver):
     def restore_world(self) -> None:
         """Drop the edits: the world the scenario describes, robots kept where they are."""
         with self.session.lock:
-            self.sim.set_world(world_for(self.session.scenario.world))
+            self.sim.set_world(world_for(required(self.session.scenario.world, "world")))
             self.world_revision += 1
             self.edits = 0
             self._twin_world()
@@ -787,7 +787,7 @@ def panel(api: PanelAPI) -> KindPanel:
                 Slider("world.density", "tree density", 0.01, 0.2, 0.01, "share of the forest floor covered by trees",
                        visible=world("forest")),
                 Slider("sim.robots", "robots", 1, 40, 1, "number of robots (rebuilds the fleet)", integer=True),
-                Number("world.seed", "world seed", read=lambda s: int(s.scenario.world.seed),
+                Number("world.seed", "world seed", read=lambda s: int(required(s.scenario.world, "world").seed),
                        hint="which random course or forest"),
                 Dropdown("robot.motion", "motion", ("kinematic", "physics"),
                          hint="ideal particles (MATLAB) or pymunk bodies with inertia (Gazebo)"),

@@ -28,7 +28,7 @@ from shoal.engine.slo.selection import SELECTIONS
 from shoal.engine.slo.sensors import error_model
 from shoal.presets.build import build_slo, kind_of, slo_live_changes
 from shoal.presets.io import PresetError
-from shoal.presets.models import Scenario, SLOErrorValues
+from shoal.presets.models import SLO, Scenario, SLOErrorValues, required
 
 from ..markdown import escape
 from ..panel.panel import TRAIL_SLIDER
@@ -84,9 +84,12 @@ class MaiDriver(BaseDriver):
 
     def build(self, scenario: Scenario) -> SLOSwarm:
         try:
-            return build_slo(scenario, runs=1)
+            swarm = build_slo(scenario, runs=1)
         except ValueError as err:
             raise PresetError([f"slo: {err}"]) from None
+        if not isinstance(swarm, SLOSwarm):  # (the kind refuses a host swarm on SLO positions)
+            raise PresetError([f"slo.swarm: {scenario.name} is not Mai's SLO swarm"])
+        return swarm
 
     def cleared(self) -> None:
         self._prev_est = None
@@ -262,6 +265,11 @@ ERROR_FIELDS = tuple(SLOErrorValues.model_fields)
 EXPORT_NOTE = " The JSON export adds the selected robot's estimates of the others."
 
 
+def _slo(s: Session) -> SLO:
+    """The scene's ``[slo]`` (Mai's swarm always has one)."""
+    return required(s.scenario.slo, "slo")
+
+
 def _error_range(name: str) -> tuple[float, float]:
     """On-screen (max, step) of one single error slider."""
     if name.endswith("p_fail"):
@@ -273,7 +281,7 @@ def _error_range(name: str) -> tuple[float, float]:
 
 def _error_value(s: Session, name: str) -> float:
     """The single error ``name`` in force: set by hand, or the error set's."""
-    slo = s.scenario.slo
+    slo = _slo(s)
     set_value = getattr(slo.error_values, name)
     if set_value is not None:
         return float(set_value)
@@ -308,26 +316,26 @@ def _mapped(path: str, mapping: dict[str, str]) -> tuple[Any, Any]:
 
 
 def _set_errors(s: Session, label: str) -> dict[str, Any] | None:
-    value, slo = ERROR_SETS.get(label, label), s.scenario.slo
+    value, slo = ERROR_SETS.get(label, label), _slo(s)
     if value == slo.errors and not slo.error_values.values():
         return None
     return {"slo.errors": value, "slo.error_values": {}}
 
 
 def _set_neighbourhood(s: Session, value: str) -> dict[str, Any] | None:
-    if value == s.scenario.slo.neighbourhood:
+    if value == _slo(s).neighbourhood:
         return None
     return {"slo.neighbourhood": value, "slo.neighbourhood_param": None}
 
 
 def _neighbourhood_param(s: Session) -> float | None:
-    slo = s.scenario.slo
+    slo = _slo(s)
     p = slo.neighbourhood_param if slo.neighbourhood_param is not None else PARAM_DEFAULT[slo.neighbourhood]
     return None if math.isnan(p) else float(p)
 
 
 def _set_neighbourhood_param(s: Session, value: Any) -> dict[str, Any] | None:
-    return None if value == s.scenario.slo.neighbourhood_param else {"slo.neighbourhood_param": value}
+    return None if value == _slo(s).neighbourhood_param else {"slo.neighbourhood_param": value}
 
 
 def _neighbour(s: Session) -> int:
@@ -340,10 +348,10 @@ def _pick_neighbour(panel: PanelAPI, value: Any) -> None:
 
 
 def _engine(s: Session) -> str:
-    sc = s.scenario
-    what = "SPSO 2011 in each robot's frame" if sc.slo.motion == "pso" else "a random walk"
+    slo = _slo(s)
+    what = "SPSO 2011 in each robot's frame" if slo.motion == "pso" else "a random walk"
     return (f"engine: **{escape(s.engine_name)}**, Mai's SLO swarm ({what}) · "
-            f"selection {escape(sc.slo.selection.upper())}")
+            f"selection {escape(slo.selection.upper())}")
 
 
 def _inspector(s: Session, snap: Snapshot) -> str:
@@ -358,7 +366,7 @@ def _inspector(s: Session, snap: Snapshot) -> str:
         f"chosen: **{KIND_NAMES.get(p.kind, escape(p.kind))}** · error |x̂ − r| = {fmt(err)}",
         f"cos α = {fmt(p.cos_alpha)} · |v|/d = {fmt(p.thinness)}",
     ]
-    if s.scenario.slo.selection == "rts":
+    if _slo(s).selection == "rts":
         lines.append(f"RTS loop error e_r = {fmt(p.round_trip)}")
     localised = len(snap.ghosts.of) if snap.ghosts is not None else 0
     lines.append(f"robot {snap.selected} localised {localised} neighbour(s) this step")
@@ -373,7 +381,7 @@ def _status(s: Session, r: dict[str, float], state: str) -> str:
 
 def _compare(s: Session) -> dict[str, dict[str, Any]]:
     """B with another candidate selection."""
-    here = s.scenario.slo.selection
+    here = _slo(s).selection
     return {f"selection: {label}": {"slo.selection": value} for label, value in SELECTION_LABELS.items()
             if value != here}
 
@@ -430,14 +438,14 @@ def panel(api: PanelAPI) -> KindPanel:
                 Slider("slo.delta_v", "δ_v", 0.0, 0.5, 0.005,
                        "mitigation: dead reckoning when |v|/d < δ_v (thin triangle)"),
                 Dropdown("slo.errors", "error set", tuple(ERROR_SETS),
-                         read=lambda s: label_of(ERROR_SETS, s.scenario.slo.errors), write=_set_errors,
+                         read=lambda s: label_of(ERROR_SETS, _slo(s).errors), write=_set_errors,
                          hint="Tab. 4.3; choosing a set clears the single errors below"),
                 Folder("single errors", expand=False, items=tuple(_error_slider(name) for name in ERROR_FIELDS)),
                 Dropdown("slo.neighbourhood", "neighbourhood", NEIGHBOURHOODS, write=_set_neighbourhood,
                          hint="who localises whom (computed from truth)"),
                 Number("slo.neighbourhood_param", "neighbourhood parameter", read=_neighbourhood_param,
                        write=_set_neighbourhood_param, step=0.1, hint="k (knn), r (radius), n (ring), p (random)",
-                       visible=lambda s: s.scenario.slo.neighbourhood != "full"),
+                       visible=lambda s: _slo(s).neighbourhood != "full"),
                 Text("engine", compute=_engine),
                 Text(text="*An SLO change restarts the run with the same seed, so settings compare run for run.*"),
             )),
@@ -445,9 +453,9 @@ def panel(api: PanelAPI) -> KindPanel:
                 Dropdown("slo.motion", "motion", MOTIONS,
                          hint="SLO swarm: SPSO 2011 in each robot's frame, or a random walk"),
                 Dropdown("slo.objective", "objective", OBJECTIVES, hint="SLO swarm: 2-D benchmark, minimised",
-                         visible=lambda s: s.scenario.slo.motion == "pso"),
+                         visible=lambda s: _slo(s).motion == "pso"),
                 Slider("slo.walk_speed", "walk speed", 0.5, 20.0, 0.5, "random walk: longest step (thesis units)",
-                       visible=lambda s: s.scenario.slo.motion == "random_walk"),
+                       visible=lambda s: _slo(s).motion == "random_walk"),
                 Slider("sim.robots", "robots", 2, 60, 1, "swarm size P; RTS and Akcan slow down above ~30",
                        integer=True),
                 TRAIL_SLIDER,

@@ -25,7 +25,7 @@ from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams
 from shoal.presets.build import build_sonar, kind_of, sonar_keywords, sonar_params_for
 from shoal.presets.io import PresetError, kept_fields
-from shoal.presets.models import Scenario
+from shoal.presets.models import Acoustics, Scenario, required
 
 from ..markdown import escape
 from ..panel.panel import TRAIL_SLIDER
@@ -62,7 +62,14 @@ LIVE_OVERLAYS = ("rays", "true_ray", "points", "forward", "kept", "pick", "partn
                  "tri_direction", "tri_valid")  # what one listen shows; not recorded
 
 
+def _acoustics(s: Session) -> Acoustics:
+    """The scene's ``[acoustics]`` (an acoustic scene always has one)."""
+    return required(s.scenario.acoustics, "acoustics")
+
+
 def _params(scenario: Scenario) -> SonarParams:
+    if scenario.acoustics is None:
+        raise PresetError([f"acoustics: {scenario.name} has no [acoustics] section"])
     try:
         return sonar_params_for(scenario.acoustics)
     except ValueError as err:
@@ -157,7 +164,7 @@ class SonarDriver(BaseDriver):
         pts = fwd = kept = pick = partner = None
         tri: list[Any] = [None] * 4
         if loc is not None:
-            if loc.points is not None:
+            if loc.points is not None and loc.forward is not None and loc.kept is not None:
                 pts, fwd, kept = loc.points[0].copy(), loc.forward[0].copy(), loc.kept[0].copy()
                 pick = loc.selected[0].copy() if loc.selected is not None else None
             if loc.partner is not None:
@@ -569,19 +576,19 @@ NO_CORR = Text(text="*R(τ): only the algorithms with two hydrophones (X-, B- an
                visible=lambda s: not _two_hydrophones(s))
 DIST = PlotSpec("dist", "|CoM − source| [m]",
                 (Series("|CoM − source| [m]", "com_dist", "rgb(220,50,50)", 2),),
-                lines=lambda s: (Line("d_c", float(s.scenario.acoustics.d_c)),), twin="com_dist", history=2000,
+                lines=lambda s: (Line("d_c", float(_acoustics(s).d_c)),), twin="com_dist", history=2000,
                 aspect=1.8)
 SNR_PLOT = Chart("snr", "SNR [dB] at each robot", snr_series(), lambda s: snr_data(_snr(s)),
                  lambda s, data: snr_scales(_snr(s)), x_label="robot", legend={"show": False})
 
 
 def _algorithm(s: Session) -> str:
-    return LABELS[s.scenario.acoustics.algorithm]
+    return LABELS[_acoustics(s).algorithm]
 
 
 def _set_algorithm(s: Session, label: str) -> dict[str, Any] | None:
     algo = ALGORITHMS.get(label)
-    return {"acoustics.algorithm": algo} if algo is not None and algo != s.scenario.acoustics.algorithm else None
+    return {"acoustics.algorithm": algo} if algo is not None and algo != _acoustics(s).algorithm else None
 
 
 def _hearing(s: Session, snap: Snapshot) -> str:
@@ -597,7 +604,7 @@ def _hearing(s: Session, snap: Snapshot) -> str:
 
 
 def _readout(s: Session) -> str:
-    r, ac = s.readout(), s.scenario.acoustics
+    r, ac = s.readout(), _acoustics(s)
     start = (f"source starts at ({ac.source[0]:.1f}, {ac.source[1]:.1f}) m (acoustics.source)" if ac.source is not None
              else f"source starts at d_s = {fmt(r['d_s'], 'm')}")
     return (f"R_ref = {fmt(r['r_ref'], 'm')} (SNR 0 dB) · {start} · "
@@ -606,18 +613,18 @@ def _readout(s: Session) -> str:
 
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
-    sc = s.scenario
+    sc, ac = s.scenario, _acoustics(s)
     conv = f" · reached d_c at step {int(r['converged_at'])}" if r["converged_at"] >= 0 else ""
     ring = (f" · robots {r['mean_dist']:.0f} m from the source on average, {100 * r['inside']:.0f}% inside r"
-            if sc.acoustics.r > 0 else "")
-    return (f"**{escape(sc.name)}** · {LABELS[sc.acoustics.algorithm]} · {state} · t = {r['t']:.0f} s · "
+            if ac.r > 0 else "")
+    return (f"**{escape(sc.name)}** · {LABELS[ac.algorithm]} · {state} · t = {r['t']:.0f} s · "
             f"{s.progress()} · |CoM − source| = {r['com_dist']:.0f} m{conv}{ring}")
 
 
 def _compare(s: Session) -> dict[str, dict[str, Any]]:
     """B with another localisation algorithm, or on the other positions (oracle vs SLO)."""
     sc = s.scenario
-    here = sc.acoustics.algorithm
+    here = _acoustics(s).algorithm
     return {**{f"algorithm: {label}": {"acoustics.algorithm": alg} for label, alg in ALGORITHMS.items()
                if alg != here}, **positions_choices(sc)}
 
@@ -635,7 +642,7 @@ def _click(panel: PanelAPI, x: float, y: float, modifier: str | None) -> str:
 
 
 def _two_hydrophones(s: Session) -> bool:
-    return STRATEGIES[s.scenario.acoustics.algorithm].hydrophones == 2
+    return STRATEGIES[_acoustics(s).algorithm].hydrophones == 2
 
 
 def panel(api: PanelAPI) -> KindPanel:
@@ -680,7 +687,7 @@ def panel(api: PanelAPI) -> KindPanel:
                 Slider("acoustics.U", "U [m/s]", 0.2, 10.0, 0.1, "top speed"),
                 Slider("acoustics.r", "escort radius r [m]", 0.0, 200.0, 1.0,
                        "keep this distance from the global best (needs the non-omni controller, Ch. 8.2)",
-                       visible=lambda s: s.scenario.acoustics.controller == "nonomni"),
+                       visible=lambda s: _acoustics(s).controller == "nonomni"),
                 Slider("acoustics.v_n", "source speed v_n", 0.0, 1.0, 0.01, "source speed as a share of U [8.8]"),
                 Slider("acoustics.source_heading_deg", "source heading [°]", -180.0, 180.0, 5.0,
                        "direction the source moves (0 = +x)"),

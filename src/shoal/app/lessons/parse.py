@@ -108,7 +108,8 @@ def _step(title: str, body: str, where: str) -> dict[str, Any]:
         setup["values"] = flatten(table)
         step["setup"] = setup
         body = _SETUP.sub("", body)
-    field, parts = "text", {"text": [], "instruction": [], "question": [], "answer": []}
+    field = "text"
+    parts: dict[str, list[str]] = {"text": [], "instruction": [], "question": [], "answer": []}
     for para in re.split(r"\n\s*\n", body.strip()):
         lower = para.lstrip().lower()
         marker = next((m for m in MARKERS if lower.startswith(m)), None)

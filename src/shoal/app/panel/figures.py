@@ -233,7 +233,7 @@ def phase_figure(
                                  marker=dict(size=11, color="rgb(220,50,50)", line=dict(width=1, color="black"))))
     if geo:
         u_lim, a_lim = geo["u_lim"], geo["a_lim"]
-        if u is not None and len(u):
+        if u is not None and a is not None and len(u):
             u_lim = max(u_lim, 1.1 * float(np.nanmax(np.abs(u))))
             a_lim = max(a_lim, 1.1 * float(np.nanmax(np.abs(a))))
         fig.update_xaxes(range=[-u_lim, u_lim])

@@ -61,5 +61,6 @@ class LessonRun:
         metrics = {name: columns[name] for name in names if name in columns}
         if frames:
             by_step = {f.k: f.x for f in frames}
-            metrics["outside"] = np.array([outside(by_step[j], half) if j in by_step else np.nan for j in steps])
+            metrics["outside"] = np.array([outside(by_step[j], half) if j in by_step else np.nan
+                                           for j in steps.tolist()])
         return Run(steps, metrics)

@@ -68,8 +68,13 @@ SendFile = Callable[[str, bytes], None]
 class PanelKind(Protocol):
     """A scene kind as a panel sees it (the whole plug-in is :class:`shoal.app.kinds.base.AppKind`)."""
 
-    name: str
-    notes: str  # teaching notes ``static/notes/<notes>.md``
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def notes(self) -> str:
+        """Teaching notes ``static/notes/<notes>.md``."""
+        ...
 
     def panel(self, api: PanelAPI) -> KindPanel: ...
 
@@ -136,7 +141,6 @@ class Panel:
     def __init__(self, gui: Any, session: Session, kind: PanelKind, services: Services) -> None:
         self.gui, self.session, self.services = gui, session, services
         self.name = kind.name  # the scene kind it shows
-        self.notify = services.notify
         self.handles: dict[str, Any] = {}
         self.top: list[Any] = []  # top-level handles: removing them removes the whole panel
         self.removed = False
@@ -169,6 +173,10 @@ class Panel:
             self._build_lessons(kind.notes)
         self.experiment = self._build_experiment()
         self.sync()
+
+    def notify(self, title: str, body: str, color: str = "blue") -> None:
+        """A message for the tab's user (the tab shows it)."""
+        self.services.notify(title, body, color)
 
     # ------------------------------------------------------------------ building
     def _build_header(self) -> None:
@@ -271,9 +279,16 @@ class Panel:
         sv = self.services
         if sv.experiments is None:
             return None
+        replace = sv.replace
+
+        def open_cell(scenario: Scenario) -> Session:
+            if replace is None:
+                raise PresetError(["this app cannot open a cell in the arena"])
+            return replace(scenario)
+
         with self.tabs.add_tab("Sweep"):
             return ExperimentPanel(self.gui, sv.experiments, sv.owner, scenario=lambda: self.session.scenario,
-                                   open_cell=sv.replace, notify=self.notify, send_file=self.send_file)
+                                   open_cell=open_cell, notify=self.notify, send_file=self.send_file)
 
     def _build_lessons(self, notes: str) -> None:
         """The Lessons tab, the chapter's teaching notes below the lessons."""

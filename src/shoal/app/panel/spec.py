@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Protocol, Union
 
 import annotated_types as at
+from pydantic import BaseModel
 
 from shoal.presets.kinds import plugin_sections
 from shoal.presets.models import Scenario
@@ -82,19 +83,28 @@ def field_bounds(path: str) -> tuple[float, float]:
     """The closed range [lo, hi] the model allows for a numeric field ``section.name`` (±inf when open)."""
     section, name = path.split(".")
     field = Scenario.model_fields.get(section)
-    model = field.annotation if field is not None else plugin_sections()[section]  # a plug-in kind's section
-    model = next((a for a in getattr(model, "__args__", (model,)) if hasattr(a, "model_fields")), model)
+    annotation = field.annotation if field is not None else plugin_sections()[section]  # a plug-in kind's section
+    model = next((a for a in getattr(annotation, "__args__", (annotation,)) if hasattr(a, "model_fields")), annotation)
+    if not (isinstance(model, type) and issubclass(model, BaseModel)):
+        raise ValueError(f"{path}: [{section}] is not a section of a preset")
     lo, hi = -math.inf, math.inf
-    for m in model.model_fields[name].metadata:  # type: ignore[union-attr]
+    for m in model.model_fields[name].metadata:
         if isinstance(m, at.Ge):
-            lo = max(lo, float(m.ge))
+            lo = max(lo, _number(m.ge, path))
         elif isinstance(m, at.Gt):
-            lo = max(lo, float(m.gt))
+            lo = max(lo, _number(m.gt, path))
         elif isinstance(m, at.Le):
-            hi = min(hi, float(m.le))
+            hi = min(hi, _number(m.le, path))
         elif isinstance(m, at.Lt):
-            hi = min(hi, float(m.lt))
+            hi = min(hi, _number(m.lt, path))
     return lo, hi
+
+
+def _number(bound: object, path: str) -> float:
+    """A bound of a numeric field (annotated_types allows any comparable)."""
+    if not isinstance(bound, (int, float)):
+        raise TypeError(f"{path}: the model's bound {bound!r} is not a number")
+    return float(bound)
 
 
 def get_path(scenario: Scenario, path: str) -> Any:

@@ -47,9 +47,14 @@ BOXES = (
 class Glyph(Protocol):
     """A legend entry (the view's ``LegendEntry``): a glyph in a colour and what it stands for."""
 
-    glyph: str
-    colour: tuple[int, int, int]
-    label: str
+    @property
+    def glyph(self) -> str: ...
+
+    @property
+    def colour(self) -> tuple[int, int, int]: ...
+
+    @property
+    def label(self) -> str: ...
 
 
 def legend_html(entries: Sequence[Glyph]) -> str:

@@ -16,7 +16,10 @@ from .history import Frame
 
 
 class Driver(Protocol):
-    scene_sections: tuple[str, ...]  # scenario sections drawn in the static scene (a change redraws it)
+    @property
+    def scene_sections(self) -> tuple[str, ...]:
+        """Scenario sections drawn in the static scene (a change redraws it)."""
+        ...
 
     def build(self, scenario: Scenario) -> Any:
         """The engine for ``scenario`` (run 0 only); :class:`PresetError` if it cannot be built."""

@@ -47,7 +47,7 @@ def slo_retune(old: Scenario, new: Scenario) -> dict[str, Any] | None:
         return None
     if positions_of(new) == "oracle":
         return {}  # nothing localises: the run is the scene's without SLO
-    if a.unit != b.unit:  # type: ignore[union-attr]
+    if a is None or b is None or a.unit != b.unit:  # (both have an [slo] here: both on SLO positions)
         return None
     changes = slo_live_changes(old, old.model_copy(update={"slo": b}))
     return None if changes is None else {k: v for k, v in changes.items() if k not in ENGINE_ONLY}

@@ -46,7 +46,8 @@ from .upload import parse_upload
 class SessionKind(Protocol):
     """A scene kind as a session sees it (the whole plug-in is :class:`shoal.app.kinds.base.AppKind`)."""
 
-    name: str
+    @property
+    def name(self) -> str: ...
 
     def check(self, scenario: Scenario) -> Scenario:
         """``scenario`` if this kind shows it, else :class:`PresetError` saying why not."""
@@ -68,7 +69,7 @@ class Session:
         self.selected_robot = 0  # the robot the panels and the view single out
         self.selected_neighbour: int | None = None  # a second robot (a pair to inspect; None: the kind picks)
         self.selected_dim = 0  # the coordinate a per-dimension plot shows
-        self.compare: Twin | None = None  # swarm B, stepped with this one
+        self.compare: Twin[Session] | None = None  # swarm B, stepped with this one
         self.live_edits = 0  # changes made while the run went on (a replay of it cannot be re-simulated)
         self.driver = kind.driver(self)
         self.history = History(("t",))
@@ -116,7 +117,7 @@ class Session:
     @property
     def twin(self) -> Session | None:
         """Swarm B's session (None without B)."""
-        return self.compare.b if self.compare is not None else None  # type: ignore[return-value]
+        return self.compare.b if self.compare is not None else None
 
     @property
     def overrides(self) -> dict[str, Any]:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import copy
 import threading
-from typing import Any, Callable, Protocol
+from typing import Any, Callable, Generic, Protocol, TypeVar
 
 import numpy as np
 
@@ -85,14 +85,17 @@ class Side(Protocol):
     def restart(self, seed: int) -> None: ...
 
 
-class Twin:
-    """Swarm B (``b``) and how it differs from A (``overrides``)."""
+S = TypeVar("S", bound=Side)
 
-    def __init__(self, b: Side, overrides: dict[str, Any]) -> None:
+
+class Twin(Generic[S]):
+    """Swarm B (``b``, a session of the kind of A's) and how it differs from A (``overrides``)."""
+
+    def __init__(self, b: S, overrides: dict[str, Any]) -> None:
         self.b, self.overrides = b, dict(overrides)
 
     @classmethod
-    def of(cls, scenario: Scenario, overrides: dict[str, Any], make: Callable[[Scenario], Side]) -> Twin:
+    def of(cls, scenario: Scenario, overrides: dict[str, Any], make: Callable[[Scenario], S]) -> Twin[S]:
         """B for A's ``scenario`` with ``overrides`` (raises :class:`PresetError` naming B's fields)."""
         return cls(make(twin_scenario(scenario, overrides)), overrides)
 

@@ -70,9 +70,10 @@ def recording_html(rec: Recording, max_frames: int = MAX_FRAMES, kept: Scenario 
     :class:`~shoal.presets.io.PresetError` or :class:`~shoal.app.replay.ReplayError` for a
     recording the app could not show."""
     a = draw.replay_session(rec)
-    overrides = rec.twin_overrides if len(rec.b_x) else None
+    b_n, b_x, _ = rec.twin_rows
+    overrides = rec.twin_overrides if len(b_x) else None
     twin = twin_scenario(a.scenario, overrides) if overrides is not None else None
-    robots = int(rec.n.max()) + int(rec.b_n.max())
+    robots = int(rec.n.max()) + int(b_n.max())
     limit = frame_budget(robots, max_frames)
     fp = plan(rec.k, limit)
     info = _info(a.scenario, fp, origin="recorded history", shoal_version=str(rec.meta["shoal"]),

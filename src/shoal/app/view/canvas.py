@@ -117,13 +117,13 @@ class Canvas:
         xy = np.asarray(xy, dtype=float)
         xy = plane(xy.reshape(-1, xy.shape[-1]))
         finite = np.all(np.isfinite(xy), axis=1)
-        per_point = isinstance(color, np.ndarray) and color.ndim == 2
-        colors = color[finite] if per_point else color
+        per_point = color if isinstance(color, np.ndarray) and color.ndim == 2 else None  # one RGB per point
         xy = xy[finite]
         pts = self.to_view(xy, z) if len(xy) else self.to_view(np.zeros((1, 2)), z)
-        if per_point and not len(xy):
-            colors = np.zeros((1, 3), np.uint8)
-        self._put(key, pts, colors if per_point else None, bool(len(xy)), lambda: self.scene.add_point_cloud(
+        if per_point is not None:
+            per_point = per_point[finite] if len(xy) else np.zeros((1, 3), np.uint8)
+        colors = color if per_point is None else per_point
+        self._put(key, pts, per_point, bool(len(xy)), lambda: self.scene.add_point_cloud(
             self.name(key), pts, colors=colors, point_size=size, point_shape=shape, precision="float32",
             point_shading="flat"))
 
@@ -132,9 +132,11 @@ class Canvas:
         RGB or one per segment end (S, 2, 3); an empty list hides the node."""
         segs = np.asarray(segs, dtype=float).reshape(-1, 2, 2)
         pts = self.to_view(segs, z) if len(segs) else np.zeros((1, 2, 3), np.float32)
-        per_segment = isinstance(color, np.ndarray) and color.ndim == 3
-        colors = color if not per_segment or len(segs) else np.zeros((1, 2, 3), np.uint8)
-        self._put(key, pts, colors if per_segment else None, bool(len(segs)), lambda: self.scene.add_line_segments(
+        per_segment = color if isinstance(color, np.ndarray) and color.ndim == 3 else None  # one RGB per end
+        if per_segment is not None and not len(segs):
+            per_segment = np.zeros((1, 2, 3), np.uint8)
+        colors = color if per_segment is None else per_segment
+        self._put(key, pts, per_segment, bool(len(segs)), lambda: self.scene.add_line_segments(
             self.name(key), pts, colors=colors, thickness=px, thickness_units="screen"))
 
     def _put(self, key: str, pts: np.ndarray, colors: np.ndarray | None, shown: bool,

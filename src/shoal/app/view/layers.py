@@ -49,9 +49,18 @@ class LegendEntry:
 
 
 class Layer(Protocol):
-    name: str  # unique in its view
-    keys: tuple[str, ...]  # the canvas nodes it draws
-    legend: tuple[LegendEntry, ...]
+    @property
+    def name(self) -> str:
+        """Unique in its view."""
+        ...
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """The canvas nodes it draws."""
+        ...
+
+    @property
+    def legend(self) -> tuple[LegendEntry, ...]: ...
 
     def build(self, canvas: Canvas, snap: Snapshot) -> None:
         """Static nodes, once per (re)built scene."""

@@ -8,6 +8,7 @@ import math
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
 def fan_mesh(a0: float, a1: float, segments: int) -> tuple[np.ndarray, np.ndarray]:
@@ -116,7 +117,7 @@ def rays(centre: np.ndarray, angles: np.ndarray, r0: float, r1: float) -> np.nda
     return np.stack([c + r0 * d, c + r1 * d], axis=1)
 
 
-def dashed(a: np.ndarray, b: np.ndarray, dash: float, gap: float) -> np.ndarray:
+def dashed(a: ArrayLike, b: ArrayLike, dash: float, gap: float) -> np.ndarray:
     """(S, 2, 2) dashes along the segment a → b."""
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     length = float(np.hypot(*(b - a)))

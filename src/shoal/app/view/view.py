@@ -132,7 +132,8 @@ class View:
     """The arena of one tab for one kind of scene (``name``). ``scene`` is a viser ``SceneApi``."""
 
     def __init__(self, scene: Any, name: str, camera: Camera, layers: Sequence[Layer], fit: Fit | None = None) -> None:
-        self.name, self.camera, self.layers, self.fit = name, camera, (*layers, ScaleBar()), fit
+        self.name, self.camera, self.fit = name, camera, fit
+        self.layers: tuple[Layer, ...] = (*layers, ScaleBar())
         self.canvas = Canvas(scene, name)
         self.drawn_revision = -1
         self.built_revision = -1

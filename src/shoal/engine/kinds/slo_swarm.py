@@ -20,6 +20,7 @@ import numpy as np
 
 from ..core.compiled_draws import CompiledDraws
 from ..core.contract import check_live
+from ..core.portable import arctan2
 from ..core.rng import component_generators
 from ..core.schema import Column, Schema
 from ..pso.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
@@ -385,7 +386,7 @@ class SLOSwarm:
         shape = (self.runs, n)
         self.state = SLOState(
             x=x, u=u, P=np.zeros_like(x), fP=np.full(shape, np.inf), f=self.fitness(x),
-            heading=np.arctan2(u[..., 1], u[..., 0]), status=np.zeros(shape, dtype=np.int8), beliefs=beliefs,
+            heading=arctan2(u[..., 1], u[..., 0]), status=np.zeros(shape, dtype=np.int8), beliefs=beliefs,
             best_fitness=np.full(self.runs, np.inf),
         )
         self._met = np.full(self.runs, np.inf)
@@ -442,7 +443,7 @@ class SLOSwarm:
         s.x = s.x + v_new  # [3.12], perfect movement (Mai §3.1, p. 21)
         s.u = v_new
         moving = np.any(v_new != 0, axis=-1)
-        s.heading = np.where(moving, np.arctan2(v_new[..., 1], v_new[..., 0]), s.heading)
+        s.heading = np.where(moving, arctan2(v_new[..., 1], v_new[..., 0]), s.heading)
         if cfg.pbest_shift == "commanded":
             s.P = s.P - v_new  # [3.13]
         adjacency = self.rule.adjacency(s.x, self.streams["topology"])

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.portable import exp
+
 
 @dataclass(frozen=True)
 class AttractionRepulsion:
@@ -37,7 +39,7 @@ class AttractionRepulsion:
         """V_i = k_ar·Σ_{j∈N_i} g(−x̂_ij), clamped to ``v_max``; est (R, N, N, 2) → (R, N, 2)."""
         y = -est  # x_i − x_j in i's frame
         sq = np.sum(y * y, axis=-1)
-        g = -y * (self.a - self.b * np.exp(-sq / self.c))[..., None]
+        g = -y * (self.a - self.b * exp(-sq / self.c))[..., None]  # the C library's exp: the same bits on any CPU
         v = self.gain * np.where(valid[..., None], g, 0.0).sum(axis=2)
         speed = np.linalg.norm(v, axis=-1, keepdims=True)
         scale = np.minimum(1.0, np.divide(self.v_max, speed, out=np.ones_like(speed), where=speed > 0))

@@ -138,6 +138,23 @@ def distance_errors(x: np.ndarray, est: np.ndarray, valid: np.ndarray) -> tuple[
 
 
 @kernel
+def angle_differences(x: np.ndarray, est: np.ndarray, valid: np.ndarray) -> np.ndarray:
+    """atan2 of x̂_ij minus atan2 of x_j − x_i for every ordered pair in ``valid``, NaN elsewhere,
+    (R, N, N): the C library's atan2 (engine/core/portable.py), only where it is read."""
+    R, n = x.shape[0], x.shape[1]
+    ang = np.empty((R, n, n))
+    for r in range(R):
+        for i in range(n):
+            for j in range(n):
+                if valid[r, i, j]:
+                    tx, ty = x[r, j, 0] - x[r, i, 0], x[r, j, 1] - x[r, i, 1]
+                    ang[r, i, j] = math.atan2(est[r, i, j, 1], est[r, i, j, 0]) - math.atan2(ty, tx)
+                else:
+                    ang[r, i, j] = np.nan
+    return ang
+
+
+@kernel
 def pair_distances(x: np.ndarray) -> np.ndarray:
     """‖x_j − x_i‖ over the unordered pairs i < j in ``np.triu_indices`` order, (R, N(N−1)/2),
     laid out pair-major as numpy gathers ``x[:, j] − x[:, i]`` (so :func:`stats` sums as it did)."""

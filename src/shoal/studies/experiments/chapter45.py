@@ -140,11 +140,12 @@ class FleetBatch:
 
     def head(self, runs: int) -> "FleetBatch":
         """The first ``runs`` runs of this batch."""
-        cut = lambda a: None if a is None else a[:, :runs]  # noqa: E731
+        cut = lambda a: a[:, :runs]  # noqa: E731
         return FleetBatch(
             seed=self.seed, first_run=self.first_run, dt=self.dt, robots=self.robots, robot_radius=self.robot_radius,
             layer_x=self.layer_x, t=self.t, com=cut(self.com), collided=cut(self.collided), stalled=cut(self.stalled),
-            layers=cut(self.layers), x=cut(self.x), status=cut(self.status),
+            layers=cut(self.layers), x=None if self.x is None else cut(self.x),
+            status=None if self.status is None else cut(self.status),
         )
 
     def median_run(self) -> int:
@@ -172,7 +173,7 @@ def simulate_fleet(job: FleetJob, first_run: int, runs: int) -> FleetBatch:
             info = fleet.step()
         t[k], com[k], collided[k], layers[k] = info.t, info.com_fitness, info.collided, info.layers_passed
         stalled[k] = info.stalled
-        if x is not None:
+        if x is not None and status is not None:
             x[k], status[k] = fleet.state.x, fleet.state.status
     return FleetBatch(
         seed=job.seed, first_run=first_run, dt=fleet.dt, robots=fleet.robots,

@@ -18,7 +18,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Literal, Sequence
 
 import numpy as np
 
@@ -131,6 +131,14 @@ class SonarBatch:
         """(R,) mean of a per-tick series over the window, ticks ``window …`` K."""
         return values[self.window:].astype(float).mean(axis=0)
 
+    def kept(self, name: Literal["mean_dist", "frac_inside", "occupancy", "com"]) -> np.ndarray:
+        """A series only some jobs keep (the escort metrics and occupancy of a job with a
+        ``window``, the routes of one with ``routes``); a ``ValueError`` if this one did not."""
+        values: np.ndarray | None = getattr(self, name)
+        if values is None:
+            raise ValueError(f"this batch did not keep {name} (see SonarJob)")
+        return values
+
 
 def median_time(first: np.ndarray) -> float:
     """Median of first-passage ticks with −1 read as +∞."""
@@ -166,7 +174,7 @@ def simulate_sonar(job: SonarJob, first_run: int, runs: int) -> SonarBatch:
         com[k] = info.com_dist
         if route is not None:
             route[k] = np.einsum("rij,rj->ri", turn, info.com)
-        if escort:
+        if md is not None and fr is not None:  # an escort job
             md[k], fr[k] = info.mean_dist_to_source, info.frac_inside_ring
             if occ is not None and k >= job.window:
                 # source-centred frame: docs/readings.md, "Occupancy maps of Figures 8-4 and 8-5"
@@ -192,7 +200,10 @@ def merge(parts: Sequence[SonarBatch]) -> SonarBatch:
             raise ValueError("chunks must be consecutive runs of the same seed and length")
         expected += b.runs
 
-    def cat(name: str, axis: int) -> np.ndarray | None:
+    def cat(name: str, axis: int) -> np.ndarray:
+        return np.concatenate([getattr(b, name) for b in parts], axis=axis)
+
+    def cat_kept(name: str, axis: int) -> np.ndarray | None:  # a series only some jobs keep
         arrays = [getattr(b, name) for b in parts]
         return None if arrays[0] is None else np.concatenate(arrays, axis=axis)
 
@@ -200,8 +211,9 @@ def merge(parts: Sequence[SonarBatch]) -> SonarBatch:
         seed=first.seed, first_run=first.first_run, robots=first.robots, dt=first.dt, dc=first.dc,
         r_trap=first.r_trap, r_ref=first.r_ref, com_dist=cat("com_dist", 1),
         first_converged=cat("first_converged", 0), robot_steps=sum(b.robot_steps for b in parts),
-        mean_dist=cat("mean_dist", 1), frac_inside=cat("frac_inside", 1), occupancy=cat("occupancy", 0),
-        com=cat("com", 1), extent=first.extent, cell=first.cell, window=first.window,
+        mean_dist=cat_kept("mean_dist", 1), frac_inside=cat_kept("frac_inside", 1),
+        occupancy=cat_kept("occupancy", 0), com=cat_kept("com", 1), extent=first.extent, cell=first.cell,
+        window=first.window,
     )
 
 
@@ -284,7 +296,7 @@ def escort_jobs(cases: Sequence[EscortCase], preset: str, runs: int, steps: int,
 
 def escort_rows(case: EscortCase, b: SonarBatch) -> list[list[str]]:
     """``ESCORT_COLUMNS`` rows: per run, window means of the ring fraction and distance."""
-    frac, dist = b.window_mean(b.frac_inside), b.window_mean(b.mean_dist)
+    frac, dist = b.window_mean(b.kept("frac_inside")), b.window_mean(b.kept("mean_dist"))
     return [[case.name, str(r), str(b.seed), str(case.robots), num(case.r), num(case.v_n), num(case.psd_s),
              num(f), num(d)] for r, f, d in zip(b.run_index, frac, dist)]
 
@@ -292,13 +304,13 @@ def escort_rows(case: EscortCase, b: SonarBatch) -> list[list[str]]:
 def escort_series(case: EscortCase, b: SonarBatch, every: int = 10) -> list[list[str]]:
     K = b.com_dist.shape[0]
     idx = np.unique(np.r_[np.arange(0, K, every), K - 1])
-    md, cd, fr = (np.median(a.astype(float), axis=1) for a in (b.mean_dist, b.com_dist, b.frac_inside))
+    md, cd, fr = (np.median(a.astype(float), axis=1) for a in (b.kept("mean_dist"), b.com_dist, b.kept("frac_inside")))
     return [[case.name, str(k), num(k * b.dt), num(md[k]), num(cd[k]), num(fr[k])] for k in idx]
 
 
 def occupancy_probability(b: SonarBatch) -> np.ndarray:
     """(C, C) fraction of all robot-ticks of all runs in each cell; rows = x cells."""
-    occ = b.occupancy.sum(axis=0).astype(float)
+    occ = b.kept("occupancy").sum(axis=0).astype(float)
     window = b.com_dist.shape[0] - b.window  # ticks window … K
     return occ / max(b.robots * b.runs * window, 1)  # robots outside the mapped square count too
 
@@ -307,8 +319,9 @@ def escort_estimates(b: SonarBatch) -> dict[str, Estimate]:
     """Medians over runs with their intervals: the window means of the fraction inside the
     ring (``frac``), the mean robot–source distance (``dist``) and |CoM − source| (``com``),
     and the mean robot–source distance at the end (``final``)."""
-    return {"frac": Estimate.median(b.window_mean(b.frac_inside)), "dist": Estimate.median(b.window_mean(b.mean_dist)),
-            "com": Estimate.median(b.window_mean(b.com_dist)), "final": Estimate.median(b.mean_dist[-1])}
+    dist = b.kept("mean_dist")
+    return {"frac": Estimate.median(b.window_mean(b.kept("frac_inside"))), "dist": Estimate.median(b.window_mean(dist)),
+            "com": Estimate.median(b.window_mean(b.com_dist)), "final": Estimate.median(dist[-1])}
 
 
 def inside_peak(b: SonarBatch, r: float) -> Estimate:
@@ -321,7 +334,7 @@ def inside_peak(b: SonarBatch, r: float) -> Estimate:
         return Estimate.exact(0.0)
     i, j = np.unravel_index(np.argmax(np.where(inside, p, -1.0)), p.shape)
     window = b.com_dist.shape[0] - b.window
-    return Estimate.mean(b.occupancy[:, i, j] / max(b.robots * window, 1))
+    return Estimate.mean(b.kept("occupancy")[:, i, j] / max(b.robots * window, 1))
 
 
 def occupancy_rows(case: EscortCase, b: SonarBatch) -> list[list[str]]:

@@ -20,6 +20,7 @@ import numpy as np
 
 from shoal.presets.build import sonar_params_for
 from shoal.presets.io import load
+from shoal.presets.models import required
 
 from . import chapter78 as ch
 from . import verdict as vd
@@ -56,7 +57,7 @@ def make_jobs(runs: int, steps: int, snrs: Sequence[float], algorithms: Sequence
     c1/(c1 + c2) as well, keyed (algorithm, SNR_0, share). ``routes`` keeps the CoM routes
     of the 10 dB jobs of the preset's own split (Fig. 7-3)."""
     base = load(preset).sim.seed
-    own = load(preset).acoustics.c1_share
+    own = required(load(preset).acoustics, "acoustics").c1_share
     jobs = []
     for share in (None,) if shares is None else shares:
         for snr in snrs:
@@ -80,7 +81,7 @@ def run(
     steps: int = HORIZON, snrs: Sequence[float] = SNRS, algorithms: Sequence[str] = ch.ALGORITHMS,
     mode: str = "waveform", shares: Sequence[float] = SPLITS,
 ) -> dict[str, Any]:
-    own = load(PRESET).acoustics.c1_share
+    own = required(load(PRESET).acoustics, "acoustics").c1_share
     shares = tuple(dict.fromkeys((own, *shares)))  # the preset's split first
     jobs = make_jobs(runs, steps, snrs, algorithms, mode, shares=shares, routes=True)
     res, wall = ch.convergence_sweep(jobs, runs, out_dir, RUNS_COLUMNS, SERIES_EVERY, workers, progress, "fig7-2")
@@ -89,7 +90,7 @@ def run(
 
     med = {j.key: res[j.key].median_steps() for j in jobs}
     frac = {j.key: float(res[j.key].converged.mean()) for j in jobs}
-    p = sonar_params_for(jobs[0].scenario().acoustics)
+    p = sonar_params_for(required(jobs[0].scenario().acoustics, "acoustics"))
     r_ref, dc, U = p.r_ref, p.dc, p.U
     _figure(out_dir / "fig7-2.png", res, snrs, algorithms, shares, r_ref, dc, runs, steps)
     def of(d: dict, sh: float) -> dict:
@@ -142,9 +143,9 @@ def _within_two(med: dict, snrs: Sequence[float], algorithms: Sequence[str]) -> 
     hits = total = 0
     for snr in snrs:
         for a in algorithms:
-            th = THESIS.get(snr, {}).get(a, "absent")
-            if th == "absent":
+            if a not in THESIS.get(snr, {}):
                 continue
+            th = THESIS[snr][a]
             total += 1
             m = med[(a, snr)]
             hits += (not np.isfinite(m)) if th is None else bool(np.isfinite(m) and th / 2 <= m <= 2 * th)
@@ -160,11 +161,12 @@ def _speed(b: ch.SonarBatch, r_ref: float, snr: float, dc: float) -> float | Non
 
 def write_routes(path: Path, batches: dict[str, ch.SonarBatch], runs: int, steps: int) -> None:
     """The 10 dB CoM routes (source on +x, every ``ROUTE_EVERY`` steps) for fig7-3."""
-    arrays = {f"com_{a}": b.com[::ROUTE_EVERY] for a, b in batches.items() if b.com is not None}
-    arrays.update({f"first_{a}": b.first_converged for a, b in batches.items()})
     b0 = next(iter(batches.values()))
-    np.savez_compressed(path, runs=runs, steps=steps, every=ROUTE_EVERY, r_ref=b0.r_ref, dc=b0.dc, dt=b0.dt,
-                        seed=b0.seed, **arrays)
+    contents: dict[str, Any] = dict(runs=runs, steps=steps, every=ROUTE_EVERY, r_ref=b0.r_ref, dc=b0.dc, dt=b0.dt,
+                                    seed=b0.seed)  # (numbers and arrays, in this order)
+    contents.update({f"com_{a}": b.com[::ROUTE_EVERY] for a, b in batches.items() if b.com is not None})
+    contents.update({f"first_{a}": b.first_converged for a, b in batches.items()})
+    np.savez_compressed(path, **contents)
 
 
 def _nearer(res: dict, steps: int, share: float) -> dict[str, Any]:
@@ -220,9 +222,9 @@ def _checks(med, frac, res, snrs, algorithms, steps, r_ref, dc, U) -> list[dict[
                           + [vd.negate(converges((a, snr))) for a in ("a-pso", "x-pso")])))
     for snr in snrs:
         for a in algorithms:
-            th = THESIS.get(snr, {}).get(a, "absent")
-            if th == "absent":
+            if a not in THESIS.get(snr, {}):
                 continue
+            th = THESIS[snr][a]
             m = med[(a, snr)]
             if th is None:
                 checks.append(check(f"{ch.LABELS[a]} at {snr:g} dB: median time to d_c (pass: n.c.)", "n.c.",

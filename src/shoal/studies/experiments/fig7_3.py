@@ -29,6 +29,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from shoal.presets.build import sonar_params_for
+from shoal.presets.models import required
 
 from . import chapter78 as ch
 from . import verdict as vd
@@ -62,7 +63,10 @@ def simulate_routes(out_dir: Path, runs: int, steps: int, workers: int, progress
     res = run_jobs(jobs, workers=workers, progress=progress, desc="fig7-3", simulate=ch.simulate_sonar,
                    merge=ch.merge, chunk=runs)
     write_routes(out_dir / ROUTES, {j.key[0]: res[j.key] for j in jobs}, runs, steps)
-    return load_routes(out_dir / ROUTES, runs, steps)
+    routes = load_routes(out_dir / ROUTES, runs, steps)
+    if routes is None:  # (just written for these runs and steps)
+        raise RuntimeError(f"{out_dir / ROUTES}: the routes just written do not read back")
+    return routes
 
 
 def route_of(com: np.ndarray, first: int, every: int) -> np.ndarray:
@@ -146,7 +150,7 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
     if data is None:
         data, origin = simulate_routes(out_dir, runs, steps, workers, progress, mode), "simulated"
     jobs = make_jobs(runs, steps, (ROUTES_SNR,), ch.ALGORITHMS, mode)
-    p = sonar_params_for(jobs[0].scenario().acoustics)
+    p = sonar_params_for(required(jobs[0].scenario().acoustics, "acoustics"))
     R, every = float(data["r_ref"]), int(data["every"])
     d_s, dc, d0 = p.d_s / R, p.dc / R, p.d0 / R
     routes = {a: [route_of(data[f"com_{a}"][:, i] / R, int(data[f"first_{a}"][i]), every) for i in range(runs)]

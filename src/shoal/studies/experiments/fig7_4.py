@@ -25,6 +25,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from shoal.presets.io import load
+from shoal.presets.models import required
 
 from . import chapter78 as ch
 from . import verdict as vd
@@ -42,7 +43,7 @@ U0, D0, Q0 = 2.0, 0.5, 1.5  # the Fig. 7-2 setting
 RUNS_COLUMNS = ("case", "run", "seed", "Q", "d_over_lambda", "U", "c1_share", "converged", "steps_to_converge")
 GRID_COLUMNS = ("case", "Q", "d_over_lambda", "U", "c1_share", "runs", "converged_fraction",
                 "median_steps_to_converge", "mean_steps_converged_runs", "median_final_com_dist_m")
-C1_SHARE = load(PRESET).acoustics.c1_share  # the preset's split of ĉ (fig7-2)
+C1_SHARE = required(load(PRESET).acoustics, "acoustics").c1_share  # the preset's split of ĉ (fig7-2)
 
 Point = tuple[float, float, float]  # (Q, D/λ_c, U)
 

@@ -36,7 +36,11 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
     res, cost = sweep(out_dir, "fig7-5", points, runs, workers, progress, steps, mode, shares)
     for sh in shares:
         name = "fig7-5.png" if sh == C1_SHARE else f"fig7-5-c1c2-{split_label(sh).replace(':', '-')}.png"
-        heatmaps(out_dir / name, res, points, q, u, lambda alg, x, y, sh=sh: (alg, x, D0, y, sh), "U (m/s)",
+
+        def key(alg: str, x: float, y: float, sh: float = sh) -> tuple:
+            return (alg, x, D0, y, sh)
+
+        heatmaps(out_dir / name, res, points, q, u, key, "U (m/s)",
                  f"Fig. 7-5: median time to d_c at SNR0 = 10 dB, D = λ_c/2, c1:c2 = {split_label(sh)}, {runs} runs "
                  "per point", steps=steps)
     checks = _checks(res, q, u, steps, C1_SHARE)

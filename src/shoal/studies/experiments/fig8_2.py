@@ -18,6 +18,7 @@ import numpy as np
 
 from shoal.presets.build import sonar_params_for
 from shoal.presets.io import load
+from shoal.presets.models import required
 
 from . import chapter78 as ch
 from . import verdict as vd
@@ -39,7 +40,8 @@ def run(
 ) -> dict[str, Any]:
     jobs = make_jobs(runs, steps, snrs, ALGORITHMS, mode, preset=PRESET)
     res, wall = ch.convergence_sweep(jobs, runs, out_dir, RUNS_COLUMNS, SERIES_EVERY, workers, progress, "fig8-2")
-    p = sonar_params_for(jobs[0].scenario().acoustics)
+    acoustics = required(jobs[0].scenario().acoustics, "acoustics")
+    p = sonar_params_for(acoustics)
     med = {j.key: res[j.key].median_steps() for j in jobs}
     frac = {j.key: float(res[j.key].converged.mean()) for j in jobs}
 
@@ -84,7 +86,7 @@ def run(
         "mode": mode,
         "horizon": steps,
         "snr0_db": list(snrs),
-        "receiver": {"lag_peak": jobs[0].scenario().acoustics.lag_peak, "fs": jobs[0].scenario().acoustics.fs},
+        "receiver": {"lag_peak": acoustics.lag_peak, "fs": acoustics.fs},
         "percentiles": [5, 25, 75, 95],
         "series_every": SERIES_EVERY,
         "cases": {f"{a} @ {s:g} dB": {

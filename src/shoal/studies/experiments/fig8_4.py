@@ -116,13 +116,13 @@ Collisions are not enforced (robots may overlap; `summary.json` does not count t
 
 
 def _stats(c: ch.EscortCase, b: ch.SonarBatch) -> dict[str, Any]:
-    frac, dist = b.window_mean(b.frac_inside), b.window_mean(b.mean_dist)
+    frac, dist = b.window_mean(b.kept("frac_inside")), b.window_mean(b.kept("mean_dist"))
     com = b.window_mean(b.com_dist)
     return {
         "robots": c.robots, "r": c.r, "v_n": c.v_n, "psd_s": c.psd_s,
         "median_frac_inside_ring": r3(np.median(frac)), "median_mean_dist_to_source": r3(np.median(dist)),
         "median_com_dist": r3(np.median(com)),
-        "median_final_mean_dist": r3(np.median(b.mean_dist[-1])),
+        "median_final_mean_dist": r3(np.median(b.kept("mean_dist")[-1])),
         "max_occupancy_inside_ring": r3(_inside_peak(b, c.r) * 1e3) / 1e3,
     }
 

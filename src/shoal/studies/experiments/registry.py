@@ -269,7 +269,8 @@ def reproduce(
         summary["verdicts"] = {v: verdicts.count(v) for v in OUTCOMES}
         if (used := scheduler or current()) is not None:
             summary["scheduler"] = used.describe()
-        summary["files"] = sorted(p.name for p in tmp.iterdir())  # what a rerun into out_dir may replace
+        # what a rerun into out_dir may replace: the target's files, this summary and its README
+        summary["files"] = sorted({p.name for p in tmp.iterdir()} | {"summary.json", "README.md"})
         (tmp / "summary.json").write_text(json.dumps(summary, indent=2, ensure_ascii=False) + "\n", encoding="utf-8")
         (tmp / "README.md").write_text(spec.readme(json.loads(json.dumps(summary))), encoding="utf-8")
     return summary

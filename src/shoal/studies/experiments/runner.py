@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from contextlib import closing
 from dataclasses import dataclass, field
-from typing import Any, Callable, Hashable, Iterator, Sequence
+from typing import Any, Callable, Hashable, Iterator, Protocol, Sequence, TypeVar, overload
 
 import numpy as np
 
@@ -194,6 +194,20 @@ def simulate_job(job: Job, first_run: int, runs: int) -> BatchResult:
 Simulate = Callable[[Any, int, int], Any]
 Merge = Callable[[Sequence[Any]], Any]
 
+K = TypeVar("K", bound=Hashable, covariant=True)
+B = TypeVar("B")
+
+
+class KeyedJob(Protocol[K]):
+    """What the runner reads of a job: its ``key`` and its number of ``runs`` (and, if it has
+    one, its ``cost``); the rest is for the job's own ``simulate``."""
+
+    @property
+    def key(self) -> K: ...
+
+    @property
+    def runs(self) -> int: ...
+
 
 @dataclass(frozen=True)
 class _Chunk:
@@ -261,11 +275,28 @@ class _Progress:
             self.bar.close()
 
 
+@overload
+def iter_jobs(
+    jobs: Sequence[Job], *, workers: int = 1, scheduler: Scheduler | None = None,
+    progress: bool | Callable[[int], None] = False, chunk: int = 25, desc: str = "runs",
+    cancelled: Callable[[], bool] | None = None,
+) -> Iterator[tuple[tuple[str, int], BatchResult]]: ...
+
+
+@overload
+def iter_jobs(
+    jobs: Sequence[KeyedJob[K]], *, workers: int = 1, scheduler: Scheduler | None = None,
+    progress: bool | Callable[[int], None] = False, chunk: int = 25, desc: str = "runs",
+    simulate: Callable[[Any, int, int], B], merge: Callable[[Sequence[B]], B],
+    cancelled: Callable[[], bool] | None = None,
+) -> Iterator[tuple[K, B]]: ...
+
+
 def iter_jobs(
     jobs: Sequence[Any], *, workers: int = 1, scheduler: Scheduler | None = None,
     progress: bool | Callable[[int], None] = False, chunk: int = 25, desc: str = "runs",
     simulate: Simulate = simulate_job, merge: Merge = concat, cancelled: Callable[[], bool] | None = None,
-) -> Iterator[tuple[Hashable, Any]]:
+) -> Iterator[tuple[Any, Any]]:  # (the overloads above say which)
     """Yield ``(key, result)`` of every job as soon as all its chunks are in (earlier jobs
     tend to finish first). The chunks run on ``scheduler``; by default the one of the
     enclosing :func:`~.schedulers.using` block, else this process (``workers == 1``) or a
@@ -295,11 +326,26 @@ def iter_jobs(
                 return
 
 
+@overload
+def run_jobs(
+    jobs: Sequence[Job], *, workers: int = 1, scheduler: Scheduler | None = None,
+    progress: bool | Callable[[int], None] = False, chunk: int = 25, desc: str = "runs",
+) -> dict[tuple[str, int], BatchResult]: ...
+
+
+@overload
+def run_jobs(
+    jobs: Sequence[KeyedJob[K]], *, workers: int = 1, scheduler: Scheduler | None = None,
+    progress: bool | Callable[[int], None] = False, chunk: int = 25, desc: str = "runs",
+    simulate: Callable[[Any, int, int], B], merge: Callable[[Sequence[B]], B],
+) -> dict[K, B]: ...
+
+
 def run_jobs(
     jobs: Sequence[Any], *, workers: int = 1, scheduler: Scheduler | None = None,
     progress: bool | Callable[[int], None] = False, chunk: int = 25, desc: str = "runs",
     simulate: Simulate = simulate_job, merge: Merge = concat,
-) -> dict[Hashable, Any]:
+) -> dict[Any, Any]:  # (the overloads above say which)
     """Simulate every job, split into chunks of at most ``chunk`` runs sized by the jobs'
     estimated cost (:func:`_chunks`); with ``workers > 1`` the chunks go to a process pool,
     with a ``scheduler`` (or inside ``schedulers.using``) wherever it sends them, e.g. a Dask

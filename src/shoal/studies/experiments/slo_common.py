@@ -19,6 +19,7 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
+from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.presets.build import build_slo
 from shoal.presets.io import load
 
@@ -107,10 +108,18 @@ class SLOBatch:
         return np.nanmean(self.series[column][start:], axis=0)
 
 
+def slo_swarm(job: SLOJob, first_run: int, runs: int) -> SLOSwarm:
+    """Mai's SLO swarm of ``job`` (its preset says ``[slo] swarm = "slo"``), runs ``first_run …``."""
+    swarm = build_slo(load(job.preset, list(job.overrides)), runs=runs, seed=job.seed, first_run=first_run)
+    if not isinstance(swarm, SLOSwarm):
+        raise ValueError(f"{job.preset}: this SLO study needs [slo] swarm = \"slo\", not a host swarm")
+    return swarm
+
+
 def simulate_slo(job: SLOJob, first_run: int, runs: int) -> SLOBatch:
     """Runs ``first_run … first_run + runs − 1`` of ``job`` (``simulate`` for ``run_jobs``)."""
-    swarm = build_slo(load(job.preset, list(job.overrides)), runs=runs, seed=job.seed, first_run=first_run)
-    hist = swarm.run(job.generations, KEPT)  # type: ignore[attr-defined]  # (an SLOSwarm: only the kept series)
+    swarm = slo_swarm(job, first_run, runs)
+    hist = swarm.run(job.generations, KEPT)  # only the kept series
     return SLOBatch(job.seed, first_run, {k: hist[k] for k in KEPT})
 
 
@@ -118,7 +127,7 @@ def simulate_entry(job: SLOJob, first_run: int, runs: int) -> SLOBatch:
     """Runs of ``job`` recording, per generation, the mean absolute error of the neighbour
     pairs that have just entered the neighbourhood (``e_abs_entering``) and of those that were
     neighbours the generation before too (``e_abs_staying``); NaN when a run has none."""
-    swarm = build_slo(load(job.preset, list(job.overrides)), runs=runs, seed=job.seed, first_run=first_run)
+    swarm = slo_swarm(job, first_run, runs)
     before = swarm.state.adjacency.copy()
     eye = np.eye(before.shape[-1], dtype=bool)
     rows: dict[str, list[np.ndarray]] = {"e_abs_entering": [], "e_abs_staying": []}

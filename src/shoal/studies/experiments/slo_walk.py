@@ -180,7 +180,7 @@ def run_errors(out_dir: Path, runs: int, workers: int = 1, progress: bool = True
 
     checks = []
     worst = {p: _fin(res, c.name) for p, c in alone.items()}
-    top = max(worst, key=worst.get)
+    top = max(worst, key=worst.__getitem__)
     checks.append(check(
         f"stochastic multiplicative range error σ_m hurts most: of the twelve Tab. 4.3 High values applied alone, "
         f"range_sigma_m = 0.2 gives the largest error at generation {generations}",
@@ -226,7 +226,7 @@ def run_errors(out_dir: Path, runs: int, workers: int = 1, progress: bool = True
                   for s_ in STATIC for d in dynamic)))
     css = {n: _avg(res, fig42[(n, "css")].name) for n in NEIGHBOURHOODS}
     rts_avg = {n: _avg(res, fig42[(n, "rts")].name) for n in NEIGHBOURHOODS}
-    worst_css = max(css, key=css.get)
+    worst_css = max(css, key=css.__getitem__)
     checks.append(check(
         "random is CSS's worst neighbourhood under the offset, and RTS beats CSS there (error averaged over "
         "generations)", "RTS copes comparatively well with random, CSS's worst case (Fig. 4.2)",
@@ -346,7 +346,7 @@ def run_mitigation(out_dir: Path, runs: int, workers: int = 1, progress: bool = 
         rnd[(0.03, 0.03)] >= 2 * rnd[(0.0, 0.0)],
         vd.at_most_of(ve["fig4-6"][(0.0, 0.0)].scaled(2), ve["fig4-6"][(0.03, 0.03)])))
     ring = val["fig4-5 css"]
-    best = min((k for k in ring if k != (0.0, 0.0)), key=ring.get)
+    best = min((k for k in ring if k != (0.0, 0.0)), key=ring.__getitem__)
     checks.append(check(
         "ring, Low, CSS: some mitigation setting beats no mitigation",
         "mitigation is more useful in a static ring (Fig. 4.5)",
@@ -503,7 +503,7 @@ def run_weight(out_dir: Path, runs: int, workers: int = 1, progress: bool = True
             continue
         mean = {w: float(np.mean(curve[w][a:b])) for w in WEIGHTS}
         me = {w: _curve_e(res, cases[("ring", w)].name, a, b) for w in WEIGHTS}
-        best = min(mean, key=mean.get)
+        best = min(mean, key=mean.__getitem__)
         checks.append(check(
             f"ring: the best w in generations {label} (lowest mean of the median curve) is {w_th:g}",
             f"w = {w_th:g} is best for generations {label} (Fig. 4.10)",

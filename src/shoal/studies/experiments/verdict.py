@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..medians import MEDIAN_LEVEL, median, median_interval, quantile_interval
 
@@ -260,7 +261,7 @@ def median_runs(values: Any) -> np.ndarray:
     return np.flatnonzero((v >= e.lo) & (v <= e.hi))
 
 
-def over_choices(claim: Callable[..., bool], *choices: Sequence[Any], runs: int | None = None) -> Verdict:
+def over_choices(claim: Callable[..., bool], *choices: ArrayLike, runs: int | None = None) -> Verdict:
     """A claim about one value of each of several sets (e.g. a count at each case's median
     run): holds if it holds for every combination, fails if for none, else undecided."""
     distinct = [sorted(set(np.asarray(c).ravel().tolist())) for c in choices]

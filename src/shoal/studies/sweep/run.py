@@ -96,7 +96,7 @@ def sweep_rows(plan: SweepPlan, *, workers: int = 1, scheduler: Scheduler | None
     12 significant digits), a cell without an outcome another has: NaN."""
     batches: dict[int, outcomes.CellBatch] = dict(iter_jobs(
         [plan.job(i) for i in range(len(plan))], workers=workers, scheduler=scheduler, simulate=simulate,
-        merge=outcomes.merge, desc="sweep"))  # type: ignore[arg-type]
+        merge=outcomes.merge, desc="sweep"))
     names: list[str] = []
     for i in range(len(plan)):
         names += [n for n in batches[i].columns if n not in names]
@@ -166,7 +166,7 @@ def run_sweep(
                   unit="run", disable=not progress) as bar:
             for key, batch in iter_jobs(jobs, workers=workers, scheduler=scheduler, progress=bar.update,
                                         simulate=simulate, merge=outcomes.merge, desc="sweep"):
-                i = int(key)  # type: ignore[call-overload]  # (a cell's key is its index)
+                i = key  # (a cell's key is its index)
                 store.write_cell(i, plan.prefix(i), batch.first_run, plan.scenario(i).sim.seed, batch.columns)
         indices = list(range(len(scenarios)))
         columns = store.assemble(indices)
