@@ -264,9 +264,9 @@ def reproduce(
                    "cpu_s": round(_cpu_seconds() - cpu, 3), **fields}
         summary["workers"] = workers
         summary["quick"] = quick
-        summary["interval_level"] = LEVEL  # the checks' verdicts: the interval of each statistic at this level
         verdicts = [c.get("verdict") for c in summary.get("checks", [])]
-        summary["verdicts"] = {v: verdicts.count(v) for v in OUTCOMES}
+        # how the checks came out, each judged by the interval of its statistic at this level
+        summary["judged"] = {"checks": len(verdicts), **{v: verdicts.count(v) for v in OUTCOMES}, "level": LEVEL}
         if (used := scheduler or current()) is not None:
             summary["scheduler"] = used.describe()
         # what a rerun into out_dir may replace: the target's files, this summary and its README
