@@ -158,8 +158,8 @@ def fig7_3(s: Summary) -> str:
     straight, spread = check(s, "B-PSO and XB-PSO run straighter"), check(s, "A-PSO and X-PSO spread more")
     reach = check(s, "places passed by more than half")
     parts = ["The routes come from the fig7-2 runs, whose sources lie on random bearings; each route is turned so "
-             "that its source lies on +x (docs/readings.md, \"Figure 7-3: frame, cells and 'more than half of the "
-             "swarms'\")."]
+             "that its source lies on +x "
+             """(docs/readings.md, 'Figure 7-3: frame, cells and "more than half of the swarms"')."""]
     if straight:
         parts.append("B-PSO and XB-PSO " + _so(straight, "run straighter", "do not run straighter")
                      + " than A-PSO and X-PSO" + _shown(straight, s.get("runs")) + ".")
