@@ -12,9 +12,11 @@ import io
 import json
 import socket
 import threading
+import time
 
 import numpy as np
 import pytest
+from viser import GuiEvent
 
 from shoal.app.kinds import swarm
 from shoal.app.kinds.registry import session_for
@@ -509,3 +511,29 @@ def test_taken_port_is_refused_clearly():
 def test_unknown_preset_is_refused():
     with pytest.raises(PresetError, match="no preset"):
         start_server("no-such-preset", port=0)
+
+
+def _arrives(handle, value) -> None:
+    """What viser does when a user's value reaches ``handle``: it stores the value and its time,
+    then queues the callbacks on its thread pool (run here later, by :func:`_callback`)."""
+    handle._impl.value = value
+    handle._impl.update_timestamp = time.time()
+
+
+def _callback(handle) -> None:
+    for cb in handle._impl.update_cb:
+        cb(GuiEvent(client=None, client_id=None, target=handle))
+
+
+def test_a_value_that_arrives_while_another_change_is_applied_is_not_lost(tab):
+    """A user moves two controls quickly: the second value arrives (stored, its callback queued)
+    while the first change is applied and the panel is synced; the sync keeps the second value
+    on its control, and its callback then applies it."""
+    p, s = tab.panels, tab.session
+    _arrives(p.seed, 5)
+    p.handles["sim.robots"].value = 12  # the first change, applied and synced before the seed's callback
+    assert s.sim.robots == 12 and p.seed.value == 5  # the sync left the waiting seed alone
+    _callback(p.seed)
+    assert s.scenario.sim.seed == 5 and p.seed.value == 5
+    p.handles["sim.robots"].value = 13  # once taken, the control follows the scenario again
+    assert p.seed.value == 5 and s.scenario.sim.seed == 5

@@ -66,7 +66,7 @@ def test_the_plugins_law_objective_and_kind_are_in_the_apps_menus(plugin_server,
         wait_until(lambda: page.get_by_text("Raw mode:").count() > 0, what="raw mode")
         choose(page, "law", "clamped")
         choose(page, "objective", "himmelblau")
-        wait_until(lambda: "Clamped PSO (example plug-in): ĉ = c1 + c2 has no unit" in page.content(),
+        wait_until(lambda: "Clamped PSO (example plug-in): ĉ has no unit" in page.content(),
                    what="the law's own readout")
         page.screenshot(path=str(tmp_path / "plugin-chapter3.png"))
         assert "gather-demo" in options_of(page, "preset")

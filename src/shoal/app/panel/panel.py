@@ -145,6 +145,7 @@ class Panel:
         self.top: list[Any] = []  # top-level handles: removing them removes the whole panel
         self.removed = False
         self._local = threading.local()  # per thread: programmatic .value fires callbacks inline
+        self._taken: dict[int, float] = {}  # id(watched handle) → update time of the value last taken or set
         self._controls: list[tuple[Any, Any]] = []  # (spec, handle) in build order
         self._sent: dict[int, tuple] = {}  # uPlot (series, axes) last sent, by handle (see push_uplot)
         self.controls = 0  # a count of the user's control events (the tab holds the scene a moment after one)
@@ -197,9 +198,13 @@ class Panel:
                                    hint="random seed; changing it restarts the run")
         self.top += [self.at_end, self.seed]
 
+        for h in (self.preset, self.seed, self.at_end):
+            self.watch(h)
+
         @self.preset.on_update
         def _(event: Any) -> None:
             if not self.syncing:
+                self.taken(self.preset)
                 self.load_preset(self.preset.value)
 
         @self.playback.on_click
@@ -209,11 +214,13 @@ class Panel:
         @self.seed.on_update
         def _(event: Any) -> None:
             if not self.syncing:
+                self.taken(self.seed)
                 self._seed_changed()
 
         @self.at_end.on_update
         def _(event: Any) -> None:
             if not self.syncing:
+                self.taken(self.at_end)
                 self.choose_at_end(self.at_end.value)
 
     def _at_end_options(self) -> tuple[str, ...]:
@@ -357,9 +364,12 @@ class Panel:
             def _(event: Any) -> None:
                 item.act(self)
         elif isinstance(item, (Slider, Dropdown, Checkbox, Number)):
+            self.watch(h)
+
             @h.on_update
             def _(event: Any) -> None:
                 if not self.syncing:
+                    self.taken(h)
                     self._changed(item, _coerce(item, h.value))
 
     # ------------------------------------------------------------------ values
@@ -405,9 +415,31 @@ class Panel:
             self._local.depth -= 1
 
     def set_quietly(self, handle: Any, value: Any) -> None:
+        """Show ``value`` on ``handle``, unless a user's newer value waits there for its callback."""
+        if self.pending(handle):
+            return
         with self.quietly():
             if handle.value != value:
                 handle.value = value
+        self.taken(handle)
+
+    def watch(self, handle: Any) -> None:
+        """Keep ``handle``'s user changes from being overwritten before their callback takes them
+        (:meth:`pending`); its callback calls :meth:`taken` first."""
+        self._taken[id(handle)] = handle.update_timestamp
+
+    def taken(self, handle: Any) -> None:
+        """Note that a watched ``handle``'s value as it stands now is handled (a user's change taken,
+        or the app's own)."""
+        if id(handle) in self._taken:
+            self._taken[id(handle)] = handle.update_timestamp
+
+    def pending(self, handle: Any) -> bool:
+        """A user's value arrived on ``handle`` after the last one taken: viser has stored it and queued
+        its callback on another thread, which will take it. A sync meanwhile (after a change of
+        another control) must not put the scenario's older value over it, or the change is lost."""
+        last = self._taken.get(id(handle))
+        return last is not None and handle.update_timestamp > last
 
     def sync(self) -> None:
         """Push the session's scenario into every handle (after a load, a refusal or a change)."""
