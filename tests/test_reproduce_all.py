@@ -158,3 +158,43 @@ def test_two_reproductions_are_compared_check_by_check(tmp_path: Path) -> None:
     assert got["decided"] == [("fig4-6", "c2", "fails", "holds"), ("fig4-6", "c3 (runs 0-3)", "holds", "fails")]
     assert got["undecided"] == [("fig4-6", "c1", "undecided", "fails")]
 
+
+
+def test_agreement_counts_same_one_sided_and_opposite_verdicts(tmp_path: Path) -> None:
+    from shoal.studies.experiments.report import agreement
+
+    def write(folder: Path, verdicts: list[str], names: list[str] | None = None) -> None:
+        (folder / "fig7-2").mkdir(parents=True)
+        checks = [{"name": (names or [])[i] if names else f"c{i}", "thesis": "", "measured": "",
+                   "pass": v == "holds", "verdict": v, "runs": 6} for i, v in enumerate(verdicts)]
+        (folder / "fig7-2" / "summary.json").write_text(json.dumps({"target": "fig7-2", "runs": 6, "checks": checks}))
+
+    write(tmp_path / "quick", ["holds", "undecided", "undecided", "fails", "holds", "undecided", "fails"])
+    write(tmp_path / "full", ["holds", "holds", "undecided", "fails", "undecided", "fails", "holds", "holds"],
+          ["c0", "c1", "c2", "c3", "c4", "c5", "c6", "c9 only here"])
+    got = agreement(tmp_path / "quick", tmp_path / "full")
+    assert got.same == {"holds": 1, "fails": 1, "undecided": 1}
+    assert (got.decided_in_b_only, got.decided_in_a_only) == (2, 1)
+    assert got.opposite == [("fig7-2", "c6", "fails", "holds")]
+    assert (got.only_in_a, got.only_in_b, got.shared) == (0, 1, 7)
+
+    run = [sys.executable, "-m", "shoal", "reproduce", "--compare"]
+    out = subprocess.run([*run, str(tmp_path / "quick"), str(tmp_path / "full")], capture_output=True, text=True)
+    assert out.returncode == 1, out.stderr  # one holds what the other fails
+    assert "opposite verdicts: 1" in out.stdout and "fig7-2: c6: fails in" in out.stdout
+    same = subprocess.run([*run, str(tmp_path / "full"), str(tmp_path / "full")], capture_output=True, text=True)
+    assert same.returncode == 0 and "same verdict: 8 (4 holds, 2 fails, 2 undecided)" in same.stdout
+    none = subprocess.run([*run, str(tmp_path / "full"), str(tmp_path / "nothing")], capture_output=True, text=True)
+    assert none.returncode == 2 and "no reproduced target" in none.stderr
+
+
+def test_one_target_on_the_command_line_says_its_verdicts(tmp_path: Path) -> None:
+    out = subprocess.run([sys.executable, "-m", "shoal", "reproduce", "fig3-5", "--runs", "3", "--out",
+                          str(tmp_path / "f")], capture_output=True, text=True)
+    summary = json.loads((tmp_path / "f" / "summary.json").read_text(encoding="utf-8"))
+    counts = [sum(c["verdict"] == v for c in summary["checks"]) for v in ("holds", "fails", "undecided")]
+    assert out.returncode == 0 and counts[2] > 0  # three runs leave every median undecided
+    assert (f"({len(summary['checks'])} checks: {counts[0]} hold, {counts[1]} fail, {counts[2]} undecided at 3 "
+            "runs)") in out.stdout
+    undecided = [c["name"] for c in summary["checks"] if c["verdict"] == "undecided"]
+    assert all(f"  undecided: {name}" in out.stdout for name in undecided)

@@ -134,6 +134,8 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 
     if args.report:
         return _report(args.report)
+    if args.compare:
+        return _compare(*args.compare)
     if args.all:
         return _reproduce_all(args)
     if args.list or not args.target:
@@ -149,16 +151,21 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
         return _err(str(e))
     except OSError as e:
         return _cannot_write(out, e)
-    failed = [c["name"] for c in summary["checks"] if not c["pass"]]
-    print(f"wrote {out}/summary.json ({len(summary['checks'])} checks, {len(failed)} not passed)")
-    for name in failed:
-        print(f"  not passed: {name}")
+    from shoal.studies.experiments.output import verdict_of
+
+    verdicts = [(verdict_of(c), c["name"]) for c in summary["checks"]]
+    counts = {v: sum(got == v for got, _ in verdicts) for v in ("holds", "fails", "undecided")}
+    print(f"wrote {out}/summary.json ({len(verdicts)} checks: {counts['holds']} hold, {counts['fails']} fail, "
+          f"{counts['undecided']} undecided at {summary['runs']} runs)")
+    for verdict, name in verdicts:
+        if verdict != "holds":
+            print(f"  {'fails' if verdict == 'fails' else 'undecided'}: {name}")
     return 0
 
 
 def _cmd_reproduce_on(args: argparse.Namespace) -> int:
     """``reproduce`` with ``--scheduler``: every target's chunks of runs go to the Dask cluster."""
-    if args.scheduler is None or args.list or args.report:
+    if args.scheduler is None or args.list or args.report or args.compare:
         return _cmd_reproduce(args)
     from shoal.studies.experiments.schedulers import SchedulerError, connect, using
 
@@ -229,6 +236,19 @@ def _report(folder: str) -> int:
     except (FileNotFoundError, OutputDirError) as e:
         return _err(str(e))
     return 0
+
+
+def _compare(a: str, b: str) -> int:
+    """``--compare A B``: how two reproductions judge their shared checks; 1 if one holds a
+    check the other fails."""
+    from shoal.studies.experiments.report import agreement
+
+    try:
+        got = agreement(Path(a), Path(b))
+    except FileNotFoundError as e:
+        return _err(str(e))
+    print(got.text(a, b))
+    return 1 if got.opposite else 0
 
 
 def _cmd_warmup(args: argparse.Namespace) -> int:
@@ -311,6 +331,9 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--quick", action="store_true",
                    help="classroom size: few runs per case, the same checks (every target in minutes)")
     q.add_argument("--report", metavar="DIR", help="rebuild DIR/REPRODUCTION.md from its target folders")
+    q.add_argument("--compare", nargs=2, metavar=("A", "B"),
+                   help="compare two reproductions check by check (e.g. a --quick one and a full one); "
+                        "exit status 1 if one holds a check the other fails")
     q.set_defaults(func=_cmd_reproduce_on)
 
     w = sub.add_parser("sweep", help="seeded runs of a preset over a grid of field values (resumable)")

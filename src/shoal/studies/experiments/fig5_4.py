@@ -134,8 +134,9 @@ def run(
         checks.append(check(
             f"{c.name}: no robot-robot collision in a typical run (median over runs of the robots disabled by "
             f"touching another), {label}", "no robot-robot collisions (the example run of Fig. 5-4)",
-            f"median {np.median(rr):g} (mean {r3(rr.mean())}); {s['stalled'][s['stalled'] > 0].size} runs end with "
-            f"stalled robots (median {np.median(s['stalled']):g})", np.median(rr) == 0,
+            f"median {np.median(rr):g} (mean {r3(rr.mean())}); stalled robots at the end of "
+            f"{s['stalled'][s['stalled'] > 0].size} of {b.runs} runs (median {np.median(s['stalled']):g})",
+            np.median(rr) == 0,
             vd.at_most(Estimate.median(rr), 0)))
         information.append(info(
             f"{c.name}: no robot-robot collision in any run, {label}", "no robot-robot collisions",

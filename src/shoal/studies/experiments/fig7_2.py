@@ -110,6 +110,9 @@ def run(
         "mode": mode,
         "horizon": steps,
         "snr0_db": list(snrs),
+        "dc_m": dc,
+        "series_every": SERIES_EVERY,
+        "route_every": ROUTE_EVERY,
         "c1_share": own,
         "c1_share_evidence": {split_label(sh): f"{score[sh][0]} of {score[sh][1]} thesis median times matched within ×2"
                               for sh in shares},
@@ -280,13 +283,13 @@ c1:c2 = {own} is judged by the checks, the other is reported as information ({ev
 ## Files
 
 - `runs.csv`: `{",".join(RUNS_COLUMNS)}`. `steps_to_converge` is the first timestep with
-  |CoM − source| ≤ d_c = 50 m, empty when the run never got there within the horizon.
+  |CoM − source| ≤ d_c = {summary['dc_m']:g} m, empty when the run never got there within the horizon.
   Run `run` uses child `run` of `SeedSequence(seed)`; all algorithms and splits at one SNR0
   share `seed`.
-- `series.csv`: per case, SNR0 and split, every {SERIES_EVERY} steps, the median and the
+- `series.csv`: per case, SNR0 and split, every {summary['series_every']} steps, the median and the
   percentiles of |CoM − source| that its columns name, in metres (a run is stopped when it converges
   and its distance is held from then on).
-- `{ROUTES}`: the CoM routes of the 10 dB runs of the preset's split, every {ROUTE_EVERY} steps,
+- `{ROUTES}`: the CoM routes of the 10 dB runs of the preset's split, every {summary['route_every']} steps,
   in a frame with the source on +x (target fig7-3 draws Fig. 7-3 from them).
 - `fig7-2.png`: median |CoM − source| in spatial steps (R_ref = 1000 m) with percentile bands,
   one panel per SNR0, one row per split; ▼ marks the thesis median time at d_c.

@@ -211,6 +211,7 @@ def run(out_dir: Path, runs: int = DEFAULT_RUNS, workers: int = 1, progress: boo
         "information": information,
         "snr0_db": ROUTES_SNR,
         "c1_share": float(p.c1_share),
+        "c1_c2": split_label(float(p.c1_share)),
         "routes_from": SOURCE_NOTE[origin],
         "horizon": steps,
         "cell_spatial_steps": CELL,
@@ -277,7 +278,7 @@ def _readme(summary: dict[str, Any], runs: int, steps: int) -> str:
     return f"""# Fig. 7-3 reproduction: CoM routes at SNR0 = 10 dB
 
 The {runs} seeded swarms per algorithm of fig7-2 at SNR0 = 10 dB (preset `{PRESET}`,
-c1:c2 = {split_label(summary['c1_share'])}, horizon {steps} timesteps; routes {summary['routes_from']}).
+c1:c2 = {summary['c1_c2']}, horizon {steps} timesteps; routes {summary['routes_from']}).
 Each route is turned so that the source lies on +x and ends where the swarm converged.
 
 ## Files

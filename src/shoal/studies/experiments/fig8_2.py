@@ -88,6 +88,7 @@ def run(
         "snr0_db": list(snrs),
         "receiver": {"lag_peak": acoustics.lag_peak, "fs": acoustics.fs},
         "percentiles": [5, 25, 75, 95],
+        "series_every": SERIES_EVERY,
         "cases": {f"{a} @ {s:g} dB": {
             "median_steps_to_converge": med[(a, s)] if conv(a, s) else None,
             "converged_fraction": r3(frac[(a, s)]),
@@ -117,7 +118,7 @@ collisions are not enforced.
 
 - `runs.csv`: `{",".join(RUNS_COLUMNS)}` (empty `steps_to_converge`: not within the horizon).
 - `series.csv`: median and {"/".join(f"{q:g}" for q in summary["percentiles"])}th percentiles of |CoM − source| (m)
-  every {SERIES_EVERY} steps.
+  every {summary["series_every"]} steps.
 - `fig8-2.png`: median with 25–75 % and 5–95 % bands, one panel per SNR0.
 
 ## Checks

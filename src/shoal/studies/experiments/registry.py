@@ -11,6 +11,7 @@ from typing import Any, Callable
 from shoal.engine.core.atomic import output_dir
 
 from .schedulers import Scheduler, current, using
+from .verdict import LEVEL, OUTCOMES
 
 
 @dataclass(frozen=True)
@@ -263,6 +264,9 @@ def reproduce(
                    "cpu_s": round(_cpu_seconds() - cpu, 3), **fields}
         summary["workers"] = workers
         summary["quick"] = quick
+        verdicts = [c.get("verdict") for c in summary.get("checks", [])]
+        # how the checks came out, each judged by the interval of its statistic at this level
+        summary["judged"] = {"checks": len(verdicts), **{v: verdicts.count(v) for v in OUTCOMES}, "level": LEVEL}
         if (used := scheduler or current()) is not None:
             summary["scheduler"] = used.describe()
         # what a rerun into out_dir may replace: the target's files, this summary and its README

@@ -298,17 +298,15 @@ def write_report(out_dir: Path, names: Iterable[str] | None = None, *, dest: Pat
     return dest
 
 
-def disagreements(a: Path, b: Path) -> dict[str, list[tuple[str, str, str, str]]]:
-    """Compare two reproductions of the same targets (e.g. ``--quick`` against a full run), check
-    by check: ``decided`` lists the checks that one holds and the other fails (target, check
-    as named in ``a``, verdict in a, verdict in b); ``undecided`` those decided in one and
-    undecided in the other; checks only one of them ran are left out."""
+def _paired(a: Path, b: Path) -> tuple[list[tuple[tuple[str, str], tuple[str, str]]], dict, dict]:
+    """The checks two reproductions share, as (key in a, key in b) with key = (target, check
+    name), and each side's verdicts. A name whose only difference is a count that follows the
+    run count ("runs 0-49", "82200 samples") is the same check: paired by the name with its
+    numbers blanked, where that is unique."""
     def verdicts(folder: Path) -> dict[tuple[str, str], str]:
         return {(o.name, c["name"]): verdict_of(c) for o in collect(folder) for c in o.checks}
 
-    def by_shape(v: dict[tuple[str, str], str], keys: set) -> dict[tuple[str, str], tuple[str, str]]:
-        """A name whose only difference is a count that follows the run count ("runs 0-49",
-        "82200 samples") is the same check: key by the name with its numbers blanked, where unique."""
+    def by_shape(keys: set) -> dict[tuple[str, str], tuple[str, str]]:
         shapes: dict[tuple[str, str], list[tuple[str, str]]] = {}
         for key in keys:
             shapes.setdefault((key[0], re.sub(r"\d+", "#", key[1])), []).append(key)
@@ -316,12 +314,73 @@ def disagreements(a: Path, b: Path) -> dict[str, list[tuple[str, str, str, str]]
 
     va, vb = verdicts(Path(a)), verdicts(Path(b))
     pairs = [(k, k) for k in set(va) & set(vb)]
-    sa, sb = by_shape(va, set(va) - set(vb)), by_shape(vb, set(vb) - set(va))
+    sa, sb = by_shape(set(va) - set(vb)), by_shape(set(vb) - set(va))
     pairs += [(sa[shape], sb[shape]) for shape in set(sa) & set(sb)]
+    return sorted(pairs), va, vb
+
+
+def disagreements(a: Path, b: Path) -> dict[str, list[tuple[str, str, str, str]]]:
+    """Compare two reproductions of the same targets (e.g. ``--quick`` against a full run), check
+    by check: ``decided`` lists the checks that one holds and the other fails (target, check
+    as named in ``a``, verdict in a, verdict in b); ``undecided`` those decided in one and
+    undecided in the other; checks only one of them ran are left out."""
+    pairs, va, vb = _paired(a, b)
     out: dict[str, list[tuple[str, str, str, str]]] = {"decided": [], "undecided": []}
-    for ka, kb in sorted(pairs):
+    for ka, kb in pairs:
         x, y = va[ka], vb[kb]
         if x != y:
             out["undecided" if UNDECIDED in (x, y) else "decided"].append((*ka, x, y))
     return out
 
+
+@dataclass(frozen=True)
+class Agreement:
+    """How two reproductions judge the checks they share (:func:`agreement`)."""
+
+    same: dict[str, int]  # verdict -> checks both judged so
+    decided_in_a_only: int  # undecided in b
+    decided_in_b_only: int  # undecided in a
+    opposite: list[tuple[str, str, str, str]]  # (target, check as named in a, verdict in a, in b)
+    only_in_a: int  # checks without a partner in b
+    only_in_b: int
+
+    @property
+    def shared(self) -> int:
+        return sum(self.same.values()) + self.decided_in_a_only + self.decided_in_b_only + len(self.opposite)
+
+    def text(self, a: str = "A", b: str = "B") -> str:
+        """A few lines for a terminal or a note."""
+        same = sum(self.same.values())
+        lines = [f"{self.shared} checks in both ({self.only_in_a} in {a} only, {self.only_in_b} in {b} only)",
+                 f"  same verdict: {same} (" + ", ".join(f"{n} {v}" for v, n in self.same.items()) + ")",
+                 f"  decided in {b}, undecided in {a}: {self.decided_in_b_only}",
+                 f"  decided in {a}, undecided in {b}: {self.decided_in_a_only}",
+                 f"  opposite verdicts: {len(self.opposite)}"]
+        lines += [f"    {t}: {name}: {x} in {a}, {y} in {b}" for t, name, x, y in self.opposite]
+        return "\n".join(lines)
+
+
+def agreement(a: Path, b: Path) -> Agreement:
+    """Count how two reproductions of the same targets (e.g. ``--quick`` against a full run)
+    judge each check they share: the same verdict, decided in one only, or opposite verdicts
+    (one holds what the other fails). A folder without any reproduced target is refused
+    (``FileNotFoundError``)."""
+    for folder in (a, b):
+        if not collect(Path(folder)):
+            raise FileNotFoundError(f"{folder} holds no reproduced target (no <target>/summary.json)")
+    pairs, va, vb = _paired(a, b)
+    same = {v: 0 for v in (HOLDS, FAILS, UNDECIDED)}
+    a_only = b_only = 0
+    opposite = []
+    for ka, kb in pairs:
+        x, y = va[ka], vb[kb]
+        if x == y:
+            same[x] += 1
+        elif y == UNDECIDED:
+            a_only += 1
+        elif x == UNDECIDED:
+            b_only += 1
+        else:
+            opposite.append((*ka, x, y))
+    paired_a, paired_b = {ka for ka, _ in pairs}, {kb for _, kb in pairs}
+    return Agreement(same, a_only, b_only, opposite, len(set(va) - paired_a), len(set(vb) - paired_b))

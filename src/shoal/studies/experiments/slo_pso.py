@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from shoal.engine.slo.neighbourhoods import Neighbourhood
+
 from . import slo_common as sc
 from . import verdict as vd
 from .output import check, checks_table, new_figure, num, save, write_csv
@@ -108,6 +110,7 @@ def run(out_dir: Path, runs: int, workers: int = 1, progress: bool = True, *,
             "'first generation below the threshold' beyond that reads inf" if short < FULL else
             f"Every case runs {FULL} generations"),
         "seed_rule": "run i of every case uses the streams of run i of the preset seed (same start positions)",
+        "swarm": _swarm(jobs[0]),
         "commands": sc.cases_section(list(cases.values()), gens),
         "table4_4": {"/".join(k): {"gen": sc.g3(v[0]), "fit": sc.g3(v[1]), "end": sc.g3(v[2])}
                  for k, v in stats.items()},
@@ -219,13 +222,22 @@ def _table_checks(stats: dict, ests: dict, functions: tuple[str, ...]) -> list[d
     return out
 
 
+def _swarm(job: sc.SLOJob) -> dict[str, Any]:
+    """What every case's swarm shares (the cases differ in objective, selection and errors)."""
+    cfg = sc.slo_swarm(job, 0, 1).config
+    return {"particles": cfg.particles, "neighbourhood": cfg.neighbourhood,
+            "neighbourhood_param": Neighbourhood(cfg.neighbourhood, cfg.neighbourhood_param).value,
+            "c3": cfg.c3, "c4": cfg.c4}
+
+
 def _readme(summary: dict[str, Any]) -> str:
+    sw = summary["swarm"]
     return f"""# Table 4.4 and Figs. 4.11-4.13 reproduction: SLO with PSO motion
 
-20 particles, SPSO 2011 in each robot's own frame on SLO-estimated positions, knn 5, c3 = 1,
-c4 = 0, the start area of docs/readings.md ("Initial area of the PSO experiment"); seven DEAP
-benchmarks x {{Akcan, CSS, RTS}} x {{None, Low, High}} (Tab. 4.3). Every case is `shoal run slo-pso-sphere` with `--set` overrides (see
-`summary.json` -> `commands`).
+{sw['particles']} particles, SPSO 2011 in each robot's own frame on SLO-estimated positions,
+{sw['neighbourhood']} {sw['neighbourhood_param']:g}, c3 = {sw['c3']:g}, c4 = {sw['c4']:g}, the start area of docs/readings.md ("Initial area
+of the PSO experiment"); seven DEAP benchmarks x {{Akcan, CSS, RTS}} x {{None, Low, High}} (Tab. 4.3).
+Every case is `shoal run slo-pso-sphere` with `--set` overrides (see `summary.json` -> `commands`).
 
 ## Files
 

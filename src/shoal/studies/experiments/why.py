@@ -9,7 +9,11 @@ to docs/readings.md.
 
 from __future__ import annotations
 
+import math
+import re
 from typing import Any, Callable
+
+import numpy as np
 
 from .verdict import FAILS, HOLDS, UNDECIDED
 
@@ -38,15 +42,20 @@ def _measured(c: dict[str, Any] | None) -> str:
     return "" if c is None else str(c["measured"])
 
 
-def _so(c: dict[str, Any], yes: str, no: str, runs: Any) -> str:
+def _so(c: dict[str, Any], yes: str, no: str) -> str:
     """``yes`` if the check holds, ``no`` if it fails, and for an undecided one the point
-    estimate's side, said as unsettled."""
+    estimate's side (:func:`_shown` then says that it is not settled)."""
     v = verdict(c)
     if v == HOLDS:
         return yes
     if v == FAILS:
         return no
-    return f"{yes if c.get('pass') else no} (not settled at {runs} runs)"
+    return yes if c.get("pass") else no
+
+
+def _shown(c: dict[str, Any], runs: Any) -> str:
+    """`` (measured)``, and for an undecided check ``(measured; not settled at N runs)``."""
+    return f" ({c['measured']}{'' if verdict(c) != UNDECIDED else f'; not settled at {runs} runs'})"
 
 
 def _undecided(s: Summary) -> str:
@@ -54,7 +63,7 @@ def _undecided(s: Summary) -> str:
     if not open_:
         return ""
     return (f" {'One check is' if open_ == 1 else 'Several checks are'} undecided at {s.get('runs')} runs: the "
-            "confidence interval of the statistic straddles the threshold, so more runs would be needed to settle "
+            "confidence interval of the statistic straddles the threshold, so these runs do not settle "
             f"{'it' if open_ == 1 else 'them'}.")
 
 
@@ -84,12 +93,11 @@ def fig4_6(s: Summary) -> str:
     if kin and phy:
         parts.append("Over every run, as information, Adapted RPSO + DVC "
                      + ("is collision-free" if kin["holds"] and phy["holds"] else "is not collision-free")
-                     + f": {kin['measured']} with kinematic motion, {phy['measured']} with physics.")
+                     + f": with kinematic motion {kin['measured']}; with physics {phy['measured']}.")
     low = check(s, "[kinematic] adapted-c3-high has the lowest")
     if low and verdict(low) != HOLDS:
         parts.append("With kinematic motion Adapted RPSO with large c3 "
-                     + _so(low, "is the lowest case", "is not the lowest case", s.get("runs"))
-                     + f" ({low['measured']}).")
+                     + _so(low, "is the lowest case", "is not the lowest case") + _shown(low, s.get("runs")) + ".")
     return " ".join(parts) + _undecided(s)
 
 
@@ -104,13 +112,11 @@ def fig5_4(s: Summary) -> str:
         parts[0] += f" (Algorithm 2 as written: {bare['measured']})"
     parts[0] += "."
     if guard and every:
-        parts.append("With the guard a typical run "
-                     + _so(guard, "is collision-free", "is not collision-free", s.get("runs"))
-                     + f" ({guard['measured']}); over every run {every['measured']}.")
+        parts.append("With the guard a typical run " + _so(guard, "is collision-free", "is not collision-free")
+                     + _shown(guard, s.get("runs")) + f"; over every run {every['measured']}.")
     if speed:
-        parts.append("The robots "
-                     + _so(speed, "roam as the thesis describes", "do not roam as the thesis describes",
-                           s.get("runs")) + f": {speed['measured']} against our threshold.")
+        parts.append("The robots " + _so(speed, "roam as the thesis describes", "do not roam as the thesis describes")
+                     + _shown(speed, s.get("runs")) + ".")
     return " ".join(parts) + _undecided(s)
 
 
@@ -120,14 +126,12 @@ def fig5_5(s: Summary) -> str:
     bare = check(s, "nonomni-dvc-noguard (guard off, Algorithm 2 as written) ends ahead")
     parts = []
     if mid and end:
-        parts.append("With our guard the non-omnidirectional swarm "
-                     + _so(mid, "is ahead of", "is not ahead of", s.get("runs"))
-                     + f" the omnidirectional one at mid-run ({mid['measured']}) and "
-                     + _so(end, "ahead", "not ahead", s.get("runs")) + f" at the end ({end['measured']}).")
+        parts.append("With our guard the non-omnidirectional swarm " + _so(mid, "is ahead of", "is not ahead of")
+                     + " the omnidirectional one at mid-run" + _shown(mid, s.get("runs")) + " and "
+                     + _so(end, "ahead", "not ahead") + " at the end" + _shown(end, s.get("runs")) + ".")
     if bare:
-        parts.append("As written (no guard) it "
-                     + _so(bare, "still ends ahead", "falls behind", s.get("runs"))
-                     + f" ({bare['measured']}).")
+        parts.append("As written (no guard) it " + _so(bare, "still ends ahead", "falls behind")
+                     + _shown(bare, s.get("runs")) + ".")
     return " ".join(parts) + _undecided(s)
 
 
@@ -138,8 +142,8 @@ def fig7_2(s: Summary) -> str:
              f"of ĉ into c1 and c2 in Chapter 7\"); the split runs both ways here ({ev})."]
     x = check(s, "X-PSO faster than A-PSO at 10 dB")
     if x and verdict(x) != HOLDS:
-        parts.append("X-PSO " + _so(x, "is faster than", "is not faster than", s.get("runs"))
-                     + f" A-PSO ({x['measured']}): with the fitted receiver ρ is read at the whole-sample lag, which "
+        parts.append("X-PSO " + _so(x, "is faster than", "is not faster than") + " A-PSO"
+                     + _shown(x, s.get("runs")) + ": with the fitted receiver ρ is read at the whole-sample lag, which "
                      "loses part of the peak depending on each robot's bearing, an error A-PSO's intensity does not "
                      "have (docs/readings.md, \"Why X-PSO is not faster than A-PSO (Chapter 7)\").")
     for alg in ("B-PSO", "XB-PSO"):
@@ -154,21 +158,21 @@ def fig7_3(s: Summary) -> str:
     straight, spread = check(s, "B-PSO and XB-PSO run straighter"), check(s, "A-PSO and X-PSO spread more")
     reach = check(s, "places passed by more than half")
     parts = ["The routes come from the fig7-2 runs, whose sources lie on random bearings; each route is turned so "
-             "that its source lies on +x (docs/readings.md, \"Figure 7-3: frame, cells and 'more than half of the "
-             "swarms'\")."]
+             "that its source lies on +x "
+             """(docs/readings.md, 'Figure 7-3: frame, cells and "more than half of the swarms"')."""]
     if straight:
-        parts.append("B-PSO and XB-PSO " + _so(straight, "run straighter", "do not run straighter", s.get("runs"))
-                     + f" than A-PSO and X-PSO ({straight['measured']}).")
+        parts.append("B-PSO and XB-PSO " + _so(straight, "run straighter", "do not run straighter")
+                     + " than A-PSO and X-PSO" + _shown(straight, s.get("runs")) + ".")
     if spread and verdict(spread) != HOLDS:
-        parts.append("A-PSO and X-PSO " + _so(spread, "spread more", "do not spread more", s.get("runs"))
-                     + f" ({spread['measured']}): the per-component sgn law [3.12] moves a robot diagonally and then "
-                     "along one axis, so with random bearings the B/XB-PSO routes dog-leg on either side of the "
-                     "source line, while A/X-PSO creep along it.")
+        parts.append("A-PSO and X-PSO " + _so(spread, "spread more", "do not spread more")
+                     + _shown(spread, s.get("runs"))
+                     + ": the per-component sgn law [3.12] moves a robot diagonally and then along one axis, so "
+                     "with random bearings the B/XB-PSO routes dog-leg on either side of the source line, while "
+                     "A/X-PSO creep along it.")
     if reach and verdict(reach) != HOLDS:
-        parts.append("The cells passed by more than half of the swarms "
-                     + _so(reach, "reproduce", "do not reproduce", s.get("runs"))
-                     + f" the thesis' picture ({reach['measured']}); it would need a source on a fixed bearing, "
-                     "which the thesis does not state.")
+        parts.append("The cells passed by more than half of the swarms " + _so(reach, "reproduce", "do not reproduce")
+                     + " the thesis' picture" + _shown(reach, s.get("runs"))
+                     + "; it would need a source on a fixed bearing, which the thesis does not state.")
     return " ".join(parts) + _undecided(s)
 
 
@@ -196,17 +200,31 @@ def fig7_5(s: Summary) -> str:
     for alg in ("A-PSO", "X-PSO"):
         c = check(s, f"{alg}: time ∝ 1/U at Q")
         if c and verdict(c) == FAILS:
-            parts.append(f"{alg}'s time does not fall as 1/U ({c['measured']}).")
+            parts.append(f"{alg}'s time {_against_inverse_u(c)}.")
     x = check(s, "X-PSO faster than A-PSO wherever both converge")
     if x and verdict(x) != HOLDS:
-        parts.append("X-PSO " + _so(x, "is faster than", "is not faster than", s.get("runs"))
-                     + f" A-PSO at every U ({x['measured']}), for the reason of fig7-2 (docs/readings.md, \"Why X-PSO "
+        parts.append("X-PSO " + _so(x, "is faster than A-PSO at every U", "is not faster than A-PSO at every U")
+                     + _shown(x, s.get("runs")) + ", for the reason of fig7-2 (docs/readings.md, \"Why X-PSO "
                      "is not faster than A-PSO (Chapter 7)\").")
     b = check(s, "B-PSO never converges at large U")
     if b and verdict(b) == FAILS:
         parts.append(f"B-PSO at high Q converges at every U ({b['measured']}), against the thesis' 'unable to "
                      "converge however much U increases'.")
     return " ".join(parts) + _undecided(s)
+
+
+def _against_inverse_u(c: dict[str, Any]) -> str:
+    """How a failed "time ∝ 1/U" check missed: its measured ratio ("a / b = r") against the
+    ratio of the speeds its name gives ("within ×1.5 of 6")."""
+    expected = re.search(r"of ([0-9.]+);", c["name"])
+    try:
+        ratio = float(str(c["measured"]).rsplit("=", 1)[1])
+    except (IndexError, ValueError):
+        ratio = math.nan
+    if expected is None or math.isnan(ratio):
+        return f"does not fall as 1/U ({c['measured']})"
+    return (f"falls {'faster' if ratio > float(expected.group(1)) else 'more slowly'} than 1/U: "
+            f"{c['measured']}, where 1/U gives {expected.group(1)}")
 
 
 def fig8_2(s: Summary) -> str:
@@ -247,12 +265,12 @@ def slo_neighbourhood(s: Summary) -> str:
     early = [c for c in s.get("checks", []) if c["name"].startswith("random, CSS: in generations 1-5")]
     if early and not any(c.get("pass") for c in early):
         settled = all(verdict(c) == FAILS for c in early)
-        parts.append("No reading gives p = 0.3 and 0.5 the early lead of Fig. 4.8a"
-                     + ("" if settled else f" (not settled at {s.get('runs')} runs for every reading)")
-                     + f" (default: {early[0]['measured']}): the random start of every estimate dominates the first "
-                     "generations.")
+        parts.append("No reading gives p = 0.3 and 0.5 the early lead of Fig. 4.8a (default: "
+                     + early[0]["measured"]
+                     + ("" if settled else f"; not settled at {s.get('runs')} runs for every reading")
+                     + "): the random start of every estimate dominates the first generations.")
     elif early:
-        shown = [f"{c['name'].split('(')[-1].rstrip(')')} ({verdict(c)})" for c in early if c.get("pass")]
+        shown = [f"{_reading(c)} ({verdict(c)})" for c in early if c.get("pass")]
         parts.append("The early lead of p = 0.3 and 0.5 in Fig. 4.8a shows under: " + "; ".join(shown) + ".")
     entry = [c for c in s.get("checks", []) if "just entered" in c["name"]]
     if entry:
@@ -260,9 +278,25 @@ def slo_neighbourhood(s: Summary) -> str:
             f"{c['name'].split(',')[0]}: {c['measured']} ({verdict(c)})" for c in entry) + ".")
     rts = check(s, "random, RTS: hardly affected by p")
     if rts and verdict(rts) != HOLDS:
-        parts.append("RTS " + _so(rts, "is hardly affected by p", "is affected by p: its error falls as p rises",
-                                   s.get("runs")) + f" ({rts['measured']}).")
+        parts.append("RTS " + _so(rts, "is hardly affected by p", f"is affected by p: {_trend_in_p(rts)}")
+                     + _shown(rts, s.get("runs")) + ".")
     return " ".join(parts) + _undecided(s)
+
+
+def _reading(c: dict[str, Any]) -> str:
+    """The entry reading a Fig. 4.8a check names, in its last parentheses."""
+    return c["name"].split("than p = 0.9 (", 1)[-1].removesuffix(")")
+
+
+def _trend_in_p(c: dict[str, Any]) -> str:
+    """How the values of a check measured per p ("p=0.3: 21.5, p=0.5: 16.3, ...") move as p rises."""
+    values = [float(v) for v in re.findall(r"p=[0-9.]+: ([0-9.e+-]+)", str(c["measured"]))]
+    steps = np.diff(values) if len(values) > 1 else np.array([])
+    if steps.size and (steps < 0).all():
+        return "its error falls as p rises"
+    if steps.size and (steps > 0).all():
+        return "its error grows as p rises"
+    return "its error changes with p"
 
 
 def slo_weight(s: Summary) -> str:
