@@ -72,7 +72,7 @@ def test_the_preset_dropdown_switches_to_the_obstacle_course(server, page, cid):
     # ...and the picture has an obstacle where each one is
     dismiss_toasts(page)
     centres = np.round(to_pixel(server, cid, page, circles[:, :2])).astype(int)
-    for _attempt in range(5):  # a loaded machine may need a few seconds for the first frames
+    for _attempt in range(30):  # a loaded machine (software WebGL) may need many seconds for the first frames
         time.sleep(1.0)
         img = screenshot(page)
         dark = 0
