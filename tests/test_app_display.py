@@ -5,9 +5,11 @@ camera is put straight above what it looks at."""
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
+from viser import GuiEvent
 
 from shoal.app.panel.view_row import BOXES, DISPLAY_BUTTON, LIGHT_NOTE, TEXT_SCALE
 from shoal.app.view.camera import straighten, tipped
@@ -87,3 +89,21 @@ def test_the_display_outlives_a_swap_to_another_kind_of_scene(tab):
     assert tab.session.kind.name == "fleet" and tab.arena.canvas.light and LIGHT_NOTE in tab.panels.status.content
     assert _box(tab, "light").value and _box(tab, "orbit").value and not _box(tab, "large_text").value
     assert tab.arena.canvas.shown("trails_dots") and not tab.arena.canvas.shown("obstacle_edges")
+
+
+def test_a_tick_that_arrives_while_another_display_change_is_drawn_is_not_lost(tab):
+    """The page ticks the light drawing (viser stores the value and queues the callback) while another
+    Display change is drawn and the boxes are synced; the sync leaves the waiting tick alone and its
+    callback then turns the light drawing on (a loaded machine's first page lost it before)."""
+    light = _box(tab, "light")
+    light._impl.value = True  # what viser does as a user's value arrives, before its callback runs
+    light._impl.update_timestamp = time.time()
+    _box(tab, "large_text").value = True  # another change, drawn and synced meanwhile
+    assert light.value and not tab.display.light
+    for cb in light._impl.update_cb:
+        cb(GuiEvent(client=None, client_id=None, target=light))
+    assert tab.display.light and light.value
+    tab.tick(1.0)
+    assert tab.arena.canvas.light and LIGHT_NOTE in tab.panels.status.content
+    _box(tab, "large_text").value = False  # once taken, the box follows the display again
+    assert light.value and tab.display.light

@@ -83,6 +83,7 @@ class ViewRow:
         if display is not None:
             for label, field, hint in BOXES:
                 box = panel.gui.add_checkbox(label, bool(getattr(display, field)), hint=hint, visible=False)
+                panel.watch(box)
                 box.on_update(self._changed(field, box))
                 self.boxes[field] = box
         self.legend = panel.gui.add_markdown("")
@@ -110,7 +111,10 @@ class ViewRow:
     def _changed(self, field: str, box: Any) -> Any:
         def changed(event: Any) -> None:
             display, act = self.panel.services.display, self.panel.services.view
-            if self.panel.syncing or display is None or getattr(display, field) == bool(box.value):
+            if self.panel.syncing:
+                return
+            self.panel.taken(box)
+            if display is None or getattr(display, field) == bool(box.value):
                 return
             setattr(display, field, bool(box.value))
             if act is not None:
@@ -118,11 +122,10 @@ class ViewRow:
         return changed
 
     def sync(self, display: Display) -> None:
-        """Show ``display`` in the boxes (a change made elsewhere)."""
-        with self.panel.quietly():
-            for field, box in self.boxes.items():
-                if box.value != bool(getattr(display, field)):
-                    box.value = bool(getattr(display, field))
+        """Show ``display`` in the boxes (a change made elsewhere), except on a box whose user's
+        tick has arrived and waits for its callback (the page's own tick of the light drawing, say)."""
+        for field, box in self.boxes.items():
+            self.panel.set_quietly(box, bool(getattr(display, field)))
 
     def show_legend(self, entries: Sequence[Glyph]) -> None:
         """Show ``entries`` (sent only when they changed)."""
