@@ -130,7 +130,7 @@ def open_folder(page, title: str, probe: str) -> None:
     inside = page.get_by_text(probe, exact=True).or_(page.get_by_role("button", name=probe, exact=True)).first
     if not (inside.count() and inside.is_visible()):
         page.get_by_text(title, exact=True).first.click()
-        inside.wait_for(state="visible", timeout=10000)
+        inside.wait_for(state="visible", timeout=30000)
 
 
 @contextmanager

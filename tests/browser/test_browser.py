@@ -96,7 +96,7 @@ def test_typing_omega_in_the_browser_changes_the_engine(server, page, client_id)
     # An Adapted law refuses ω ≥ 1: red toast, engine and box keep 0.77.
     box.fill("1.1")
     box.press("Enter")
-    page.wait_for_selector(".mantine-Notification-root:has-text('Refused')", timeout=10000)
+    page.wait_for_selector(".mantine-Notification-root:has-text('Refused')", timeout=30000)
     assert session.sim.policy.omega == pytest.approx(0.77)
     wait_until(lambda: box.input_value() == "0.77", what="the box to show 0.77 again")
     dismiss_toasts(page)
@@ -174,7 +174,7 @@ def test_bad_upload_shows_the_field_and_keeps_the_scene(server, page, client_id)
     dismiss_toasts(page)  # the page shows only a few toasts at once
     upload_input(page, "Upload preset").set_input_files(
         {"name": "bad.toml", "mimeType": "application/toml", "buffer": b"[controller]\nomega = 7\n"})
-    page.wait_for_selector(".mantine-Notification-root:has-text('controller.omega')", timeout=10000)
+    page.wait_for_selector(".mantine-Notification-root:has-text('controller.omega')", timeout=30000)
     assert session.sim is sim and session.sim.state.k == k
     for _ in range(10):  # the page's own "File uploaded successfully." would show just before the verdict
         toasts = page.locator(".mantine-Notification-root").all_inner_texts()

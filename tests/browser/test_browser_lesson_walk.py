@@ -126,7 +126,7 @@ def test_every_step_of_the_lesson_sets_up_plays_and_reads_what_it_says(server, p
         else:
             assert "Read on screen" not in _text(page), where
         page.get_by_role("button", name="Show answer").click()
-        page.get_by_role("button", name="Hide answer").wait_for(state="visible", timeout=10000)
+        page.get_by_role("button", name="Hide answer").wait_for(state="visible", timeout=30000)
         assert page.get_by_text("Answer:", exact=False).first.is_visible(), where
         assert console == [], f"{where}: {console}"
         dismiss_toasts(page)

@@ -62,7 +62,7 @@ def test_switching_to_sonar_draws_rays_and_the_correlation_follows_the_robot(ser
     wait_until(lambda: _plot_matches(tab, 6), what="robot 6's R(τ) plotted")
     assert not np.allclose(np.asarray(tab.panels.handles["corr"].data[1]), before)
     page.get_by_role("tab", name="Plots").click()
-    page.get_by_text("selected robot: R(τ)", exact=False).first.wait_for(timeout=10000)
+    page.get_by_text("selected robot: R(τ)", exact=False).first.wait_for(timeout=30000)
     axes = tab.panels.handles["corr"].axes  # (uPlot draws the axes' labels on its canvas)
     assert axes[0]["label"] == "τ [ms]" and axes[1]["label"] == "R(τ)"
 

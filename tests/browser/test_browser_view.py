@@ -60,7 +60,7 @@ def tick_box(page, label: str) -> None:
     box = page.locator("label").filter(has_text=label).first
     if not box.is_visible():
         page.get_by_role("button", name="Display", exact=True).click()
-        box.wait_for(state="visible", timeout=10000)
+        box.wait_for(state="visible", timeout=30000)
     root_for(page, label).click()
 
 
@@ -97,11 +97,10 @@ def test_a_drag_on_the_arena_pans_and_never_tips_the_top_view(server, page, cid,
     before = tuple(float(v) for v in camera.look_at)
     reports = Reports(camera)
     drag(page, 180, 90)
-    page.wait_for_timeout(1000)
-    assert reports.seen, "no camera report during the drag"
+    # (scene units: the arena is ±10; a loaded machine's page may report the camera seconds late)
+    wait_until(lambda: reports.seen and math.dist(before[:2], reports.seen[-1][1][:2]) > 0.5, timeout=30,
+               what="the drag to pan the view")
     assert max(t for t, _ in reports.seen) < 1.0, "the drag tipped the view"
-    after = reports.seen[-1][1]
-    assert math.dist(before[:2], after[:2]) > 0.5, "the drag did not pan"  # (scene units: the arena is ±10)
     page.locator("body").press("ArrowLeft")  # viser orbits on the arrow keys (→ also steps the run)
     page.keyboard.down("ArrowUp")
     page.wait_for_timeout(400)
@@ -117,7 +116,7 @@ def test_the_3d_view_orbits_on_request_and_the_top_view_holds_again_after(server
     wait_until(lambda: tab.display.orbit, what="the 3-D view")
     page.wait_for_timeout(800)
     drag(page, 200, 120)
-    wait_until(lambda: tilt(camera) > 5.0, timeout=10, what="the drag to orbit the camera")
+    wait_until(lambda: tilt(camera) > 5.0, timeout=30, what="the drag to orbit the camera")
     tick_box(page, "3-D view")
     wait_until(lambda: not tab.display.orbit and tilt(camera) < 0.5, what="the top view again")
     page.wait_for_timeout(800)
