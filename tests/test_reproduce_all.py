@@ -137,7 +137,7 @@ def test_the_report_gives_each_targets_wall_and_cpu_time_and_their_totals() -> N
 
 
 def test_two_reproductions_are_compared_check_by_check(tmp_path: Path) -> None:
-    from shoal.studies.experiments.report import disagreements
+    from shoal.studies.experiments.report import agreement
 
     def write(folder: Path, verdicts: list[str]) -> None:
         (folder / "fig4-6").mkdir(parents=True)
@@ -154,9 +154,9 @@ def test_two_reproductions_are_compared_check_by_check(tmp_path: Path) -> None:
     quick = json.loads((tmp_path / "quick" / "fig4-6" / "summary.json").read_text())
     quick["checks"][3]["name"] = "c3 (runs 0-3)"  # the same check at another run count
     (tmp_path / "quick" / "fig4-6" / "summary.json").write_text(json.dumps(quick))
-    got = disagreements(tmp_path / "quick", tmp_path / "full")
-    assert got["decided"] == [("fig4-6", "c2", "fails", "holds"), ("fig4-6", "c3 (runs 0-3)", "holds", "fails")]
-    assert got["undecided"] == [("fig4-6", "c1", "undecided", "fails")]
+    got = agreement(tmp_path / "quick", tmp_path / "full")
+    assert got.opposite == [("fig4-6", "c2", "fails", "holds"), ("fig4-6", "c3 (runs 0-3)", "holds", "fails")]
+    assert got.one_sided == [("fig4-6", "c1", "undecided", "fails")]
 
 
 

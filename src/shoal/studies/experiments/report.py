@@ -319,34 +319,28 @@ def _paired(a: Path, b: Path) -> tuple[list[tuple[tuple[str, str], tuple[str, st
     return sorted(pairs), va, vb
 
 
-def disagreements(a: Path, b: Path) -> dict[str, list[tuple[str, str, str, str]]]:
-    """Compare two reproductions of the same targets (e.g. ``--quick`` against a full run), check
-    by check: ``decided`` lists the checks that one holds and the other fails (target, check
-    as named in ``a``, verdict in a, verdict in b); ``undecided`` those decided in one and
-    undecided in the other; checks only one of them ran are left out."""
-    pairs, va, vb = _paired(a, b)
-    out: dict[str, list[tuple[str, str, str, str]]] = {"decided": [], "undecided": []}
-    for ka, kb in pairs:
-        x, y = va[ka], vb[kb]
-        if x != y:
-            out["undecided" if UNDECIDED in (x, y) else "decided"].append((*ka, x, y))
-    return out
-
-
 @dataclass(frozen=True)
 class Agreement:
-    """How two reproductions judge the checks they share (:func:`agreement`)."""
+    """How two reproductions judge the checks they share (:func:`agreement`). Each differing
+    check is listed as (target, check as named in a, verdict in a, verdict in b)."""
 
     same: dict[str, int]  # verdict -> checks both judged so
-    decided_in_a_only: int  # undecided in b
-    decided_in_b_only: int  # undecided in a
-    opposite: list[tuple[str, str, str, str]]  # (target, check as named in a, verdict in a, in b)
+    one_sided: list[tuple[str, str, str, str]]  # decided in one, undecided in the other
+    opposite: list[tuple[str, str, str, str]]  # one holds what the other fails
     only_in_a: int  # checks without a partner in b
     only_in_b: int
 
     @property
+    def decided_in_a_only(self) -> int:
+        return sum(y == UNDECIDED for *_, y in self.one_sided)
+
+    @property
+    def decided_in_b_only(self) -> int:
+        return sum(x == UNDECIDED for *_, x, _ in self.one_sided)
+
+    @property
     def shared(self) -> int:
-        return sum(self.same.values()) + self.decided_in_a_only + self.decided_in_b_only + len(self.opposite)
+        return sum(self.same.values()) + len(self.one_sided) + len(self.opposite)
 
     def text(self, a: str = "A", b: str = "B") -> str:
         """A few lines for a terminal or a note."""
@@ -361,26 +355,21 @@ class Agreement:
 
 
 def agreement(a: Path, b: Path) -> Agreement:
-    """Count how two reproductions of the same targets (e.g. ``--quick`` against a full run)
-    judge each check they share: the same verdict, decided in one only, or opposite verdicts
-    (one holds what the other fails). A folder without any reproduced target is refused
-    (``FileNotFoundError``)."""
+    """Compare two reproductions of the same targets (e.g. ``--quick`` against a full run) check
+    by check: the same verdict, decided in one only, or opposite verdicts. A folder without any
+    reproduced target is refused (``FileNotFoundError``)."""
     for folder in (a, b):
         if not collect(Path(folder)):
             raise FileNotFoundError(f"{folder} holds no reproduced target (no <target>/summary.json)")
     pairs, va, vb = _paired(a, b)
     same = {v: 0 for v in (HOLDS, FAILS, UNDECIDED)}
-    a_only = b_only = 0
-    opposite = []
+    one_sided: list[tuple[str, str, str, str]] = []
+    opposite: list[tuple[str, str, str, str]] = []
     for ka, kb in pairs:
         x, y = va[ka], vb[kb]
         if x == y:
             same[x] += 1
-        elif y == UNDECIDED:
-            a_only += 1
-        elif x == UNDECIDED:
-            b_only += 1
         else:
-            opposite.append((*ka, x, y))
+            (one_sided if UNDECIDED in (x, y) else opposite).append((*ka, x, y))
     paired_a, paired_b = {ka for ka, _ in pairs}, {kb for _, kb in pairs}
-    return Agreement(same, a_only, b_only, opposite, len(set(va) - paired_a), len(set(vb) - paired_b))
+    return Agreement(same, one_sided, opposite, len(set(va) - paired_a), len(set(vb) - paired_b))
