@@ -198,30 +198,13 @@ class Panel:
                                    hint="random seed; changing it restarts the run")
         self.top += [self.at_end, self.seed]
 
-        for h in (self.preset, self.seed, self.at_end):
-            self.watch(h)
-
-        @self.preset.on_update
-        def _(event: Any) -> None:
-            if not self.syncing:
-                self.taken(self.preset)
-                self.load_preset(self.preset.value)
+        self.on_user_change(self.preset, lambda: self.load_preset(self.preset.value))
+        self.on_user_change(self.seed, self._seed_changed)
+        self.on_user_change(self.at_end, lambda: self.choose_at_end(self.at_end.value))
 
         @self.playback.on_click
         def _(event: Any) -> None:
             self.press(event.target.value)
-
-        @self.seed.on_update
-        def _(event: Any) -> None:
-            if not self.syncing:
-                self.taken(self.seed)
-                self._seed_changed()
-
-        @self.at_end.on_update
-        def _(event: Any) -> None:
-            if not self.syncing:
-                self.taken(self.at_end)
-                self.choose_at_end(self.at_end.value)
 
     def _at_end_options(self) -> tuple[str, ...]:
         steps = self.session.scenario.sim.steps
@@ -364,13 +347,7 @@ class Panel:
             def _(event: Any) -> None:
                 item.act(self)
         elif isinstance(item, (Slider, Dropdown, Checkbox, Number)):
-            self.watch(h)
-
-            @h.on_update
-            def _(event: Any) -> None:
-                if not self.syncing:
-                    self.taken(h)
-                    self._changed(item, _coerce(item, h.value))
+            self.on_user_change(h, lambda: self._changed(item, _coerce(item, h.value)))
 
     # ------------------------------------------------------------------ values
     def _read(self, item: Any) -> Any:
@@ -423,14 +400,20 @@ class Panel:
                 handle.value = value
         self.taken(handle)
 
-    def watch(self, handle: Any) -> None:
-        """Keep ``handle``'s user changes from being overwritten before their callback takes them
-        (:meth:`pending`); its callback calls :meth:`taken` first."""
+    def on_user_change(self, handle: Any, act: Callable[[], object]) -> None:
+        """Call ``act`` when a user changes ``handle`` (not when the app sets it, :meth:`quietly`).
+        Until then a sync leaves the user's value on it (:meth:`pending`)."""
         self._taken[id(handle)] = handle.update_timestamp
 
+        @handle.on_update
+        def _(event: Any) -> None:
+            if not self.syncing:
+                self.taken(handle)
+                act()
+
     def taken(self, handle: Any) -> None:
-        """Note that a watched ``handle``'s value as it stands now is handled (a user's change taken,
-        or the app's own)."""
+        """Note that the value of an :meth:`on_user_change` ``handle`` as it stands now is handled
+        (a user's change taken, or the app's own)."""
         if id(handle) in self._taken:
             self._taken[id(handle)] = handle.update_timestamp
 

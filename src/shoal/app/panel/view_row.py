@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import html
 from dataclasses import dataclass
-from typing import Any, Protocol, Sequence
+from typing import Any, Callable, Protocol, Sequence
 
 from .spec import Host
 
@@ -83,8 +83,7 @@ class ViewRow:
         if display is not None:
             for label, field, hint in BOXES:
                 box = panel.gui.add_checkbox(label, bool(getattr(display, field)), hint=hint, visible=False)
-                panel.watch(box)
-                box.on_update(self._changed(field, box))
+                panel.on_user_change(box, self._changed(field, box))
                 self.boxes[field] = box
         self.legend = panel.gui.add_markdown("")
         self._entries: tuple[Glyph, ...] = ()
@@ -108,12 +107,9 @@ class ViewRow:
         for box in self.boxes.values():
             box.visible = shown
 
-    def _changed(self, field: str, box: Any) -> Any:
-        def changed(event: Any) -> None:
+    def _changed(self, field: str, box: Any) -> Callable[[], None]:
+        def changed() -> None:
             display, act = self.panel.services.display, self.panel.services.view
-            if self.panel.syncing:
-                return
-            self.panel.taken(box)
             if display is None or getattr(display, field) == bool(box.value):
                 return
             setattr(display, field, bool(box.value))
