@@ -49,6 +49,9 @@ HOSTILE = [
     ("view", "Zoom to Mars", "not one of the choices"),
     ("compare with swarm B", "yes", "true or false"),
     ("Export CSV", 1, "true or false"),
+    ("light drawing", "yes", "true or false"),  # the Display boxes (hidden until the view row shows them)
+    ("large text", None, "true or false"),
+    ("3-D view", [True], "true or false"),
 ]
 
 
@@ -70,6 +73,7 @@ def test_a_bad_value_is_refused_by_name_and_the_control_shows_the_value_in_force
                                                                                   value, words):
     session = next(iter(server.sessions.values()))
     scenario, sim = session.scenario, session.sim
+    display = dict(vars(server.tabs[max(server.tabs)].display))  # how the arena is drawn (the Display boxes)
     uuid = client.uuid_of(label)
     shown = client.value_of(uuid)
     before = len(client.notifications())
@@ -79,6 +83,7 @@ def test_a_bad_value_is_refused_by_name_and_the_control_shows_the_value_in_force
     assert len(title) < 200 and len(body) < 400 and "Traceback" not in body
     wait_until(lambda: client.value_of(uuid) == shown, what=f"{label} to show {shown!r} again")
     assert session.scenario == scenario and session.sim is sim
+    assert vars(server.tabs[max(server.tabs)].display) == display
     assert next(iter(server.sessions.values())) is session
     err = capfd.readouterr().err
     assert "Task exception" not in err and "Traceback" not in err, err[-2000:]
