@@ -112,16 +112,55 @@ def canvas_box(page):
     return max(boxes, key=lambda b: b["width"] * b["height"])
 
 
-def to_pixel(server, cid, page, xy: np.ndarray) -> np.ndarray:
-    """World metres → page pixels (x right, y down) through the tab's camera and view."""
-    tab = server.tabs[cid]
+PAGE_CAMERA = """
+(() => {
+  const c = window.__shoalPage && window.__shoalPage.controls && window.__shoalPage.controls();
+  if (!c) return null;
+  const V = c.camera.position.constructor;
+  const p = c.getPosition(new V()), t = c.getTarget(new V());
+  return {position: [p.x, p.y, p.z], target: [t.x, t.y, t.z], fov: c.camera.fov};
+})()
+"""
+
+
+def page_camera(page) -> dict | None:
+    """The camera the page draws with, read from its camera controls (None where the page script
+    cannot reach them): ``look_at`` and ``position`` in viser's world (+z up), ``fov`` in radians."""
+    cam = page.evaluate(PAGE_CAMERA)
+    if cam is None:
+        return None
+    def world(v: list[float]) -> np.ndarray:  # three.js → viser's world of a +z-up scene
+        return np.array([-v[2], -v[0], v[1]])
+
+    return {"position": world(cam["position"]), "look_at": world(cam["target"]), "fov": math.radians(cam["fov"])}
+
+
+def server_camera(server, cid) -> dict:
+    """The camera the page last reported to the server."""
     camera = server.viser.get_clients()[cid].camera
+    return {"position": np.asarray(camera.position, float), "look_at": np.asarray(camera.look_at, float),
+            "fov": float(camera.fov)}
+
+
+def to_pixel(server, cid, page, xy: np.ndarray) -> np.ndarray:
+    """World metres → page pixels (x right, y down) through the camera the page draws with (the one
+    it last reported where the page script cannot reach it) and the tab's view. The camera looks
+    straight down."""
+    tab = server.tabs[cid]
+    camera = page_camera(page) or server_camera(server, cid)
     box = canvas_box(page)
-    half_view = float(camera.position[2]) * math.tan(camera.fov / 2)
-    px_per_unit = (box["height"] / 2) / half_view
-    s = tab.arena.to_scene(np.asarray(xy, dtype=float))
+    distance = float(camera["position"][2] - camera["look_at"][2])
+    px_per_unit = (box["height"] / 2) / (distance * math.tan(camera["fov"] / 2))
+    s = tab.arena.to_scene(np.asarray(xy, dtype=float))[..., :2] - camera["look_at"][:2]
     return np.stack([box["x"] + box["width"] / 2 + s[..., 0] * px_per_unit,
                      box["y"] + box["height"] / 2 - s[..., 1] * px_per_unit], axis=-1)
+
+
+def point_radius_px(server, cid, page, size: float) -> float:
+    """The radius on screen of a point marker ``size`` scene units across (viser: a point's pixel
+    size is ``size`` at the camera's scale)."""
+    metre = np.linalg.norm(to_pixel(server, cid, page, np.array([1.0, 0.0])) - to_pixel(server, cid, page, np.zeros(2)))
+    return float(metre) * size / server.tabs[cid].arena.scale
 
 
 def open_folder(page, title: str, probe: str) -> None:

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 import shutil
 import time
 
@@ -24,7 +23,6 @@ pytestmark = [
 sync_api = pytest.importorskip("playwright.sync_api")
 
 from shoal.app.kinds.swarm import ROBOT, ROBOT_SIZE  # noqa: E402
-from shoal.app.view.camera import VIEW_HALF  # noqa: E402
 
 from browser_helpers import (  # noqa: E402
     ARGS,
@@ -35,6 +33,8 @@ from browser_helpers import (  # noqa: E402
     dismiss_toasts,
     number_box,
     open_folder,
+    point_radius_px,
+    to_pixel,
     upload_input,
     wait_until,
 )
@@ -112,20 +112,13 @@ def test_the_picture_shows_the_robots_where_the_engine_has_them(server, page, cl
     dismiss_toasts(page)
     x = session.sim.state.x[0].copy()
     box = canvas_box(page)
-    client = server.viser.get_clients()[client_id]
     for attempt in range(6):  # a loaded machine may need a few seconds for the last frame
         time.sleep(1.5 if attempt == 0 else 1.0)
         png = page.screenshot(clip=box)
         img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
-        h, w, _ = img.shape
-
-        # Project with the tab's real camera: straight down, vertical field of view ``fov``.
-        z = float(client.camera.position[2])
-        half_view = z * math.tan(client.camera.fov / 2)  # view units from centre to top edge
-        px_per_unit = (h / 2) / half_view
-        scale = VIEW_HALF / session.scenario.arena.half_size
-        cols = w / 2 + x[:, 0] * scale * px_per_unit
-        rows = h / 2 - x[:, 1] * scale * px_per_unit
+        h = img.shape[0]
+        # Project with the camera the page draws with (straight down), into the clipped image.
+        cols, rows = (to_pixel(server, client_id, page, x) - (box["x"], box["y"])).T
 
         red = (np.abs(img[..., 0] - ROBOT[0]) < 45) & (img[..., 1] < 110) & (img[..., 2] < 110)
         hits = 0
@@ -143,7 +136,7 @@ def test_the_picture_shows_the_robots_where_the_engine_has_them(server, page, cl
     keep = ~((ys > h - 90) & (xs < 90))  # viser's orientation gizmo (red x axis) sits bottom left
     ys, xs = ys[keep], xs[keep]
     dist = np.sqrt((ys[:, None] - rows[None, :]) ** 2 + (xs[:, None] - cols[None, :]) ** 2).min(axis=1)
-    radius_px = ROBOT_SIZE * px_per_unit  # viser: point px size = point_size·height/(z·tan(fov/2))
+    radius_px = point_radius_px(server, client_id, page, ROBOT_SIZE)
     assert dist.max() <= radius_px + 4, f"robot colour {dist.max():.1f} px from any robot (radius {radius_px:.1f})"
 
 

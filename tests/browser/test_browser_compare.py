@@ -36,7 +36,10 @@ from browser_helpers import (  # noqa: E402
     dismiss_toasts,
     number_box,
     open_folder,
+    page_camera,
+    point_radius_px,
     root_for,
+    server_camera,
     to_pixel,
     upload_input,
     wait_until,
@@ -79,9 +82,8 @@ def screenshot(page) -> np.ndarray:
 
 
 def radius_px(server, cid, page) -> float:
-    """A robot's radius on screen (viser: point size in view units at the camera's scale)."""
-    return float(np.linalg.norm(to_pixel(server, cid, page, np.array([1.0, 0.0]))
-                                - to_pixel(server, cid, page, np.zeros(2)))) * ROBOT_SIZE / server.tabs[cid].arena.scale
+    """A robot's radius on screen."""
+    return point_radius_px(server, cid, page, ROBOT_SIZE)
 
 
 def seen(page, pixels: np.ndarray, colour_ok, attempts: int = 6) -> int:
@@ -108,7 +110,7 @@ def red(patch: np.ndarray) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------- compare
-def test_compare_runs_b_in_lock_step_and_draws_it_in_teal(server, page, cid):
+def test_compare_runs_b_in_lock_step_and_draws_it_in_teal(server, page, cid, tmp_path):
     session = server.tabs[cid].session
     page.get_by_role("button", name="Pause", exact=True).click()
     wait_until(lambda: not session.playing, what="pause")
@@ -141,7 +143,17 @@ def test_compare_runs_b_in_lock_step_and_draws_it_in_teal(server, page, cid):
     pixels = np.round(b[clear & inside]).astype(int)
     assert len(pixels) >= 3, "B should have moved apart from A"
     hits = seen(page, pixels, teal)
-    assert hits >= 0.8 * len(pixels), f"only {hits}/{len(pixels)} of B's robots seen in teal"
+    if hits < 0.8 * len(pixels):
+        shot = tmp_path / "compare.png"
+        shot.write_bytes(page.screenshot())
+        x0, y0 = int(box["x"]), int(box["y"])
+        arena = screenshot(page)[y0: y0 + int(box["height"]), x0: x0 + int(box["width"])]
+        found = np.argwhere(teal(arena))[:, ::-1] + (x0, y0)  # (x, y) of every teal pixel in the arena
+        where = (f"{len(found)} teal pixels in x {found[:, 0].min()}–{found[:, 0].max()}, y {found[:, 1].min()}–"
+                 f"{found[:, 1].max()}" if len(found) else "no teal in the arena")
+        raise AssertionError(f"only {hits}/{len(pixels)} of B's robots seen in teal, expected about "
+                             f"{pixels.mean(axis=0).round(1)}, {where}; page camera {page_camera(page)}, "
+                             f"reported {server_camera(server, cid)}; screenshot {shot}")
     # ...and its curve is in the speed plot
     page.get_by_role("tab", name="Plots").click()
     page.wait_for_selector("text=B: max |u|", timeout=20000)
