@@ -129,6 +129,7 @@ def page_camera(page) -> dict | None:
     cam = page.evaluate(PAGE_CAMERA)
     if cam is None:
         return None
+
     def world(v: list[float]) -> np.ndarray:  # three.js → viser's world of a +z-up scene
         return np.array([-v[2], -v[0], v[1]])
 
@@ -157,8 +158,8 @@ def to_pixel(server, cid, page, xy: np.ndarray) -> np.ndarray:
 
 
 def point_radius_px(server, cid, page, size: float) -> float:
-    """The radius on screen of a point marker ``size`` scene units across (viser: a point's pixel
-    size is ``size`` at the camera's scale)."""
+    """The radius in pixels the picture checks give a viser point of ``point_size`` = ``size``
+    scene units: ``size`` at the camera's scale."""
     metre = np.linalg.norm(to_pixel(server, cid, page, np.array([1.0, 0.0])) - to_pixel(server, cid, page, np.zeros(2)))
     return float(metre) * size / server.tabs[cid].arena.scale
 
