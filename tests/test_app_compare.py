@@ -66,6 +66,24 @@ def test_without_overrides_b_is_a_step_by_step(name):
         np.testing.assert_array_equal(pa[k], pb[k])
 
 
+def test_b_shows_only_once_a_has_restarted(monkeypatch):
+    """A reader that does not take the session's lock (a page poll, a test) never finds the new B
+    beside A's old step: B is published after A's restart, both at step 0."""
+    s = session("default")
+    s.step(5)
+    seen = []
+    reset = s.sim.reset
+
+    def watched_reset(seed):  # A's restart begins: what does a lock-free reader see now?
+        seen.append((s.twin is not None, int(s.sim.state.k)))
+        reset(seed)
+
+    monkeypatch.setattr(s.sim, "reset", watched_reset)
+    s.enable_compare({"controller.law": "adapted-tanh"})
+    assert seen == [(False, 5)]  # no B yet while A still stood at step 5
+    assert s.sim.state.k == s.twin.sim.state.k == 0
+
+
 def test_another_law_takes_b_elsewhere_from_the_same_start():
     s = session("default")
     choices = {"controller.law": "standard", "controller.mode": "raw", "controller.omega": 0.5,

@@ -400,8 +400,11 @@ class Session:
         with self.lock:
             if self.replaying is not None:
                 raise PresetError(["compare: a replay is shown; press Reset for a live run first"])
-            self.compare = Twin.of(self.scenario, overrides, lambda sc: Session(sc, self.kind))
-            self.restart(self.scenario.sim.seed)
+            twin = Twin.of(self.scenario, overrides, lambda sc: Session(sc, self.kind))
+            self.compare = None  # A restarts alone, then B joins it at step 0: a reader that does not
+            self.restart(self.scenario.sim.seed)  # take the lock never sees B beside an old A
+            twin.restart()
+            self.compare = twin
             self.revision += 1
 
     def disable_compare(self) -> None:
