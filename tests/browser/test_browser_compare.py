@@ -162,6 +162,8 @@ def test_compare_runs_b_in_lock_step_and_draws_it_in_teal(server, page, cid, tmp
 # ---------------------------------------------------------------------------- replay
 def test_a_replay_exported_here_plays_back_in_another_server(server, browser, page, cid):
     session = server.tabs[cid].session
+    page.get_by_role("button", name="Play", exact=True).click()  # a recording past the step scrubbed to below
+    wait_until(lambda: session.sim.state.k >= 20, what="20 steps")
     page.get_by_role("button", name="Pause", exact=True).click()
     wait_until(lambda: not session.playing, what="pause")
     open_folder(page, "Replay and files", "Export replay")
