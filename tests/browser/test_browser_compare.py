@@ -86,14 +86,15 @@ def radius_px(server, cid, page) -> float:
     return point_radius_px(server, cid, page, ROBOT_SIZE)
 
 
-def seen(page, pixels: np.ndarray, colour_ok, attempts: int = 6) -> int:
-    """How many of ``pixels`` show the colour (a 3×3 patch with one pixel that passes), retried
-    while a loaded machine is still drawing the last frame."""
+def seen(page, pixels: np.ndarray, colour_ok, attempts: int = 6, reach: int = 1) -> int:
+    """How many of ``pixels`` show the colour (one pixel that passes within ``reach`` pixels),
+    retried while a loaded machine is still drawing the last frame."""
     hits = 0
     for attempt in range(attempts):
         time.sleep(1.5 if attempt == 0 else 1.0)
         img = screenshot(page)
-        hits = sum(bool(colour_ok(img[y - 1: y + 2, x - 1: x + 2]).any()) for x, y in pixels)
+        hits = sum(bool(colour_ok(img[max(y - reach, 0): y + reach + 1, max(x - reach, 0): x + reach + 1]).any())
+                   for x, y in pixels)
         if hits >= 0.9 * len(pixels):
             break
     return hits
@@ -132,17 +133,18 @@ def test_compare_runs_b_in_lock_step_and_draws_it_in_teal(server, page, cid, tmp
     wait_until(lambda: tab.arena.drawn_revision == session.revision, what="the paused step drawn")
     assert session.twin.sim.state.k == session.sim.state.k
     dismiss_toasts(page)
-    # B's robots that lie clear of A's are teal on screen
-    a = to_pixel(server, cid, page, session.sim.state.x[0])
-    b = to_pixel(server, cid, page, session.twin.sim.state.x[0])
+    # B's robots that lie clear of A's are teal on screen, within a robot's diameter of where B is
+    xa, xb = session.sim.state.x[0], session.twin.sim.state.x[0]
+    body = ROBOT_SIZE / tab.arena.scale  # a robot's radius in metres
+    clear = np.sqrt(((xb[:, None] - xa[None]) ** 2).sum(-1)).min(axis=1) > 4 * body
+    inside = (np.abs(xb) < session.scenario.arena.half_size - 2 * body).all(axis=1)
+    b = to_pixel(server, cid, page, xb)
     box = canvas_box(page)
     r = radius_px(server, cid, page)
-    clear = np.sqrt(((b[:, None] - a[None]) ** 2).sum(-1)).min(axis=1) > 2 * r + 3
-    inside = (b[:, 0] > box["x"] + 5) & (b[:, 0] < box["x"] + box["width"] - 5) & (b[:, 1] > box["y"] + 5) & (
-        b[:, 1] < box["y"] + box["height"] - 5)
     pixels = np.round(b[clear & inside]).astype(int)
-    assert len(pixels) >= 3, "B should have moved apart from A"
-    hits = seen(page, pixels, teal)
+    assert len(pixels) >= 3, (f"B should have moved apart from A: A about {xa.mean(axis=0).round(2)} m, B about "
+                              f"{xb.mean(axis=0).round(2)} m")
+    hits = seen(page, pixels, teal, reach=int(np.ceil(2 * r)))
     if hits < 0.8 * len(pixels):
         shot = tmp_path / "compare.png"
         shot.write_bytes(page.screenshot())
