@@ -307,10 +307,10 @@ def test_trails_cover_the_last_trail_seconds_and_end_at_the_robots():
     s.step(100)  # 10 s at Δt = 0.1
     snap = s.snapshot(max_trails=5, max_trail_points=8)
     assert snap.trails.shape[0] == 5 and 2 <= snap.trails.shape[1] <= 8
-    np.testing.assert_array_equal(snap.trails[:, -1], s.sim.state.x[0, :5])
+    np.testing.assert_array_equal(snap.trails.points[:, -1], s.sim.state.x[0, :5])
     window = [f for f in s.frames if f.t >= s.clock() - 2.0 - 1e-9]
-    assert any(np.array_equal(snap.trails[:, 0], f.x[:5]) for f in window)  # starts inside the window
-    assert not np.array_equal(snap.trails[:, 0], s.frames[0].x[:5])  # not at the start of the run
+    assert any(np.array_equal(snap.trails.points[:, 0], f.x[:5]) for f in window)  # starts inside the window
+    assert not np.array_equal(snap.trails.points[:, 0], s.frames[0].x[:5])  # not at the start of the run
 
 
 def test_time_axis_stays_monotonic_when_dt_changes():

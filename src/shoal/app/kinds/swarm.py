@@ -130,11 +130,9 @@ class SwarmDriver(BaseDriver):
     def particle_history(self, robot: int, dim: int, n: int = 120) -> tuple[np.ndarray, np.ndarray]:
         """The last ``n`` (u_j, a_j) of one particle and dimension, oldest first."""
         with self.session.lock:
-            frames = list(self.session.history.frames)[-n:]
-        pts = [(f.u[robot, dim], f.a[robot, dim]) for f in frames
-               if f.a is not None and robot < f.u.shape[0] and dim < f.u.shape[1]]
-        arr = np.array(pts, dtype=float).reshape(-1, 2)
-        return arr[:, 0], arr[:, 1]
+            history = self.session.history
+            u, a = history.motion("u", robot, dim, n), history.motion("a", robot, dim, n)
+        return (u, a) if len(u) == len(a) else (np.zeros(0), np.zeros(0))
 
 
 # ---------------------------------------------------------------------------- view
