@@ -36,7 +36,7 @@ from .session.upload import MAX_UPLOAD_BYTES
 from .tab import TabApp
 from .upload_guard import guard_uploads
 from .view.camera import home_camera, top_view
-from .view.page import install_page
+from .view.page import install_page, run_script
 from .warmup import WARMUP
 
 TICK_HZ = 60.0
@@ -150,6 +150,7 @@ class ShoalServer:
                 send_file=lambda name, data: client.send_file_download(name, data, save_immediately=True),
                 atomic=client.atomic,
                 camera=client.camera,
+                script=lambda source: run_script(client.gui, source),
             )
         tab = TabApp(session, gui, scene, experiments=self.experiments, owner=key, **kwargs)
         tab.auto_tick = auto_tick

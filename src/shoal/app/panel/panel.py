@@ -37,6 +37,7 @@ from ..warmup import WARMUP
 from .compare import CompareFolder
 from .keys import PLAYING
 from .lesson_run import LessonRun
+from .plot_stream import PlotStream, Script
 from .plots import Chart, Frame, PlotSpec, scale_text
 from .replay import ReplayFolder
 from .spec import (
@@ -94,6 +95,7 @@ class Services:
     owner: Hashable = None  # this browser tab's key among the experiments
     view: Callable[[str], None] | None = None  # the arena's view buttons: "fit", "follow" or "display"
     display: Display | None = None  # how the tab's arena is drawn (the tab keeps it: it outlives a swap of panels)
+    script: Script | None = None  # runs JavaScript in the tab's page (None: no page; plots always sent whole)
 
 
 def notes_text(name: str = "ch3") -> str:
@@ -150,6 +152,9 @@ class Panel:
         self._sent: dict[int, tuple] = {}  # uPlot (series, axes) last sent, by handle (see push_uplot)
         self.controls = 0  # a count of the user's control events (the tab holds the scene a moment after one)
         self.text_scale = services.display.text_scale if services.display is not None else 1.0  # plots' text
+        self.plot_stream = PlotStream(gui, services.script)  # the plots' new rows only, once the page takes them
+        if self.plot_stream.sync is not None:
+            self.top.append(self.plot_stream.sync)
         self.part = kind.panel(self)
         self._build_header()
         self.view_gui = ViewRow(self)
@@ -721,7 +726,8 @@ class Panel:
         self.replay_gui.refresh()
 
     def push_uplot(self, handle: Any, f: Frame) -> None:
-        """Send a chart's frame: data and scales always, series and axes only when they change
+        """Send a chart's frame: data and scales always (as the rows that are new where the page
+        takes them, :mod:`.plot_stream`), series and axes only when they change
         (the client rebuilds the chart for those). An explicit x range goes with every update:
         viser's client keeps a *relative* x range across data pushes, which goes wrong for a
         chart first mounted in a hidden tab."""
@@ -733,5 +739,4 @@ class Panel:
         self._sent[id(handle)] = (f.series, f.axes)
         if tuple(handle.padding or ()) != f.padding:
             handle.padding = f.padding
-        handle.data = f.data
-        handle.scales = f.scales
+        self.plot_stream.push(handle, f.data, f.scales)  # (the rows that are new, where the page takes them)
