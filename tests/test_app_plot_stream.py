@@ -146,3 +146,28 @@ def test_plot_bytes_per_refresh_do_not_grow_with_the_run(server):
         assert late <= 1.2 * early, (early, late)
     finally:
         c.close()
+
+
+def test_appends_wait_while_the_page_falls_behind_and_a_keyframe_replaces_them(server):
+    """viser never drops a script message, but a data update replaces the one still queued for the
+    same chart: while many messages wait for a page, a refresh is a keyframe, so a stalled client
+    holds a bounded queue."""
+    from shoal.app.panel.plot_stream import MAX_BACKLOG, PlotStream
+
+    calls: list[str] = []
+    waiting = [0]
+    stream = PlotStream(server.viser.gui, calls.append, lambda: waiting[0])
+    stream.heard("appends 1")
+    x = np.arange(5.0)
+    h = server.viser.gui.add_uplot(data=(x, x * 2), series=({"label": "t"}, {"label": "y"}), aspect=2.0)
+    slid = (np.arange(1.0, 7.0), np.arange(1.0, 7.0) * 2)
+    stream.push(h, slid, {"x": {"range": (1.0, 6.0)}})
+    assert len(calls) == 2 and calls[-1].startswith(PLOT_CALL) and stream.appended == 1  # (calls[0]: the sync)
+    np.testing.assert_array_equal(h.data[0], slid[0])  # the handle holds what the page holds
+    waiting[0] = MAX_BACKLOG + 1
+    later = (np.arange(2.0, 8.0), np.arange(2.0, 8.0) * 2)
+    stream.push(h, later, {"x": {"range": (2.0, 7.0)}})
+    assert len(calls) == 2 and stream.keyframes == 1
+    np.testing.assert_array_equal(h.data[1], later[1])
+    h.remove()
+    stream.remove()

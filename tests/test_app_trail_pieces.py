@@ -64,9 +64,9 @@ def _view(scene, preset: str, *overrides: str):
 
 
 def _segment_set(segs: np.ndarray) -> np.ndarray:
-    """(S, 2, 2) segments as sorted rows (the order of pieces is the page's business)."""
-    flat = np.round(np.asarray(segs, dtype=np.float64).reshape(-1, 4), 4)
-    return flat[np.lexsort(flat.T[::-1])]
+    """(S, 2, 2) segments as sorted distinct rows (the order of pieces is the page's business, and a
+    segment drawn twice looks as one)."""
+    return np.unique(np.round(np.asarray(segs, dtype=np.float64).reshape(-1, 4), 4), axis=0)
 
 
 def _drawn_segments(view, key: str) -> np.ndarray:

@@ -7,6 +7,7 @@ and meet the ticking thread only through each session's lock.
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import socket
 import sys
@@ -52,6 +53,14 @@ FULL_MESSAGE = ("This server already runs {n} sessions (its maximum), so this ta
 
 
 MAX_PORT = 65535
+
+
+def waiting(client: viser.ClientHandle) -> int:
+    """Messages queued for ``client`` that have not left for its page yet (viser's per-connection
+    buffer, which a sent message leaves; 0 where it cannot be read)."""
+    with contextlib.suppress(Exception):
+        return len(client._websock_connection.get_message_buffer().message_from_id)
+    return 0
 
 
 class PortInUseError(OSError):
@@ -151,6 +160,7 @@ class ShoalServer:
                 atomic=client.atomic,
                 camera=client.camera,
                 script=lambda source: run_script(client.gui, source),
+                backlog=lambda: waiting(client),
             )
         tab = TabApp(session, gui, scene, experiments=self.experiments, owner=key, **kwargs)
         tab.auto_tick = auto_tick

@@ -37,7 +37,7 @@ from ..warmup import WARMUP
 from .compare import CompareFolder
 from .keys import PLAYING
 from .lesson_run import LessonRun
-from .plot_stream import PlotStream, Script
+from .plot_stream import Backlog, PlotStream, Script
 from .plots import Chart, Frame, PlotSpec, scale_text
 from .replay import ReplayFolder
 from .spec import (
@@ -96,6 +96,7 @@ class Services:
     view: Callable[[str], None] | None = None  # the arena's view buttons: "fit", "follow" or "display"
     display: Display | None = None  # how the tab's arena is drawn (the tab keeps it: it outlives a swap of panels)
     script: Script | None = None  # runs JavaScript in the tab's page (None: no page; plots always sent whole)
+    backlog: Backlog | None = None  # messages still on their way to the page
 
 
 def notes_text(name: str = "ch3") -> str:
@@ -152,7 +153,7 @@ class Panel:
         self._sent: dict[int, tuple] = {}  # uPlot (series, axes) last sent, by handle (see push_uplot)
         self.controls = 0  # a count of the user's control events (the tab holds the scene a moment after one)
         self.text_scale = services.display.text_scale if services.display is not None else 1.0  # plots' text
-        self.plot_stream = PlotStream(gui, services.script)  # the plots' new rows only, once the page takes them
+        self.plot_stream = PlotStream(gui, services.script, services.backlog)  # the new rows, where the page takes them
         if self.plot_stream.sync is not None:
             self.top.append(self.plot_stream.sync)
         self.part = kind.panel(self)

@@ -18,7 +18,10 @@ series, on every push), and a time plot's window is up to ``PlotSpec.history`` r
   then writes ``"appends …"`` into a hidden text control of this panel (:data:`SYNC_LABEL`).
   A page that cannot (another viser, a client without the script) never says so and keeps
   getting keyframes. An append whose base the page does not hold (a message it missed) makes
-  it write ``"resync …"``: that chart's next refresh is a keyframe.
+  it write ``"resync …"``: that chart's next refresh is a keyframe;
+- viser never drops a script message on its way to a page, while a data update replaces the one
+  still waiting for the same chart: so while more than :data:`MAX_BACKLOG` messages wait for a
+  page (a slow or stalled client), refreshes are keyframes again, and what waits stays bounded.
 
 A refresh of a playing plot then costs the page a few hundred bytes, whatever the window.
 """
@@ -31,7 +34,9 @@ from typing import Any, Callable
 import numpy as np
 
 SYNC_LABEL = "plot sync"  # the hidden control the page answers through
+MAX_BACKLOG = 256  # messages waiting for the page beyond which a refresh is a keyframe (it coalesces)
 Script = Callable[[str], None]  # runs JavaScript in the tab's page
+Backlog = Callable[[], int]  # messages still waiting to reach the tab's page
 
 
 def delta(old: tuple[np.ndarray, ...], new: tuple[np.ndarray, ...]) -> tuple[int, tuple[np.ndarray, ...]] | None:
@@ -95,8 +100,8 @@ class PlotStream:
     """One panel's uPlots as the page holds them. Without a ``script`` (a tab with no page, tests
     driving the panels) every refresh is a keyframe, as viser sends it."""
 
-    def __init__(self, gui: Any, script: Script | None) -> None:
-        self.script = script
+    def __init__(self, gui: Any, script: Script | None, backlog: Backlog | None = None) -> None:
+        self.script, self.backlog = script, backlog
         self.appends = False  # the page said it applies appended rows
         self._charts: set[str] = set()  # the charts pushed so far
         self._resync: frozenset[str] = frozenset()  # charts whose next refresh is a keyframe (the page asked)
@@ -121,7 +126,8 @@ class PlotStream:
         uuid = handle._impl.uuid
         self._charts.add(uuid)
         props = handle._impl.props
-        if self.appends and self.script is not None and uuid not in self._resync:
+        if (self.appends and self.script is not None and uuid not in self._resync
+                and (self.backlog is None or self.backlog() <= MAX_BACKLOG)):
             found = delta(tuple(props.data), data)
             if found is not None:
                 drop, rows = found

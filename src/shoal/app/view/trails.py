@@ -12,7 +12,7 @@ stride points, once drawn, never changes:
   points arrive and the oldest shrinks as they leave, and only those two are sent again, every
   ``stride`` steps;
 - the **open** piece, from the last stride point to the frame shown (the robots now), is sent
-  with every draw.
+  with every draw (when the frame shown is a stride point, it repeats the last closed segment).
 
 So a step costs about the robots' own update (one segment per trail) plus a piece every stride
 steps, whatever the horizon; a new epoch (reset, replay), other trails (the robots' count) or a
@@ -142,8 +142,9 @@ class TrailDrawing:
             blocks.setdefault(int(steps[j]) // (s * BLOCK), []).append(j)
         for b, cols in blocks.items():
             want[(*base, b)] = ((int(steps[cols[0]]), int(steps[cols[-1] + 1])), segments(cols))
-        if steps[last] % s:
-            want["open"] = ((*base, int(steps[last - 1]), int(steps[last])), segments([last - 1]))
+        # (when the frame shown is a stride point itself, the open piece repeats the last closed
+        # segment: drawn twice it looks the same, and the node stays instead of going and coming back)
+        want["open"] = ((*base, int(steps[last - 1]), int(steps[last])), segments([last - 1]))
 
         def make(key: str, pts: np.ndarray) -> None:
             canvas.add(key, canvas.scene.add_line_segments(
