@@ -359,6 +359,17 @@ def test_phase_plane_follows_the_chosen_particle_and_dimension(tab):
     np.testing.assert_allclose(traces["recent"].y, a_hist)
     assert (traces["now"].x[0], traces["now"].y[0]) == (s.sim.state.u[0, 3, 1], s.sim.state.a[0, 3, 1])
     assert "particle 3, y" in p.handles["phase"].figure.layout.title.text
+    s.pause()
+    s.step(40)  # the same particle later: its points are swapped into the figure the page has
+    p.refresh_plots()
+    sent = {t["name"]: t for t in json.loads(p.handles["phase"]._plotly_json_str)["data"]}
+    n = len(sent["recent"]["x"])
+    assert n == 71  # (steps 0–70: fewer than the 120 the plane shows)
+    np.testing.assert_allclose(sent["recent"]["x"], [f.u[3, 1] for f in list(s.frames)[-n:]])
+    np.testing.assert_allclose(sent["recent"]["y"], [f.a[3, 1] for f in list(s.frames)[-n:]])
+    assert sent["now"]["x"] == [s.sim.state.u[0, 3, 1]] and sent["now"]["y"] == [s.sim.state.a[0, 3, 1]]
+    assert "reachable set" in sent and "particle 3, y" in json.loads(p.handles["phase"]._plotly_json_str)[
+        "layout"]["title"]["text"]
 
 
 # ---------------------------------------------------------------------------- scene
