@@ -14,10 +14,11 @@ page does once it has found viser's store (``app/panel/plot_stream.py``); a tree
 what its pages get, the whole plot data on every refresh.
 
 - ``age``: ``--tabs`` tabs of ``default`` play for ``--minutes`` minutes; each minute, a tab's
-  robot updates received per second (median and lowest over the tabs), its KiB/s, and the
-  server's CPU (% of one core, and ms per robot update sent). The trees run one after the other.
+  scene updates per second (arena draws the server sent: each moves the robots; median and
+  lowest over the tabs) and steps per second, its KiB/s, and the server's CPU (% of one core, and
+  ms per update). The trees run one after the other.
 - ``bytes``: one tab of ``default`` and one of ``course-dvc`` (trails on, as shipped) per tree,
-  all four at once, for ``--bytes-minutes`` minutes: KiB/s a tab and bytes per robot update, each
+  all four at once, for ``--bytes-minutes`` minutes: KiB/s a tab and bytes per scene update, each
   minute (a plot's window is full after 1,500 rows: 75 s at 20 steps/s, 5 min at 5).
 - ``tabs``: ``--many`` tabs of ``default`` in one process, measured for ``--seconds`` after 30 s:
   updates/s a tab (median, lowest) and the server's CPU. The trees run one after the other.
@@ -46,11 +47,25 @@ sys.path.insert(0, str(ROOT / "tests"))
 from bench_common import fmt, load_note, table  # noqa: E402
 
 SERVER = r"""
-import sys
+import json, sys
 from shoal.app.server import start_server
+from shoal.app.view.view import View
+
+draws = {}  # arena → scene updates drawn (a robot update sent each)
+draw = View.draw
+
+
+def counted(self, snap):
+    draws[id(self)] = draws.get(id(self), 0) + 1
+    draw(self, snap)
+
+
+View.draw = counted
 srv = start_server(sys.argv[1], port=0, max_sessions=int(sys.argv[2]))
 print("PORT", srv.port, flush=True)
-sys.stdin.read()
+for line in sys.stdin:
+    tabs = list(srv.tabs.values())
+    print("COUNTS", json.dumps([[draws.get(id(t.arena), 0), int(t.session.k)] for t in tabs]), flush=True)
 srv.stop()
 """
 
@@ -68,6 +83,19 @@ class Server:
             if not line and self.proc.poll() is not None:
                 raise RuntimeError(f"the server of {src} did not start")
         self.port = int(line.split()[1])
+
+    def counts(self) -> np.ndarray:
+        """(tabs, 2): scene updates drawn and engine steps of every tab so far."""
+        self.proc.stdin.write("counts\n")  # type: ignore[union-attr]
+        self.proc.stdin.flush()  # type: ignore[union-attr]
+        line = ""
+        while not line.startswith("COUNTS"):
+            line = self.proc.stdout.readline()  # type: ignore[union-attr]
+            if not line:
+                raise RuntimeError("the server stopped")
+        import json
+
+        return np.array(json.loads(line.split(" ", 1)[1]), dtype=float).reshape(-1, 2)
 
     def cpu(self) -> float:
         """CPU seconds of the server process so far (all its threads)."""
@@ -91,7 +119,8 @@ class Server:
 
 
 def open_tabs(port: int, n: int) -> list[Any]:
-    """``n`` wire tabs, each running on at the end and (where the tree offers it) taking plot appends."""
+    """``n`` wire tabs, each running on at the end and (where the tree offers it) taking plot appends;
+    then they only count what they receive (decoding it would take the machine's CPU from the server)."""
     from viser_wire import WireClient
 
     tabs = [WireClient(port, decode=True) for _ in range(n)]
@@ -103,12 +132,13 @@ def open_tabs(port: int, n: int) -> list[Any]:
         if c.uuid_of("plot sync"):
             c.take_plot_appends()
         c.set_value("at the end", "run on")
+        c.decode = False
     return tabs
 
 
 def read(tabs: list[Any]) -> np.ndarray:
-    """(tabs, 3): frames, bytes and robot updates received so far."""
-    return np.array([c.counts() for c in tabs], dtype=float)
+    """(tabs,): bytes received so far."""
+    return np.array([c.counts()[1] for c in tabs], dtype=float)
 
 
 @contextlib.contextmanager
@@ -131,24 +161,23 @@ def warm(src: Path) -> None:
                    check=True, capture_output=True)
 
 
-def per_minute(server: Server, tabs: list[Any], minutes: float, label: str) -> list[dict[str, Any]]:
-    """Each minute of play: updates/s per tab, KiB/s per tab, server CPU."""
-    out = []
-    counts, cpu, t = read(tabs), server.cpu(), time.monotonic()
-    for minute in range(1, int(minutes) + 1):
-        time.sleep(max(0.0, t + 60.0 - time.monotonic()))
-        counts2, cpu2, t2 = read(tabs), server.cpu(), time.monotonic()
-        span = t2 - t
-        d = (counts2 - counts) / span
-        updates = d[:, 2]
-        cpu_pct = (cpu2 - cpu) / span * 100
-        out.append({"minute": minute, "updates": updates, "kib": d[:, 1] / 1024, "cpu": cpu_pct,
-                    "ms_per_update": (cpu2 - cpu) * 1e3 / max(updates.sum() * span, 1.0)})
-        print(f"  {label} minute {minute}: updates/s {np.median(updates):.1f} (lowest {updates.min():.1f}), "
-              f"CPU {cpu_pct:.0f} %, {out[-1]['ms_per_update']:.2f} ms/update, "
-              f"{np.median(d[:, 1]) / 1024:.0f} KiB/s a tab; {load_note()}", file=sys.stderr, flush=True)
-        counts, cpu, t = counts2, cpu2, t2
-    return out
+def window(server: Server, tabs: list[Any], seconds: float) -> dict[str, Any]:
+    """Over the next ``seconds``: each tab's scene updates/s and steps/s, its KiB/s, the server's CPU."""
+    c0, b0, cpu0, t0 = server.counts(), read(tabs), server.cpu(), time.monotonic()
+    time.sleep(seconds)
+    c1, b1, cpu1, t1 = server.counts(), read(tabs), server.cpu(), time.monotonic()
+    span = t1 - t0
+    n = min(len(c0), len(c1))
+    d = (c1[:n] - c0[:n]) / span
+    updates = d[:, 0]
+    return {"updates": updates, "steps": d[:, 1], "kib": (b1 - b0) / span / 1024, "cpu": (cpu1 - cpu0) / span * 100,
+            "ms_per_update": (cpu1 - cpu0) * 1e3 / max(updates.sum() * span, 1.0)}
+
+
+def say(label: str, r: dict[str, Any]) -> None:
+    print(f"  {label}: updates/s {np.median(r['updates']):.1f} (lowest {r['updates'].min():.1f}), steps/s "
+          f"{np.median(r['steps']):.1f}, CPU {r['cpu']:.0f} %, {r['ms_per_update']:.2f} ms/update, "
+          f"{np.median(r['kib']):.0f} KiB/s a tab; {load_note()}", file=sys.stderr, flush=True)
 
 
 def run_age(srcs: dict[str, Path], n: int, minutes: float) -> str:
@@ -157,41 +186,42 @@ def run_age(srcs: dict[str, Path], n: int, minutes: float) -> str:
         server = Server(src, "default", n)
         tabs = open_tabs(server.port, n)
         try:
-            time.sleep(20.0)
-            result = per_minute(server, tabs, minutes, f"age {name}")
+            time.sleep(10.0)
+            for minute in range(1, int(minutes) + 1):
+                r = window(server, tabs, 60.0)
+                say(f"age {name} minute {minute}", r)
+                rows.append([name, str(minute), f"{fmt(np.median(r['updates']))} / {fmt(r['updates'].min())}",
+                             fmt(np.median(r["steps"])), fmt(np.median(r["kib"])), fmt(r["cpu"]),
+                             fmt(r["ms_per_update"])])
         finally:
             for c in tabs:
                 c.close()
             server.stop()
-        for r in result:
-            rows.append([name, str(r["minute"]), f"{fmt(np.median(r['updates']))} / {fmt(r['updates'].min())}",
-                         fmt(np.median(r["kib"])), fmt(r["cpu"]), fmt(r["ms_per_update"])])
     return (f"**age**: {n} tabs of `default` playing on, each minute ({load_note()} at the end)\n\n"
-            + table(["tree", "minute", "robot updates/s a tab (median / lowest)", "KiB/s a tab", "server CPU %",
-                     "server CPU ms per update"], rows))
+            + table(["tree", "minute", "scene updates/s a tab (median / lowest)", "steps/s", "KiB/s a tab",
+                     "server CPU %", "server CPU ms per update"], rows))
 
 
 def run_bytes(srcs: dict[str, Path], minutes: float) -> str:
     servers: dict[tuple[str, str], Server] = {}
     tabs: dict[tuple[str, str], list[Any]] = {}
+    rows = []
     try:
         for name, src in srcs.items():
             for preset in ("default", "course-dvc"):
                 servers[name, preset] = Server(src, preset, 1)
                 tabs[name, preset] = open_tabs(servers[name, preset].port, 1)
-        start = {key: read(t)[0] for key, t in tabs.items()}
-        t0 = time.monotonic()
-        rows = []
-        last = dict(start)
-        t_last = t0
+        last = {key: (read(tb)[0], servers[key].counts()[0, 0]) for key, tb in tabs.items()}
+        t0 = t_last = time.monotonic()
         for minute in range(1, int(minutes) + 1):
             time.sleep(max(0.0, t0 + 60.0 * minute - time.monotonic()))
-            now, t = {key: read(tb)[0] for key, tb in tabs.items()}, time.monotonic()
+            now = {key: (read(tb)[0], servers[key].counts()[0, 0]) for key, tb in tabs.items()}
+            t = time.monotonic()
             for key in tabs:
-                d = (now[key] - last[key]) / (t - t_last)
-                rows.append([key[0], key[1], str(minute), fmt(d[1] / 1024), fmt(d[2]),
-                             fmt(d[1] / max(d[2], 1e-9))])
-                print(f"  bytes {key[0]} {key[1]} minute {minute}: {d[1] / 1024:.1f} KiB/s, {d[2]:.1f} updates/s",
+                kib = (now[key][0] - last[key][0]) / (t - t_last) / 1024
+                updates = (now[key][1] - last[key][1]) / (t - t_last)
+                rows.append([key[0], key[1], str(minute), fmt(kib), fmt(updates), fmt(kib * 1024 / max(updates, 1e-9))])
+                print(f"  bytes {key[0]} {key[1]} minute {minute}: {kib:.1f} KiB/s, {updates:.1f} updates/s",
                       file=sys.stderr, flush=True)
             last, t_last = now, t
     finally:
@@ -202,7 +232,7 @@ def run_bytes(srcs: dict[str, Path], minutes: float) -> str:
             s.stop()
     rows.sort(key=lambda r: (r[1], int(r[2]), r[0]))
     return (f"**bytes**: one tab of each preset per tree, all at once, trails on ({load_note()} at the end)\n\n"
-            + table(["tree", "preset", "minute", "KiB/s a tab", "robot updates/s", "bytes per update"], rows))
+            + table(["tree", "preset", "minute", "KiB/s a tab", "scene updates/s", "bytes per update"], rows))
 
 
 def run_tabs(srcs: dict[str, Path], n: int, seconds: float) -> str:
@@ -212,23 +242,18 @@ def run_tabs(srcs: dict[str, Path], n: int, seconds: float) -> str:
         tabs = open_tabs(server.port, n)
         try:
             time.sleep(30.0)
-            c0, cpu0, t0 = read(tabs), server.cpu(), time.monotonic()
-            time.sleep(seconds)
-            c1, cpu1, t1 = read(tabs), server.cpu(), time.monotonic()
+            r = window(server, tabs, seconds)
         finally:
             for c in tabs:
                 c.close()
             server.stop()
-        d = (c1 - c0) / (t1 - t0)
-        updates = d[:, 2]
-        cpu = (cpu1 - cpu0) / (t1 - t0) * 100
-        rows.append([name, str(n), f"{fmt(np.median(updates))} / {fmt(updates.min())}",
-                     str(int(np.sum(updates >= 18.0))), fmt(np.median(d[:, 1]) / 1024), fmt(cpu),
-                     fmt((cpu1 - cpu0) * 1e3 / max(updates.sum() * (t1 - t0), 1.0))])
-        print(f"  tabs {name}: {rows[-1]}; {load_note()}", file=sys.stderr, flush=True)
+        say(f"tabs {name}", r)
+        rows.append([name, str(n), f"{fmt(np.median(r['updates']))} / {fmt(r['updates'].min())}",
+                     str(int(np.sum(r["updates"] >= 18.0))), fmt(np.median(r["steps"])), fmt(np.median(r["kib"])),
+                     fmt(r["cpu"]), fmt(r["ms_per_update"])])
     return (f"**tabs**: {n} tabs of `default` in one process, {seconds:.0f} s after 30 s of play ({load_note()})\n\n"
-            + table(["tree", "tabs", "robot updates/s a tab (median / lowest)", "tabs at ≥ 18/s", "KiB/s a tab",
-                     "server CPU %", "server CPU ms per update"], rows))
+            + table(["tree", "tabs", "scene updates/s a tab (median / lowest)", "tabs at ≥ 18/s", "steps/s",
+                     "KiB/s a tab", "server CPU %", "server CPU ms per update"], rows))
 
 
 def main() -> None:

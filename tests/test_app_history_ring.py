@@ -161,3 +161,17 @@ def test_a_session_too_big_for_its_budget_plays_on_and_says_so_in_the_status_lin
     tab.panels.refresh_status()
     assert "history: the last" in tab.panels.status.content and "memory budget" in tab.panels.status.content
     assert TRAIL_LIMITS[0] >= len(s.snapshot().trails)
+
+
+def test_a_hostile_preset_cannot_fill_the_memory_through_the_history():
+    """1,000 robots in 1,000 dimensions are 3 million numbers a frame (24 MB): the row cap alone
+    would keep 400 of them (9.6 GB). The budget keeps what fits, one frame at least, and says so."""
+    from shoal.app.session.history import HISTORY_BUDGET
+
+    s = session_for(presets_io.load("default", ["sim.robots=1000", "sim.d=1000", "sim.steps=100000"]))
+    s.step(4)
+    h = s.history
+    assert len(s.frames) == 1 and s.frames[-1].k == 4 and h.shortened is not None
+    per_frame = 1000 * (3 * 1000 + 2)
+    assert h.allocated() <= max(HISTORY_BUDGET, per_frame + 200_000)
+    assert s.trajectory_rows().shape[0] == 1000  # the exports read what is kept
