@@ -84,8 +84,17 @@ class Server:
                 raise RuntimeError(f"the server of {src} did not start")
         self.port = int(line.split()[1])
 
-    def counts(self) -> np.ndarray:
-        """(tabs, 2): scene updates drawn and engine steps of every tab so far."""
+    def counts(self, tabs: int = 0) -> np.ndarray:
+        """(tabs, 2): scene updates drawn and engine steps of every tab so far (waiting until there
+        are ``tabs`` of them)."""
+        for _ in range(600):
+            out = self._counts()
+            if len(out) >= tabs:
+                return out
+            time.sleep(0.1)
+        raise RuntimeError(f"the server has {len(out)} tabs, not {tabs}")
+
+    def _counts(self) -> np.ndarray:
         self.proc.stdin.write("counts\n")  # type: ignore[union-attr]
         self.proc.stdin.flush()  # type: ignore[union-attr]
         line = ""
@@ -126,9 +135,9 @@ def open_tabs(port: int, n: int) -> list[Any]:
     tabs = [WireClient(port, decode=True) for _ in range(n)]
     for c in tabs:
         end = time.monotonic() + 300
-        while not c.uuid_of("at the end") and time.monotonic() < end:
+        while not c.uuid_of("Run experiment") and time.monotonic() < end:  # (the panel's last control)
             time.sleep(0.05)
-        time.sleep(0.3)  # (the rest of the panel: the hidden plot sync comes first where there is one)
+        time.sleep(0.5)  # (the tab is registered once its panel is built)
         if c.uuid_of("plot sync"):
             c.take_plot_appends()
         c.set_value("at the end", "run on")
@@ -163,7 +172,7 @@ def warm(src: Path) -> None:
 
 def window(server: Server, tabs: list[Any], seconds: float) -> dict[str, Any]:
     """Over the next ``seconds``: each tab's scene updates/s and steps/s, its KiB/s, the server's CPU."""
-    c0, b0, cpu0, t0 = server.counts(), read(tabs), server.cpu(), time.monotonic()
+    c0, b0, cpu0, t0 = server.counts(len(tabs)), read(tabs), server.cpu(), time.monotonic()
     time.sleep(seconds)
     c1, b1, cpu1, t1 = server.counts(), read(tabs), server.cpu(), time.monotonic()
     span = t1 - t0
@@ -211,11 +220,11 @@ def run_bytes(srcs: dict[str, Path], minutes: float) -> str:
             for preset in ("default", "course-dvc"):
                 servers[name, preset] = Server(src, preset, 1)
                 tabs[name, preset] = open_tabs(servers[name, preset].port, 1)
-        last = {key: (read(tb)[0], servers[key].counts()[0, 0]) for key, tb in tabs.items()}
+        last = {key: (read(tb)[0], servers[key].counts(1)[0, 0]) for key, tb in tabs.items()}
         t0 = t_last = time.monotonic()
         for minute in range(1, int(minutes) + 1):
             time.sleep(max(0.0, t0 + 60.0 * minute - time.monotonic()))
-            now = {key: (read(tb)[0], servers[key].counts()[0, 0]) for key, tb in tabs.items()}
+            now = {key: (read(tb)[0], servers[key].counts(1)[0, 0]) for key, tb in tabs.items()}
             t = time.monotonic()
             for key in tabs:
                 kib = (now[key][0] - last[key][0]) / (t - t_last) / 1024

@@ -143,9 +143,6 @@ class PlotStream:
         handle.scales = scales
         self.keyframes += 1
 
-    def forget(self, handle: Any) -> None:
-        self._charts.discard(handle._impl.uuid)
-
     def remove(self) -> None:
         if self.sync is not None:
             self.sync.remove()

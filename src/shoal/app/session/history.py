@@ -29,7 +29,7 @@ from .ring import FrameRing, FrameView, MetricRing
 
 TRAIL_LIMITS = (80, 40)  # at most this many trails of this many points
 TRAIL_DIMS = 3  # coordinates a trail keeps (the arena draws the first two)
-HISTORY_BUDGET = 4_000_000  # numbers (32 MiB of float64) one session's history holds at most
+HISTORY_BUDGET = 4 * 2**20  # numbers (32 MiB of float64) a tab's history holds at most (A's and B's together)
 METRIC_SHARE = 8  # at most 1/8 of the budget for metric rows …
 SCENE_SHARE = 8  # … and 1/8 for the scene parts that changed while the run went on
 
