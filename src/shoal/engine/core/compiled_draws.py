@@ -28,7 +28,7 @@ S11, S8 = np.uint64(11), np.uint64(8)
 
 
 @kernel
-def _double(next_u64, state: int) -> float:  # next_u64: a C function pointer
+def next_double(next_u64, state: int) -> float:  # next_u64: a C function pointer
     """numpy's next_double: the top 53 bits of the next output."""
     return float(next_u64(state) >> S11) * TO_DOUBLE
 
@@ -48,12 +48,14 @@ def _normal(next_u64, state: int) -> float:
             return x
         if idx == 0:  # the tail
             while True:
-                xx = -ziggurat_nor_inv_r * math.log1p(-_double(next_u64, state))
-                yy = -math.log1p(-_double(next_u64, state))
+                xx = -ziggurat_nor_inv_r * math.log1p(-next_double(next_u64, state))
+                yy = -math.log1p(-next_double(next_u64, state))
                 if yy + yy > xx * xx:
                     return -(ziggurat_nor_r + xx) if (rabs >> S8) & ONE else ziggurat_nor_r + xx
-        elif (fi_double[idx - 1] - fi_double[idx]) * _double(next_u64, state) + fi_double[idx] < math.exp(-0.5 * x * x):
-            return x
+        else:
+            u01 = next_double(next_u64, state)
+            if (fi_double[idx - 1] - fi_double[idx]) * u01 + fi_double[idx] < math.exp(-0.5 * x * x):
+                return x
 
 
 @kernel
@@ -69,7 +71,7 @@ def _fill(next_u64, states: np.ndarray, parts: tuple, normal: np.ndarray) -> Non
                     a[r, q] = _normal(next_u64, state)
             else:
                 for q in range(a.shape[1]):
-                    a[r, q] = _double(next_u64, state)
+                    a[r, q] = next_double(next_u64, state)
 
 
 class CompiledDraws:
@@ -89,6 +91,16 @@ class CompiledDraws:
         interfaces = [g.bit_generator.ctypes for g in self.rngs]
         self._next = interfaces[0].next_uint64 if interfaces else None  # PCG64's one C function
         self._states = np.array([c.state_address for c in interfaces], dtype=np.uintp)
+
+    @property
+    def next_u64(self) -> object:
+        """PCG64's C function for the next output, for a kernel's :func:`next_double` (None: no runs)."""
+        return self._next
+
+    @property
+    def states(self) -> np.ndarray:
+        """The address of each run's generator state, (R,) ``uintp``, for a kernel's :func:`next_double`."""
+        return self._states
 
     def fill(self, *arrays: np.ndarray, normal: Sequence[bool]) -> None:
         """Each run r draws ``arrays[0][r]``, ``arrays[1][r]``, … in turn, N(0,1) where ``normal``
