@@ -14,10 +14,14 @@ fills every run's arrays.
 
 from __future__ import annotations
 
+import ctypes
 import math
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
+from llvmlite import ir
+from numba import types
+from numba.extending import intrinsic
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
 from .compiled import kernel
@@ -31,6 +35,29 @@ S11, S8 = np.uint64(11), np.uint64(8)
 def next_double(next_u64, state: int) -> float:  # next_u64: a C function pointer
     """numpy's next_double: the top 53 bits of the next output."""
     return float(next_u64(state) >> S11) * TO_DOUBLE
+
+
+@intrinsic
+def _next_u64_at(typingctx: Any, fn: Any, state: Any) -> Any:
+    """The next 64-bit output of the bit generator whose C function for it is at address ``fn``
+    (numpy's ``uint64_t next_uint64(void *state)``), on the state at address ``state``. Both are
+    plain integers, so a kernel takes them as cheaply as any number (a ctypes function object
+    costs a Python call to type every time the kernel is called)."""
+    if not (isinstance(fn, types.Integer) and isinstance(state, types.Integer)):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        void_p = ir.IntType(8).as_pointer()
+        f = builder.inttoptr(args[0], ir.FunctionType(ir.IntType(64), [void_p]).as_pointer())
+        return builder.call(f, [builder.inttoptr(args[1], void_p)])
+
+    return types.uint64(fn, state), codegen
+
+
+@kernel
+def double_at(fn: int, state: int) -> float:
+    """:func:`next_double` with the generator's C function given by its address (:attr:`CompiledDraws.address`)."""
+    return float(_next_u64_at(fn, state) >> S11) * TO_DOUBLE  # type: ignore[call-arg]  # (the typing context is numba's)
 
 
 @kernel
@@ -91,6 +118,12 @@ class CompiledDraws:
         interfaces = [g.bit_generator.ctypes for g in self.rngs]
         self._next = interfaces[0].next_uint64 if interfaces else None  # PCG64's one C function
         self._states = np.array([c.state_address for c in interfaces], dtype=np.uintp)
+        self._address = ctypes.cast(self._next, ctypes.c_void_p).value or 0 if self._next is not None else 0
+
+    @property
+    def address(self) -> int:
+        """The address of PCG64's C function for the next output, for a kernel's :func:`double_at` (0: no runs)."""
+        return self._address
 
     @property
     def next_u64(self) -> object:

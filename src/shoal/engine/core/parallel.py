@@ -23,6 +23,7 @@ _lock = threading.Lock()
 _inside = threading.local()  # set in a pool's threads: a block there runs its own blocks serially
 _pool: tuple[int, int, ThreadPoolExecutor] | None = None  # (pid, threads, pool)
 _threads: int | None = None
+_default: int | None = None  # default_threads(), read once
 
 
 def default_threads() -> int:
@@ -38,7 +39,12 @@ def default_threads() -> int:
 
 def threads() -> int:
     """How many threads a batch of runs is split over."""
-    return _threads if _threads is not None else default_threads()
+    global _default
+    if _threads is not None:
+        return _threads
+    if _default is None:
+        _default = default_threads()
+    return _default
 
 
 def set_threads(n: int | None) -> None:
@@ -82,11 +88,11 @@ def each_block(fn: Callable[[int, int], object], runs: int, min_block: int = 1) 
     """``fn(lo, hi)`` for every block of :func:`blocks`, the blocks in parallel threads (the
     first in the calling thread), with blocks of at least ``min_block`` runs; returns when all
     are done and raises the first block's error, if any. Serial inside a pool thread."""
-    n = 1 if getattr(_inside, "active", False) else min(threads(), max(1, runs // max(1, min_block)))
-    parts = blocks(runs, n)
-    if len(parts) == 1:
+    n = 1 if runs == 1 or getattr(_inside, "active", False) else min(threads(), max(1, runs // max(1, min_block)))
+    if n == 1:
         fn(0, runs)
         return
+    parts = blocks(runs, n)
     pool = _executor(max(1, threads() - 1))
     futures: list[Future] = [pool.submit(fn, lo, hi) for lo, hi in parts[1:]]
     first: BaseException | None = None

@@ -499,7 +499,7 @@ class Simulation:
         speeds, bests, tracked = out.speeds[k:k + n], out.best_fitness[k:k + n], out.tracked[k:k + n]
 
         def block(lo: int, hi: int) -> int:
-            return kernels.swarm_runs(lo, hi, s.x, s.u, y, f_y, f, gen.next_u64, gen.states, w, c_all, ahead,
+            return kernels.swarm_runs(lo, hi, s.x, s.u, y, f_y, f, gen.address, gen.states, w, c_all, ahead,
                                       literal, adapted, dt, before, maximise, code, source, scale, new, yg, best,
                                       turns.turn, turns.turned, speeds, bests, track, tracked)
 

@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from ..core.compiled import kernel
-from ..core.compiled_draws import next_double
+from ..core.compiled_draws import double_at
 from ..core.sums import BLOCK, block_sum
 
 # objectives evaluated in the kernel, by their Objective names; a code is the index
@@ -225,13 +225,13 @@ def swarm_run(x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: n
 
 @kernel
 def swarm_runs(lo: int, hi: int, x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: np.ndarray,
-               next_u64, states: np.ndarray, omegas: np.ndarray, cs: np.ndarray, ahead: np.ndarray, literal: bool,
+               fn: int, states: np.ndarray, omegas: np.ndarray, cs: np.ndarray, ahead: np.ndarray, literal: bool,
                adapted: bool, dt: float, before: bool, maximise: bool, code: int, source: np.ndarray, scale: float,
                new: np.ndarray, yg: np.ndarray, best: np.ndarray, turn: np.ndarray, turned: np.ndarray,
                speeds: np.ndarray, bests: np.ndarray, track: int, tracked: np.ndarray) -> int:
     """:func:`swarm_run` for runs ``lo … hi − 1`` only, each run through all ``len(omegas)`` ticks
     before the next, drawing its U(0,1) numbers itself from its own generator (PCG64's C
-    function ``next_u64`` on the state at ``states[r]``) as one ``random((2, N, d))`` call a tick
+    function at address ``fn`` on the state at ``states[r]``) as one ``random((2, N, d))`` call a tick
     would: the same numbers, and the generator left where those calls leave it. Blocks of runs
     touch disjoint rows, so they may run in parallel threads (the kernel releases the GIL)."""
     N, d = x.shape[1], x.shape[2]
@@ -244,7 +244,7 @@ def swarm_runs(lo: int, hi: int, x: np.ndarray, u: np.ndarray, y: np.ndarray, f_
             for t in range(2):
                 for i in range(N):
                     for k in range(d):
-                        draws[t, i, k] = next_double(next_u64, state)
+                        draws[t, i, k] = double_at(fn, state)
             xj = x if j == 0 else new[(j - 1) % 2, 0]
             uj = u if j == 0 else new[(j - 1) % 2, 1]
             out = new[j % 2]
