@@ -27,6 +27,7 @@ from shoal.engine.core.registry import Registry
 from shoal.engine.pso.laws import LAWS
 from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.engine.slo.beliefs import EntryPolicy
+from shoal.engine.slo.ranging_modes import refusal
 from shoal.engine.slo.selection import SELECTIONS
 
 
@@ -378,6 +379,10 @@ class SLO(_Model):
     quality_threshold: Annotated[float | None, Field(
         ge=-1e12, le=1e12,
         description="fitness T of 'first generation with best <= T'; unset = the benchmark's")] = None
+    ranging: Literal["all", "neighbours"] = Field(
+        "all", description="SLO swarm: every robot ranges and localises every other (the thesis, O(N²)), or only "
+        "the robots of its neighbourhood (ours, O(N·k): knn, radius or ring, CSS; a robot forgets whoever leaves and "
+        "starts an arriving neighbour from its initial estimate)")
 
     @field_validator("swarm", mode="before")
     @classmethod
@@ -394,6 +399,13 @@ class SLO(_Model):
                 raise ValueError(f"neighbourhood_param = {p:g}: {self.neighbourhood} takes a whole number >= 1")
         if self.positions == "oracle" and self.swarm != "host":
             raise ValueError("positions = 'oracle' needs swarm = 'host' (the SLO swarm always localises)")
+        if self.ranging == "neighbours":
+            if self.swarm != "slo":
+                raise ValueError("ranging = 'neighbours' is the SLO swarm's (swarm = 'slo'); a host swarm ranges all")
+            why = refusal(selection=self.selection, entry_policy=self.entry_policy, neighbourhood=self.neighbourhood,
+                          motion=self.motion, ar_gain=0.0)
+            if why:
+                raise ValueError(f"ranging = 'neighbours': {why}")
         return self
 
 
