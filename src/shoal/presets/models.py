@@ -381,8 +381,8 @@ class SLO(_Model):
         description="fitness T of 'first generation with best <= T'; unset = the benchmark's")] = None
     ranging: Literal["all", "neighbours"] = Field(
         "all", description="SLO swarm: every robot ranges and localises every other (the thesis, O(N²)), or only "
-        "the robots of its neighbourhood (ours, O(N·k): knn, radius or ring, CSS; a robot forgets whoever leaves and "
-        "starts an arriving neighbour from its initial estimate)")
+        "the robots of its neighbourhood (ours, O(N·k): knn, radius or ring, CSS; a robot remembers the last few that "
+        "left, frozen, and starts any other arriving neighbour from its initial estimate)")
 
     @field_validator("swarm", mode="before")
     @classmethod

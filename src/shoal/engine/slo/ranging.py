@@ -10,12 +10,13 @@ with the thesis' own pair arithmetic (:func:`~.kernels.css_pair`, [3.1]–[3.7])
 - a neighbour it had last step: its kept range and estimate, as in the all-pairs step;
 - a neighbour that has just arrived: the range it would have measured last step (the
   simulator works it out now, from last step's positions, only for the pairs that use it)
-  and the pair's initial estimate x̂(−1) (the truth at step 0, or U(S) − U(S) drawn for the
-  pair from a counter-based stream of the run): a robot forgets whoever leaves.
+  and its frozen estimate if the robot still remembers it (the last ``memory`` robots that
+  left its neighbourhood), else the pair's initial estimate x̂(−1) (the truth at step 0, or
+  U(S) − U(S) drawn for the pair from a counter-based stream of the run).
 
-With zero error and true initial estimates a pair that never left gets the all-pairs step's
-bits; with errors the draws are other numbers of the same distributions
-(``tests/test_slo_ranging.py``). Selections RTS and Akcan (triangles of pairs), the
+With zero error and true initial estimates a pair whose history has no forgotten departure
+gets the all-pairs step's bits; with errors the draws are other numbers of the same
+distributions (``tests/test_slo_ranging.py``). Selections RTS and Akcan (triangles of pairs), the
 dead-reckoning entry policy (every pair carried), the full and random neighbourhoods (every
 pair used) and the formation motion need every pair and keep ``ranging = "all"``.
 """
