@@ -145,3 +145,32 @@ def test_numba_num_threads_does_not_change_a_batch():
         out.append(json.loads(done.stdout.strip().splitlines()[-1]))
     assert [o["threads"] for o in out] == [1, 2]
     assert out[0]["digest"] == out[1]["digest"]
+
+
+def test_a_batch_of_acoustic_swarms_is_the_same_on_one_thread_or_three(threads):
+    """The sonar's draws and its lag-grid correlation go to blocks of runs: the same bytes."""
+    from shoal.presets.build import build
+    from shoal.presets.io import load
+
+    out = []
+    for n in (1, 3):
+        threads(n)
+        sim = build(load("sonar-xb-pso"), runs=24, seed=2)
+        for _ in range(8):
+            info = sim.step()
+        out.append((sim.state.x.tobytes(), sim.state.f_hat.tobytes(), info.com_dist.tobytes(),
+                    [g.random() for g in sim.rngs]))
+    assert out[0] == out[1]
+
+
+def test_compiled_draws_in_blocks_are_the_generators_own_numbers(threads):
+    from shoal.engine.core.compiled_draws import CompiledDraws
+    from shoal.engine.core.rng import run_generators
+
+    threads(3)
+    a, b = run_generators(4, 0, 9), run_generators(4, 0, 9)
+    u, z = np.empty((9, 5000)), np.empty((9, 3, 2000))
+    CompiledDraws(a).fill(u, z, normal=(False, True))
+    for g, ur, zr in zip(b, u, z):
+        assert ur.tobytes() == g.random(5000).tobytes() and zr.tobytes() == g.standard_normal((3, 2000)).tobytes()
+    assert [g.random() for g in a] == [g.random() for g in b]

@@ -169,7 +169,8 @@ def test_a_preset_asking_for_what_neighbour_ranging_cannot_do_is_refused_by_name
 
 
 def test_the_preset_field_builds_a_neighbour_ranging_swarm_and_defaults_to_all_pairs():
-    assert load("slo-pso-sphere").slo.ranging == "all"
+    assert load("slo-pso-sphere").slo.ranging is None  # unset: every pair, and dumps as before
+    assert "ranging" not in load("slo-pso-sphere").model_dump()["slo"]
     assert build(load("slo-pso-sphere"), runs=1).config.ranging == "all"
     sw = build(load("slo-pso-sphere", ["slo.ranging=neighbours", "sim.robots=50"]), runs=2)
     assert isinstance(sw, SLOSwarm) and sw.config.ranging == "neighbours"

@@ -236,6 +236,7 @@ RULES: tuple[Rule, ...] = (
     stated("slo.walk_speed", 5.0, "Mai §4.5: |v| = U(0, 5)", _is("slo.motion", "random_walk")),
     read("slo.radial", "uniform_radius", "The point in the hypersphere (SPSO 2011)", _is("slo.motion", "pso")),
     read("slo.quality_threshold", None, "Quality thresholds"),
+    read("slo.ranging", None, "Estimates of robots outside the neighbourhood (SLO)"),  # unset: every pair
     read("slo.ranging", "all", "Estimates of robots outside the neighbourhood (SLO)"),
     ours("slo.ranging", "neighbours", "Ranging only the neighbours (ours)"),
     ours("slo.neighbourhood", "full", "a host scene of ours: every robot localises every robot",

@@ -342,6 +342,8 @@ class SLO(_Model):
     (docs/readings.md, "Thesis units on a scene (ours)").
     """
 
+    omit_unset = ("ranging",)  # added later: a scene that leaves it unset dumps as before
+
     swarm: Literal["slo", "host"] = Field(
         "slo",
         description="Mai's SLO swarm, or the scene's own swarm (Ch. 3, [world] fleet, [acoustics]) on SLO positions")
@@ -379,8 +381,9 @@ class SLO(_Model):
     quality_threshold: Annotated[float | None, Field(
         ge=-1e12, le=1e12,
         description="fitness T of 'first generation with best <= T'; unset = the benchmark's")] = None
-    ranging: Literal["all", "neighbours"] = Field(
-        "all", description="SLO swarm: every robot ranges and localises every other (the thesis, O(N²)), or only "
+    ranging: Literal["all", "neighbours"] | None = Field(
+        None, description="SLO swarm: every robot ranges and localises every other ('all', the thesis, O(N²); "
+        "unset means 'all'), or only "
         "the robots of its neighbourhood (ours, O(N·k): knn, radius or ring, CSS; a robot remembers the last few that "
         "left, frozen, and starts any other arriving neighbour from its initial estimate)")
 

@@ -9,7 +9,8 @@ generator's C function for the next output through its ``ctypes`` interface (num
 stream, its state stepped in place) and repeats both conversions compiled; the ziggurat tables
 are numba's copy of numpy's. ``tests/test_compiled_draws.py`` compares the draws and the
 generators' states with numpy's own calls. What a run saves is a Python call a draw: one call
-fills every run's arrays.
+fills every run's arrays, blocks of runs in parallel threads (:mod:`.parallel`) when there are
+enough draws to share.
 """
 
 from __future__ import annotations
@@ -24,7 +25,10 @@ from numba import types
 from numba.extending import intrinsic
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
+from . import parallel
 from .compiled import kernel
+
+BLOCK_DRAWS = 1 << 15  # draws a thread is given at least
 
 TO_DOUBLE = 1.0 / 9007199254740992.0  # 2⁻⁵³
 FF, ONE, MANTISSA = np.uint64(0xFF), np.uint64(1), np.uint64(0x000FFFFFFFFFFFFF)
@@ -143,4 +147,10 @@ class CompiledDraws:
             raise ValueError("CompiledDraws.fill: the arrays are filled in place and must be C-contiguous float64")
         if self.rngs:
             R = len(self.rngs)
-            _fill(self._next, self._states, tuple(a.reshape(R, -1) for a in arrays), np.array(normal, dtype=bool))
+            parts, kinds = tuple(a.reshape(R, -1) for a in arrays), np.array(normal, dtype=bool)
+            per_run = sum(a.shape[1] for a in parts)
+
+            def block(lo: int, hi: int) -> None:  # a run's draws touch its own generator and rows only
+                _fill(self._next, self._states[lo:hi], tuple(a[lo:hi] for a in parts), kinds)
+
+            parallel.each_block(block, R, min_block=max(1, BLOCK_DRAWS // max(1, per_run)))
