@@ -174,3 +174,20 @@ def test_compiled_draws_in_blocks_are_the_generators_own_numbers(threads):
     for g, ur, zr in zip(b, u, z):
         assert ur.tobytes() == g.random(5000).tobytes() and zr.tobytes() == g.standard_normal((3, 2000)).tobytes()
     assert [g.random() for g in a] == [g.random() for g in b]
+
+
+def test_a_forked_child_runs_its_batches_on_a_pool_of_its_own(threads):
+    """A process forked after a parallel batch (as the local process pool forks) gets the same bytes."""
+    import multiprocessing
+
+    threads(2)
+    here = _digest(sim := _swarm(runs=4), sim.run(40))
+    ctx = multiprocessing.get_context("fork")
+    with ctx.Pool(1) as pool:
+        there = pool.apply(_child_digest)
+    assert there == here
+
+
+def _child_digest() -> str:
+    sim = _swarm(runs=4)
+    return _digest(sim, sim.run(40))

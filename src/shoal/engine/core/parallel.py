@@ -84,6 +84,16 @@ def _mark() -> None:
     _inside.active = True
 
 
+def _forked() -> None:
+    """In a forked child: the parent's pool threads do not exist here, and its lock may have been held."""
+    global _lock, _pool
+    _lock, _pool = threading.Lock(), None
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forked)
+
+
 def each_block(fn: Callable[[int, int], object], runs: int, min_block: int = 1) -> None:
     """``fn(lo, hi)`` for every block of :func:`blocks`, the blocks in parallel threads (the
     first in the calling thread), with blocks of at least ``min_block`` runs; returns when all
