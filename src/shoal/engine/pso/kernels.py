@@ -200,40 +200,21 @@ def run_tick(r: int, x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarra
 
 
 @kernel
-def swarm_run(x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: np.ndarray, draws: np.ndarray,
-              first: int, omegas: np.ndarray, cs: np.ndarray, ahead: np.ndarray, literal: bool, adapted: bool,
-              dt: float, before: bool, maximise: bool, code: int, source: np.ndarray, scale: float, new: np.ndarray,
-              yg: np.ndarray, best: np.ndarray, turn: np.ndarray, turned: np.ndarray, speeds: np.ndarray,
-              bests: np.ndarray, track: int, tracked: np.ndarray) -> int:
-    """``len(omegas)`` ticks of :func:`swarm_step` in one call, with the coefficients ``omegas[j]``
-    and ``cs[j]`` (the same for every robot) and the draws ``draws[:, first + j]`` at tick j. The
-    states alternate between ``new[0]`` and ``new[1]`` (each (3, R, N, d)); returns the index of
-    the last. Per tick j: ``speeds[j]`` as in :func:`swarm_step`, ``bests[j]`` the runs' best
-    fitness, ``tracked[j]`` the velocity of robot ``track`` of every run."""
-    none2, none3 = np.empty((0, 0)), np.empty((0, 0, 0))
-    last = 0
-    for j in range(omegas.shape[0]):
-        last = j % 2
-        out = new[last]
-        swarm_step(x, u, y, f_y, f, draws, first + j, omegas[j], none2, cs[j], none3, ahead, literal, adapted, dt,
-                   before, maximise, code, source, scale, out, yg, best, turn, turned, speeds[j])
-        bests[j] = best
-        tracked[j] = out[1, :, track]
-        x, u = out[0], out[1]
-    return last
-
-
-@kernel
 def swarm_runs(lo: int, hi: int, x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: np.ndarray,
                fn: int, states: np.ndarray, omegas: np.ndarray, cs: np.ndarray, ahead: np.ndarray, literal: bool,
                adapted: bool, dt: float, before: bool, maximise: bool, code: int, source: np.ndarray, scale: float,
                new: np.ndarray, yg: np.ndarray, best: np.ndarray, turn: np.ndarray, turned: np.ndarray,
                speeds: np.ndarray, bests: np.ndarray, track: int, tracked: np.ndarray) -> int:
-    """:func:`swarm_run` for runs ``lo … hi − 1`` only, each run through all ``len(omegas)`` ticks
-    before the next, drawing its U(0,1) numbers itself from its own generator (PCG64's C
+    """``len(omegas)`` ticks of :func:`swarm_step` for runs ``lo … hi − 1`` in one call (for
+    :meth:`Simulation.run`), with the coefficients ``omegas[j]`` and ``cs[j]`` (the same for
+    every robot) at tick j, each run through all its ticks before the next, drawing its U(0,1)
+    numbers itself from its own generator (PCG64's C
     function at address ``fn`` on the state at ``states[r]``) as one ``random((2, N, d))`` call a tick
     would: the same numbers, and the generator left where those calls leave it. Blocks of runs
-    touch disjoint rows, so they may run in parallel threads (the kernel releases the GIL)."""
+    touch disjoint rows, so they may run in parallel threads (the kernel releases the GIL).
+    The states alternate between ``new[0]`` and ``new[1]`` (each (3, R, N, d)); returns the
+    index of the last. Per tick j: ``speeds[j]`` as in :func:`swarm_step`, ``bests[j]`` the
+    runs' best fitness, ``tracked[j]`` the velocity of robot ``track`` of every run."""
     N, d = x.shape[1], x.shape[2]
     ticks = omegas.shape[0]
     draws, buf = np.empty((2, N, d)), np.empty(d)
