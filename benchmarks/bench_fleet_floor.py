@@ -3,9 +3,10 @@ plus batched fleets on one thread and on every core (item 1).
 
 Run: python benchmarks/bench_fleet_floor.py [--base PATH] [--sizes 10 100 1000 10000 100000] [--reps 3]
 
-- **Tick**: ``Fleet.step()`` of ``course-dvc`` (omni DVC, sequential update, kinematic) with N
-  robots in a start square of side 2√N m (bench_scaling's same density at every size), one run,
-  wall time per tick over T ticks from the start.
+- **Tick**: ``Fleet.step()`` of ``course-dvc``'s controller (omni DVC, sequential update,
+  kinematic) with N robots in a start square of side 2√N m on an obstacle course 10 m wider
+  (bench_scaling's same density at every size), one run, wall time per tick over T ticks from
+  the start.
 - **Floor**: :func:`floor_ticks` below, a numba kernel that does the same T ticks in one call:
   for every tick, the whole tick of every run (``robots/tick_kernels.fleet_runs``: bests, the
   draws, the attractors, phase B, the metrics) into buffers reused from tick to tick, with no
@@ -37,17 +38,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_common import fmt, load_note, table  # noqa: E402
 
 
-def overrides(robots: int) -> list[str]:
-    side = round(2.0 * math.sqrt(robots), 1)
-    return [f"sim.robots={robots}", f"world.start_size={side}", f"world.width={side + 10}",
-            f"world.length={max(60.0, 2 * side + 30)}"]
-
-
 def make_fleet(robots: int, runs: int = 1):
-    from shoal.presets.build import build_fleet
-    from shoal.presets.io import load
+    """``course-dvc``'s fleet (the default FleetParams: omni DVC, sequential, kinematic) on an
+    obstacle course whose start square has side 2√N m, 10 m narrower than the course."""
+    from shoal.engine.kinds.fleet import Fleet, FleetParams
+    from shoal.engine.robots.world import obstacle_course
 
-    return build_fleet(load("course-dvc", overrides(robots)), runs=runs, seed=0)
+    side = round(2.0 * math.sqrt(robots), 1)
+    world = obstacle_course(seed=0, length=max(60.0, 2 * side + 30), width=side + 10, start_size=side)
+    return Fleet(world=world, robots=robots, params=FleetParams(), runs=runs, seed=0)
 
 
 def ticks_for(robots: int, quick: bool) -> int:

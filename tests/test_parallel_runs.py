@@ -191,3 +191,16 @@ def test_a_forked_child_runs_its_batches_on_a_pool_of_its_own(threads):
 def _child_digest() -> str:
     sim = _swarm(runs=4)
     return _digest(sim, sim.run(40))
+
+
+def _worker_threads(_: int) -> int:
+    return parallel.threads()
+
+
+def test_local_pool_workers_share_the_cores(threads):
+    """Two worker processes on four threads' worth: two each, so workers × threads stays the count."""
+    from shoal.studies.experiments.schedulers import LocalPool
+
+    threads(4)
+    pool = LocalPool(2)
+    assert {t for _, t in pool.map_unordered(_worker_threads, [0, 1, 2])} == {2}
