@@ -18,6 +18,7 @@ from ..core.contract import check_live
 from ..core.rng import run_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, fields_of, from_fields, integer, part, rng_states, set_rng_states
+from ..pso.bests import best_of, improves
 from ..robots import kernels
 from ..robots.dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
 from ..robots.laws import ROBOT_LAWS, Inertia, Limits, rotational_energy_factor
@@ -239,7 +240,7 @@ class Fleet:
         heading = np.zeros(x.shape[:2])
         f = self.cost(x)
         R, N = f.shape
-        best = np.argmin(f, axis=1)
+        best = best_of(f, False, axis=1)
         self.state = FleetState(
             x=x, heading=heading, u=np.zeros_like(x), cmd=np.zeros_like(x), y=x.copy(), f_y=f.copy(),
             yg=x[np.arange(R), best], best_fitness=f[np.arange(R), best], f=f, status=np.zeros((R, N), np.int8),
@@ -318,10 +319,11 @@ class Fleet:
         before = s.f_y.copy()
         active = s.status == ACTIVE
         s.f = self.cost(s.x)
-        better = active & (s.f < s.f_y)  # disabled robots keep their last best: docs/readings.md, "Disabled robots"
+        better = active & improves(s.f, s.f_y, False)  # disabled robots keep their last best: docs/readings.md,
+        # "Disabled robots"; NaN is never a best (pso/bests.py)
         s.y = np.where(better[..., None], s.x, s.y)
         s.f_y = np.where(better, s.f, s.f_y)
-        idx = np.argmin(s.f_y, axis=1)
+        idx = best_of(s.f_y, False, axis=1)
         runs = np.arange(self.runs)
         s.yg, s.best_fitness = s.y[runs, idx], s.f_y[runs, idx]
         self.positions.keep(s.f_y != before)  # a new best is where the robot stands
@@ -352,7 +354,7 @@ class Fleet:
 
     def _to_global(self) -> np.ndarray:
         s = self.state
-        return self.positions.to_owner(s.x, s.y, np.argmin(s.f_y, axis=1))
+        return self.positions.to_owner(s.x, s.y, best_of(s.f_y, False, axis=1))
 
     def believed_gbest(self) -> np.ndarray:
         """(R, N, 2) where each robot believes the global best is (y_g itself on true positions)."""

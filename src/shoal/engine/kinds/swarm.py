@@ -19,7 +19,7 @@ from ..core.rng import BlockDraws, run_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, integer, part, rng_states, set_rng_states
 from ..pso import kernels
-from ..pso.bests import best_index, global_best, update_personal
+from ..pso.bests import best_index, global_best, update_personal, warn_unfound
 from ..pso.coeffs import CoefficientPolicy
 from ..pso.laws import Law
 from ..pso.laws import motion_heading as _heading
@@ -228,6 +228,13 @@ class Simulation:
         self._coefficients: tuple[np.ndarray | float, np.ndarray] = (np.nan, np.full(1, np.nan))
         s = self.state
         self.positions.start(s.x, s.y, s.k, self.seed, self.first_run)
+        self._warned = False
+        self._honest()
+
+    def _honest(self) -> None:
+        """Say once if some run has no best yet (every value NaN or the worst infinity)."""
+        self._warned = warn_unfound(self.state.best_fitness, self.objective.maximise, self.objective.name,
+                                    self._warned)
 
     @property
     def rngs(self) -> list[np.random.Generator]:
@@ -347,8 +354,13 @@ class Simulation:
 
     def step(self) -> StepInfo:
         """Advance every run by one control tick Δt."""
-        if self._compiled_tick():
-            return self._compiled_step()
+        info = self._compiled_step() if self._compiled_tick() else self._numpy_step()
+        if not self._warned:
+            self._honest()
+        return info
+
+    def _numpy_step(self) -> StepInfo:
+        """The tick of :meth:`step` in numpy (the reference of the compiled one)."""
         s = self.state
         if self.pbest_order == "before_velocity":  # Algorithm 1 phase A first
             self._update_bests()
@@ -503,6 +515,8 @@ class Simulation:
         out.c += cs
         s.k += n
         self._coefficients = (omegas[-1], cs[-1])
+        if not self._warned:
+            self._honest()
         return n
 
     # ------------------------------------------------------------------ snapshot
