@@ -11,6 +11,7 @@ its state and metrics, retunes it live and collects its metrics as a table.
 from __future__ import annotations
 
 import copy
+import dataclasses
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
@@ -59,21 +60,39 @@ def scenario_of(preset: str | Path | Mapping[str, Any] | Scenario = "default", o
 
 
 def _objective_name(value: Any) -> Any:
-    """A function given as an objective: its registered name (registering it under ``__name__``)."""
+    """A function given as an objective: its registered name. A function met for the first time is
+    registered under its ``__name__`` or, where another objective holds that (a built-in
+    ``rastrigin``, another module's function), under ``module.qualname``; a function with the
+    module and qualname of one registered so (a notebook cell run again) replaces it, so scenes
+    made from then on, and those already made from their next tick, use the new definition."""
     if not callable(value):
         return value
     for name, entry in OBJECTIVES.items():
         if entry.f is value:
             return name
-    name = getattr(value, "__name__", "")
-    if not name or name == "<lambda>":
+    bare = getattr(value, "__name__", "")
+    if not bare or bare == "<lambda>":
         raise PresetError(["objective: register a lambda first (shoal.register_objective(name, f)) or pass a "
                            "named function"])
-    if name in OBJECTIVES:
-        raise ValueError(f"objective: {name!r} names another objective already; register yours under a name of its "
-                         "own (shoal.register_objective(name, f)) and give that name")
-    OBJECTIVES.register(ObjectiveFunction(name, name, value))
-    return name
+    origin = _origin(value)
+    names = (bare, ".".join(p for p in origin if p))
+    for name in names:
+        found = OBJECTIVES.get(name)
+        if found is None:
+            OBJECTIVES.register(ObjectiveFunction(name, name, value))
+            return name
+        if _origin(found.f) == origin:  # the same function, defined again
+            OBJECTIVES.register(dataclasses.replace(found, f=value), replace=True)
+            return name
+    raise ValueError(f"objective: {names[0]!r} and {names[1]!r} name other objectives already; register yours under "
+                     "a name of its own (shoal.register_objective(name, f)) and give that name")
+
+
+def _origin(f: Any) -> tuple[str, str]:
+    """Where a function was defined: its module and qualified name (a numba dispatcher's, its Python function's)."""
+    f = getattr(f, "py_func", f)
+    qualname = getattr(f, "__qualname__", None) or getattr(f, "__name__", "")
+    return str(getattr(f, "__module__", None) or ""), str(qualname)
 
 
 def make(preset: str | Path | Mapping[str, Any] | Scenario = "default", overrides: Sequence[str] = (), *,
