@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from shoal import __version__
-from shoal.engine.core.snapshot import SnapshotError, from_bytes, to_bytes
+from shoal.engine.core.snapshot import MAX_BYTES, SnapshotError, from_bytes, to_bytes
 from shoal.presets.io import PresetError, validate
 from shoal.presets.models import Scenario
 
@@ -48,9 +48,11 @@ class Snapshot:
         return to_bytes(header, {"engine": self.engine, "rows": self.rows, "trajectories": self.trajectories})
 
     @classmethod
-    def from_bytes(cls, blob: bytes) -> Snapshot:
-        """The snapshot :meth:`to_bytes` wrote; :class:`SnapshotError` for anything else."""
-        header, data = from_bytes(blob)
+    def from_bytes(cls, blob: bytes, *, max_bytes: int = MAX_BYTES) -> Snapshot:
+        """The snapshot :meth:`to_bytes` wrote; :class:`SnapshotError` for anything else, or for
+        one that would unpack to more than ``max_bytes``. Nothing is built: a server can price
+        :attr:`scenario` before it makes the scene."""
+        header, data = from_bytes(blob, max_bytes)
         raw = header.get("scenario")
         if not isinstance(raw, dict):
             raise SnapshotError("snapshot: its header holds no scenario")
