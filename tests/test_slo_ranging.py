@@ -180,3 +180,19 @@ def test_the_preset_field_builds_a_neighbour_ranging_swarm_and_defaults_to_all_p
         SLOSwarm(ranging="some")
     with pytest.raises(ValueError, match="neighbourhood"):
         ranging.neighbour_slots(Neighbourhood("full"), np.zeros((1, 3, 2)))
+
+
+def test_a_snapshot_of_a_neighbour_ranging_scene_goes_on_with_the_same_bits():
+    import shoal
+
+    original = shoal.make("slo-pso-sphere", ["slo.ranging=neighbours", "sim.robots=40", "slo.errors=high"], runs=2,
+                          seed=11)
+    original.run(6)
+    copy = shoal.make(snapshot=original.snapshot().to_bytes())
+    for scene in (original, copy):
+        scene.run(25)
+    a, b = original.engine.state, copy.engine.state
+    for name in ("x", "u", "P", "fP"):
+        assert getattr(a, name).tobytes() == getattr(b, name).tobytes(), name
+    assert a.beliefs.slot_est.tobytes() == b.beliefs.slot_est.tobytes()
+    assert a.beliefs.memory[1].tobytes() == b.beliefs.memory[1].tobytes()

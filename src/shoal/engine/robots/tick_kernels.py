@@ -4,7 +4,7 @@ metrics of :meth:`~shoal.engine.kinds.fleet.Fleet.info`, run by run.
 
 A tick of a small fleet in numpy around :func:`.kernels.phase_b` is a few dozen calls on tiny
 arrays, more than the kernel's own work below a few hundred robots. :func:`fleet_runs` repeats
-that numpy in its order (the cost's ``norm``, ``argmin``'s first minimum or first NaN, the
+that numpy in its order (the cost's ``norm``, the honest bests of ``pso/bests.py``, the
 mean's pairwise sum, the maximum's NaN) and draws each run's U(0,1) numbers from its own
 generator as ``Generator.random`` would, so its bits are the numpy tick's
 (``tests/test_fleet_tick.py``). Each run reads and writes its own rows only, so blocks of
@@ -26,16 +26,19 @@ STATE = ("x", "heading", "u", "cmd", "status", "slow", "y", "f_y")  # what a tic
 
 
 @kernel
-def _argmin(a: np.ndarray) -> int:
-    """numpy's argmin of a row: the first minimum, or the first NaN if there is one."""
-    best = 0
+def _admissible(v: float) -> bool:
+    """A cost that may be a best (``pso.bests.admissible``, minimising): not NaN, not +inf."""
+    return v == v and v != np.inf
+
+
+@kernel
+def _best_of(a: np.ndarray) -> int:
+    """``pso.bests.best_of`` of a row (minimising): the first least admissible value, else 0."""
+    best = -1
     for i in range(a.shape[0]):
-        v = a[i]
-        if v != v:
-            return i
-        if v < a[best]:
+        if _admissible(a[i]) and (best < 0 or a[i] < a[best]):
             best = i
-    return best
+    return max(best, 0)
 
 
 @kernel
@@ -67,15 +70,15 @@ def fleet_runs(lo: int, hi: int, old: tuple, new: tuple, f: np.ndarray, yg: np.n
             u[r, i, 0], u[r, i, 1] = u0[r, i, 0], u0[r, i, 1]
             cmd[r, i, 0], cmd[r, i, 1] = cmd0[r, i, 0], cmd0[r, i, 1]
             heading[r, i], status[r, i] = heading0[r, i], status0[r, i]
-            # phase A: the cost at the true position, the bests of the robots still active
+            # phase A: the cost at the true position, the bests of the robots still active (never NaN)
             dx, dy = x[r, i, 0] - source[0], x[r, i, 1] - source[1]
             fi = math.sqrt(dx * dx + dy * dy)
             f[r, i] = fi
-            if status[r, i] == ACTIVE and fi < f_y0[r, i]:
+            if status[r, i] == ACTIVE and _admissible(fi) and (fi < f_y0[r, i] or not _admissible(f_y0[r, i])):
                 f_y[r, i], y[r, i, 0], y[r, i, 1] = fi, x[r, i, 0], x[r, i, 1]
             else:
                 f_y[r, i], y[r, i, 0], y[r, i, 1] = f_y0[r, i], y0[r, i, 0], y0[r, i, 1]
-        b = _argmin(f_y[r])
+        b = _best_of(f_y[r])
         yg[r, 0], yg[r, 1], best[r] = y[r, b, 0], y[r, b, 1], f_y[r, b]
         state = states[r]
         for t in range(draws.shape[0]):  # the run's draws of this tick, in Generator.random's order

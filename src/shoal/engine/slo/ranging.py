@@ -26,12 +26,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 
 from ..core.compiled import f64, kernel
 from ..core.compiled_draws import CompiledDraws
 from ..core.rng import Streams
+from ..core.snapshot import SnapshotError, arrays, integer, part
 from . import neighbour_kernels
 from .beliefs import PERFECT, LocaliserParams
 from .candidates import Candidates, Flag
@@ -303,6 +305,50 @@ class SlotBeliefs:
         return self._scattered(self.slot_flag, float(Flag.FALLBACK), np.int8)
 
 
+SLOT_ARRAYS = ("nb", "slot_est", "slot_ranges", "slot_kind", "slot_flag", "odometry")
+
+
+def slot_beliefs_data(b: SlotBeliefs) -> dict[str, Any]:
+    """``b`` as plain data (:mod:`~shoal.engine.core.snapshot`): the slots, the memory and where
+    the initial estimates come from."""
+    st = b.start
+    return {**{n: getattr(b, n) for n in SLOT_ARRAYS}, "memory": list(b.memory),
+            "start": {"truth": st.truth, "x": st.x, "keys": st.keys, "lo": st.lo, "hi": st.hi}}
+
+
+def slot_beliefs_from(data: Any, runs: int, n: int, where: str = "beliefs") -> SlotBeliefs:
+    """The :class:`SlotBeliefs` of :func:`slot_beliefs_data`'s ``data``, for ``runs`` × ``n`` robots."""
+    got = {name: arrays(part(data, name, where), f"{where}.{name}") for name in SLOT_ARRAYS}
+    nb = got["nb"]
+    if nb.ndim != 3 or nb.shape[:2] != (runs, n) or nb.dtype != np.int64:
+        raise SnapshotError(f"{where}.nb: expected int64 ({runs}, {n}, K), got {nb.dtype}{nb.shape}")
+    K = nb.shape[2]
+    want = {"slot_est": (runs, n, K, 2), "slot_ranges": (runs, n, K), "slot_kind": (runs, n, K),
+            "slot_flag": (runs, n, K), "odometry": (runs, n, 2)}
+    for name, shape in want.items():
+        if got[name].shape != shape:
+            raise SnapshotError(f"{where}.{name}: expected shape {shape}, got {got[name].shape}")
+    if ((nb < -1) | (nb >= n)).any():
+        raise SnapshotError(f"{where}.nb: a neighbour outside 0 … {n - 1}")
+    mem = part(data, "memory", where)
+    if not isinstance(mem, list) or len(mem) != 3:
+        raise SnapshotError(f"{where}.memory: expected [who, frozen, left]")
+    who, frozen, left = (arrays(v, f"{where}.memory[{i}]") for i, v in enumerate(mem))
+    M = who.shape[2] if who.ndim == 3 else -1
+    if who.shape != (runs, n, M) or frozen.shape != (runs, n, M, 2) or left.shape != (runs, n, M) \
+            or who.dtype != np.int64 or left.dtype != np.int64 or ((who < -1) | (who >= n)).any():
+        raise SnapshotError(f"{where}.memory: expected who and left int64 ({runs}, {n}, M), frozen (…, 2)")
+    st, at = part(data, "start", where), f"{where}.start"
+    x0, keys = arrays(part(st, "x", at), f"{at}.x"), arrays(part(st, "keys", at), f"{at}.keys")
+    truth, lo, hi = part(st, "truth", at), part(st, "lo", at), part(st, "hi", at)
+    if x0.shape != (runs, n, 2) or keys.shape != (runs,) or keys.dtype != np.uint64 or not isinstance(truth, bool) \
+            or not all(isinstance(v, float) for v in (lo, hi)):
+        raise SnapshotError(f"{where}.start: expected truth, x ({runs}, {n}, 2), uint64 keys ({runs},), lo and hi")
+    start = Start(truth, f64(x0), keys, lo, hi)
+    return SlotBeliefs(nb, f64(got["slot_est"]), f64(got["slot_ranges"]), got["slot_kind"].astype(np.int8),
+                       got["slot_flag"].astype(np.int8), f64(got["odometry"]), (who, f64(frozen), left), start)
+
+
 class SlotLocaliser:
     """:class:`~.beliefs.Localiser` for neighbour-only ranging: the same sensors and
     permanent errors, the pairs of each robot's neighbourhood only."""
@@ -324,6 +370,22 @@ class SlotLocaliser:
         if errors is not None:
             self.errors = errors
             self.permanent = permanent_errors(errors, self._z)
+
+    def snapshot(self) -> dict[str, Any]:
+        """The calibration draws (as :meth:`~.beliefs.Localiser.snapshot`)."""
+        return {"n": self.n, "z": self._z}
+
+    def restore(self, data: Any) -> None:
+        n = integer(part(data, "n", "localiser"), "localiser.n", 1)
+        z = arrays(part(data, "z", "localiser"), "localiser.z", dtype=np.floating)
+        if z.shape != (self._z.shape[0], self._z.shape[1], n) or n != self.n:
+            raise SnapshotError(f"localiser.z: expected shape {self._z.shape}, got {z.shape}")
+        self._z = z
+        self.permanent = permanent_errors(self.errors, z)
+
+    def adopt(self, b: SlotBeliefs) -> None:
+        """Initial estimates from now on as a restored ``b`` says."""
+        self.start_info = b.start
 
     def _range_params(self) -> np.ndarray:
         rg = self.errors.range
