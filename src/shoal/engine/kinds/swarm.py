@@ -546,7 +546,7 @@ class Simulation:
                 raise SnapshotError(f"state.{n}: expected shape {shape}, got {got[n].shape}")
         omega = part(data, "omega")
         omega = arrays(omega, "omega") if isinstance(omega, np.ndarray) else omega
-        if not isinstance(omega, float):
+        if not isinstance(omega, (float, np.ndarray)):  # an array: ω per robot (a steered tick)
             raise SnapshotError("omega: expected a float or an array")
         k, seed, dt = integer(part(data, "k"), "k"), integer(part(data, "seed"), "seed"), part(data, "dt")
         if not isinstance(dt, float) or not dt > 0:
