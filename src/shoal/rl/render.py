@@ -81,7 +81,7 @@ class Trails:
 
     def read(self) -> np.ndarray:
         """(robots, points, d), at most TRAIL_LIMITS robots of TRAIL_LIMITS points each."""
-        if self.buffer is None or self.count == 0:
+        if self.buffer is None or self.count < 2:  # a trail needs two points
             return np.zeros((0, 0, 2))
         n = min(self.count, self.steps)
         idx = (np.arange(self.count - n, self.count)) % self.steps
@@ -125,7 +125,7 @@ class Renderer:
         w, h = SIZE
         fig = Figure(figsize=(w / 100, h / 100), dpi=100, facecolor="white")
         canvas = FigureCanvasAgg(fig)
-        ax = fig.add_axes((0.02, 0.03, 0.68, 0.9))
+        ax = fig.add_axes((0.08, 0.06, 0.62, 0.86))
         ax.set_aspect("equal")
         ax.set_facecolor("white")
         legend: list[tuple[Any, str]] = []
@@ -139,7 +139,7 @@ class Renderer:
                      fontsize=9, loc="left")
         ax.tick_params(labelsize=7)
         if legend:
-            fig.legend([g for g, _ in legend], [t for _, t in legend], loc="upper left", bbox_to_anchor=(0.71, 0.93),
+            fig.legend([g for g, _ in legend], [t for _, t in legend], loc="upper left", bbox_to_anchor=(0.72, 0.93),
                        fontsize=8, frameon=False)
         canvas.draw()
         return np.asarray(canvas.buffer_rgba())[..., :3].copy()
@@ -170,7 +170,7 @@ class Renderer:
         colours = np.array([rgb(p.collided if (p.collided is not None and st != 0) else p.robot) for st in status])
         heading = np.asarray(s.heading[0], dtype=float)
         span = self._span(ax)
-        tip = x + 0.04 * span * np.stack([np.cos(heading), np.sin(heading)], axis=-1)
+        tip = x + 0.025 * span * np.stack([np.cos(heading), np.sin(heading)], axis=-1)
         from matplotlib.collections import LineCollection
 
         ax.add_collection(LineCollection(list(np.stack([x, tip], axis=1)), colors=[rgb(p.heading)], linewidths=1.5,
@@ -259,9 +259,10 @@ class Renderer:
         extra = dict(p.extra)
         s = e.state
         src = np.asarray(s.source[0], dtype=float)
-        pts = np.vstack([s.x[0], src[None]])
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
-        c, half = (lo + hi) / 2.0, max(float((hi - lo).max()) / 2.0, e.params.dc) * 1.15
+        reach = max(e.params.dc, e.params.r_trap)
+        lo = np.minimum(s.x[0].min(axis=0), src - reach)
+        hi = np.maximum(s.x[0].max(axis=0), src + reach)
+        c, half = (lo + hi) / 2.0, float((hi - lo).max()) / 2.0 * 1.08
         self._frame_box(ax, (c[0] - half, c[1] - half, c[0] + half, c[1] + half), pad=0.0)
         ax.add_patch(Circle(tuple(src), e.params.dc, fill=False, ec=rgb(extra["d_c"]), lw=1.2, ls="--", zorder=1))
         if e.params.r_trap > 0:
