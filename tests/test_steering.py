@@ -145,3 +145,16 @@ def test_given_coefficients_steer_the_compiled_fleet_as_its_numpy_tick():
     o = runs[0].engine.state.omega
     assert np.all(o[:, ::2] == 0.5) and np.allclose(o[:, 1::2], 1 - runs[0].engine.params.beta)
     assert np.all(runs[0].engine.state.c[0] == 0.2)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_steered_fleet_senses_nothing_it_does_not_need(compiled):
+    """A given command needs no six-sector reading (the environment senses for its observation);
+    the DVC guard still needs the gaps, so with the guard on the robots sense as the law's do."""
+    for guard, sensed in ((False, False), (True, True)):
+        scene = shoal.make("course-dvc", runs=2, seed=1, controller={"guard": guard})
+        scene.engine.compiled = compiled
+        scene.engine.steering = Steering(velocity=np.full(scene.state.x.shape, 0.5))
+        scene.step()
+        assert (scene.engine.state.reading is not None) == sensed
+        assert np.all(np.isfinite(scene.state.x))

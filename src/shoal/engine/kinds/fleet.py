@@ -529,9 +529,13 @@ class Fleet:
         robot sensed."""
         p, s = self.params, self.state
         sensed = False
+        blind = self._steered[0] and not (p.dvc and p.guard)  # a given command needs no sensing
         for group in self._groups(s.status == ACTIVE):
             m = group & (s.status == ACTIVE)
             if not m.any():
+                continue
+            if blind:
+                self._move(m, np.where(m[..., None], steered_command(s.cmd, ROBOT_LAWS[p.law], p.limits, SLACK), 0.0))
                 continue
             sensed = True
             reading = self._sense(m)
@@ -543,18 +547,22 @@ class Fleet:
             cmd = self._velocity(omega, c, force, r)
             if p.dvc and p.guard:
                 cmd = self._guard(cmd, reading, gap)
-            cmd = np.where(m[..., None], cmd, 0.0)
-            moved = self.motion.move(self.spaces, s.x, s.heading, cmd, m, p.dt)
-            s.x = np.where(m[..., None], moved.x, s.x)
-            s.heading = np.where(m, moved.heading, s.heading)
-            s.u = np.where(m[..., None], moved.velocity, s.u)
-            s.cmd = np.where(m[..., None], cmd, s.cmd)
-            struck = moved.hit if moved.struck is None else moved.hit | moved.struck
-            s.status = np.where(struck | self._touching(m), COLLIDED, s.status).astype(np.int8)
+            self._move(m, np.where(m[..., None], cmd, 0.0))
             out.omega[m], out.c[:, m], out.force[m] = omega[m], c[:, m], force[m]
             out.gap[m], out.point[m], out.centre[m], out.hit[m] = (
                 reading.gap[m], reading.point[m], reading.centre[m], reading.hit[m])
         return sensed
+
+    def _move(self, m: np.ndarray, cmd: np.ndarray) -> None:
+        """Move the robots ``m`` by their commands ``cmd`` (zero for the others); a contact disables."""
+        p, s = self.params, self.state
+        moved = self.motion.move(self.spaces, s.x, s.heading, cmd, m, p.dt)
+        s.x = np.where(m[..., None], moved.x, s.x)
+        s.heading = np.where(m, moved.heading, s.heading)
+        s.u = np.where(m[..., None], moved.velocity, s.u)
+        s.cmd = np.where(m[..., None], cmd, s.cmd)
+        struck = moved.hit if moved.struck is None else moved.hit | moved.struck
+        s.status = np.where(struck | self._touching(m), COLLIDED, s.status).astype(np.int8)
 
     def _compiled_tick(self) -> bool:
         """Kinematic motion through :func:`kernels.phase_b` (unless the fleet was made with

@@ -73,7 +73,8 @@ class TickParams(NamedTuple):
     tolerance: float  # contact tolerance
     s_floor: float  # smallest gap in [4.4]
     reach: float  # R_s + 2r + 2 v_max Δt: robots farther apart cannot interact within a tick
-    steered: bool = False  # the command is the one in ``cmd`` (core/steering.py), limited as the law limits its own
+    steered: bool = False  # the command is the one in ``cmd`` (core/steering.py), limited as the law limits its own;
+    # the robots then sense nothing in the tick (nothing reads it), unless the DVC guard needs the gaps
     given: bool = False  # ω and c are read from ``out`` where they are not NaN (core/steering.py)
 
 
@@ -694,9 +695,13 @@ def phase_b(x: np.ndarray, heading: np.ndarray, u: np.ndarray, cmd: np.ndarray, 
                     m += 1
             if m == 0:
                 continue
-            sensed = True
+            blind = p.steered and not (p.guard and p.coefficients != CONSTANT)  # a given command needs no sensing
+            sensed = sensed or not blind
             for s in range(m):  # everyone in the group senses and decides ...
                 i = members[s]
+                if blind:
+                    new_cmd[i, 0], new_cmd[i, 1] = _steered(cmd[r, i], p)
+                    continue
                 turn = heading[r, i] if p.body_frame else 0.0
                 gap, point, centre, seen = out.gap[r, i], out.point[r, i], out.centre[r, i], out.hit[r, i]
                 _sense(i, xr, turn, p, w, g, head, nxt, ostamp, gap, point, centre, seen)
