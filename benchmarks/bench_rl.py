@@ -11,8 +11,9 @@ Run: python benchmarks/bench_rl.py [--envs 32] [--robots 20] [--steps 100] [--re
   the environment moves every robot exactly as ``Scene.step`` does (the script checks the positions
   agree to the bit): the two sides do the same engine work, and the difference is the env layer
   (the steering, the observation with each robot's six-sector reading, reward, end rule, info).
-* VMAS 1.5 ``flocking`` (agents with a LiDAR, obstacles, collisions; its physics engine) on the CPU,
-  the same number of envs and agents, random actions; run by ``--vmas-python``, the interpreter of
+* VMAS 1.5 ``flocking`` (agents with a LiDAR, obstacles, collisions; its physics engine; or
+  ``--vmas-scenario navigation``: a LiDAR, no obstacles) on the CPU, the same number of envs and
+  agents, random actions; run by ``--vmas-python``, the interpreter of
   a separate venv with ``torch`` and ``vmas`` (never this project's: ``pip install torch==2.13.0
   vmas==1.5.2`` there). Without it the VMAS row is left out.
 
@@ -44,7 +45,8 @@ import torch
 torch.set_num_threads(1)
 import vmas
 envs, agents, steps, seed = (int(a) for a in sys.argv[1:5])
-env = vmas.make_env(scenario="flocking", num_envs=envs, device="cpu", continuous_actions=True, seed=seed,
+scenario = sys.argv[5]
+env = vmas.make_env(scenario=scenario, num_envs=envs, device="cpu", continuous_actions=True, seed=seed,
                     n_agents=agents)
 env.reset()
 g = torch.Generator().manual_seed(seed)
@@ -102,8 +104,8 @@ def time_env(envs, commands: list[np.ndarray], seed: int, end: np.ndarray) -> fl
     return cpu
 
 
-def time_vmas(python: str, envs: int, robots: int, steps: int, seed: int) -> dict:
-    done = subprocess.run([python, "-c", VMAS_CHILD, str(envs), str(robots), str(steps), str(seed)],
+def time_vmas(python: str, envs: int, robots: int, steps: int, seed: int, scenario: str) -> dict:
+    done = subprocess.run([python, "-c", VMAS_CHILD, str(envs), str(robots), str(steps), str(seed), scenario],
                           capture_output=True, text=True, timeout=3600)
     if done.returncode != 0:
         raise SystemExit(f"VMAS failed:\n{done.stderr[-3000:]}")
@@ -118,6 +120,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--vmas-python", help="python of a venv with torch and vmas (VMAS row left out without it)")
+    ap.add_argument("--vmas-scenario", default="flocking", help="flocking (obstacles, LiDAR) or navigation (LiDAR)")
     ap.add_argument("--quick", action="store_true", help="4 envs × 5 robots, 20 steps, 2 repeats")
     args = ap.parse_args(argv)
     if args.quick:
@@ -139,7 +142,7 @@ def main(argv: list[str] | None = None) -> None:
         results["scene"].append(time_scene(E, N, T, args.seed))
         results["env"].append(time_env(envs, commands, args.seed, end))
         if args.vmas_python:
-            got = time_vmas(args.vmas_python, E, N, T, args.seed)
+            got = time_vmas(args.vmas_python, E, N, T, args.seed, args.vmas_scenario)
             vmas_meta = got
             results["vmas"].append(got["cpu"])
     med = {k: float(np.median(v)) for k, v in results.items() if v}
@@ -149,7 +152,8 @@ def main(argv: list[str] | None = None) -> None:
             ["ShoalVectorEnv.step (course-dvc, velocity)", f"{E} × {N}", f"{med['env'] / T * 1e3:.3f}",
              f"{rate['env'] / 1e3:.1f} k", "–"]]
     if "vmas" in med:
-        rows.append([f"VMAS {vmas_meta['version']} flocking (torch {vmas_meta['torch']}, CPU)", f"{E} × {N}",
+        what = f"VMAS {vmas_meta['version']} {args.vmas_scenario} (torch {vmas_meta['torch']}, CPU)"
+        rows.append([what, f"{E} × {N}",
                      f"{med['vmas'] / T * 1e3:.3f}", f"{rate['vmas'] / 1e3:.1f} k",
                      f"{rate['env'] / rate['vmas']:.1f}×"])
     print(f"# shoal.rl vector env: {E} envs × {N} robots, {T} steps, median of {args.repeats} ({pinned}; "
