@@ -74,17 +74,25 @@ def test_the_observation_is_the_documented_dict_and_holds_the_kinds_sensing():
 def test_rewards_are_the_kinds_headline_metrics():
     env = gym.make("shoal/course-dvc-v0", **SMALL)
     env.reset(seed=1)
-    _, reward, *_ = env.step(shoal.rl.baseline(env))
     e = env.unwrapped.scene.engine
-    assert reward == pytest.approx(-np.linalg.norm(e.state.x[0] - e.source, axis=-1).mean())
+    before = np.linalg.norm(e.state.x[0] - e.source, axis=-1).mean()
+    ret = sum(env.step(shoal.rl.baseline(env))[1] for _ in range(8))
+    after = np.linalg.norm(e.state.x[0] - e.source, axis=-1).mean()
+    assert ret == pytest.approx(before - after) and ret > 0.5, "the return is the fleet's progress to the source"
     env = gym.make("shoal/sonar-xb-pso-v0", **SMALL)
     env.reset(seed=1)
+    e = env.unwrapped.scene.engine
+    before = e.state.snr_db[0].mean()
     _, reward, *_ = env.step(shoal.rl.baseline(env))
-    assert reward == pytest.approx(env.unwrapped.scene.engine.state.snr_db[0].mean())
+    assert reward == pytest.approx(e.state.snr_db[0].mean() - before), "the rise of the signal level"
     env = gym.make("shoal/default-v0", **SMALL)
     env.reset(seed=1)
     _, reward, *_ = env.step(shoal.rl.baseline(env))
     assert reward == pytest.approx(-env.unwrapped.scene.engine.state.best_fitness[0]), "minus f(y_g) for a cost"
+    env = gym.make("shoal/slo-pso-sphere-v0", **SMALL)
+    env.reset(seed=1)
+    _, reward, *_ = env.step(shoal.rl.baseline(env))
+    assert reward == pytest.approx(-env.unwrapped.scene.engine.state.f[0].min()), "minus the generation's best"
 
 
 def test_terminated_when_the_thesis_end_rule_holds_truncated_at_the_horizon():

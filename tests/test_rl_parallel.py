@@ -35,9 +35,10 @@ def test_one_agent_per_robot_with_the_same_spaces_and_its_own_parts():
         assert np.array_equal(obs[a]["position"], x[i].astype(np.float32))
         assert obs[a]["sectors"].shape == (6,) and obs[a]["global_best"].shape == (2,)
     actions = {a: np.array([1.0, 0.0]) for a in env.agents}
+    before = np.linalg.norm(env.scene.state.x[0] - env.scene.engine.source, axis=-1)
     obs, rewards, terms, truncs, infos = env.step(actions)
-    cost = np.linalg.norm(env.scene.state.x[0] - env.scene.engine.source, axis=-1)
-    assert [rewards[a] for a in ["robot_0", "robot_1", "robot_2", "robot_3"]] == pytest.approx(list(-cost))
+    after = np.linalg.norm(env.scene.state.x[0] - env.scene.engine.source, axis=-1)
+    assert [rewards[a] for a in ["robot_0", "robot_1", "robot_2", "robot_3"]] == pytest.approx(list(before - after))
 
 
 def test_a_disabled_robot_is_terminated_and_leaves_the_agents():

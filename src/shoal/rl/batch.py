@@ -60,6 +60,8 @@ class Batch:
         self.elapsed = np.zeros(R, np.int64)  # ticks of each run's episode
         self.seeds = np.full(R, self.scene.scenario.sim.seed, np.int64)  # the seed each run's episode started from
         self.fresh = np.ones(R, bool)  # not stepped since its episode started
+        self._level = self._levels()  # the headline metric now, of the swarm (R,) and its robots (R, N)
+        self.robot_rewards = np.zeros((R, self.robots))  # each robot's reward of the last tick
 
     # ------------------------------------------------------------------ shapes
     @property
@@ -91,6 +93,7 @@ class Batch:
         self.elapsed[:] = 0
         self.seeds[:] = seed
         self.fresh[:] = True
+        self._level = self._levels()
 
     def restart(self, runs: np.ndarray, seeds: np.ndarray) -> None:
         """Runs ``runs`` alone from step 0, run i with ``seeds[i]`` (the others go on)."""
@@ -102,6 +105,8 @@ class Batch:
         self.elapsed[runs] = 0
         self.seeds[runs] = seeds
         self.fresh[runs] = True
+        swarm, robots = self._levels()
+        self._level[0][runs], self._level[1][runs] = swarm[runs], robots[runs]
 
     # ------------------------------------------------------------------ stepping
     def check(self, action: Any) -> np.ndarray:
@@ -130,10 +135,21 @@ class Batch:
         engine.step()
         self.elapsed += 1
         self.fresh[:] = False
-        return self.reward(), self.terminated()
+        return self._rewards(), self.terminated()
 
-    def reward(self) -> np.ndarray:
-        return np.asarray(self.spec.reward(self.scene), dtype=float)
+    def _levels(self) -> tuple[np.ndarray, np.ndarray]:
+        return (np.asarray(self.spec.reward(self.scene), dtype=float),
+                np.asarray(self.spec.robot_reward(self.scene), dtype=float))
+
+    def _rewards(self) -> np.ndarray:
+        """The swarm's reward of the tick just done (R,); each robot's in :attr:`robot_rewards`."""
+        level = self._levels()
+        if self.spec.progress:
+            swarm, self.robot_rewards = level[0] - self._level[0], level[1] - self._level[1]
+        else:
+            swarm, self.robot_rewards = level
+        self._level = level
+        return swarm
 
     def terminated(self) -> np.ndarray:
         return np.asarray(self.spec.terminated(self.scene), dtype=bool)

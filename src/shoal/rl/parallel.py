@@ -105,7 +105,7 @@ class ShoalParallelEnv(ParallelEnv):
         reward, terminated = b.step(per_robot)
         truncated = b.truncated(terminated)
         live = list(self.agents)
-        robot_reward = np.asarray(b.spec.robot_reward(b.scene), dtype=float)[0]
+        robot_reward = b.robot_rewards[0]
         out_of_run = np.zeros(b.robots, bool) if b.spec.robot_done is None else \
             np.asarray(b.spec.robot_done(b.scene), dtype=bool)[0]
         obs = self._observations(live)

@@ -7,7 +7,10 @@ The spec says, from a running :class:`~shoal.api.Scene` (all arrays run-major, R
 
 * ``parts``: the observation, as named :class:`Part` s (a robot's own, or the swarm's), and
   ``observe``: their values;
-* ``reward`` (R,) of the swarm and ``robot_reward`` (R, N) of each robot: the kind's headline metric;
+* ``reward`` (R,) of the swarm and ``robot_reward`` (R, N) of each robot: the kind's headline metric,
+  given as it is or (``progress``) as its change over the tick, for a metric whose level a run that
+  ends early must not be rewarded for (the distance a fleet has left, the signal an acoustic swarm
+  hears);
 * ``terminated`` (R,): the kind's own end rule (``robot_done`` (R, N): a robot out of the run);
 * ``command``: the frame and range of a robot's velocity command, and ``towards``: the command
   that takes a robot to a waypoint;
@@ -90,6 +93,7 @@ class RLSpec:
     coefficients: Callable[[EnvScene], Coefficients] | None  # None: no PSO coefficients ("pso-params" refused)
     arena: Callable[[EnvScene], tuple[float, float, float, float]]  # x0, y0, x1, y1 a waypoint lies in (run 0's)
     commanded: Callable[[EnvScene], np.ndarray]  # (R, N, k) each robot's command in the tick just done
+    progress: bool = False  # the reward is the change of ``reward`` (and ``robot_reward``) over the tick
     reward_text: str = ""  # what the reward is, in words (the docs and the env's repr)
     end_text: str = ""  # what ends an episode (terminated), in words
     robot_done: Callable[[EnvScene], np.ndarray] | None = None  # (R, N) robots out of the run (a fleet's disabled)

@@ -85,7 +85,8 @@ SPEC = RLSpec(
     commanded=_commanded,
     command=command, towards=towards, coefficients=coefficients,
     arena=_arena,
-    reward_text="minus the mean distance of the robots to the source (the cost of Algorithms 1–2); a robot's own: "
-                "minus its distance",
+    progress=True,
+    reward_text="the progress towards the source: how much the robots' mean distance to it (the cost of "
+                "Algorithms 1–2) fell in the tick, in m; a robot's own: how much its distance fell",
     end_text="every robot disabled by a collision (ours: the thesis runs a fixed horizon); a disabled robot is done",
 )

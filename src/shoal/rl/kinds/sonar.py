@@ -82,7 +82,9 @@ SPEC = RLSpec(
     terminated=_terminated,
     commanded=lambda scene: scene.engine.state.cmd.copy(),
     command=command, towards=towards, coefficients=coefficients, arena=_arena,
-    reward_text="the signal level: the mean in-band SNR at the robots [7.16], in dB; a robot's own: its SNR",
+    progress=True,
+    reward_text="the signal level's rise: how much the mean in-band SNR at the robots [7.16] rose in the tick, in "
+                "dB; a robot's own: its SNR's rise",
     end_text="the CoM within d_c of the source, the thesis' convergence (not with an escort ring, which goes on)",
     unheard=("intensity", "rays"),
 )
