@@ -30,7 +30,7 @@ def baseline_episode(preset: str, seed: int, steps: int, robots: int, control: s
     env = gym.make(f"shoal/{preset}-v0", control=control, robots=robots, steps=steps)
     env.reset(seed=seed)
     scene = env.unwrapped.scene
-    columns = scene.kind.engine.COLUMNS
+    columns = type(scene.engine).COLUMNS
     csv = io.StringIO()
     write_metrics(csv, scene.row(), columns, header=True)
     for _ in range(steps):
