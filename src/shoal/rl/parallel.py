@@ -10,7 +10,6 @@ terminated and leaves ``agents``; the kind's end rule terminates every agent, th
 
 from __future__ import annotations
 
-import functools
 from typing import Any
 
 import numpy as np
@@ -59,11 +58,10 @@ class ShoalParallelEnv(ParallelEnv):
     def scene(self) -> Any:
         return self.batch.scene
 
-    @functools.lru_cache(maxsize=None)  # noqa: B019  (one space object per agent, as PettingZoo asks)
     def observation_space(self, agent: str) -> spaces.Space:
+        """The same space object every time (PettingZoo seeds and compares it)."""
         return self._obs_spaces[agent]
 
-    @functools.lru_cache(maxsize=None)  # noqa: B019
     def action_space(self, agent: str) -> spaces.Space:
         return self._act_spaces[agent]
 
