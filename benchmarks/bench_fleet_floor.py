@@ -80,11 +80,11 @@ def _floor_kernel():
             runs = f.shape[0]
             for t in range(ticks):
                 if t % 2 == 0:
-                    fleet_runs(0, runs, a, b, f, yg, best, source, fn, states, terms, per_component, params, world,
-                               grid, out, layers, stall_speed, stall_steps, com, max_speed, counts)
+                    fleet_runs(0, runs, a[:8], b, f, yg, best, source, fn, states, terms, per_component, params,
+                               world, grid, out, layers, stall_speed, stall_steps, com, max_speed, counts)
                 else:
-                    fleet_runs(0, runs, b, a, f, yg, best, source, fn, states, terms, per_component, params, world,
-                               grid, out, layers, stall_speed, stall_steps, com, max_speed, counts)
+                    fleet_runs(0, runs, b[:8], a, f, yg, best, source, fn, states, terms, per_component, params,
+                               world, grid, out, layers, stall_speed, stall_steps, com, max_speed, counts)
 
         _FLOOR = floor_ticks
     return _FLOOR
@@ -102,7 +102,7 @@ def floor_seconds(robots: int, ticks: int, check: bool = True) -> float:
     gen = fleet._compiled_draws()
     source, layers, params, world, grid = fleet._kernel_constants()
     a = tuple(np.array(getattr(s, name)) for name in ("x", "heading", "u", "cmd", "status", "slow", "y", "f_y"))
-    b = tuple(np.empty_like(v) for v in a)
+    a, b = a + (np.empty_like(s.x),), tuple(np.empty_like(v) for v in a) + (np.empty_like(s.x),)  # + commanded
     f, yg, best, com, max_speed = np.empty((R, N)), np.empty((R, 2)), np.empty(R), np.empty(R), np.empty(R)
     counts = np.empty((4, R), np.int64)
     out = (np.empty((R, N)), np.empty((terms, R, N)), np.empty((R, N, 2)), np.empty((R, N, 6)),

@@ -47,7 +47,8 @@ def fleet_runs(lo: int, hi: int, old: tuple, new: tuple, f: np.ndarray, yg: np.n
                world: tuple, grid: tuple, outputs: tuple, layer_x: np.ndarray, stall_speed: float, stall_steps: int,
                com: np.ndarray, max_speed: np.ndarray, counts: np.ndarray) -> bool:
     """One tick of runs ``lo … hi − 1``: the state at step k in ``old`` and anew in ``new``
-    (the arrays of :data:`STATE`, (R, N, …) each), the costs ``f``, bests ``yg`` and ``best``,
+    (the arrays of :data:`STATE`, (R, N, …) each; ``new`` also the commands before collisions
+    zeroed them, ``FleetState.commanded``), the costs ``f``, bests ``yg`` and ``best``,
     and the outputs (filled for these runs). ``fn`` and ``states`` are the runs' generators
     (:attr:`~shoal.engine.core.compiled_draws.CompiledDraws.address`, ``.states``). ``params``,
     ``world``, ``grid`` and ``outputs`` are a :class:`TickParams`, :class:`WorldArrays`,
@@ -57,7 +58,7 @@ def fleet_runs(lo: int, hi: int, old: tuple, new: tuple, f: np.ndarray, yg: np.n
     robot sensed."""
     p, w, g, out = TickParams(*params), WorldArrays(*world), Grid(*grid), Outputs(*outputs)
     x0, heading0, u0, cmd0, status0, slow0, y0, f_y0 = old
-    x, heading, u, cmd, status, slow, y, f_y = new
+    x, heading, u, cmd, status, slow, y, f_y, commanded = new
     N = x.shape[1]
     scratch = _scratch(N, g, w)
     draws = np.empty((terms, N, 2 if per_component else 1))
@@ -101,6 +102,7 @@ def fleet_runs(lo: int, hi: int, old: tuple, new: tuple, f: np.ndarray, yg: np.n
         top = -np.inf
         collided = stalled = 0
         for i in range(N):
+            commanded[r, i, 0], commanded[r, i, 1] = cmd[r, i, 0], cmd[r, i, 1]  # before a collision zeroes it
             if status[r, i] != ACTIVE:
                 cmd[r, i, 0] = cmd[r, i, 1] = 0.0
                 u[r, i, 0] = u[r, i, 1] = 0.0
