@@ -70,7 +70,7 @@ def test_the_kinds_schema_is_its_metric_table(preset):
     when its state has a best fitness."""
     kind = kind_for(load(preset))
     sim = engine(preset)
-    assert type(sim) is kind.engine
+    assert type(sim) is kind.engine_class
     table = metric_table(sim.state, sim.step(), sim.t)
     assert [c.name for c in kind.columns] == list(table)
     assert hasattr(sim.state, "best_fitness") == kind.optimises

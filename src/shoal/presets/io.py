@@ -1,11 +1,11 @@
-"""Reading, writing, listing and overriding presets."""
+"""Reading, writing, listing and overriding presets (:class:`PresetError`, :func:`short` and
+:func:`format_errors` come from :mod:`.errors`; they are offered here too)."""
 
 from __future__ import annotations
 
 import copy
 import functools
 import json
-import reprlib
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -16,44 +16,9 @@ from pydantic import ValidationError
 
 from shoal.engine.core.plugins import load_plugins
 
+from .errors import PresetError, format_errors, short
 from .models import Scenario
 from .toml_bounds import check_toml
-
-
-class PresetError(ValueError):
-    """A preset could not be read or validated; ``messages`` name each bad field."""
-
-    def __init__(self, messages: list[str]) -> None:
-        self.messages = messages
-        super().__init__("\n".join(messages))
-
-
-_SHORT = reprlib.Repr()  # a bad value is shown short: a few items, a few levels
-_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxtuple, _SHORT.maxdict = 2, 4, 4, 4
-_SHORT.maxstring = _SHORT.maxother = _SHORT.maxlong = 40
-MAX_NAME = 60  # characters of a field name shown in a message
-
-
-def short(value: Any) -> str:
-    """A value as a message shows it: a few characters, a few items, a few levels."""
-    return _SHORT.repr(value)
-
-
-def _short_name(part: object) -> str:
-    text = str(part)
-    return text if len(text) <= MAX_NAME else text[: MAX_NAME - 3] + "..."
-
-
-def format_errors(err: ValidationError) -> list[str]:
-    """One line per error: ``dotted.field: message (got value)``, the value and names shortened."""
-    lines = []
-    for e in err.errors(include_url=False):
-        loc = ".".join(_short_name(p) for p in e["loc"])
-        msg = e["msg"].removeprefix("Value error, ")
-        quiet = e["type"] in ("missing",) or isinstance(e.get("input"), dict)
-        got = "" if quiet else f" (got {_SHORT.repr(e.get('input'))})"
-        lines.append(f"{loc}: {msg}{got}" if loc else f"{msg}{got}")
-    return lines
 
 
 def validate(data: dict[str, Any]) -> Scenario:
@@ -224,7 +189,7 @@ def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any
     for item in overrides:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
-            raise PresetError([f"--set {_SHORT.repr(item)}: expected dotted.key=value"])
+            raise PresetError([f"--set {short(item)}: expected dotted.key=value"])
         set_dotted(out, key.strip(), parse_value(value.strip()))
     return out
 

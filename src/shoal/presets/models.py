@@ -29,6 +29,9 @@ from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.engine.slo.beliefs import EntryPolicy
 from shoal.engine.slo.selection import SELECTIONS
 
+from .kinds import check_plugin_sections, check_scene
+from .marks import provenance
+
 
 def dvc_laws() -> tuple[str, ...]:
     """The robot laws with a DVC form."""
@@ -436,14 +439,10 @@ class Scenario(_Model):
     def marks(self) -> dict[str, Any]:
         """Where each value that shapes this scene's runs comes from: stated, read, fitted or
         ours, with its source (:func:`shoal.presets.marks.provenance`; None: unmarked)."""
-        from .marks import provenance
-
         return provenance(self)
 
     @model_validator(mode="after")
     def _across_sections(self) -> "Scenario":
-        from .kinds import check_plugin_sections, check_scene  # (the kinds' registry builds on these models)
-
         if self.model_extra:
             self.__pydantic_extra__ = check_plugin_sections(self.model_extra)
         check_scene(self)  # one kind, its dimensions, a law of the registry it reads
@@ -471,6 +470,13 @@ class Scenario(_Model):
         if name in type(self).model_fields:
             return getattr(self, name)
         return (self.model_extra or {}).get(name)
+
+
+def on_slo_positions(scenario: Scenario) -> bool:
+    """Does the scene's own swarm act on SLO-estimated positions (``[slo] swarm = "host"``,
+    ``positions = "slo"``)?"""
+    slo = scenario.slo
+    return slo is not None and slo.swarm == "host" and slo.positions == "slo"
 
 
 _Section = TypeVar("_Section")

@@ -55,6 +55,7 @@ from ..acoustics.signals import hydrophone_positions, intensity, synthesise
 from ..acoustics.strategies import LocInfo, Sensed, Strategy, initial_memory, make_strategy
 from ..acoustics.surrogate import surrogate
 from ..core.contract import check_live
+from ..core.positions import Oracle, PositionSource
 from ..core.rng import run_generators
 from ..core.schema import Column, Schema
 from ..pso.laws import adapted_velocity, motion_heading
@@ -63,7 +64,6 @@ from ..robots.dvc import dvc_nonomni, forward_guard, w_max
 from ..robots.laws import arc_pose_update, energy_limit, nonomni_velocity, to_body
 from ..robots.sensing import SectorReading
 from ..robots.swarm_sensing import contacts, pairwise, sense_robots
-from ..slo.positions import Oracle, PositionSource
 
 ControllerName = Literal["adapted", "nonomni"]
 AcousticMode = Literal["waveform", "surrogate"]

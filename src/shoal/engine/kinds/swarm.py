@@ -15,6 +15,7 @@ import numpy as np
 
 from ..core.contract import check_live
 from ..core.objectives import Objective
+from ..core.positions import Oracle, PositionSource
 from ..core.rng import BlockDraws, run_generators
 from ..core.schema import Column, Schema
 from ..pso import kernels
@@ -22,7 +23,6 @@ from ..pso.bests import best_index, global_best, update_personal
 from ..pso.coeffs import CoefficientPolicy
 from ..pso.laws import Law
 from ..pso.laws import motion_heading as _heading
-from ..slo.positions import Oracle, PositionSource
 
 Attractors = Literal["literal", "ahead"]
 PbestOrder = Literal["before_velocity", "after_velocity"]
