@@ -109,8 +109,9 @@ def test_outcomes_are_the_recorded_columns_each_labelled(preset):
     names = [o.name for o in offered]
     assert names == [n for n in recorded if n in names]  # the sweep's columns, in its order
     hidden = set(recorded) - set(names)
-    assert hidden <= catalogue.HIDDEN | {n for n in recorded if n.endswith(catalogue.HIDDEN_SUFFIXES)}
-    assert all(o.name in catalogue.LABELS for o in offered), [o.name for o in offered if o.name not in catalogue.LABELS]
+    assert hidden <= catalogue.hidden() | {n for n in recorded if n.endswith(catalogue.HIDDEN_SUFFIXES)}
+    labels = catalogue.labels()
+    assert all(o.name in labels for o in offered), [o.name for o in offered if o.name not in labels]
     titles = [o.title for o in offered]
     assert len(titles) == len(set(titles))
     first = catalogue.first_outcome(offered).name
