@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import operator
 from dataclasses import dataclass, fields
-from typing import Any, ClassVar, Literal, get_args
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, get_args
 
 import numpy as np
 
@@ -18,11 +18,25 @@ from ..core.objectives import Objective
 from ..core.positions import Oracle, PositionSource
 from ..core.rng import BlockDraws, run_generators
 from ..core.schema import Column, Schema
-from ..pso import kernels
 from ..pso.bests import best_index, global_best, update_personal
 from ..pso.coeffs import CoefficientPolicy
 from ..pso.laws import Law
 from ..pso.laws import motion_heading as _heading
+
+if TYPE_CHECKING:
+    from ..pso import kernels
+else:
+    class _Kernels:
+        """The compiled Chapter 3 kernels (numba), imported at their first use: a swarm on its numpy
+        tick never loads numba. That first use puts the module itself under this name."""
+
+        def __getattr__(self, name: str) -> Any:
+            global kernels
+            from ..pso import kernels
+
+            return getattr(kernels, name)
+
+    kernels = _Kernels()
 
 Attractors = Literal["literal", "ahead"]
 PbestOrder = Literal["before_velocity", "after_velocity"]

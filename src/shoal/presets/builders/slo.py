@@ -3,16 +3,17 @@ positions of a host swarm (``[slo] swarm = "host"``), and the keywords that retu
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from shoal.engine.kinds.slo_swarm import SLOSwarm
-from shoal.engine.robots.world import WorldSpec
 from shoal.engine.slo.positions import Estimated
 from shoal.engine.slo.sensors import ErrorModel, error_model
 
 from ..kinds import SLO_LIVE
 from ..models import SLO, Scenario, on_slo_positions, required
-from .world import world_for
+
+if TYPE_CHECKING:
+    from shoal.engine.robots.world import WorldSpec
 
 
 def slo_errors_for(slo: SLO) -> str | ErrorModel:
@@ -30,7 +31,11 @@ def slo_unit(scenario: Scenario, world: WorldSpec | None = None) -> float:
     if scenario.slo is not None and scenario.slo.unit is not None:
         return scenario.slo.unit
     if scenario.world is not None:
-        x0, y0, x1, y1 = (world or world_for(scenario.world)).bounds
+        if world is None:
+            from .world import world_for  # (a fleet's world: only a fleet on SLO positions lays one out here)
+
+            world = world_for(scenario.world)
+        x0, y0, x1, y1 = world.bounds
         return max(x1 - x0, y1 - y0) / 100.0
     if scenario.acoustics is not None and scenario.acoustics.d_0 > 0:
         return 2.0 * scenario.acoustics.d_0 / 100.0
