@@ -95,11 +95,15 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)  # no NaN/inf anywhere
     # fields a dump leaves out while unset (hand edits: a preset without them dumps as before)
     omit_unset: ClassVar[tuple[str, ...]] = ()
+    omit_unset_optional: ClassVar[bool] = False  # also every field whose default is None, while it is None
 
     @model_serializer(mode="wrap")
     def _omit_unset(self, handler: SerializerFunctionWrapHandler) -> Any:
         data = handler(self)
-        for name in self.omit_unset:
+        names = list(self.omit_unset)
+        if self.omit_unset_optional:
+            names += [n for n, f in type(self).model_fields.items() if f.default is None]
+        for name in names:
             if data.get(name, 0) is None:
                 del data[name]
         return data
@@ -432,6 +436,10 @@ class Scenario(_Model):
     kind's model; any other name is refused."""
 
     model_config = ConfigDict(extra="allow")
+    # An unset section (world, acoustics, slo, a new kind's) is left out of a dump, so that a
+    # scenario written down (run.json, a replay, a preset file) reads the same whichever kinds
+    # Shoal has: adding a kind changes no file of another kind's run.
+    omit_unset_optional = True
 
     schema_version: Literal[1] = 1
     name: Annotated[str, Field(min_length=1, max_length=80)] = "custom"
