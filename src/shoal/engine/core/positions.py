@@ -9,6 +9,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from .snapshot import SnapshotError, part
+
 
 class PositionSource(Protocol):
     """What a scene kind asks about positions. Shapes: x, y (R, N, 2); owner (R,)."""
@@ -51,6 +53,14 @@ class PositionSource(Protocol):
         """New localisation settings (errors, selection, …), beliefs kept."""
         ...
 
+    def snapshot(self) -> dict[str, Any]:
+        """What this source keeps from tick to tick, as plain data (:mod:`~shoal.engine.core.snapshot`)."""
+        ...
+
+    def restore(self, data: Any, x: np.ndarray) -> None:
+        """Continue from :meth:`snapshot`'s ``data`` for the robots at ``x``."""
+        ...
+
 
 class Oracle:
     """Every robot knows every true position."""
@@ -83,3 +93,10 @@ class Oracle:
 
     def retune(self, **slo: Any) -> None:
         raise ValueError("slo: this swarm acts on true positions; switch it to SLO positions first")
+
+    def snapshot(self) -> dict[str, Any]:
+        return {"source": "oracle"}
+
+    def restore(self, data: Any, x: np.ndarray) -> None:
+        if part(data, "source", "positions") != "oracle":
+            raise SnapshotError("positions: the snapshot is of a swarm on SLO positions, this one acts on true ones")

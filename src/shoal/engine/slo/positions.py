@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..core.positions import Oracle, PositionSource
+from ..core.snapshot import SnapshotError, arrays, integer, part
 from .beliefs import Beliefs
 from .tracker import BeliefTracker
 
@@ -113,3 +114,19 @@ class Estimated:
         self.tracker.retune(**{k: merged[k] for k in slo if k != "unit"}, unit=merged["unit"],
                             **({"neighbourhood_param": merged.get("neighbourhood_param")} if keep_param else {}))
         self.params = merged
+
+    def snapshot(self) -> dict[str, Any]:
+        return {"source": "estimated", "pbest": self.pbest.copy(), "sensed_k": self.sensed_k,
+                "tracker": self.tracker.snapshot()}
+
+    def restore(self, data: Any, x: np.ndarray) -> None:
+        if part(data, "source", "positions") != "estimated":
+            raise SnapshotError("positions: the snapshot is of a swarm on true positions, this one acts on SLO ones")
+        pbest = arrays(part(data, "pbest", "positions"), "positions.pbest", dtype=np.floating)
+        if pbest.shape != x.shape:
+            raise SnapshotError(f"positions.pbest: expected shape {x.shape}, got {pbest.shape}")
+        sensed_k = integer(part(data, "sensed_k", "positions"), "positions.sensed_k")
+        self.tracker.restore(part(data, "tracker", "positions"))
+        if self.tracker.x.shape != x.shape:
+            raise SnapshotError(f"positions.tracker.x: expected shape {x.shape}, got {self.tracker.x.shape}")
+        self.pbest, self.sensed_k = pbest, sensed_k
