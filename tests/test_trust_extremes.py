@@ -20,13 +20,14 @@ from pydantic import BaseModel
 
 from shoal.app.kinds.registry import session_for
 from shoal.app.limits import MAX_ROBOTS, check_app_limits, scene_kind
-from shoal.presets.io import PresetError, load, read_raw, set_dotted, validate
+from shoal.presets.io import PresetError, list_presets, load, read_raw, set_dotted, validate
 from shoal.presets.kinds import sections
 from shoal.presets.models import Scenario
+from shoal.testing import variant_presets
 
-# One shipped preset for each kind of scene and motion the app runs.
-KINDS = ("default", "rastrigin", "course-dvc", "course-physics", "open-nonomni", "forest-dvc",
-         "sonar-xb-pso", "escort-moving", "slo-walk", "slo-adapted")
+# One shipped preset for each kind of scene a tab tells apart (each robot cap of each registered
+# kind: a fleet in physics, a swarm on SLO positions, …); the sampled cases draw from every preset.
+KINDS = tuple(variant_presets())
 STEPS = 3
 
 
@@ -69,7 +70,7 @@ def fields_of(preset: str) -> list[str]:
 
 @st.composite
 def extreme_case(draw: st.DrawFn) -> tuple[str, dict[str, Any]]:
-    preset = draw(st.sampled_from(KINDS))
+    preset = draw(st.sampled_from(sorted(list_presets())))
     paths = draw(st.lists(st.sampled_from(fields_of(preset)), min_size=1, max_size=4, unique=True))
     changes = {p: draw(st.sampled_from(BOUNDS[p])) for p in paths}
     if "sim.robots" in changes and draw(st.booleans()):  # the app's own cap is an edge too

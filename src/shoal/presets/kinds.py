@@ -104,13 +104,13 @@ class Live:
 HOST_SLO_RETUNE = "shoal.presets.builders.slo:host_slo_retune"  # a host swarm's slo=... keywords (or None)
 
 
-def _leaves(data: Any, prefix: str = "") -> dict[str, Any]:
+def leaves(data: Any, prefix: str = "") -> dict[str, Any]:
     """A dumped scenario as dotted path → value (tables opened, lists kept whole)."""
     if not isinstance(data, dict):
         return {prefix: data}
     out: dict[str, Any] = {}
     for key, value in data.items():
-        out.update(_leaves(value, f"{prefix}{key}.") if isinstance(value, dict) and value else
+        out.update(leaves(value, f"{prefix}{key}.") if isinstance(value, dict) and value else
                    {f"{prefix}{key}": value})
     return {k.removesuffix("."): v for k, v in out.items()}
 
@@ -118,7 +118,7 @@ def _leaves(data: Any, prefix: str = "") -> dict[str, Any]:
 def changed_fields(old: Scenario, new: Scenario) -> list[str]:
     """The dotted fields whose values differ between two scenarios (a section set in one only:
     each of its fields)."""
-    a, b = _leaves(old.model_dump(mode="json")), _leaves(new.model_dump(mode="json"))
+    a, b = leaves(old.model_dump(mode="json")), leaves(new.model_dump(mode="json"))
     missing = object()
     return sorted(p for p in a.keys() | b.keys() if a.get(p, missing) != b.get(p, missing))
 
