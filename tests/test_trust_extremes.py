@@ -9,7 +9,7 @@ velocities and no exception. The app's own limits (``app/limits.py``) are among 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, get_origin
 
 import annotated_types as at
 import numpy as np
@@ -35,6 +35,8 @@ def bounds(model: type[BaseModel], prefix: str = "") -> dict[str, tuple[float, .
     """Dotted path → the extreme values a numeric field allows (open bounds: the nearest value inside)."""
     out: dict[str, tuple[float, ...]] = {}
     for name, field in model.model_fields.items():
+        if get_origin(field.annotation) is list:
+            continue  # (list items, e.g. controller.schedule, have no dotted path of their own)
         args = getattr(field.annotation, "__args__", (field.annotation,))
         sub = next((a for a in args if isinstance(a, type) and issubclass(a, BaseModel)), None)
         if sub is not None:
