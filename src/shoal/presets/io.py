@@ -15,10 +15,28 @@ import tomli_w
 from pydantic import ValidationError
 
 from shoal.engine.core.plugins import load_plugins
+from shoal.engine.core.suggest import did_you_mean
 
-from .errors import PresetError, format_errors, short
+from . import errors
+from .errors import PresetError, fields_in, short
+from .kinds import plugin_sections
 from .models import Scenario
 from .toml_bounds import check_toml
+
+
+def format_errors(err: ValidationError) -> list[str]:
+    """One line per error of a scenario's validation (:func:`.errors.format_errors`), a mistyped
+    field or section with the closest names it could have been."""
+    return errors.format_errors(err, _fields_at)
+
+
+def _fields_at(loc: tuple[Any, ...]) -> list[str]:
+    """The field names at ``loc`` inside a scenario: at the top its sections, the plug-in kinds'
+    too; inside a plug-in kind's section, its model's."""
+    sections = plugin_sections()
+    if loc and loc[0] in sections and loc[0] not in Scenario.model_fields:
+        return fields_in(sections[loc[0]], loc[1:])
+    return fields_in(Scenario, loc) + (list(sections) if not loc else [])
 
 
 def validate(data: dict[str, Any]) -> Scenario:
@@ -139,7 +157,8 @@ def read_raw(name_or_path: str | Path) -> dict[str, Any]:
     if str(name_or_path) in shipped_names():
         return read_shipped(str(name_or_path))
     names = ", ".join(shipped_names())
-    raise PresetError([f"no preset or file named {short(str(name_or_path))} (shipped presets: {names})"])
+    hint = did_you_mean(str(name_or_path), shipped_names())
+    raise PresetError([f"no preset or file named {short(str(name_or_path))}{hint} (shipped presets: {names})"])
 
 
 def parse_value(text: str) -> Any:

@@ -31,7 +31,7 @@ from pydantic import BaseModel, ValidationError
 from shoal.engine.core.registry import Registry
 from shoal.engine.core.schema import Schema, common_columns, integer_names
 
-from .errors import format_errors
+from .errors import fields_in, format_errors
 
 if TYPE_CHECKING:
     from shoal.engine.core.contract import Engine
@@ -428,7 +428,8 @@ def check_plugin_sections(extra: dict[str, Any]) -> dict[str, Any]:
         try:
             out[name] = model.model_validate(value)
         except Exception as err:  # a pydantic ValidationError: one line per field
-            lines = format_errors(err) if isinstance(err, ValidationError) else [str(err)]
+            lines = format_errors(err, functools.partial(fields_in, model)) if isinstance(err, ValidationError) \
+                else [str(err)]
             raise ValueError("; ".join(f"{name}.{line}" for line in lines)) from None
     return out
 

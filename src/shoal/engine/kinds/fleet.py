@@ -19,6 +19,7 @@ from ..core.positions import Oracle, PositionSource
 from ..core.rng import run_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, fields_of, from_fields, integer, part, rng_states, set_rng_states
+from ..pso.bests import best_of, improves
 from ..robots import kernels
 from ..robots.dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
 from ..robots.laws import ROBOT_LAWS, Inertia, Limits, rotational_energy_factor
@@ -239,7 +240,7 @@ class Fleet:
         heading = np.zeros(x.shape[:2])
         f = self.cost(x)
         R, N = f.shape
-        best = np.argmin(f, axis=1)
+        best = best_of(f, False, axis=1)
         self.state = FleetState(
             x=x, heading=heading, u=np.zeros_like(x), cmd=np.zeros_like(x), y=x.copy(), f_y=f.copy(),
             yg=x[np.arange(R), best], best_fitness=f[np.arange(R), best], f=f, status=np.zeros((R, N), np.int8),
@@ -318,10 +319,11 @@ class Fleet:
         before = s.f_y.copy()
         active = s.status == ACTIVE
         s.f = self.cost(s.x)
-        better = active & (s.f < s.f_y)  # disabled robots keep their last best: docs/readings.md, "Disabled robots"
+        better = active & improves(s.f, s.f_y, False)  # disabled robots keep their last best: docs/readings.md,
+        # "Disabled robots"; NaN is never a best (pso/bests.py)
         s.y = np.where(better[..., None], s.x, s.y)
         s.f_y = np.where(better, s.f, s.f_y)
-        idx = np.argmin(s.f_y, axis=1)
+        idx = best_of(s.f_y, False, axis=1)
         runs = np.arange(self.runs)
         s.yg, s.best_fitness = s.y[runs, idx], s.f_y[runs, idx]
         self.positions.keep(s.f_y != before)  # a new best is where the robot stands
@@ -352,7 +354,7 @@ class Fleet:
 
     def _to_global(self) -> np.ndarray:
         s = self.state
-        return self.positions.to_owner(s.x, s.y, np.argmin(s.f_y, axis=1))
+        return self.positions.to_owner(s.x, s.y, best_of(s.f_y, False, axis=1))
 
     def believed_gbest(self) -> np.ndarray:
         """(R, N, 2) where each robot believes the global best is (y_g itself on true positions)."""
@@ -585,13 +587,33 @@ class Fleet:
         self.world, self._world_arrays, self._spaces, self._stale = world, None, None, False
         self._tick_params = (None, None)
         if bodies is not None:
-            self._build_spaces()  # bodies at the robots, disabled ones kinematic
-            for sp, b in zip(self.spaces, bodies):
-                for body, (bx, by, angle) in zip(sp.robot_bodies, b[:, :3].tolist()):
-                    body.position, body.angle = (bx, by), angle
-                    sp.space.reindex_shapes_for_body(body)
-                sp.bodies()
-                sp.set_velocities(b[:, 3:5], b[:, 5])
+            self._place_bodies(bodies)
+
+    def _place_bodies(self, bodies: np.ndarray) -> None:
+        """Physics mode: new pymunk spaces round the robots (disabled ones kinematic), every body
+        at its pose and velocity of ``bodies`` (R, N, 6)."""
+        self._build_spaces()
+        for sp, b in zip(self.spaces, bodies):
+            for body, (bx, by, angle) in zip(sp.robot_bodies, b[:, :3].tolist()):
+                body.position, body.angle = (bx, by), angle
+                sp.space.reindex_shapes_for_body(body)
+            sp.bodies()
+            sp.set_velocities(b[:, 3:5], b[:, 5])
+
+    def __getstate__(self) -> dict[str, Any]:
+        """A fleet pickles without its pymunk spaces (built again on unpickling, as on :meth:`restore`)."""
+        state = dict(self.__dict__)
+        physics = self.params.motion == "physics"
+        state["_bodies"] = np.stack([sp.bodies() for sp in self.spaces]) if physics else None
+        state.update(_spaces=None, _stale=False, motion=None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        bodies = state.pop("_bodies", None)
+        self.__dict__.update(state)
+        self.motion = self._motion()
+        if bodies is not None:
+            self._place_bodies(bodies)
 
     def info(self) -> FleetInfo:
         s = self.state

@@ -24,6 +24,7 @@ from ..core.portable import arctan2
 from ..core.rng import component_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, integer, part
+from ..pso.bests import admissible
 from ..pso.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
 from ..pso.spso_kernels import local_velocity
 from ..slo import metrics
@@ -504,7 +505,7 @@ class SLOSwarm:
 
     def _record(self) -> SLOInfo:
         s = self.state
-        best = s.f.min(axis=1)
+        best = np.where(admissible(s.f, False), s.f, np.inf).min(axis=1)  # NaN is never a best (pso/bests.py)
         s.best_fitness = np.minimum(s.best_fitness, best)
         self._met = np.where(np.isinf(self._met) & (best <= self.config.threshold()), float(s.k), self._met)
         return SLOInfo(k=s.k, best_fitness=best, best_so_far=s.best_fitness.copy(), quality_met_at=self._met.copy(),

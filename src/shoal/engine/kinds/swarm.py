@@ -19,9 +19,10 @@ from ..core.positions import Oracle, PositionSource
 from ..core.rng import BlockDraws, run_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, integer, part, rng_states, set_rng_states
-from ..pso.bests import best_index, global_best, update_personal
-from ..pso.coeffs import CoefficientPolicy
-from ..pso.laws import Law
+from ..pso.bests import best_index, global_best, update_personal, warn_unfound
+from ..pso.bounds import confine
+from ..pso.coeffs import CoefficientPolicy, Constant
+from ..pso.laws import LAWS, Law
 from ..pso.laws import motion_heading as _heading
 
 if TYPE_CHECKING:
@@ -156,6 +157,15 @@ class RunSeries:
     tracked: np.ndarray  # (steps, R, d): velocity of the tracked robot
 
 
+def check_coefficients(law: Law, policy: CoefficientPolicy) -> None:
+    """The law's coefficient rule (:meth:`~shoal.engine.pso.laws.VelocityLaw.check`) for raw
+    coefficients; a ``ValueError`` naming them. Physical tuning gives coefficients inside it."""
+    if isinstance(policy, Constant):
+        why = LAWS[law.name].check(policy.omega, policy.c)
+        if why:
+            raise ValueError(f"policy: {why}")
+
+
 def _per_run(value: np.ndarray | float, R: int) -> np.ndarray:
     """A scalar or per-robot ``(R, N)`` coefficient as one value per run (mean over robots)."""
     v = np.asarray(value, dtype=float)
@@ -206,6 +216,7 @@ class Simulation:
             raise ValueError(f"dt must be > 0, got {dt}")
         self.d, self.dt, self.runs, self.seed, self.first_run = d, float(dt), runs, seed, first_run
         self.law = law or Law()
+        check_coefficients(self.law, policy)
         self.policy = policy
         self.objective = objective or Objective()
         self.attractors: Attractors = attractors
@@ -242,6 +253,13 @@ class Simulation:
         self._coefficients: tuple[np.ndarray | float, np.ndarray] = (np.nan, np.full(1, np.nan))
         s = self.state
         self.positions.start(s.x, s.y, s.k, self.seed, self.first_run)
+        self._warned = False
+        self._honest()
+
+    def _honest(self) -> None:
+        """Say once if some run has no best yet (every value NaN or the worst infinity)."""
+        self._warned = warn_unfound(self.state.best_fitness, self.objective.maximise, self.objective.name,
+                                    self._warned)
 
     @property
     def rngs(self) -> list[np.random.Generator]:
@@ -256,7 +274,8 @@ class Simulation:
         shape = (n, self.d)
         x = np.stack([self.init_center + self.init_spread * (g.random(shape) - 0.5) for g in self.rngs])
         u = np.stack([self.init_speed * (2.0 * g.random(shape) - 1.0) for g in self.rngs])
-        return x, u
+        box = self.objective.box(self.d)
+        return (x, u) if box is None else (np.clip(x, box[0], box[1]), u)  # bounded: the start inside
 
     def _fresh_state(self, x: np.ndarray, u: np.ndarray) -> SwarmState:
         f = self.objective(x)
@@ -308,6 +327,8 @@ class Simulation:
         for name, kind in (("attractors", Attractors), ("pbest_order", PbestOrder)):
             if name in changes and changes[name] not in get_args(kind):
                 raise ValueError(f"{name}: unknown {changes[name]!r}, choose from {get_args(kind)}")
+        if "policy" in changes or "law" in changes:
+            check_coefficients(changes.get("law", self.law), changes.get("policy", self.policy))
         slo = changes.pop("slo", None)
         now = {"policy": self.policy, "law": self.law, "dt": self.dt, "robots": self.robots,
                "attractors": self.attractors, "pbest_order": self.pbest_order, "objective": self.objective}
@@ -361,8 +382,13 @@ class Simulation:
 
     def step(self) -> StepInfo:
         """Advance every run by one control tick Δt."""
-        if self._compiled_tick():
-            return self._compiled_step()
+        info = self._compiled_step() if self._compiled_tick() else self._numpy_step()
+        if not self._warned:
+            self._honest()
+        return info
+
+    def _numpy_step(self) -> StepInfo:
+        """The tick of :meth:`step` in numpy (the reference of the compiled one)."""
         s = self.state
         if self.pbest_order == "before_velocity":  # Algorithm 1 phase A first
             self._update_bests()
@@ -372,8 +398,12 @@ class Simulation:
         u_new = self.law.velocity(s.u, g, c, omega, self._draw(g.shape[0]))
         if self.pbest_order == "after_velocity":  # the velocity saw last tick's bests
             self._update_bests()
+        x_new = self.law.position(s.x, u_new, self.dt)
+        box = self.objective.box(self.d)
+        if box is not None:  # the search-space bounds (pso/bounds.py)
+            x_new, u_new = confine(x_new, u_new, box[0], box[1], self.objective.boundary)  # type: ignore[arg-type]
         s.a = (u_new - s.u) / self.dt  # [3.22]
-        s.x = self.law.position(s.x, u_new, self.dt)
+        s.x = x_new
         s.u = u_new
         s.heading = _heading(u_new, s.heading)
         s.k += 1
@@ -386,6 +416,7 @@ class Simulation:
         made with ``compiled=False``."""
         s = self.state
         return (self.compiled and self.law.name in ("standard", "adapted-sgn") and self.d <= kernels.MAX_TERMS
+                and self.objective.bounds is None
                 and isinstance(self.positions, Oracle) and s.x.dtype == s.u.dtype == s.y.dtype == np.float64)
 
     # U(0,1) draws a block holds at most (R × ticks × 2N d), and its ticks at most
@@ -517,6 +548,8 @@ class Simulation:
         out.c += cs
         s.k += n
         self._coefficients = (omegas[-1], cs[-1])
+        if not self._warned:
+            self._honest()
         return n
 
     # ------------------------------------------------------------------ snapshot
