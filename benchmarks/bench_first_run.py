@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -68,13 +69,16 @@ for k in range(steps + 1):
 GROUPS = ("numba", "llvmlite", "scipy", "pymunk", "pydantic", "numpy", "tqdm", "shoal")
 
 
-def _timed(args: list[str], env: dict[str, str]) -> float:
+def _timed(args: list[str], env: dict[str, str]) -> tuple[float, float]:
+    """Wall-clock and CPU (user + system) seconds of one child process."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     done = subprocess.run(args, env=env, capture_output=True, text=True, timeout=600)
     took = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(args)} failed: {done.stderr[-2000:]}")
-    return took
+    return took, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def _shoal(pkg: Path, out: Path) -> list[str]:
@@ -113,7 +117,7 @@ def main() -> None:
             trees[args.base] = tree_of(args.base, tmp / "base")
         script = tmp / "numpy_run.py"
         script.write_text(NUMPY_SCRIPT)
-        times: dict[str, list[float]] = {"numpy script": [], **{name: [] for name in trees}}
+        times: dict[str, list[tuple[float, float]]] = {"numpy script": [], **{name: [] for name in trees}}
         for round_ in range(args.repeats + 1):  # round 0: the caches filled, dropped
             got = {"numpy script": _timed([sys.executable, str(script), str(tmp / "np")], dict(os.environ))}
             for name, pkg in trees.items():
@@ -124,11 +128,14 @@ def main() -> None:
         load = os.getloadavg()
         print(f"{args.repeats} rounds, load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} (uptime), "
               f"{os.cpu_count()} cores\n")
-        base = statistics.median(times["numpy script"])
-        print(f"{'':<18} {'median':>8} {'min':>7} {'max':>7}  {'median − numpy':>15}")
-        for name, ts in times.items():
-            med = statistics.median(ts)
-            print(f"{name:<18} {med:8.3f} {min(ts):7.3f} {max(ts):7.3f}  {med - base:+14.3f} s")
+        for i, what in enumerate(("wall-clock", "CPU (user + system)")):
+            base = statistics.median(t[i] for t in times["numpy script"])
+            print(f"{what + ' s':<22} {'median':>8} {'min':>7} {'max':>7}  {'median − numpy':>15}")
+            for name, ts in times.items():
+                vals = [t[i] for t in ts]
+                med = statistics.median(vals)
+                print(f"  {name:<20} {med:8.3f} {min(vals):7.3f} {max(vals):7.3f}  {med - base:+14.3f}")
+            print()
         print("\nimport time by package (python -X importtime, self times, s):")
         print(f"{'':<12}" + "".join(f"{g:>9}" for g in (*GROUPS, "other", "total")))
         for name, pkg in trees.items():
