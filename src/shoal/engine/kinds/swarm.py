@@ -19,10 +19,11 @@ from ..core.positions import Oracle, PositionSource
 from ..core.rng import BlockDraws, run_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, integer, part, rng_states, set_rng_states
+from ..core.steering import Steering
 from ..pso.bests import best_index, global_best, update_personal, warn_unfound
 from ..pso.bounds import confine
 from ..pso.coeffs import CoefficientPolicy, Constant
-from ..pso.laws import LAWS, Law
+from ..pso.laws import LAWS, Law, reachable
 from ..pso.laws import motion_heading as _heading
 
 if TYPE_CHECKING:
@@ -187,6 +188,7 @@ class Simulation:
     LIVE: ClassVar[frozenset[str]] = frozenset(
         {"policy", "law", "dt", "slo", "robots", "attractors", "pbest_order", "objective"})
     COLUMNS: ClassVar[Schema] = COLUMNS
+    steering: Steering | None = None  # the next tick's command from outside the law (core/steering.py)
 
     def __init__(
         self,
@@ -246,6 +248,7 @@ class Simulation:
         if seed is not None:
             self.seed = int(seed)
         self._rngs = run_generators(self.seed, self.first_run, self.runs)
+        self.steering = None
         self._block: BlockDraws | None = None
         self._setup: tuple | None = None
         x, u = self._spawn(self._robots)
@@ -381,21 +384,28 @@ class Simulation:
         return np.stack([g.random(shape) for g in self.rngs], axis=1)
 
     def step(self) -> StepInfo:
-        """Advance every run by one control tick Δt."""
-        info = self._compiled_step() if self._compiled_tick() else self._numpy_step()
+        """Advance every run by one control tick Δt (steered by :attr:`steering`, if set)."""
+        steering, self.steering = self.steering, None
+        if self._compiled_tick() and (steering is None or steering.velocity is None):
+            info = self._compiled_step(steering)
+        else:
+            info = self._numpy_step(steering)
         if not self._warned:
             self._honest()
         return info
 
-    def _numpy_step(self) -> StepInfo:
+    def _numpy_step(self, steering: Steering | None = None) -> StepInfo:
         """The tick of :meth:`step` in numpy (the reference of the compiled one)."""
         s = self.state
         if self.pbest_order == "before_velocity":  # Algorithm 1 phase A first
             self._update_bests()
-        omega, c = self.policy.coefficients(self.t, self.dt, self.d)
+        omega, c = self._tick_coefficients(steering)
         self._coefficients = (omega, np.asarray(c))
         g = self._directions()
         u_new = self.law.velocity(s.u, g, c, omega, self._draw(g.shape[0]))
+        if steering is not None and steering.velocity is not None:  # the law's draws are made all the same
+            command = np.asarray(steering.velocity, dtype=float)
+            u_new = reachable(command, s.u, c, omega) if self.law.adapted else command
         if self.pbest_order == "after_velocity":  # the velocity saw last tick's bests
             self._update_bests()
         x_new = self.law.position(s.x, u_new, self.dt)
@@ -409,6 +419,13 @@ class Simulation:
         s.k += 1
         self.positions.observe(s.x, s.k)  # where the moves ended: current beliefs for drawing
         return self.info()
+
+    def _tick_coefficients(self, steering: Steering | None) -> tuple[np.ndarray | float, np.ndarray]:
+        """ω and c of this tick: the policy's, or those of ``steering`` where it gives them."""
+        omega, c = self.policy.coefficients(self.t, self.dt, self.d)
+        if steering is None:
+            return omega, c
+        return steering.coefficients(omega, c, self.state.x.shape[:2])
 
     def _compiled_tick(self) -> bool:
         """:func:`kernels.swarm_step` does the tick: the laws it knows (standard, Adapted with
@@ -454,11 +471,11 @@ class Simulation:
         self._setup = (key, setup) if np.shares_memory(source, obj.source) else None
         return setup
 
-    def _compiled_step(self) -> StepInfo:
+    def _compiled_step(self, steering: Steering | None = None) -> StepInfo:
         """The tick of :meth:`step` in one compiled call; the same numbers."""
         s, d = self.state, self.d
         R, N = s.x.shape[:2]
-        omega, c = self.policy.coefficients(self.t, self.dt, d)
+        omega, c = self._tick_coefficients(steering)
         c = np.asarray(c, dtype=float)
         self._coefficients = (omega, c)
         block = self._draws((2, N, d))
@@ -490,7 +507,7 @@ class Simulation:
         """Advance ``steps`` ticks without a caller between them (headless use): the same
         numbers as ``steps`` calls of :meth:`step`. Where the compiled tick applies and the
         coefficients are the same for every robot, whole blocks of ticks run in one compiled
-        call (:func:`kernels.swarm_run`); other ticks go through :meth:`step`."""
+        call (:func:`kernels.swarm_run`); other ticks go through :meth:`step` (a steered tick too)."""
         if steps < 0 or not 0 <= track < self.robots:
             raise ValueError(f"need steps >= 0 and 0 <= track < {self.robots}, got {steps}, {track}")
         R, d = self.runs, self.d
@@ -512,7 +529,7 @@ class Simulation:
     def _run_compiled(self, k: int, steps: int, track: int, out: RunSeries) -> int:
         """Ticks k … of :meth:`run` in one compiled call, as many as the block of draws holds
         and while the coefficients are the same for every robot; 0 if none."""
-        if not self._compiled_tick():
+        if not self._compiled_tick() or self.steering is not None:
             return 0
         s, d, dt = self.state, self.d, self.dt
         R, N = s.x.shape[:2]
@@ -579,7 +596,7 @@ class Simulation:
                 raise SnapshotError(f"state.{n}: expected shape {shape}, got {got[n].shape}")
         omega = part(data, "omega")
         omega = arrays(omega, "omega") if isinstance(omega, np.ndarray) else omega
-        if not isinstance(omega, float):
+        if not isinstance(omega, (float, np.ndarray)):  # an array: ω per robot (a steered tick)
             raise SnapshotError("omega: expected a float or an array")
         k, seed, dt = integer(part(data, "k"), "k"), integer(part(data, "seed"), "seed"), part(data, "dt")
         if not isinstance(dt, float) or not dt > 0:

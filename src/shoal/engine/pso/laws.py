@@ -78,6 +78,16 @@ def adapted_velocity(
     return _omega(omega) * u + terms.sum(axis=0)
 
 
+def reachable(command: np.ndarray, u: np.ndarray, c: np.ndarray, omega: np.ndarray | float) -> np.ndarray:
+    """``command`` clipped, component by component, to what an Adapted law [3.36] can reach from
+    ``u`` in one tick: ω u ± Σ |c_n| (each term adds at most c_n). So |u_j| ≤ ĉ/(1 − ω) = U_j holds
+    once it holds [3.26], and the acceleration stays within A+ and A− [3.27]–[3.28]. Rounding is
+    monotone, so the law's own next velocity lies inside and passes unchanged."""
+    wu = _omega(omega) * u
+    reach = np.abs(_coeffs(c, u.ndim + 1)).sum(axis=0)
+    return np.minimum(np.maximum(command, wu - reach), wu + reach)
+
+
 # (u, g, c, omega, r, smooth width) → u[k+1]
 Velocity = Callable[[np.ndarray, np.ndarray, np.ndarray, "np.ndarray | float", np.ndarray, float], np.ndarray]
 
