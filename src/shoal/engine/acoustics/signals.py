@@ -28,7 +28,6 @@ from typing import Sequence
 
 import numpy as np
 
-from ..core.compiled_draws import CompiledDraws
 from .band import Band
 from .propagation import clamp_range
 
@@ -54,6 +53,8 @@ def _draw(rngs: Sequence[np.random.Generator], n_src: int, n_noise: int, K: int)
     """Unit-power complex Gaussian spectra: source (R, n_src, K) and noise (R, n_noise, K)."""
     z = np.empty((len(rngs), n_src + n_noise, K, 2))
     if all(type(g.bit_generator) is np.random.PCG64 for g in rngs):  # compiled, the same numbers, every core
+        from ..core.compiled_draws import CompiledDraws  # (numba: at first use)
+
         CompiledDraws(rngs).fill(z, normal=(True,))
     else:
         for g, out in zip(rngs, z):
