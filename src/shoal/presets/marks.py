@@ -238,6 +238,9 @@ RULES: tuple[Rule, ...] = (
     stated("slo.walk_speed", 5.0, "Mai §4.5: |v| = U(0, 5)", _is("slo.motion", "random_walk")),
     read("slo.radial", "uniform_radius", "The point in the hypersphere (SPSO 2011)", _is("slo.motion", "pso")),
     read("slo.quality_threshold", None, "Quality thresholds"),
+    read("slo.ranging", None, "Estimates of robots outside the neighbourhood (SLO)"),  # unset: every pair
+    read("slo.ranging", "all", "Estimates of robots outside the neighbourhood (SLO)"),
+    ours("slo.ranging", "neighbours", "Ranging only the neighbours (ours)"),
     ours("slo.neighbourhood", "full", "a host scene of ours: every robot localises every robot",
          lambda d: not _mai(d)),
     ours("slo.neighbourhood_param", None, "not used by the full neighbourhood", _is("slo.neighbourhood", "full")),
@@ -271,7 +274,7 @@ FIELDS: dict[str, tuple[str, ...]] = {
               "acoustics.source_bearing_deg", "acoustics.start"),
     "slo": ("sim.robots", "sim.steps", "slo.motion", "slo.selection", "slo.errors", "slo.prediction_weight",
             "slo.delta_cos", "slo.delta_v", "slo.literal_eq_3_1", "slo.entry_policy", "slo.neighbourhood",
-            "slo.neighbourhood_param", "slo.quality_threshold"),
+            "slo.neighbourhood_param", "slo.quality_threshold", "slo.ranging"),
 }
 EXTRA: dict[str, Callable[[dict[str, Any]], tuple[str, ...]]] = {
     "fleet": lambda d: (

@@ -377,6 +377,8 @@ class SLO(_Model):
     (docs/readings.md, "Thesis units on a scene (ours)").
     """
 
+    omit_unset = ("ranging",)  # added later: a scene that leaves it unset dumps as before
+
     swarm: Literal["slo", "host"] = Field(
         "slo",
         description="Mai's SLO swarm, or the scene's own swarm (Ch. 3, [world] fleet, [acoustics]) on SLO positions")
@@ -414,6 +416,11 @@ class SLO(_Model):
     quality_threshold: Annotated[float | None, Field(
         ge=-1e12, le=1e12,
         description="fitness T of 'first generation with best <= T'; unset = the benchmark's")] = None
+    ranging: Literal["all", "neighbours"] | None = Field(
+        None, description="SLO swarm: every robot ranges and localises every other ('all', the thesis, O(N²); "
+        "unset means 'all'), or only "
+        "the robots of its neighbourhood (ours, O(N·k): knn, radius or ring, CSS; a robot remembers the last few that "
+        "left, frozen, and starts any other arriving neighbour from its initial estimate)")
 
     @field_validator("swarm", mode="before")
     @classmethod
@@ -430,6 +437,15 @@ class SLO(_Model):
                 raise ValueError(f"neighbourhood_param = {p:g}: {self.neighbourhood} takes a whole number >= 1")
         if self.positions == "oracle" and self.swarm != "host":
             raise ValueError("positions = 'oracle' needs swarm = 'host' (the SLO swarm always localises)")
+        if self.ranging == "neighbours":
+            if self.swarm != "slo":
+                raise ValueError("ranging = 'neighbours' is the SLO swarm's (swarm = 'slo'); a host swarm ranges all")
+            from shoal.engine.slo.ranging_modes import refusal  # (plain Python: no SLO kernels to check a preset)
+
+            why = refusal(selection=self.selection, entry_policy=self.entry_policy, neighbourhood=self.neighbourhood,
+                          motion=self.motion, ar_gain=0.0)
+            if why:
+                raise ValueError(f"ranging = 'neighbours': {why}")
         return self
 
 

@@ -14,6 +14,8 @@ from typing import Any, ClassVar, Literal, cast
 
 import numpy as np
 
+from ..core import parallel
+from ..core.compiled_draws import CompiledDraws
 from ..core.contract import check_live
 from ..core.positions import Oracle, PositionSource
 from ..core.rng import run_generators
@@ -21,7 +23,7 @@ from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, fields_of, from_fields, integer, part, rng_states, set_rng_states
 from ..core.steering import SLACK, Steering, given_coefficients
 from ..pso.bests import best_of, improves
-from ..robots import kernels
+from ..robots import kernels, tick_kernels
 from ..robots.dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
 from ..robots.laws import ROBOT_LAWS, Inertia, Limits, rotational_energy_factor, steered_command
 from ..robots.motion import Drive, Kinematic, Physics
@@ -33,6 +35,7 @@ ACTIVE, COLLIDED = 0, 1
 # least STALL_STEPS ticks in a row, e.g. squeezed between bodies it may not approach.
 STALL_SPEED = 0.01
 STALL_STEPS = 10
+STATE_DTYPES = (float, float, float, float, np.int8, np.int64, float, float)  # of tick_kernels.STATE
 
 
 @dataclass
@@ -493,6 +496,8 @@ class Fleet:
 
     def step(self) -> FleetInfo:
         """Advance every run by one control tick (steered by :attr:`steering`, if set)."""
+        if self.steering is None and self._fused_tick():
+            return self._fused_step()
         p, s = self.params, self.state
         steering, self.steering = self.steering, None
         self._update_bests()  # phase A, all robots
@@ -587,6 +592,74 @@ class Fleet:
         sensed = kernels.phase_b(s.x, s.heading, s.u, s.cmd, s.status, g_p, g_g, draws, params, world, grid, out)
         self._stale = True
         return bool(sensed)
+
+    def _fused_tick(self) -> bool:
+        """The whole tick by :func:`tick_kernels.fleet_runs`: the compiled kinematic tick on true
+        positions, float64 states and a point source."""
+        s = self.state
+        return (self._compiled_tick() and type(self.positions) is Oracle and len(self.world.source) == 2
+                and s.x.dtype == s.y.dtype == s.u.dtype == s.cmd.dtype == np.float64)
+
+    def _fused_step(self) -> FleetInfo:
+        """:meth:`step` in one compiled call per block of runs (the blocks on every core): the
+        same numbers, the generators left as the numpy tick leaves them."""
+        s = self.state
+        R, N = s.status.shape
+        terms, per_component = self._draw_layout()
+        gen = self._compiled_draws()
+        old: tuple[np.ndarray, ...] = (s.x, s.heading, s.u, s.cmd, s.status, s.slow, s.y, s.f_y)  # tick_kernels.STATE
+        if not all(a.flags.c_contiguous for a in old) or s.status.dtype != np.int8 or s.slow.dtype != np.int64:
+            old = tuple(np.ascontiguousarray(a, dtype=t) for a, t in zip(old, STATE_DTYPES))
+        new = (np.empty((R, N, 2)), np.empty((R, N)), np.empty((R, N, 2)), np.empty((R, N, 2)),
+               np.empty((R, N), np.int8), np.empty((R, N), np.int64), np.empty((R, N, 2)), np.empty((R, N)),
+               np.empty((R, N, 2)))  # ..., commanded
+        f, yg, best, com, max_speed = np.empty((R, N)), np.empty((R, 2)), np.empty(R), np.empty(R), np.empty(R)
+        counts = np.empty((4, R), np.int64)
+        out = (np.empty((R, N)), np.empty((terms, R, N)), np.empty((R, N, 2)), np.empty((R, N, SECTORS)),
+               np.empty((R, N, SECTORS, 2)), np.empty((R, N, SECTORS, 2)), np.empty((R, N, SECTORS), bool))  # Outputs
+        source, layers, params, world, grid = self._kernel_constants()
+        sensed = False
+
+        def block(lo: int, hi: int) -> None:
+            nonlocal sensed
+            if tick_kernels.fleet_runs(lo, hi, old, new, f, yg, best, source, gen.address, gen.states, terms,
+                                       per_component, params, world, grid, out, layers, STALL_SPEED, STALL_STEPS,
+                                       com, max_speed, counts):
+                sensed = True
+
+        parallel.each_block(block, R)
+        s.x, s.heading, s.u, s.cmd, s.status, s.slow, s.y, s.f_y, s.commanded = new
+        s.f, s.yg, s.best_fitness = f, yg, best
+        omega, c, force, gap, point, centre, hit = out
+        s.reading = SectorReading(gap, point, centre, hit) if sensed else None
+        s.force, s.omega, s.c = force, omega, c
+        s.k += 1
+        self._stale = True
+        return FleetInfo(s.k * self.params.dt, com, counts[0], counts[1], counts[2], counts[3], best.copy(), max_speed)
+
+    def _draw_layout(self) -> tuple[int, bool]:
+        """The law's U(0,1) draws a robot takes a tick: how many terms, and two (one a component) or one each."""
+        law = ROBOT_LAWS[self.params.law]
+        return law.terms, law.draws != "robot"
+
+    def _compiled_draws(self) -> CompiledDraws:
+        """The runs' generators as a kernel draws from them (rebuilt when they are replaced)."""
+        kept = self.__dict__.get("_gen")
+        if kept is None or kept[0] is not self.rngs:
+            kept = self._gen = (self.rngs, CompiledDraws(self.rngs))
+        return kept[1]
+
+    def _kernel_constants(self) -> tuple[np.ndarray, np.ndarray, tuple, tuple, tuple]:
+        """The source and the obstacle layers' x as float64 arrays, and the tick's parameters,
+        world and grid as the plain tuples :func:`tick_kernels.fleet_runs` takes."""
+        params = self._kernel_params()
+        kept = self.__dict__.get("_constants")
+        if kept is None or kept[0] is not self.world or kept[1] is not params:  # a world spec is frozen
+            world, grid = self._kernel_world()
+            kept = self._constants = (self.world, params, np.array(self.world.source, dtype=float),
+                                      np.array(self.world.layer_x, dtype=float).reshape(-1), tuple(params),
+                                      tuple(world), tuple(grid))
+        return kept[2:]
 
     # ------------------------------------------------------------------ snapshot
     STATE = ("x", "heading", "u", "cmd", "y", "f_y", "yg", "best_fitness", "f", "status", "slow", "a")

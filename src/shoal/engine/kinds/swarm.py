@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Literal, get_args
 
 import numpy as np
 
+from ..core import parallel
 from ..core.contract import check_live
 from ..core.objectives import Objective
 from ..core.positions import Oracle, PositionSource
@@ -27,6 +28,7 @@ from ..pso.laws import LAWS, Law, reachable
 from ..pso.laws import motion_heading as _heading
 
 if TYPE_CHECKING:
+    from ..core.compiled_draws import CompiledDraws
     from ..pso import kernels
 else:
     class _Kernels:
@@ -506,8 +508,9 @@ class Simulation:
     def run(self, steps: int, track: int = 0) -> RunSeries:
         """Advance ``steps`` ticks without a caller between them (headless use): the same
         numbers as ``steps`` calls of :meth:`step`. Where the compiled tick applies and the
-        coefficients are the same for every robot, whole blocks of ticks run in one compiled
-        call (:func:`kernels.swarm_run`); other ticks go through :meth:`step` (a steered tick too)."""
+        coefficients are the same for every robot, all the ticks of a block of runs go in one
+        compiled call (:func:`kernels.swarm_runs`), the blocks on every core; other ticks go
+        through :meth:`step` (a steered tick too)."""
         if steps < 0 or not 0 <= track < self.robots:
             raise ValueError(f"need steps >= 0 and 0 <= track < {self.robots}, got {steps}, {track}")
         R, d = self.runs, self.d
@@ -526,16 +529,22 @@ class Simulation:
         out.c.append(info.c)
         return 1
 
+    # ticks one compiled call of :meth:`run` takes at most (bounds the coefficient lists)
+    RUN_TICKS = 1 << 14
+
     def _run_compiled(self, k: int, steps: int, track: int, out: RunSeries) -> int:
-        """Ticks k … of :meth:`run` in one compiled call, as many as the block of draws holds
-        and while the coefficients are the same for every robot; 0 if none."""
+        """Ticks k … of :meth:`run` in compiled calls while the coefficients are the same for
+        every robot (and no steering is set), each block of runs in its own thread
+        (:mod:`~shoal.engine.core.parallel`), drawing from the runs' own generators; 0 if none."""
         if not self._compiled_tick() or self.steering is not None:
+            return 0
+        ahead, literal, adapted, before, maximise, code, source, scale = self._kernel_setup()
+        if code == kernels.GIVEN:
             return 0
         s, d, dt = self.state, self.d, self.dt
         R, N = s.x.shape[:2]
-        block = self._draws((2, N, d))
         omegas, cs = [], []
-        for j in range(min(steps - k, block.ticks - block.used)):
+        for j in range(min(steps - k, self.RUN_TICKS)):
             omega, c = self.policy.coefficients((s.k + j) * dt, dt, d)  # self.t at that tick
             c = np.asarray(c, dtype=float)
             if not isinstance(omega, float) or c.shape != (2,):
@@ -545,21 +554,22 @@ class Simulation:
         n = len(omegas)
         if not n:
             return 0
-        ahead, literal, adapted, before, maximise, code, source, scale = self._kernel_setup()
-        if code == kernels.GIVEN:
-            return 0
+        gen = self._compiled_draws()  # settles a block of draws of the single-tick path first
         new, f = np.empty((2, 3) + s.x.shape), np.empty((R, N))
         y, f_y, yg, best = s.y.copy(), s.f_y.copy(), s.yg.copy(), s.best_fitness.copy()
         turns = s.turns()
-        first = block.used
-        block.used += n
-        last = kernels.swarm_run(s.x, s.u, y, f_y, f, block.draws, first, np.array(omegas), np.array(cs), ahead,
-                                 literal, adapted, dt, before, maximise, code, source, scale, new, yg, best,
-                                 turns.turn, turns.turned, out.speeds[k:k + n], out.best_fitness[k:k + n], track,
-                                 out.tracked[k:k + n])
+        w, c_all = np.array(omegas), np.array(cs)
+        speeds, bests, tracked = out.speeds[k:k + n], out.best_fitness[k:k + n], out.tracked[k:k + n]
+
+        def block(lo: int, hi: int) -> int:
+            return kernels.swarm_runs(lo, hi, s.x, s.u, y, f_y, f, gen.address, gen.states, w, c_all, ahead,
+                                      literal, adapted, dt, before, maximise, code, source, scale, new, yg, best,
+                                      turns.turn, turns.turned, speeds, bests, track, tracked)
+
+        parallel.each_block(block, R)
         turns.pending = True
         s.f, s.y, s.f_y, s.yg, s.best_fitness = f, y, f_y, yg, best
-        s.x, s.u, s.a = new[last]
+        s.x, s.u, s.a = new[(n - 1) % 2]
         out.t[k:k + n] = [(s.k + j + 1) * dt for j in range(n)]
         out.omega += omegas
         out.c += cs
@@ -568,6 +578,16 @@ class Simulation:
         if not self._warned:
             self._honest()
         return n
+
+    def _compiled_draws(self) -> "CompiledDraws":
+        """The runs' generators as a kernel draws from them (where one call a tick leaves them)."""
+        from ..core.compiled_draws import CompiledDraws  # (numba: imported with the kernels, at first use)
+
+        rngs = self.rngs
+        kept = self.__dict__.get("_gen")
+        if kept is None or kept[0] is not rngs:
+            kept = self._gen = (rngs, CompiledDraws(rngs))
+        return kept[1]
 
     # ------------------------------------------------------------------ snapshot
     STATE = ("x", "u", "a", "y", "f_y", "yg", "best_fitness", "f", "heading", "status")

@@ -654,108 +654,123 @@ def phase_b(x: np.ndarray, heading: np.ndarray, u: np.ndarray, cmd: np.ndarray, 
     ``draws`` (n, R, N, k) its U(0,1) draws (k = 2 per component, 1 per robot). Returns whether
     any robot sensed (False when every robot of every run has collided)."""
     R, N = status.shape
-    head, nxt, prv, cell, ostamp = _grid_scratch(N, g, w)
-    colour = np.zeros(N, np.int64)
-    stamp = np.full(N + 1, -1, np.int64)
-    order = np.empty(N, np.int64)
-    start = np.empty(N + 2, np.int64)
-    members = np.empty(N, np.int64)
-    new_cmd = np.empty((N, 2))
-    touched = np.zeros(N, np.bool_)
-    hit = np.zeros(N, np.bool_)
-    c = np.zeros(5)
-    adj = np.empty(SECTORS)
+    scratch = _scratch(N, g, w)
     sensed = False
     for r in range(R):
-        xr = x[r]
-        head[:] = -1
-        for i in range(N):
-            _grid_insert(i, _grid_cell(xr[i, 0], xr[i, 1], g), head, nxt, prv, cell)
-        if p.sequential:
-            groups = _colour(xr, p.reach, g, head, nxt, colour, stamp)
-        else:
-            colour[:] = 0
-            groups = 1
-        start[:] = 0  # the active robots of each colour, in index order
-        for i in range(N):
-            if status[r, i] == ACTIVE:
-                start[colour[i] + 2] += 1
-        for k in range(groups):
-            start[k + 2] += start[k + 1]
-        for i in range(N):
-            if status[r, i] == ACTIVE:
-                order[start[colour[i] + 1]] = i
-                start[colour[i] + 1] += 1
-        for k in range(groups):
-            m = 0
-            for s in range(start[k], start[k + 1]):
-                i = order[s]
-                if status[r, i] == ACTIVE:  # a robot hit earlier in this tick sits out
-                    members[m] = i
-                    m += 1
-            if m == 0:
+        sensed |= _phase_b_run(r, x, heading, u, cmd, status, g_p[r], g_g[r], draws[:, r], p, w, g, out, scratch)
+    return sensed
+
+
+Scratch = tuple  # what one run's phase B works in (:func:`_scratch`)
+
+
+@kernel
+def _scratch(N: int, g: Grid, w: WorldArrays) -> tuple:
+    """Scratch of :func:`_phase_b_run` for N robots: the robot grid, the colouring, the groups,
+    each group's commands and contacts."""
+    head, nxt, prv, cell, ostamp = _grid_scratch(N, g, w)
+    return (head, nxt, prv, cell, ostamp, np.zeros(N, np.int64), np.full(N + 1, -1, np.int64), np.empty(N, np.int64),
+            np.empty(N + 2, np.int64), np.empty(N, np.int64), np.empty((N, 2)), np.zeros(N, np.bool_),
+            np.zeros(N, np.bool_), np.zeros(5), np.empty(SECTORS))
+
+
+@kernel
+def _phase_b_run(r: int, x: np.ndarray, heading: np.ndarray, u: np.ndarray, cmd: np.ndarray, status: np.ndarray,
+                 g_p: np.ndarray, g_g: np.ndarray, draws: np.ndarray, p: TickParams, w: WorldArrays, g: Grid,
+                 out: Outputs, scratch: tuple) -> bool:
+    """Phase B of run r (:func:`phase_b`); ``g_p``, ``g_g`` (N, 2) and ``draws`` (n, N, k) are
+    the run's own. Reads and writes row r of the arrays only. Whether a robot sensed."""
+    N = status.shape[1]
+    head, nxt, prv, cell, ostamp, colour, stamp, order, start, members, new_cmd, touched, hit, c, adj = scratch
+    sensed = False
+    xr = x[r]
+    head[:] = -1
+    for i in range(N):
+        _grid_insert(i, _grid_cell(xr[i, 0], xr[i, 1], g), head, nxt, prv, cell)
+    if p.sequential:
+        groups = _colour(xr, p.reach, g, head, nxt, colour, stamp)
+    else:
+        colour[:] = 0
+        groups = 1
+    start[:] = 0  # the active robots of each colour, in index order
+    for i in range(N):
+        if status[r, i] == ACTIVE:
+            start[colour[i] + 2] += 1
+    for k in range(groups):
+        start[k + 2] += start[k + 1]
+    for i in range(N):
+        if status[r, i] == ACTIVE:
+            order[start[colour[i] + 1]] = i
+            start[colour[i] + 1] += 1
+    for k in range(groups):
+        m = 0
+        for s in range(start[k], start[k + 1]):
+            i = order[s]
+            if status[r, i] == ACTIVE:  # a robot hit earlier in this tick sits out
+                members[m] = i
+                m += 1
+        if m == 0:
+            continue
+        blind = p.steered and not (p.guard and p.coefficients != CONSTANT)  # a given command needs no sensing
+        sensed = sensed or not blind
+        for s in range(m):  # everyone in the group senses and decides ...
+            i = members[s]
+            if blind:
+                new_cmd[i, 0], new_cmd[i, 1] = _steered(cmd[r, i], p)
                 continue
-            blind = p.steered and not (p.guard and p.coefficients != CONSTANT)  # a given command needs no sensing
-            sensed = sensed or not blind
-            for s in range(m):  # everyone in the group senses and decides ...
-                i = members[s]
-                if blind:
-                    new_cmd[i, 0], new_cmd[i, 1] = _steered(cmd[r, i], p)
-                    continue
-                turn = heading[r, i] if p.body_frame else 0.0
-                gap, point, centre, seen = out.gap[r, i], out.point[r, i], out.centre[r, i], out.hit[r, i]
-                _sense(i, xr, turn, p, w, g, head, nxt, ostamp, gap, point, centre, seen)
-                for q in range(SECTORS):
-                    adj[q] = _maximum(gap[q] - p.s_min, 0.0) if p.s_min > 0 else gap[q]
-                omega = _coefficients(adj, p, c)
-                if p.given:  # ω, c given from outside where not NaN
-                    if out.omega[r, i] == out.omega[r, i]:
-                        omega = out.omega[r, i]
-                    for n in range(p.terms):
-                        if out.c[n, r, i] == out.c[n, r, i]:
-                            c[n] = out.c[n, r, i]
-                fx = fy = 0.0
-                if not p.body_frame:
-                    fx, fy = _virtual_force(xr[i, 0], xr[i, 1], gap, centre, seen, p)
-                cx, cy = _command(cmd[r, i], g_p[r, i], g_g[r, i], fx, fy, heading[r, i], c, omega,
-                                  draws[:, r, i, :], p)
-                if p.guard and p.coefficients != CONSTANT:
-                    cx, cy = _guard(cx, cy, xr[i, 0], xr[i, 1], point, adj, p)
-                new_cmd[i, 0], new_cmd[i, 1] = cx, cy
-                out.omega[r, i] = omega
+            turn = heading[r, i] if p.body_frame else 0.0
+            gap, point, centre, seen = out.gap[r, i], out.point[r, i], out.centre[r, i], out.hit[r, i]
+            _sense(i, xr, turn, p, w, g, head, nxt, ostamp, gap, point, centre, seen)
+            for q in range(SECTORS):
+                adj[q] = _maximum(gap[q] - p.s_min, 0.0) if p.s_min > 0 else gap[q]
+            omega = _coefficients(adj, p, c)
+            if p.given:  # ω, c given from outside where not NaN
+                if out.omega[r, i] == out.omega[r, i]:
+                    omega = out.omega[r, i]
                 for n in range(p.terms):
-                    out.c[n, r, i] = c[n]
-                out.force[r, i, 0], out.force[r, i, 1] = fx, fy
-            touched[:] = False  # robots a mover collides with, then whoever overlaps a body
-            for s in range(m):  # ... then they move one after another ...
-                i = members[s]
-                sx, sy = xr[i, 0], xr[i, 1]
-                ex, ey, new_heading = _target(sx, sy, heading[r, i], new_cmd[i, 0], new_cmd[i, 1], p)
-                nx_, ny_ = ex, ey
-                hit[i] = False
-                if sx != ex or sy != ey:
-                    t, kind, idx = _first_contact(i, sx, sy, ex, ey, p.radius, xr, p, w, g, head, nxt, ostamp)
-                    if t >= 0.0:  # stop where the swept disc first touches
-                        f = max(t - STOP_SHORT, 0.0)
-                        nx_, ny_ = sx + f * (ex - sx), sy + f * (ey - sy)
-                        hit[i] = p.tolerance <= 0 or _sweep_body(kind, idx, sx, sy, ex, ey, p.radius - p.tolerance,
-                                                                 xr, p, w) >= 0.0
-                        if hit[i] and kind == ROBOT_BODY:  # both robots of a collision are disabled
-                            touched[idx] = True
-                    _grid_remove(i, head, nxt, prv, cell)
-                    xr[i, 0], xr[i, 1] = nx_, ny_
-                    _grid_insert(i, _grid_cell(nx_, ny_, g), head, nxt, prv, cell)
-                heading[r, i] = new_heading
-                u[r, i, 0], u[r, i, 1] = (nx_ - sx) / p.dt, (ny_ - sy) / p.dt
-                cmd[r, i, 0], cmd[r, i, 1] = new_cmd[i, 0], new_cmd[i, 1]
-            for s in range(m):  # ... and whoever overlaps a body beyond the tolerance has collided
-                _touching(members[s], xr, p, w, g, head, nxt, ostamp, touched)
-            for s in range(m):
-                if hit[members[s]]:
-                    status[r, members[s]] = COLLIDED
-            for j in range(N):
-                if touched[j]:
-                    status[r, j] = COLLIDED
+                    if out.c[n, r, i] == out.c[n, r, i]:
+                        c[n] = out.c[n, r, i]
+            fx = fy = 0.0
+            if not p.body_frame:
+                fx, fy = _virtual_force(xr[i, 0], xr[i, 1], gap, centre, seen, p)
+            cx, cy = _command(cmd[r, i], g_p[i], g_g[i], fx, fy, heading[r, i], c, omega, draws[:, i, :], p)
+            if p.guard and p.coefficients != CONSTANT:
+                cx, cy = _guard(cx, cy, xr[i, 0], xr[i, 1], point, adj, p)
+            new_cmd[i, 0], new_cmd[i, 1] = cx, cy
+            out.omega[r, i] = omega
+            for n in range(p.terms):
+                out.c[n, r, i] = c[n]
+            out.force[r, i, 0], out.force[r, i, 1] = fx, fy
+        touched[:] = False  # robots a mover collides with, then whoever overlaps a body
+        for s in range(m):  # ... then they move one after another ...
+            i = members[s]
+            sx, sy = xr[i, 0], xr[i, 1]
+            ex, ey, new_heading = _target(sx, sy, heading[r, i], new_cmd[i, 0], new_cmd[i, 1], p)
+            nx_, ny_ = ex, ey
+            hit[i] = False
+            if sx != ex or sy != ey:
+                t, kind, idx = _first_contact(i, sx, sy, ex, ey, p.radius, xr, p, w, g, head, nxt, ostamp)
+                if t >= 0.0:  # stop where the swept disc first touches
+                    f = max(t - STOP_SHORT, 0.0)
+                    nx_, ny_ = sx + f * (ex - sx), sy + f * (ey - sy)
+                    hit[i] = p.tolerance <= 0 or _sweep_body(kind, idx, sx, sy, ex, ey, p.radius - p.tolerance,
+                                                             xr, p, w) >= 0.0
+                    if hit[i] and kind == ROBOT_BODY:  # both robots of a collision are disabled
+                        touched[idx] = True
+                _grid_remove(i, head, nxt, prv, cell)
+                xr[i, 0], xr[i, 1] = nx_, ny_
+                _grid_insert(i, _grid_cell(nx_, ny_, g), head, nxt, prv, cell)
+            heading[r, i] = new_heading
+            u[r, i, 0], u[r, i, 1] = (nx_ - sx) / p.dt, (ny_ - sy) / p.dt
+            cmd[r, i, 0], cmd[r, i, 1] = new_cmd[i, 0], new_cmd[i, 1]
+        for s in range(m):  # ... and whoever overlaps a body beyond the tolerance has collided
+            _touching(members[s], xr, p, w, g, head, nxt, ostamp, touched)
+        for s in range(m):
+            if hit[members[s]]:
+                status[r, members[s]] = COLLIDED
+        for j in range(N):
+            if touched[j]:
+                status[r, j] = COLLIDED
     return sensed
 
 

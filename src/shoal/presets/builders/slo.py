@@ -78,7 +78,8 @@ def build_slo_swarm(scenario: Scenario, *, runs: int | None = None, seed: int | 
     return SLOSwarm(
         runs=runs or scenario.sim.runs, seed=scenario.sim.seed if seed is None else seed, first_run=first_run,
         particles=scenario.sim.robots, objective=slo.objective, motion=slo.motion, walk_speed=slo.walk_speed,
-        quality_threshold=slo.quality_threshold, radial=slo.radial, **slo_localiser_for(slo),
+        quality_threshold=slo.quality_threshold, radial=slo.radial, ranging=slo.ranging or "all",
+        **slo_localiser_for(slo),
     )
 
 
