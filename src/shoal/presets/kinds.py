@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from pydantic import BaseModel, ValidationError
 
-from shoal.engine.core.registry import Registry
+from shoal.engine.core.registry import Registry, shape
 from shoal.engine.core.schema import Schema, common_columns, integer_names
 from shoal.engine.kinds.fleet import Fleet
 from shoal.engine.kinds.slo_swarm import SLOSwarm
@@ -108,6 +108,26 @@ class SceneKind:
         return next((c for c in self.caps if c.when is None or c.when(scenario)), Cap(self.label, self.default_cap))
 
 
+_SHAPE = shape("build", "detects", "cap", engine=type, section=(str, type(None)), app=(str, type(None)),
+               caps=tuple, dims=tuple, cost=tuple, optimises=bool)
+
+
+def check_kind(kind: Any) -> str | None:
+    """Why ``kind`` is not a well-formed :class:`SceneKind` (None: it is), said when it registers."""
+    why = _SHAPE(kind)
+    if why is not None:
+        return why
+    if not all(isinstance(c, Cap) for c in kind.caps):
+        return "caps must be a tuple of Cap"
+    if kind.live is not None and not callable(kind.live):
+        return "live must be callable or None"
+    cost = kind.cost
+    if len(cost) < 2 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v < 1e3
+                                for v in cost):
+        return f"cost must be CPU seconds per run and per robot (finite, >= 0), got {cost!r}"
+    return None
+
+
 def section_of(scenario: Scenario, name: str) -> Any:
     """The section ``name`` of ``scenario`` (a field, or a plug-in kind's section), None if unset."""
     if name in type(scenario).model_fields:
@@ -140,6 +160,7 @@ KINDS: Registry[SceneKind] = Registry(  # (the order the app lists them in; a sc
                              "objective", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1",
                              "entry_policy", "walk_speed", "quality_threshold"),
                      "sim": ("robots", "steps")}),
+    check=check_kind,
 )
 # Robots per kind in a tab, where one step still costs a few tens of ms at most: the compiled
 # kinematic fleet tick takes 1000 robots in a few ms, pymunk physics 200 in about 20 ms; the
