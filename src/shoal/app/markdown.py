@@ -13,7 +13,9 @@ scans the app for f-strings and ``format`` calls into markdown content that bypa
   ``*``, ``_``, ``[``, ``#``, `````, ``|`` or ``:`` starts emphasis, a link, a heading, code or a
   table;
 - line breaks and other control characters become spaces (a name stays on its line), and a
-  text longer than ``limit`` characters is cut with an ellipsis.
+  text longer than ``limit`` characters is cut with an ellipsis;
+- a lone surrogate (JSON's ``"\ud800"``) becomes U+FFFD, so the text is UTF-8 encodable and
+  msgpack can send it (:func:`shoal.presets.text.encodable`).
 
 Markdown the project writes itself (the shipped notes and lessons, and literals in the code)
 is not escaped: it is meant as markdown.
@@ -22,6 +24,10 @@ is not escaped: it is meant as markdown.
 from __future__ import annotations
 
 import re
+
+from shoal.presets.text import encodable
+
+__all__ = ["MAX_SHOWN", "encodable", "escape"]
 
 MAX_SHOWN = 300  # characters of one escaped text, by default (a replay's name may be 1 MiB long)
 
@@ -34,7 +40,7 @@ _REFERENCE = re.compile("[&<>\"']")
 def escape(value: object, limit: int | None = MAX_SHOWN) -> str:
     """``value`` as text that viser's markdown shows literally (see the module doc); ``limit``:
     the most characters kept (None: all)."""
-    text = _CONTROL.sub(" ", str(value))
+    text = _CONTROL.sub(" ", encodable(str(value)))
     if limit is not None and len(text) > limit:
         text = text[: max(limit - 1, 0)] + "…"
     text = _PUNCTUATION.sub(r"\\\1", text)

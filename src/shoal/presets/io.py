@@ -17,6 +17,7 @@ from pydantic import ValidationError
 from shoal.engine.core.plugins import load_plugins
 
 from .models import Scenario
+from .text import encodable, has_surrogate_escape
 from .toml_bounds import check_toml
 
 
@@ -89,7 +90,7 @@ def parse_text(text: str, fmt: str = "toml") -> dict[str, Any]:
         raise PresetError(["a preset must be a table of fields"])
     if _depth(data) > MAX_DEPTH:
         raise PresetError([f"{fmt.upper()} syntax: nested deeper than {MAX_DEPTH} levels; a preset needs a few"])
-    return data
+    return encodable(data) if fmt == "json" and has_surrogate_escape(text) else data  # (TOML has no lone surrogate)
 
 
 MAX_DEPTH = 16  # tables and arrays in a preset; the deepest shipped one has 4
