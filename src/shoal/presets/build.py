@@ -121,6 +121,14 @@ def with_obstacles(world: WorldSpec, obstacles: list[tuple[float, float, float]]
     return dataclasses.replace(world, circles=circles)
 
 
+def check_runs(scenario: Scenario) -> Scenario:
+    """``scenario`` if ``shoal run`` can build it, else :class:`PresetError` naming the field:
+    what :func:`build` refuses beyond the model, a world its generator cannot lay out (a forest
+    7 m wide; :func:`world_for`, the code every build lays its world out with). ``shoal presets
+    validate`` applies it, so it refuses what ``shoal run`` refuses; no swarm is allocated."""
+    return check_world(scenario)
+
+
 def check_world(scenario: Scenario) -> Scenario:
     """``scenario`` if its ``[world]`` (if any) can be laid out, else :class:`PresetError`."""
     if scenario.world is not None:
