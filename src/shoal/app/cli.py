@@ -267,7 +267,7 @@ def _cmd_warmup(args: argparse.Namespace) -> int:
 
 
 def _cmd_presets(args: argparse.Namespace) -> int:
-    from shoal.presets.build import check_runs
+    from shoal.presets.build import check_buildable
     from shoal.presets.io import PresetError, list_presets, load, to_toml
 
     if args.action == "list":
@@ -279,7 +279,7 @@ def _cmd_presets(args: argparse.Namespace) -> int:
     try:
         scenario = load(args.name)
         if args.action == "validate":
-            check_runs(scenario)  # the rules `shoal run` applies when it builds the scene, not only the model's
+            check_buildable(scenario)  # the rules `shoal run` applies when it builds the scene, not only the model's
     except PresetError as e:
         print("\n".join(e.messages), file=sys.stderr)
         return 1 if args.action == "validate" else EXIT_USAGE

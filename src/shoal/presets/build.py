@@ -121,7 +121,7 @@ def with_obstacles(world: WorldSpec, obstacles: list[tuple[float, float, float]]
     return dataclasses.replace(world, circles=circles)
 
 
-def check_runs(scenario: Scenario) -> Scenario:
+def check_buildable(scenario: Scenario) -> Scenario:
     """``scenario`` if ``shoal run`` can build it, else :class:`PresetError` naming the field:
     what :func:`build` refuses beyond the model, a world its generator cannot lay out (a forest
     7 m wide; :func:`world_for`, the code every build lays its world out with). ``shoal presets

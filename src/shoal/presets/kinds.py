@@ -47,11 +47,13 @@ if TYPE_CHECKING:
 @dataclass(frozen=True)
 class Cap:
     """At most ``robots`` robots in one browser tab (the model's range is for headless runs),
-    for the scenarios ``when`` holds for (all if None); ``label`` names the kind of scene."""
+    and at most ``d`` dimensions (None: the kind's own range), for the scenarios ``when`` holds
+    for (all if None); ``label`` names the kind of scene."""
 
     label: str
     robots: int
     when: Callable[[Scenario], bool] | None = None
+    d: int | None = None
 
 
 def on_slo(scenario: Scenario) -> bool:
@@ -60,6 +62,7 @@ def on_slo(scenario: Scenario) -> bool:
 
 
 SLO_CAP = Cap("SLO swarm", 100, on_slo)  # pairwise ranging grows as N²
+BROWSER_DIMS = 10  # sim.d of a Chapter 3 swarm in a tab: its tick, and each frame its history keeps, grow with N·d
 
 
 @dataclass(frozen=True)
@@ -138,7 +141,8 @@ def section_of(scenario: Scenario, name: str) -> Any:
 KINDS: Registry[SceneKind] = Registry(  # (the order the app lists them in; a scene matches one kind at most)
     "scene kind",
     SceneKind("swarm", "Chapter 3 swarm", Simulation, build_simulation, None, dims=(1, 1000), laws=LAWS,
-              caps=(SLO_CAP, Cap("free-space swarm", 2000)), app="shoal.app.kinds.swarm", live=swarm_live,
+              caps=(SLO_CAP, Cap("free-space swarm", 2000, d=BROWSER_DIMS)), app="shoal.app.kinds.swarm",
+              live=swarm_live,
               reads={"controller": ("U", "A_plus", "omega", "c1", "c2", "c1_share", "dt", "law", "mode",
                                     "smooth_width"),
                      "objective": None, "bests": None, "init": None, "sim": ("robots", "d", "steps")}),
