@@ -38,6 +38,18 @@ def test_the_tutorial_runs_as_written(tmp_path):
     assert "['beta']" in done.stdout and "needs a new engine" in done.stdout
 
 
+def test_the_training_page_runs_as_written():
+    """docs/train.md: a random agent, the baseline, a search over ω and c, a frame: no RL library."""
+    blocks = re.findall(r"```python\n(.*?)```", (DOCS / "train.md").read_text(encoding="utf-8"), re.S)
+    assert len(blocks) >= 5
+    done = run([sys.executable, "-c", "\n".join(blocks)], input="")
+    assert done.returncode == 0, done.stderr[-3000:]
+    out = done.stdout
+    assert "random agent: return" in out and "the law: return" in out and "(560, 720, 3) uint8" in out
+    law, found = re.search(r"the law's tuning: (-?\d+); searched: .*: (-?\d+)", out).groups()
+    assert int(found) > int(law), "the search improved on the law's tuning"
+
+
 def test_the_example_scripts_run(tmp_path):
     figure = tmp_path / "fig3-5a.png"
     for script, args in (("figure_3_5a.py", [str(figure)]), ("rastrigin_10d.py", []), ("custom_law_app.py", [])):

@@ -17,6 +17,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from shoal.engine.core.contract import check_live
 from shoal.engine.core.rng import run_generators
 from shoal.engine.core.schema import Column, Schema
+from shoal.engine.core.steering import Steering
 from shoal.presets.kinds import Cap, SceneKind
 
 
@@ -62,6 +63,7 @@ class Gather:
     """``runs`` seeded runs of ``robots`` robots gathering (run i draws from child i of the seed)."""
 
     LIVE: ClassVar[frozenset[str]] = frozenset({"speed", "noise"})
+    steering: Steering | None = None  # a velocity from outside the law for the next tick (shoal.rl's actions)
     COLUMNS: ClassVar[Schema] = (
         Column("spread", "m", "float", "root mean square distance of the robots to their centroid"),
         Column("radius", "m", "float", "largest distance of a robot to the centroid"),
@@ -88,6 +90,7 @@ class Gather:
         if seed is not None:
             self.seed = int(seed)
         self._rngs = run_generators(self.seed, self.first_run, self.runs)
+        self.steering = None
         a = self.params.area
         x = np.stack([a * (g.random((self._robots, 2)) - 0.5) for g in self._rngs])
         R, N = x.shape[:2]
@@ -99,6 +102,11 @@ class Gather:
         dist = np.linalg.norm(to_centre, axis=-1, keepdims=True)
         speed = np.minimum(p.speed, dist / p.dt)  # no overshoot
         u = np.divide(to_centre, dist, out=np.zeros_like(to_centre), where=dist > 0) * speed
+        steering, self.steering = self.steering, None
+        if steering is not None and steering.velocity is not None:  # walks as told, no faster than the law
+            given = np.asarray(steering.velocity, dtype=float)
+            norm = np.linalg.norm(given, axis=-1, keepdims=True)
+            u = given * np.minimum(1.0, np.divide(p.speed, norm, out=np.ones_like(norm), where=norm > 0))
         u = u + p.noise * np.stack([g.standard_normal(s.x.shape[1:]) for g in self._rngs])
         s.x = s.x + p.dt * u
         s.u = u

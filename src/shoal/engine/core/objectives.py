@@ -1,8 +1,9 @@
 """Fitness and cost functions (Rossides Alg. 1, p. 90; §3.5, p. 74; common PSO benchmarks).
 
 Every objective returns a value per robot, shape ``(runs, robots)``, and says whether
-it is maximised; :meth:`Objective.is_better` is the single comparison the swarm uses
-(docs/readings.md, "Fitness or cost"). :data:`OBJECTIVES` is their registry: a plug-in adds its
+it is maximised; the swarms compare values through ``engine/pso/bests.py``, where NaN and the
+worst infinity are never bests (docs/readings.md, "Fitness or cost", "Bests that are NaN or
+infinite"). :data:`OBJECTIVES` is their registry: a plug-in adds its
 own vectorised function there.
 """
 
@@ -75,6 +76,14 @@ class ObjectiveFunction:
     frame: Frame = "scaled"
 
 
+def shape_message(name: str, given: tuple[int, ...], got: tuple[int, ...]) -> str:
+    """Why objective ``name``'s values cannot be a fitness per robot: it mapped ``given`` to ``got``."""
+    hint = (" (a function of one point? make it work on the last axis, e.g. np.sum(z**2, axis=-1))"
+            if len(got) < len(given) - 1 or got == given[-1:] else "")
+    return (f"objective {name!r}: f must map (..., d) to (...), one value per point: given an array of shape "
+            f"{given} it returned shape {got}, not {given[:-1]}{hint}")
+
+
 OBJECTIVES: Registry[ObjectiveFunction] = Registry(
     "objective",
     ObjectiveFunction("source-distance", "distance to the source", lambda z: np.linalg.norm(z, axis=-1),
@@ -99,13 +108,28 @@ class Objective:
     name: str = "source-distance"
     source: np.ndarray = field(default_factory=lambda: np.zeros(2))
     scale: float = 1.0
+    bounds: tuple[float, float] | None = None  # every component of f's argument in [lo, hi]; None: unbounded
+    boundary: str = "periodic"  # how a swarm keeps to the bounds (engine/pso/bounds.py)
 
     def __post_init__(self) -> None:
         OBJECTIVES.pick(self.name)
+        if self.bounds is not None and not self.bounds[0] < self.bounds[1]:
+            raise ValueError(f"bounds: need lo < hi, got {self.bounds}")
 
     def __eq__(self, other: object) -> bool:
         return (isinstance(other, Objective) and (self.name, self.scale) == (other.name, other.scale)
-                and np.array_equal(self.source, other.source))
+                and np.array_equal(self.source, other.source)
+                and (self.bounds, self.boundary) == (other.bounds, other.boundary))
+
+    def box(self, d: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """The bounds as positions, (d,) each: where f's argument is ``bounds`` in every component."""
+        if self.bounds is None:
+            return None
+        frame = OBJECTIVES[self.name].frame
+        origin = np.zeros(d) if frame == "x" else self._source(d)
+        size = self.scale if frame == "scaled" else 1.0
+        lo, hi = self.bounds
+        return origin + size * lo, origin + size * hi
 
     @property
     def maximise(self) -> bool:
@@ -118,9 +142,13 @@ class Objective:
     def __call__(self, x: np.ndarray) -> np.ndarray:
         entry = OBJECTIVES[self.name]
         if entry.frame == "x":
-            return entry.f(x)
-        z = x - self._source(x.shape[-1])
-        return np.asarray(entry.f(z if entry.frame == "offset" else z / self.scale), dtype=float)
+            out = entry.f(x)
+        else:
+            z = x - self._source(x.shape[-1])
+            out = np.asarray(entry.f(z if entry.frame == "offset" else z / self.scale), dtype=float)
+        if np.shape(out) != x.shape[:-1]:
+            raise ValueError(shape_message(self.name, x.shape, np.shape(out)))
+        return out
 
     def is_better(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """True where fitness ``a`` beats ``b`` (strictly)."""

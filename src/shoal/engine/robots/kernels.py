@@ -29,6 +29,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..core.compiled import kernel
+from ..core.steering import SLACK
 from .queries import bb_overlap, circle_point, circle_sweep, segment_box, segment_normal, segment_point, segment_sweep
 
 # the variants the kernel knows, by their FleetParams names; a code is the index
@@ -72,6 +73,9 @@ class TickParams(NamedTuple):
     tolerance: float  # contact tolerance
     s_floor: float  # smallest gap in [4.4]
     reach: float  # R_s + 2r + 2 v_max Δt: robots farther apart cannot interact within a tick
+    steered: bool = False  # the command is the one in ``cmd`` (core/steering.py), limited as the law limits its own;
+    # the robots then sense nothing in the tick (nothing reads it), unless the DVC guard needs the gaps
+    given: bool = False  # ω and c are read from ``out`` where they are not NaN (core/steering.py)
 
 
 class Grid(NamedTuple):
@@ -391,9 +395,37 @@ def _limited(v: float, w: float, p: TickParams) -> tuple[float, float]:
 
 
 @kernel
+def _steered(prev: np.ndarray, p: TickParams) -> tuple[float, float]:
+    """A command from outside the law within the law's limits (laws.steered_command): a speed at
+    most v_max, or [v, w] forward only (non-omni), within the energy limit and the turning radius;
+    each limit where the command exceeds it by more than SLACK."""
+    if not p.body_frame:
+        ux, uy = prev[0], prev[1]
+        speed = math.sqrt(ux * ux + uy * uy)
+        if speed > p.v_max * (1.0 + SLACK):
+            f = p.v_max / speed
+            ux, uy = ux * f, uy * f
+        return ux, uy
+    v, w = prev[0], prev[1]
+    if p.law == NONOMNI:
+        v = _maximum(v, 0.0)
+    e_t = 0.5 * (v * v) + p.rot_factor * (w * w)
+    e_max = 0.5 * (p.v_max * p.v_max)
+    if e_t > e_max * (1.0 + SLACK):
+        lam = math.sqrt(e_max / e_t)
+        v, w = v * lam, w * lam
+    if p.r_min != 0.0:
+        w = _sgn(w) * _minimum(abs(w), abs(v) / p.r_min)
+    return v, w
+
+
+@kernel
 def _command(prev: np.ndarray, gp: np.ndarray, gg: np.ndarray, fx: float, fy: float, heading: float, c: np.ndarray,
              omega: float, r: np.ndarray, p: TickParams) -> tuple[float, float]:
-    """The velocity law of robot_laws.ROBOT_LAWS: [4.2] clipped, [4.5], [5.4] and [5.13]."""
+    """The velocity law of robot_laws.ROBOT_LAWS: [4.2] clipped, [4.5], [5.4] and [5.13] (or, steered,
+    the command in ``prev`` within the law's limits)."""
+    if p.steered:
+        return _steered(prev, p)
     if p.law == RPSO or p.law == ADAPTED_RPSO:
         out = np.empty(2)
         for d in range(2):
@@ -663,15 +695,25 @@ def phase_b(x: np.ndarray, heading: np.ndarray, u: np.ndarray, cmd: np.ndarray, 
                     m += 1
             if m == 0:
                 continue
-            sensed = True
+            blind = p.steered and not (p.guard and p.coefficients != CONSTANT)  # a given command needs no sensing
+            sensed = sensed or not blind
             for s in range(m):  # everyone in the group senses and decides ...
                 i = members[s]
+                if blind:
+                    new_cmd[i, 0], new_cmd[i, 1] = _steered(cmd[r, i], p)
+                    continue
                 turn = heading[r, i] if p.body_frame else 0.0
                 gap, point, centre, seen = out.gap[r, i], out.point[r, i], out.centre[r, i], out.hit[r, i]
                 _sense(i, xr, turn, p, w, g, head, nxt, ostamp, gap, point, centre, seen)
                 for q in range(SECTORS):
                     adj[q] = _maximum(gap[q] - p.s_min, 0.0) if p.s_min > 0 else gap[q]
                 omega = _coefficients(adj, p, c)
+                if p.given:  # ω, c given from outside where not NaN
+                    if out.omega[r, i] == out.omega[r, i]:
+                        omega = out.omega[r, i]
+                    for n in range(p.terms):
+                        if out.c[n, r, i] == out.c[n, r, i]:
+                            c[n] = out.c[n, r, i]
                 fx = fy = 0.0
                 if not p.body_frame:
                     fx, fy = _virtual_force(xr[i, 0], xr[i, 1], gap, centre, seen, p)
