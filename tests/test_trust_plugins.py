@@ -12,6 +12,7 @@ A real Ctrl-C while the plug-ins load still ends the command.
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -127,7 +128,7 @@ def test_a_slow_plugin_is_named(tmp_path):
     out = run(site, "presets", "list")
     assert out.returncode == 0 and "default" in out.stdout
     (line,) = shoal_lines(out.stderr)
-    assert "slow-plugin" in line and "took 1." in line and "to load" in line, line
+    assert "slow-plugin" in line and re.search(r"took \d+\.\d s to load", line), line
 
 
 def test_replacing_a_built_in_entry_says_so_naming_both(tmp_path):
