@@ -161,7 +161,7 @@ def test_a_real_ctrl_c_while_the_plugins_load_still_ends_the_command(tmp_path):
     ("replace(ROBOT_LAWS['rpso'], name='r', command=None)", "command must be callable"),
     ("replace(ROBOT_LAWS['rpso'], name='r', terms='3')", "terms must be int"),
     ("replace(SELECTIONS['css'], name='s', select=1)", "select must be callable"),
-    ("replace(KINDS['sonar'], name='k', section='k', build=None)", "build must be callable"),
+    ("replace(KINDS['sonar'], name='k', section='k', builder=None)", "builder must be callable"),
     ("replace(KINDS['sonar'], name='k', section='k', cost=(float('nan'), 1.0))", "cost must be"),
     ("replace(LAWS['standard'], name='l', region='round')", "region must be one of"),
 ])

@@ -18,7 +18,7 @@ from shoal.engine.core.contract import check_live
 from shoal.engine.core.rng import run_generators
 from shoal.engine.core.schema import Column, Schema
 from shoal.engine.core.steering import Steering
-from shoal.presets.kinds import Cap, SceneKind
+from shoal.presets.kinds import Cap, Live, SceneKind
 
 
 class GatherSection(BaseModel):
@@ -139,17 +139,13 @@ def build_gather(scenario: Any, *, runs: int | None = None, seed: int | None = N
                   seed=scenario.sim.seed if seed is None else seed, first_run=first_run)
 
 
-def live(old: Any, new: Any) -> dict[str, Any] | None:
-    """Speed and noise change a running scene; anything else needs a new one."""
-    a, b = old.model_dump(), new.model_dump()
-    for d in (a, b):
-        d.pop("view"), d.pop("name"), d.pop("description"), d["sim"].pop("steps")
-        d["gather"].pop("speed"), d["gather"].pop("noise")
-    if a != b:
-        return None
+def retune_keywords(old: Any, new: Any) -> dict[str, Any]:
+    """The ``Gather.retune`` keywords of ``new`` (the engine keeps what did not change)."""
     p = params_for(new)
     return {"speed": p.speed, "noise": p.noise}
 
 
 KIND = SceneKind("gather", "gathering swarm (example plug-in)", Gather, build_gather, "gather", model=GatherSection,
-                 optimises=False, caps=(Cap("gathering swarm", 500),), app="shoal_example.gather_app", live=live)
+                 optimises=False, headline=("spread",), labels={"spread": ("spread at the end", "m")},
+                 live=Live(("gather.speed", "gather.noise"), retune_keywords),  # anything else: a new engine
+                 caps=(Cap("gathering swarm", 500),), app="shoal_example.gather_app", example="gather-demo")

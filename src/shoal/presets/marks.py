@@ -22,6 +22,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable, Literal
 
+from .kinds import kind_for
+
 Kind = Literal["stated", "read", "fitted", "ours"]
 KINDS: tuple[Kind, ...] = ("stated", "read", "fitted", "ours")
 ANY = object()  # a rule for every value of its field
@@ -308,8 +310,6 @@ def _equal(a: Any, b: Any) -> bool:
 def provenance(scenario: Any) -> dict[str, Mark | None]:
     """Every field that shapes a run of this scenario's kind, with its mark (None: no rule
     covers its value). ``scenario`` is a :class:`~shoal.presets.models.Scenario`."""
-    from .kinds import kind_for
-
     d = scenario.model_dump(mode="json")
     kind = {"slo_swarm": "slo"}.get(kind_for(scenario).name, kind_for(scenario).name)
     if kind not in FIELDS:  # a plug-in kind: no thesis values

@@ -15,6 +15,7 @@ from typing import Any, ClassVar, Literal, cast
 import numpy as np
 
 from ..core.contract import check_live
+from ..core.positions import Oracle, PositionSource
 from ..core.rng import run_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, fields_of, from_fields, integer, part, rng_states, set_rng_states
@@ -26,7 +27,6 @@ from ..robots.laws import ROBOT_LAWS, Inertia, Limits, rotational_energy_factor,
 from ..robots.motion import Drive, Kinematic, Physics
 from ..robots.sensing import S_FLOOR, SECTORS, SectorReading, sense, virtual_force
 from ..robots.world import RunSpace, WorldSpec
-from ..slo.positions import Oracle, PositionSource
 
 ACTIVE, COLLIDED = 0, 1
 # A stall (ours, a metric only): an operational robot slower than STALL_SPEED m/s for at

@@ -56,6 +56,7 @@ from ..acoustics.strategies import LocInfo, Sensed, Strategy, initial_memory, ma
 from ..acoustics.surrogate import surrogate
 from ..acoustics.triangulation import Triangles
 from ..core.contract import check_live
+from ..core.positions import Oracle, PositionSource
 from ..core.rng import run_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, fields_of, from_fields, integer, part, rng_states, set_rng_states
@@ -66,7 +67,6 @@ from ..robots.dvc import dvc_nonomni, forward_guard, w_max
 from ..robots.laws import arc_pose_update, energy_limit, nonomni_velocity, to_body
 from ..robots.sensing import SectorReading
 from ..robots.swarm_sensing import contacts, pairwise, sense_robots
-from ..slo.positions import Oracle, PositionSource
 
 ControllerName = Literal["adapted", "nonomni"]
 AcousticMode = Literal["waveform", "surrogate"]

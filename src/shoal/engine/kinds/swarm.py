@@ -9,23 +9,37 @@ from __future__ import annotations
 
 import operator
 from dataclasses import dataclass, fields
-from typing import Any, ClassVar, Literal, get_args
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, get_args
 
 import numpy as np
 
 from ..core.contract import check_live
 from ..core.objectives import Objective
+from ..core.positions import Oracle, PositionSource
 from ..core.rng import BlockDraws, run_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, integer, part, rng_states, set_rng_states
 from ..core.steering import Steering
-from ..pso import kernels
 from ..pso.bests import best_index, global_best, update_personal, warn_unfound
 from ..pso.bounds import confine
 from ..pso.coeffs import CoefficientPolicy, Constant
 from ..pso.laws import LAWS, Law, reachable
 from ..pso.laws import motion_heading as _heading
-from ..slo.positions import Oracle, PositionSource
+
+if TYPE_CHECKING:
+    from ..pso import kernels
+else:
+    class _Kernels:
+        """The compiled Chapter 3 kernels (numba), imported at their first use: a swarm on its numpy
+        tick never loads numba. That first use puts the module itself under this name."""
+
+        def __getattr__(self, name: str) -> Any:
+            global kernels
+            from ..pso import kernels
+
+            return getattr(kernels, name)
+
+    kernels = _Kernels()
 
 Attractors = Literal["literal", "ahead"]
 PbestOrder = Literal["before_velocity", "after_velocity"]

@@ -13,7 +13,6 @@ from dataclasses import dataclass
 from typing import Any, Callable, Literal
 
 import numpy as np
-from scipy.special import expit
 
 from ..core.registry import Registry, shape
 from . import stability
@@ -36,6 +35,8 @@ def squash(z: np.ndarray, kind: Squash = "sgn", width: float = 1.0) -> np.ndarra
         if kind == "tanh":
             return np.tanh(z / width)
         if kind == "logistic":
+            from scipy.special import expit  # (scipy.special takes a fifth of a second to import: only here)
+
             return 2.0 * expit(z / width) - 1.0
     raise ValueError(f"unknown squash {kind!r}")
 
@@ -97,7 +98,14 @@ Region = Literal["adapted", "order-2"]  # the (ω, ĉ) regions the panel draws: 
 @dataclass(frozen=True)
 class VelocityLaw:
     """One Chapter 3 velocity law and what the rest of Shoal needs to know about it: how it
-    moves, its coefficient rule and its stability region."""
+    moves, its coefficient rule and its stability region.
+
+    ``name`` is the preset's ``controller.law``, ``label`` what a panel shows; ``adapted``: bounded
+    per-component terms with the position update x + Δt u (the physical tuning U, A+, Δt and the
+    speed bounds need it); ``velocity(u, g, c, omega, r, width)``: the next velocities (see
+    :func:`standard_velocity`); ``omega_range`` (lo, hi): the raw ω it needs, lo ≤ ω < hi, with
+    ``rule`` the rule in words that a refusal names; ``region``: its stability region in the
+    (ω, ĉ) plane, ``"adapted"`` [3.13]–[3.14] or ``"order-2"`` [3.9], which the panel draws."""
 
     name: str
     label: str
