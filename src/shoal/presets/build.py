@@ -33,23 +33,12 @@ def build_slo(scenario: Scenario, *, runs: int | None = None, seed: int | None =
     return build(scenario, runs=runs, seed=seed, first_run=first_run)
 
 
-def check_buildable(scenario: Scenario) -> Scenario:
-    """``scenario`` if ``shoal run`` can build it, else :class:`PresetError` naming the field:
-    what :func:`build` refuses beyond the model, a world its generator cannot lay out (a forest
-    7 m wide; ``builders.world.world_for``, the code every build lays its world out with).
-    ``shoal presets validate`` applies it, so it refuses what ``shoal run`` refuses; no swarm
-    is allocated."""
-    from .builders.world import check_world
-
-    return check_world(scenario)
-
-
 _MOVED = {  # name → the builder module that has it now
     **dict.fromkeys(("build_simulation", "policy_for", "law_for", "objective_for", "swarm_keywords"), "swarm"),
     **dict.fromkeys(("build_fleet", "fleet_params_for", "fleet_keywords"), "fleet"),
     **dict.fromkeys(("build_sonar", "sonar_params_for", "sonar_keywords"), "sonar"),
     **dict.fromkeys(("build_slo_swarm", "slo_errors_for", "slo_unit", "slo_localiser_for", "slo_live_changes"), "slo"),
-    **dict.fromkeys(("world_for", "world_error", "with_obstacles", "check_world"), "world"),
+    **dict.fromkeys(("world_for", "world_error", "with_obstacles", "check_world", "check_buildable"), "world"),
     "positions_for": "positions",
 }
 
