@@ -293,6 +293,7 @@ def _cmd_warmup(args: argparse.Namespace) -> int:
 
 
 def _cmd_presets(args: argparse.Namespace) -> int:
+    from shoal.presets.build import check_buildable
     from shoal.presets.io import PresetError, list_presets, load, to_toml
 
     if args.action == "list":
@@ -303,6 +304,8 @@ def _cmd_presets(args: argparse.Namespace) -> int:
         return _err(f"presets {args.action} needs a NAME or FILE")
     try:
         scenario = load(args.name)
+        if args.action == "validate":
+            check_buildable(scenario)  # the rules `shoal run` applies when it builds the scene, not only the model's
     except PresetError as e:
         print("\n".join(e.messages), file=sys.stderr)
         return 1 if args.action == "validate" else EXIT_USAGE
@@ -397,16 +400,34 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from shoal.app.terminate import EXIT_TERMINATED, Terminated, terminate_as_interrupt
 
-    args = build_parser().parse_args(argv)
     with terminate_as_interrupt():  # SIGTERM cleans up as Ctrl-C does (serve: tabs told, run: no partial folder)
         try:
-            return args.func(args)
+            args = build_parser().parse_args(argv)  # (--help prints too)
+            code = args.func(args)
+            sys.stdout.flush()  # (a closed pipe is found here, not at exit)
+            return code
+        except BrokenPipeError:
+            return _closed_pipe()
         except Terminated:
             print("terminated", file=sys.stderr)
             return EXIT_TERMINATED
         except KeyboardInterrupt:
             print("interrupted", file=sys.stderr)
             return 130
+
+
+EXIT_PIPE = 128 + 13  # as a process that SIGPIPE ended
+
+
+def _closed_pipe() -> int:
+    """The reader of standard output went away (``shoal presets show default | head``): stop
+    quietly, as a command killed by SIGPIPE does, with nothing more written to the pipe."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # (Python's own flush at exit then has nowhere to fail)
+    except (OSError, ValueError):
+        pass
+    return EXIT_PIPE
 
 
 def entry() -> NoReturn:

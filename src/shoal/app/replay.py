@@ -40,6 +40,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from shoal.presets import kinds
+from shoal.presets.text import encodable
 
 FORMAT = "shoal-replay"
 VERSION = 2  # what this shoal writes
@@ -284,6 +285,10 @@ def _meta(raw: np.ndarray, where: str) -> dict[str, Any]:
         raise ReplayError([f"{where}: meta is not UTF-8 JSON ({err})"]) from None
     if not isinstance(meta, dict):
         raise ReplayError([f"{where}: meta is not a JSON object"])
+    try:
+        meta = encodable(meta)  # every name sendable: a lone surrogate ("\ud800" is valid JSON) is U+FFFD
+    except RecursionError:
+        raise ReplayError([f"{where}: meta is nested too deeply"]) from None
     if meta.get("format") != FORMAT:
         raise ReplayError([f"{where}: format {meta.get('format')!r} is not {FORMAT!r}"])
     version = meta.get("version")

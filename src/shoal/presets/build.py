@@ -38,7 +38,7 @@ _MOVED = {  # name → the builder module that has it now
     **dict.fromkeys(("build_fleet", "fleet_params_for", "fleet_keywords"), "fleet"),
     **dict.fromkeys(("build_sonar", "sonar_params_for", "sonar_keywords"), "sonar"),
     **dict.fromkeys(("build_slo_swarm", "slo_errors_for", "slo_unit", "slo_localiser_for", "slo_live_changes"), "slo"),
-    **dict.fromkeys(("world_for", "world_error", "with_obstacles", "check_world"), "world"),
+    **dict.fromkeys(("world_for", "world_error", "with_obstacles", "check_world", "check_buildable"), "world"),
     "positions_for": "positions",
 }
 

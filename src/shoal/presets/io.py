@@ -21,6 +21,7 @@ from . import errors
 from .errors import PresetError, fields_in, short
 from .kinds import plugin_sections
 from .models import Scenario
+from .text import encodable, has_surrogate_escape
 from .toml_bounds import check_toml
 
 
@@ -72,7 +73,7 @@ def parse_text(text: str, fmt: str = "toml") -> dict[str, Any]:
         raise PresetError(["a preset must be a table of fields"])
     if _depth(data) > MAX_DEPTH:
         raise PresetError([f"{fmt.upper()} syntax: nested deeper than {MAX_DEPTH} levels; a preset needs a few"])
-    return data
+    return encodable(data) if fmt == "json" and has_surrogate_escape(text) else data  # (TOML has no lone surrogate)
 
 
 MAX_DEPTH = 16  # tables and arrays in a preset; the deepest shipped one has 4

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any, Callable, Protocol
 
 from pydantic import BaseModel, ValidationError
 
-from shoal.engine.core.registry import Registry
+from shoal.engine.core.registry import Registry, shape
 from shoal.engine.core.schema import Schema, common_columns, integer_names
 
 from .errors import fields_in, format_errors
@@ -65,11 +65,13 @@ class Builder(Protocol):
 @dataclass(frozen=True)
 class Cap:
     """At most ``robots`` robots in one browser tab (the model's range is for headless runs),
-    for the scenarios ``when`` holds for (all if None); ``label`` names the kind of scene."""
+    and at most ``d`` dimensions (None: the kind's own range), for the scenarios ``when`` holds
+    for (all if None); ``label`` names the kind of scene."""
 
     label: str
     robots: int
     when: Callable[[Scenario], bool] | None = None
+    d: int | None = None
 
 
 def on_slo(scenario: Scenario) -> bool:
@@ -78,6 +80,7 @@ def on_slo(scenario: Scenario) -> bool:
 
 
 SLO_CAP = Cap("SLO swarm", 100, on_slo)  # pairwise ranging grows as N²
+BROWSER_DIMS = 10  # sim.d of a Chapter 3 swarm in a tab: its tick, and each frame its history keeps, grow with N·d
 
 NEVER_READ = ("view", "name", "description", "sim.steps")  # no engine reads these: changing them needs nothing
 
@@ -275,6 +278,35 @@ SLO_LIVE = ("selection", "prediction_weight", "delta_cos", "delta_v", "literal_e
 SONAR_FIXED = ("algorithm", "controller", "mode", "snr0_db", "d_0", "start", "source_bearing_deg", "source",
                "full_lag", "stop_on_converge")
 
+def _ref(value: Any) -> bool:
+    """An object, or a string ``"package.module:name"`` naming one (:func:`resolve`)."""
+    return not isinstance(value, str) or (":" in value and all(value.partition(":")[::2]))
+
+
+_SHAPE = shape(section=(str, type(None)), app=(str, type(None)), caps=tuple, dims=tuple, cost=tuple, optimises=bool)
+
+
+def check_kind(kind: Any) -> str | None:
+    """Why ``kind`` is not a well-formed :class:`SceneKind` (None: it is), said when it registers."""
+    why = _SHAPE(kind)
+    if why is not None:
+        return why
+    builder, engine = getattr(kind, "builder", None), getattr(kind, "engine", None)
+    if not (callable(builder) or isinstance(builder, str)) or not _ref(builder):
+        return f"builder must be callable or 'package.module:name', got {builder!r}"
+    if not (isinstance(engine, (type, str)) and _ref(engine)):
+        return f"engine must be a class or 'package.module:name', got {engine!r}"
+    if not all(isinstance(c, Cap) for c in kind.caps):
+        return "caps must be a tuple of Cap"
+    if kind.live is not None and not isinstance(kind.live, Live):
+        return f"live must be a Live or None, got {kind.live!r}"
+    cost = kind.cost
+    if len(cost) < 2 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v < 1e3
+                                for v in cost):
+        return f"cost must be CPU seconds per run and per robot (finite, >= 0), got {cost!r}"
+    return None
+
+
 _B = "shoal.presets.builders"
 KINDS: Registry[SceneKind] = Registry(  # (the order the app lists them in; a scene matches one kind at most)
     "scene kind",
@@ -285,7 +317,8 @@ KINDS: Registry[SceneKind] = Registry(  # (the order the app lists them in; a sc
                 "omega": ("inertia weight ω at the end", ""), "c_hat": ("ĉ = c1 + c2 at the end", "")},
         live=Live(("controller", "bests", "objective", "sim.robots"), f"{_B}.swarm:swarm_retune",
                   ignores=("arena", "robot", "sensing"), slo=True),
-        dims=(1, 1000), laws="shoal.engine.pso.laws:LAWS", caps=(SLO_CAP, Cap("free-space swarm", 2000)),
+        dims=(1, 1000), laws="shoal.engine.pso.laws:LAWS",
+        caps=(SLO_CAP, Cap("free-space swarm", 2000, d=BROWSER_DIMS)),
         app="shoal.app.kinds.swarm", example="default",
         reads={"controller": ("U", "A_plus", "omega", "c1", "c2", "c1_share", "dt", "law", "mode", "smooth_width"),
                "objective": None, "bests": None, "init": None, "sim": ("robots", "d", "steps")}),
@@ -340,6 +373,7 @@ KINDS: Registry[SceneKind] = Registry(  # (the order the app lists them in; a sc
                        "objective", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1", "entry_policy",
                        "walk_speed", "quality_threshold"),
                "sim": ("robots", "steps")}),
+    check=check_kind,
 )
 # Robots per kind in a tab, where one step still costs a few tens of ms at most: the compiled
 # kinematic fleet tick takes 1000 robots in a few ms, pymunk physics 200 in about 20 ms; the

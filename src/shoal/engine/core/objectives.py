@@ -14,7 +14,7 @@ from typing import Callable, Literal
 
 import numpy as np
 
-from .registry import Registry
+from .registry import Registry, shape
 
 
 def source_distance(x: np.ndarray, source: np.ndarray) -> np.ndarray:
@@ -98,6 +98,7 @@ OBJECTIVES: Registry[ObjectiveFunction] = Registry(
     ObjectiveFunction("ackley", "Ackley", ackley),
     ObjectiveFunction("rosenbrock", "Rosenbrock", rosenbrock),
     ObjectiveFunction("griewank", "Griewank", griewank),
+    check=shape("f", maximise=bool, frame=frozenset({"x", "offset", "scaled"})),
 )
 
 

@@ -14,7 +14,7 @@ from typing import Any, Callable, Literal
 
 import numpy as np
 
-from ..core.registry import Registry
+from ..core.registry import Registry, shape
 from . import stability
 
 Squash = Literal["sgn", "tanh", "logistic"]
@@ -175,6 +175,8 @@ LAWS: Registry[VelocityLaw] = Registry(
     VelocityLaw("adapted-tanh", "Adapted PSO (tanh)", True, _adapted("tanh"),  # Rossides §3.2.1 smooth option
                 **_ADAPTED_RULE),
     VelocityLaw("adapted-logistic", "Adapted PSO (logistic)", True, _adapted("logistic"), **_ADAPTED_RULE),
+    check=shape("velocity", "check_omega", "stable", adapted=bool, region=frozenset({"adapted", "order-2"}), rule=str,
+                omega_range=(tuple, type(None))),
 )
 
 

@@ -14,7 +14,7 @@ from typing import Callable, Literal
 
 import numpy as np
 
-from ..core.registry import Registry
+from ..core.registry import Registry, shape
 from ..pso.laws import Squash, adapted_velocity, squash, standard_velocity
 
 Inertia = Literal["pi", "disc"]
@@ -321,6 +321,8 @@ ROBOT_LAWS: Registry[RobotLaw] = Registry(
     RobotLaw("adapted-rpso", "Adapted RPSO", 3, "component", False, "omni", _adapted_rpso),  # [4.5]
     RobotLaw("robot-centred", "Robot-centred", 2, "component", True, None, _robot_centred),  # [5.4]
     RobotLaw("nonomni", "Non-omni", 5, "robot", True, "nonomni", _nonomni, forward=True),  # [5.13]
+    check=shape("command", terms=int, draws=frozenset({"component", "robot"}), body_frame=bool,
+                dvc=frozenset({"omni", "nonomni", None}), forward=bool),
 )
 
 

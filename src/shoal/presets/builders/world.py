@@ -67,6 +67,14 @@ def check_world(scenario: Scenario) -> Scenario:
     return scenario
 
 
+def check_buildable(scenario: Scenario) -> Scenario:
+    """``scenario`` if ``shoal run`` can build it, else :class:`PresetError` naming the field:
+    what a build refuses beyond the model, a world its generator cannot lay out (a forest 7 m
+    wide; :func:`world_for`, the code every build lays its world out with). ``shoal presets
+    validate`` applies it, so it refuses what ``shoal run`` refuses; no swarm is allocated."""
+    return check_world(scenario)
+
+
 @functools.lru_cache(maxsize=256)
 def _world_fits(section: str) -> None:
     world_for(WorldModel.model_validate_json(section))
