@@ -38,7 +38,7 @@ SCENE_SHARE = 8  # … and 1/8 for the scene parts that changed while the run we
 class Frame:
     """The robots (run 0) after step ``k``: what trails and export need (``a`` only for Ch. 3), and
     the parts of the scene that may change while the run goes on (``scene``: a fleet's obstacles,
-    a sonar's source; see ``replay.SCENE_PARTS``), as the arena drew them then. An unchanged part
+    a sonar's source; see ``replay.scene_parts``), as the arena drew them then. An unchanged part
     is the same array from frame to frame: never written to, it costs nothing per frame."""
 
     k: int
