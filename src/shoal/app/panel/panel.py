@@ -664,7 +664,7 @@ class Panel:
             compiling = WARMUP.status(s.scenario)  # kernels compiling: what the scene does meanwhile
             short = s.history.shortened  # the tab's memory budget holds fewer steps than usual
             self._status(self.part.status(s, s.readout(), state) + (f" · {compiling}" if compiling else "")
-                         + (f" · {short}" if short else ""))
+                         + (f" · {escape(short)}" if short else ""))
             return
         k, t, last = shown
         what = "replay" if s.replaying is not None else "recorded history"

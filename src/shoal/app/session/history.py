@@ -126,7 +126,7 @@ def frame_rows(frames: Iterable[Frame]) -> np.ndarray:
 
 def _make_frame(k: int, t: float, x: np.ndarray, u: np.ndarray, heading: np.ndarray, status: np.ndarray,
                 a: np.ndarray | None, scene: Mapping[str, np.ndarray]) -> Frame:
-    return Frame(k=k, t=t, x=x, u=u, heading=heading, status=status, a=a, scene=scene)
+    return Frame(k, t, x, u, heading, status, a, scene)
 
 
 def _scene_numbers(scene: Mapping[str, np.ndarray], other: Mapping[str, np.ndarray]) -> int:

@@ -75,8 +75,8 @@ def recorded_frames(rec: Recording) -> list[Frame]:
     frames = []
     for i in range(rec.frames):
         x, heading, status = rec.robots(i)
-        frames.append(Frame(k=int(rec.k[i]), t=float(rec.t[i]), x=x, u=np.zeros_like(x), heading=heading,
-                            status=status, scene=rec.scene_at(i)))
+        frames.append(Frame(int(rec.k[i]), float(rec.t[i]), x, np.zeros_like(x), heading, status,
+                            scene=rec.scene_at(i)))  # (k, t, x, u, heading, status)
     return frames
 
 
@@ -87,8 +87,7 @@ def twin_frames(rec: Recording) -> list[Frame]:
         b = rec.twin(i)
         if b is not None:
             x, status = b
-            frames.append(Frame(k=int(rec.k[i]), t=float(rec.t[i]), x=x, u=np.zeros_like(x),
-                                heading=np.zeros(len(x)), status=status))
+            frames.append(Frame(int(rec.k[i]), float(rec.t[i]), x, np.zeros_like(x), np.zeros(len(x)), status))
     return frames
 
 
