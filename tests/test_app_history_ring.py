@@ -11,6 +11,8 @@ from shoal.app.kinds.registry import session_for
 from shoal.app.session.history import TRAIL_DIMS, TRAIL_LIMITS, Frame, History, frame_rows, robots_at, trail_array
 from shoal.presets import io as presets_io
 
+from app_helpers import shown
+
 
 def _frames(n: int, d: int, seed: int = 0, robots: tuple[int, ...] = (7,)) -> list[Frame]:
     """``n`` frames of steps 3, 4, … with times whose step changes on the way (a Δt changed
@@ -123,7 +125,7 @@ def test_the_budget_counts_numbers_and_a_run_that_reaches_it_goes_on_with_a_shor
         assert h.allocated() <= budget
     kept = len(h.frames)
     assert 5 <= kept < 40 and h.frames[-1].k == 39 and h.frames[0].k == 40 - kept  # the newest steps kept
-    assert h.shortened is not None and f"last {kept}" in h.shortened and "memory budget" in h.shortened
+    assert h.shortened is not None and f"the last {kept} steps" in h.shortened and "memory budget" in h.shortened
     assert len(h.metrics) == 40  # (metric rows are small: all of them)
     small = _filled(_frames(60, 2))
     assert small.shortened is None  # 7 robots in the plane: nowhere near it
@@ -159,7 +161,8 @@ def test_a_session_too_big_for_its_budget_plays_on_and_says_so_in_the_status_lin
     s.step(60)
     assert s.k == 60 and 1 <= len(s.frames) < 60 and s.frames[-1].k == 60
     tab.panels.refresh_status()
-    assert "history: the last" in tab.panels.status.content and "memory budget" in tab.panels.status.content
+    said = shown(tab.panels.status.content)
+    assert f"the history keeps the last {len(s.frames)} steps (the tab's memory budget" in said, said
     assert TRAIL_LIMITS[0] >= len(s.snapshot().trails)
 
 

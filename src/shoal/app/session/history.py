@@ -305,7 +305,7 @@ class History:
         """Why the history keeps fewer steps than ``max_steps`` (None while it does not)."""
         if not self.cut:
             return None
-        return (f"history: the last {len(self._ring):,} steps (a tab's memory budget of "
+        return (f"the history keeps the last {len(self._ring):,} steps (the tab's memory budget of "
                 f"{self._budget * 8 / 2**20:.0f} MiB)")
 
     def allocated(self) -> int:
