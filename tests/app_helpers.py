@@ -25,14 +25,15 @@ def hand_tab(server: Any, cid: int = HAND_TAB) -> Iterator[Any]:
         server.viser.scene.reset()
 
 
-def wire_tab(server: Any, *labels: str) -> tuple[Any, int]:
+def wire_tab(server: Any, *labels: str, plots: bool = False) -> tuple[Any, int]:
     """A new tab of ``server`` opened over the raw websocket (:class:`viser_wire.WireClient`), once
-    its page shows a control of each of ``labels``: the client and the tab's key in ``server.tabs``."""
+    its page shows a control of each of ``labels``: the client and the tab's key in ``server.tabs``
+    (``plots``: the client keeps the uPlot data a page would hold)."""
     from browser.browser_helpers import wait_until
     from viser_wire import WireClient
 
     before = set(server.tabs)
-    c = WireClient(server.port, decode=True)
+    c = WireClient(server.port, decode=True, plots=plots)
     wait_until(lambda: set(server.tabs) - before and all(c.uuid_of(label) for label in labels), what="a tab")
     (key,) = set(server.tabs) - before
     return c, key

@@ -142,7 +142,7 @@ def test_scrubbing_shows_the_recorded_frame_and_play_returns_live():
     snap = s.shown_snapshot()
     np.testing.assert_array_equal(snap.x, s.frames[8].x)
     assert not snap.live and snap.k == 8
-    assert snap.trails.shape[1] >= 2 and np.allclose(snap.trails[:, -1], s.frames[8].x[: len(snap.trails)])
+    assert snap.trails.shape[1] >= 2 and np.allclose(snap.trails.points[:, -1], s.frames[8].x[: len(snap.trails)])
     np.testing.assert_array_equal(s.twin_view()[0], s.twin.frames[8].x)
     m, span = s.shown_metrics(1000)
     assert m["t"][-1] == pytest.approx(s.frames[8].t) and span[1] == pytest.approx(s.frames[-1].t)

@@ -307,10 +307,10 @@ def test_trails_cover_the_last_trail_seconds_and_end_at_the_robots():
     s.step(100)  # 10 s at Δt = 0.1
     snap = s.snapshot(max_trails=5, max_trail_points=8)
     assert snap.trails.shape[0] == 5 and 2 <= snap.trails.shape[1] <= 8
-    np.testing.assert_array_equal(snap.trails[:, -1], s.sim.state.x[0, :5])
+    np.testing.assert_array_equal(snap.trails.points[:, -1], s.sim.state.x[0, :5])
     window = [f for f in s.frames if f.t >= s.clock() - 2.0 - 1e-9]
-    assert any(np.array_equal(snap.trails[:, 0], f.x[:5]) for f in window)  # starts inside the window
-    assert not np.array_equal(snap.trails[:, 0], s.frames[0].x[:5])  # not at the start of the run
+    assert any(np.array_equal(snap.trails.points[:, 0], f.x[:5]) for f in window)  # starts inside the window
+    assert not np.array_equal(snap.trails.points[:, 0], s.frames[0].x[:5])  # not at the start of the run
 
 
 def test_time_axis_stays_monotonic_when_dt_changes():
@@ -359,6 +359,17 @@ def test_phase_plane_follows_the_chosen_particle_and_dimension(tab):
     np.testing.assert_allclose(traces["recent"].y, a_hist)
     assert (traces["now"].x[0], traces["now"].y[0]) == (s.sim.state.u[0, 3, 1], s.sim.state.a[0, 3, 1])
     assert "particle 3, y" in p.handles["phase"].figure.layout.title.text
+    s.pause()
+    s.step(40)  # the same particle later: its points are swapped into the figure the page has
+    p.refresh_plots()
+    sent = {t["name"]: t for t in json.loads(p.handles["phase"]._plotly_json_str)["data"]}
+    n = len(sent["recent"]["x"])
+    assert n == 71  # (steps 0–70: fewer than the 120 the plane shows)
+    np.testing.assert_allclose(sent["recent"]["x"], [f.u[3, 1] for f in list(s.frames)[-n:]])
+    np.testing.assert_allclose(sent["recent"]["y"], [f.a[3, 1] for f in list(s.frames)[-n:]])
+    assert sent["now"]["x"] == [s.sim.state.u[0, 3, 1]] and sent["now"]["y"] == [s.sim.state.a[0, 3, 1]]
+    assert "reachable set" in sent and "particle 3, y" in json.loads(p.handles["phase"]._plotly_json_str)[
+        "layout"]["title"]["text"]
 
 
 # ---------------------------------------------------------------------------- scene

@@ -227,6 +227,7 @@ def test_the_light_drawing_has_no_line_per_robot_and_keeps_the_view(scene, prese
     sections; the robots stay one point cloud and the view stays where it was. (A sonar's rays and
     Mai's neighbour edges stay lines: they are what those scenes show, for tens of robots.)"""
     from shoal.app.view.layers import TRAIL_DOTS
+    from shoal.app.view.trails import drawn_points
 
     session, view = _view(scene, preset)
     session.step(30)
@@ -241,7 +242,7 @@ def test_the_light_drawing_has_no_line_per_robot_and_keeps_the_view(scene, prese
     view.draw(session.snapshot())
     np.testing.assert_allclose(view.focus, focus)
     assert view.scale == scale
-    dots = np.asarray(view.nodes["trails_dots"].points)
+    dots = drawn_points(view.canvas, "trails_dots")
     assert not view.canvas.shown("trails") and 0 < len(dots) <= TRAIL_DOTS * robots
     assert not view.canvas.shown("headings") and "heading" not in _labels(view)
     assert np.asarray(view.nodes["robots"].points).shape[0] == robots

@@ -12,11 +12,13 @@ msgpack ``{"messages": [...]}``, then raw binary buffers.
 
 from __future__ import annotations
 
+import json
 import socket
 import threading
 from typing import Any
 
 import msgspec
+import numpy as np
 import viser
 import zstandard
 from viser import _messages
@@ -26,12 +28,81 @@ from websockets.sync.client import connect
 from app_helpers import shown
 
 
-def decode_frame(payload: bytes) -> list[dict[str, Any]]:
-    """The messages of one viser frame (binary buffers left out)."""
+def decode_frame(payload: bytes, arrays: bool = False) -> list[dict[str, Any]]:
+    """The messages of one viser frame (binary buffers left out, or with ``arrays`` read into the
+    numpy arrays they stand for)."""
     size = int.from_bytes(payload[:8], "little")
     csize = int.from_bytes(payload[8:16], "little")
-    inner = zstandard.ZstdDecompressor().decompress(payload[16:16 + csize], max_output_size=size)
-    return list(msgspec.msgpack.decode(inner).get("messages", ()))
+    inner = msgspec.msgpack.decode(zstandard.ZstdDecompressor().decompress(payload[16:16 + csize],
+                                                                           max_output_size=size))
+    messages = list(inner.get("messages", ()))
+    if not arrays:
+        return messages
+    buffers, at = [], 16 + csize
+    for n in inner.get("binaryBufferLengths", ()):
+        at += (8 - at % 8) % 8
+        buffers.append(payload[at:at + n])
+        at += n
+
+    def resolve(v: Any) -> Any:
+        if isinstance(v, dict):
+            if "__binary_index" in v and "dtype" in v:
+                return np.frombuffer(buffers[v["__binary_index"]], dtype=np.dtype(v["dtype"]))
+            return {k: resolve(x) for k, x in v.items()}
+        if isinstance(v, list):
+            return [resolve(x) for x in v]
+        return v
+
+    return [resolve(m) for m in messages]
+
+
+PLOT_CALL = "window.__shoalPage&&window.__shoalPage.plot("
+
+
+def _without_arrays(v: Any) -> Any:
+    """``v`` with every numpy array replaced by its shape (what the GUI log keeps)."""
+    if isinstance(v, np.ndarray):
+        return {"shape": v.shape}
+    if isinstance(v, dict):
+        return {k: _without_arrays(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [_without_arrays(x) for x in v]
+    return v
+
+
+class PagePlots:
+    """The uPlot data a page holds, kept from the messages it receives as the page does: a chart's
+    data as created, replaced by a data update, or (the page script's ``plot`` call, see
+    ``app/view/page.py``) its rows slid on by an append. ``refused`` counts appends whose base the
+    page did not hold (where the page asks for a keyframe)."""
+
+    def __init__(self) -> None:
+        self.data: dict[str, list[np.ndarray]] = {}
+        self.scales: dict[str, Any] = {}
+        self.appends = self.keyframes = self.refused = 0
+        self.append_bytes = self.keyframe_bytes = 0
+
+    def take(self, m: dict[str, Any]) -> None:
+        kind = m.get("type", "")
+        if kind == "GuiUplotMessage":
+            self.data[m["uuid"]] = [np.asarray(a, dtype=float) for a in m["props"]["data"]]
+        elif kind == "GuiUpdateMessage" and m.get("uuid") in self.data and "data" in m["updates"]:
+            self.data[m["uuid"]] = [np.asarray(a, dtype=float) for a in m["updates"]["data"]]
+            self.keyframes += 1
+            self.keyframe_bytes += sum(len(a) * 8 for a in self.data[m["uuid"]])
+        elif kind == "GuiUpdateMessage" and m.get("uuid") in self.data and "scales" in m["updates"]:
+            self.scales[m["uuid"]] = m["updates"]["scales"]
+        elif kind == "RunJavascriptMessage" and m["source"].startswith(PLOT_CALL):
+            args = json.loads("[" + m["source"][len(PLOT_CALL):].rstrip(");") + "]")  # (NaN, Infinity: JSON's)
+            _, uuid, n0, x0, x1, drop, cols, scales = args
+            held = self.data.get(uuid)
+            self.append_bytes += len(m["source"])
+            if held is None or len(held[0]) != n0 or held[0][0] != x0 or held[0][-1] != x1 or len(held) != len(cols):
+                self.refused += 1
+                return
+            self.data[uuid] = [np.concatenate([a[drop:], np.asarray(c, dtype=float)]) for a, c in zip(held, cols)]
+            self.scales[uuid] = scales
+            self.appends += 1
 
 
 def _texts(value: Any) -> list[str]:
@@ -46,19 +117,22 @@ def _texts(value: Any) -> list[str]:
 
 class WireClient:
     """One tab on ``ws://127.0.0.1:port``: ``frames``/``nbytes`` received, ``texts`` seen
-    (with ``decode=True``: every string in the GUI messages, e.g. markdown and modal titles).
+    (with ``decode=True``: every string in the GUI messages, e.g. markdown and modal titles;
+    with ``plots=True`` also ``plots``, the uPlot data the page would hold).
 
     ``origin`` sends an ``Origin`` header as a browser page would; ``host`` connects to
     127.0.0.1 all the same but names ``host`` in the ``Host`` header (a DNS name pointed at
     this machine). A refused upgrade raises ``websockets.exceptions.InvalidStatus``."""
 
     def __init__(self, port: int, *, decode: bool = False, width: int = 1280, height: int = 800,
-                 origin: str | None = None, host: str | None = None) -> None:
-        self.decode = decode
+                 origin: str | None = None, host: str | None = None, plots: bool = False) -> None:
+        self.decode = decode or plots
+        self.track_plots = plots  # keep the uPlot data the page would hold (``plots``)
         self.frames = 0
         self.nbytes = 0
         self.robot_updates = 0
         self.texts: list[str] = []
+        self.plots = PagePlots()  # (decode=True) the uPlot data the page would hold
         self.gui: list[dict[str, Any]] = []  # (decode=True) every GUI message received
         self.downloads: list[str] = []  # (decode=True) names of the files the server sent
         self.last: dict[str, dict[str, Any]] = {}  # (decode=True) the last message of each type
@@ -85,8 +159,12 @@ class WireClient:
                 robots = 0
                 last: dict[str, dict[str, Any]] = {}
                 if self.decode:
-                    for m in decode_frame(payload):
+                    for m in decode_frame(payload, arrays=self.track_plots):
                         kind = m.get("type", "")
+                        if self.track_plots:
+                            with self._lock:
+                                self.plots.take(m)
+                            m = _without_arrays(m)
                         last[kind] = m
                         if kind.startswith(("Gui", "Notification")):
                             texts += _texts(m)
@@ -150,6 +228,10 @@ class WireClient:
                 if m.get("uuid") == uuid and "value" in m:
                     return m["value"]
         raise KeyError(uuid)
+
+    def take_plot_appends(self) -> None:
+        """Say what the page script says once it reaches viser's store: plots may come as appends."""
+        self.set_value("plot sync", "appends 1")
 
     def set_value(self, label: str, value: Any) -> None:
         """Send ``value`` for the control labelled ``label``, as the page does when it changes."""

@@ -38,7 +38,7 @@ from .session.upload import MAX_UPLOAD_BYTES
 from .tab import TabApp
 from .upload_guard import guard_uploads
 from .view.camera import home_camera, top_view
-from .view.page import install_page
+from .view.page import install_page, run_script
 from .warmup import WARMUP
 
 TICK_HZ = 60.0
@@ -54,6 +54,14 @@ FULL_MESSAGE = ("This server already runs {n} sessions (its maximum), so this ta
 
 
 MAX_PORT = 65535
+
+
+def waiting(client: viser.ClientHandle) -> int:
+    """Messages queued for ``client`` that have not left for its page yet (viser's per-connection
+    buffer, which a sent message leaves; 0 where it cannot be read)."""
+    with contextlib.suppress(Exception):
+        return len(client._websock_connection.get_message_buffer().message_from_id)
+    return 0
 
 
 class PortInUseError(OSError):
@@ -160,6 +168,8 @@ class ShoalServer:
                 send_file=lambda name, data: client.send_file_download(name, data, save_immediately=True),
                 atomic=client.atomic,
                 camera=client.camera,
+                script=lambda source: run_script(client.gui, source),
+                backlog=lambda: waiting(client),
             )
         tab = TabApp(session, gui, scene, experiments=self.experiments, owner=key, **kwargs)
         tab.auto_tick = auto_tick

@@ -66,6 +66,8 @@ class TabApp:
         experiments: ExperimentService | None = None,
         owner: Hashable = None,
         camera: Any = None,
+        script: Callable[[str], None] | None = None,
+        backlog: Callable[[], int] | None = None,
     ) -> None:
         self.session = session
         self.experiments, self.owner = experiments, owner  # the server's experiments; this tab's key there
@@ -76,6 +78,7 @@ class TabApp:
         self._send_client = send_file
         self._atomic = atomic or contextlib.nullcontext
         self.camera = camera  # the browser's camera (viser ``CameraHandle``), None without one
+        self.script, self.backlog = script, backlog  # runs JavaScript in the page; messages on their way there
         # held while the panels are built and while a tick or a swap runs: an upload (or any
         # control) the page sends while the tab is still being built waits for it, then loads
         self._ticking = threading.RLock()
@@ -98,7 +101,7 @@ class TabApp:
         services = Services(notify=self.notify, send_file=self.send_file, menu=self.menu, make_session=session_for,
                             replace=self.replace, share=share_page, lessons=self.lesson_progress,
                             experiments=self.experiments, owner=self.owner, view=self.view_action,
-                            display=self.display)
+                            display=self.display, script=self.script, backlog=self.backlog)
         self.panels = Panel(self.gui, self.session, kind, services)
         self.arena = kind.view(self.scene, self.panels.part)
         self._show_display()

@@ -82,16 +82,23 @@ class Warmup:
         """Are ``group``'s kernels compiled, or left to compile on first call (not scheduled)?"""
         return group not in self.scheduled or self.ready[group].is_set()
 
+    def all_ready(self) -> bool:
+        """Is every scheduled group compiled (or none scheduled)? Then no scene needs to know its group:
+        the ticks ask this first (finding a scene's group costs more than its step)."""
+        return all(self.ready[g].is_set() for g in self.scheduled)
+
     def use(self, sim: Any, scenario: Scenario) -> None:
         """Before a tick: ``sim`` on its compiled tick if its kernels are ready (or no warm-up
         runs), else on its numpy tick (the same numbers)."""
         if hasattr(sim, "compiled"):  # (a swarm on SLO positions: its own kind's kernels too)
-            sim.compiled = not self.active or all(self.is_ready(g) for g in {group_of(scenario), kind_of(scenario)})
+            sim.compiled = self.all_ready() or all(self.is_ready(g) for g in {group_of(scenario), kind_of(scenario)})
 
     def waits(self, scenario: Scenario) -> bool:
         """Must a scene of ``scenario`` wait for its kernels (no numpy tick to run meanwhile)?"""
+        if self.all_ready():
+            return False
         group = group_of(scenario)
-        return self.active and group not in NUMPY_TICK and not self.is_ready(group)
+        return group not in NUMPY_TICK and not self.is_ready(group)
 
     def prefer(self, scenario: Scenario) -> None:
         """Compile the kernels of ``scenario``'s group next (a tab opened a scene that needs them)."""

@@ -424,7 +424,7 @@ class Probe(Static):
             node.batched_positions, node.batched_wxyzs, node.batched_scales = pos, wxyz, scales
             if not np.array_equal(node.batched_colors, colors):
                 node.batched_colors = colors
-            node.visible = True
+            canvas.show("sectors")
         edges = np.concatenate([shapes.circle_segments(centre, radius + rng, 72),
                                 shapes.rays(centre, start, radius, radius + rng)])
         canvas.lines("sector_edges", edges, SECTOR_EDGE, 1.0, Z["probe"])

@@ -123,11 +123,9 @@ class SwarmDriver(BaseDriver):
     def particle_history(self, robot: int, dim: int, n: int = 120) -> tuple[np.ndarray, np.ndarray]:
         """The last ``n`` (u_j, a_j) of one particle and dimension, oldest first."""
         with self.session.lock:
-            frames = list(self.session.history.frames)[-n:]
-        pts = [(f.u[robot, dim], f.a[robot, dim]) for f in frames
-               if f.a is not None and robot < f.u.shape[0] and dim < f.u.shape[1]]
-        arr = np.array(pts, dtype=float).reshape(-1, 2)
-        return arr[:, 0], arr[:, 1]
+            history = self.session.history
+            u, a = history.motion("u", robot, dim, n), history.motion("a", robot, dim, n)
+        return (u, a) if len(u) == len(a) else (np.zeros(0), np.zeros(0))
 
 
 # ---------------------------------------------------------------------------- view
@@ -351,13 +349,16 @@ SPEED = PlotSpec(
 class _Figures:
     """The (ω, ĉ) plane and the phase plane of one panel, moved rather than rebuilt where they can.
     Each plotly update is a whole figure for the page to lay out again, so while the run plays the
-    phase plane follows at most once every ``PHASE_PERIOD`` seconds (control feedback first)."""
+    phase plane follows at most once every ``PHASE_PERIOD`` seconds (control feedback first); its
+    points are swapped into the figure's JSON (:class:`~shoal.app.panel.figures.PhaseText`), so
+    ``handle.figure`` keeps the figure as it was built and the page gets the points."""
 
     PHASE_PERIOD = 1.0
 
     def __init__(self) -> None:
         self._stability: tuple | None = None
         self._phase: tuple | None = None
+        self._phase_text: figures.PhaseText | None = None  # the phase figure's JSON, its points swapped in
         self._phase_at = -math.inf
 
     def stability(self, s: Session) -> Any:
@@ -388,11 +389,13 @@ class _Figures:
         u, a = driver(s).particle_history(robot, dim)
         label = f"particle {robot}, {_dims(s)[min(dim, s.scenario.sim.d - 1)]}"
         phase_key = (key, round(s.sim.dt, 12), label)
-        fig = handle.figure
-        if phase_key != self._phase or not figures.update_phase_points(fig, u, a):
+        text = self._phase_text.text(u, a) if phase_key == self._phase and self._phase_text is not None else None
+        if text is None:
             fig = figures.phase_figure(omega, c_hat, s.sim.dt, u, a, adapted=adapted, label=label)
-            self._phase = phase_key
-        handle.figure = fig
+            handle.figure = fig
+            self._phase, self._phase_text = phase_key, figures.PhaseText(fig)
+        elif text != handle._plotly_json_str:
+            handle._plotly_json_str = text  # (viser's props: what ``handle.figure = …`` sets, without plotly's to_json)
 
 
 def panel(api: PanelAPI) -> KindPanel:

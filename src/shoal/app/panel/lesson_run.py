@@ -32,6 +32,23 @@ class LessonRun:
     def __init__(self, session: Session) -> None:
         self.session = session
         self._scenes: dict[str, Scenario | None] = {}
+        self._outside: tuple[int, float, np.ndarray, np.ndarray] | None = None  # (epoch, half size, steps, counts)
+
+    def _outside_by_step(self, half: float) -> tuple[np.ndarray, np.ndarray]:
+        """Robots outside the arena at every recorded step (the lock held): worked out once a
+        frame, for the frames recorded since the last call."""
+        h = self.session.history
+        kept = self._outside
+        if kept is None or kept[0] != h.epoch or kept[1] != half:
+            kept = (h.epoch, half, np.zeros(0, np.int64), np.zeros(0))
+        steps, counts = kept[2], kept[3]
+        new_steps, x = h.positions_after(int(steps[-1]) if len(steps) else -(2**62))
+        if len(new_steps):
+            steps = np.concatenate([steps, new_steps])
+            counts = np.concatenate([counts, outside(x, half)])
+        first = int(np.searchsorted(steps, h.ks[0])) if len(h.ks) else len(steps)
+        self._outside = (h.epoch, half, steps[first:], counts[first:])
+        return self._outside[2], self._outside[3]
 
     def _scene(self, preset: str, values: dict[str, Any]) -> Scenario | None:
         key = f"{preset} {sorted(values.items())!r}"
@@ -54,13 +71,14 @@ class LessonRun:
                 return CHANGED
             columns = s.history.metric_arrays()
             k = s.k
-            frames = list(s.history.frames) if "outside" in names and "outside" not in columns else []
             half = float(s.scenario.arena.half_size)
+            by_step = self._outside_by_step(half) if "outside" in names and "outside" not in columns else None
         rows = len(columns.get("t", ()))
         steps = np.arange(k - rows + 1, k + 1)
         metrics = {name: columns[name] for name in names if name in columns}
-        if frames:
-            by_step = {f.k: f.x for f in frames}
-            metrics["outside"] = np.array([outside(by_step[j], half) if j in by_step else np.nan
-                                           for j in steps.tolist()])
+        if by_step is not None:
+            known, counts = by_step
+            at = np.clip(np.searchsorted(known, steps), 0, max(len(known) - 1, 0))
+            found = (at < len(known)) & (known[at] == steps) if len(known) else np.zeros(len(steps), bool)
+            metrics["outside"] = np.where(found, counts[at] if len(known) else np.nan, np.nan)
         return Run(steps, metrics)

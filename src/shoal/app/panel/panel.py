@@ -38,6 +38,7 @@ from ..warmup import WARMUP
 from .compare import CompareFolder
 from .keys import PLAYING
 from .lesson_run import LessonRun
+from .plot_stream import Backlog, PlotStream, Script
 from .plots import Chart, Frame, PlotSpec, scale_text
 from .replay import ReplayFolder
 from .spec import (
@@ -95,6 +96,8 @@ class Services:
     owner: Hashable = None  # this browser tab's key among the experiments
     view: Callable[[str], None] | None = None  # the arena's view buttons: "fit", "follow" or "display"
     display: Display | None = None  # how the tab's arena is drawn (the tab keeps it: it outlives a swap of panels)
+    script: Script | None = None  # runs JavaScript in the tab's page (None: no page; plots always sent whole)
+    backlog: Backlog | None = None  # messages still on their way to the page
 
 
 def notes_text(name: str = "ch3") -> str:
@@ -157,6 +160,9 @@ class Panel:
         self._sent: dict[int, tuple] = {}  # uPlot (series, axes) last sent, by handle (see push_uplot)
         self.controls = 0  # a count of the user's control events (the tab holds the scene a moment after one)
         self.text_scale = services.display.text_scale if services.display is not None else 1.0  # plots' text
+        self.plot_stream = PlotStream(gui, services.script, services.backlog)  # the new rows, where the page takes them
+        if self.plot_stream.sync is not None:
+            self.top.append(self.plot_stream.sync)
         self.part = kind.panel(self)
         self._build_header()
         self.view_gui = ViewRow(self)
@@ -656,7 +662,9 @@ class Panel:
         shown = s.shown_step()
         if shown is None:
             compiling = WARMUP.status(s.scenario)  # kernels compiling: what the scene does meanwhile
-            self._status(self.part.status(s, s.readout(), state) + (f" · {compiling}" if compiling else ""))
+            short = s.history.shortened  # the tab's memory budget holds fewer steps than usual
+            self._status(self.part.status(s, s.readout(), state) + (f" · {compiling}" if compiling else "")
+                         + (f" · {escape(short)}" if short else ""))
             return
         k, t, last = shown
         what = "replay" if s.replaying is not None else "recorded history"
@@ -726,7 +734,8 @@ class Panel:
         self.replay_gui.refresh()
 
     def push_uplot(self, handle: Any, f: Frame) -> None:
-        """Send a chart's frame: data and scales always, series and axes only when they change
+        """Send a chart's frame: data and scales always (as the rows that are new where the page
+        takes them, :mod:`.plot_stream`), series and axes only when they change
         (the client rebuilds the chart for those). An explicit x range goes with every update:
         viser's client keeps a *relative* x range across data pushes, which goes wrong for a
         chart first mounted in a hidden tab."""
@@ -738,5 +747,4 @@ class Panel:
         self._sent[id(handle)] = (f.series, f.axes)
         if tuple(handle.padding or ()) != f.padding:
             handle.padding = f.padding
-        handle.data = f.data
-        handle.scales = f.scales
+        self.plot_stream.push(handle, f.data, f.scales)  # (the rows that are new, where the page takes them)

@@ -35,7 +35,7 @@ from ..limits import check_app_limits, check_recording
 from ..replay import Recording
 from ..warmup import WARMUP
 from .driver import Driver
-from .history import TRAIL_LIMITS, Frame, History, robots_at
+from .history import HISTORY_BUDGET, TRAIL_LIMITS, Frame, History, Trails
 from .lifecycle import Lifecycle
 from .snapshot import Snapshot
 from .timeline import ReplayInfo, Timeline
@@ -74,6 +74,7 @@ class Session:
         self.driver = kind.driver(self)
         self.history = History(("t",))
         self.timeline = Timeline(self.history)
+        self.history_budget = HISTORY_BUDGET  # numbers this tab's histories hold (A's and B's together)
         self._load(scenario)
 
     def check(self, scenario: Scenario) -> Scenario:
@@ -174,6 +175,7 @@ class Session:
         with self.lock:
             self._load(scenario)
             self.compare = None  # a new scene: no swarm B until asked again
+            self._share_budget(None)
             self._clamp_selection()
             self.playing = play  # every scene opens playing
             self.revision += 1
@@ -220,7 +222,7 @@ class Session:
             elif not view_only:
                 self.timeline.cursor = None  # a change applies to the live run: show it
             old_b = self.compare.adopt(new_b) if self.compare is not None and new_b is not None else None
-            before = self.history.frames
+            before = self.history.epoch
             try:
                 self.adopt(new)
             except PresetError:
@@ -228,10 +230,10 @@ class Session:
                     self.compare.adopt(old_b)
                 raise
             if was_finished and not view_only:
-                if self.history.frames is before:  # taken by the running engine: start it again
+                if self.history.epoch == before:  # taken by the running engine: start it again
                     self.restart(self.scenario.sim.seed)
                 self.playing = True
-            if self.history.frames is before and not view_only:
+            if self.history.epoch == before and not view_only:
                 self.live_edits += 1
             return new
 
@@ -283,8 +285,8 @@ class Session:
         with self.lock:
             if self.timeline.live:
                 return None
-            f = self.history.frames[self.timeline.shown_index()]
-            return int(f.k), float(f.t), int(self.history.frames[-1].k)
+            i = self.timeline.shown_index()
+            return int(self.history.ks[i]), float(self.history.ts[i]), int(self.history.ks[-1])
 
     def progress(self, unit: str = "step") -> str:
         """The status line's ``step k/N`` (never beyond N over N)."""
@@ -402,6 +404,7 @@ class Session:
                 raise PresetError(["compare: a replay is shown; press Reset for a live run first"])
             twin = Twin.of(self.scenario, overrides, lambda sc: Session(sc, self.kind))
             self.compare = None  # A restarts alone, then B joins it at step 0: a reader that does not
+            self._share_budget(twin.b)
             self.restart(self.scenario.sim.seed)  # take the lock never sees B beside an old A
             twin.restart()
             self.compare = twin
@@ -410,21 +413,32 @@ class Session:
     def disable_compare(self) -> None:
         with self.lock:
             self.compare = None
+            self._share_budget(None)
             self.revision += 1
+
+    def _share_budget(self, b: Session | None, replay_twin: bool = False) -> None:
+        """A's history takes the tab's whole budget, or half of it with swarm B (live ``b``, or a
+        replay's B frames), B's the other half (the lock held)."""
+        two = b is not None or replay_twin
+        share = self.history_budget // (2 if two else 1)
+        self.history.budget = share
+        self.timeline.twin.budget = share
+        if b is not None:
+            b.history.budget = share
 
     def twin_metric(self, name: str, t: np.ndarray) -> np.ndarray | None:
         """B's metric ``name`` at A's times ``t`` (None without B)."""
         compare = self.compare
         return compare.metric(name, t) if compare is not None else None
 
-    def twin_view(self) -> tuple[np.ndarray, np.ndarray] | None:
+    def twin_view(self) -> tuple[np.ndarray, Trails] | None:
         """Swarm B's robots and trails at the step shown (None without B, or if B has no such step);
         in a replay, B as it was recorded."""
         with self.lock:
-            k = self.timeline.shown_frame().k
+            k = int(self.history.ks[self.timeline.shown_index()])
             if self.replaying is not None:
-                frames = self.timeline.twin_frames
-                return robots_at(frames, k, self.scenario.view.trail_seconds) if frames else None
+                twin = self.timeline.twin
+                return twin.robots_at(k, self.scenario.view.trail_seconds) if len(twin.frames) else None
             if self.compare is None:
                 return None
             return self.compare.at(k)
@@ -463,8 +477,8 @@ class Session:
         with self.lock:
             return self.history.metric_arrays()
 
-    def trails(self, max_trails: int = TRAIL_LIMITS[0], max_trail_points: int = TRAIL_LIMITS[1]) -> np.ndarray:
-        """(M, L, d) trails of the last ``view.trail_seconds``, ending at the robots."""
+    def trails(self, max_trails: int = TRAIL_LIMITS[0], max_trail_points: int = TRAIL_LIMITS[1]) -> Trails:
+        """Trails (M, L, d ≤ 3) of the last ``view.trail_seconds``, ending at the robots."""
         with self.lock:
             return self.history.trails(self.clock(), self.scenario.view.trail_seconds, max_trails, max_trail_points)
 
@@ -496,7 +510,7 @@ class Session:
             snap = self.snapshot()
             trails = self.history.trails(f.t, self.scenario.view.trail_seconds, *TRAIL_LIMITS, upto=i)
             return dataclasses.replace(
-                snap, k=f.k, t=f.t, x=f.x.copy(), heading=f.heading.copy(), status=f.status.copy(), trails=trails,
+                snap, k=f.k, t=f.t, x=f.x, heading=f.heading, status=f.status, trails=trails,
                 live=False, y=None, yg=None, ghosts=None, selected=min(snap.selected, len(f.x) - 1),
                 extras={**snap.extras, **self.driver.recorded(f)})
 
@@ -561,6 +575,7 @@ class Session:
         with self.lock:
             self.playing = False
             self.compare = None
+            self._share_budget(None, replay_twin=rec.twin_overrides is not None)
             self.timeline.load(rec, check, metrics_match=rec.metric_names == self.history.names)
             self.revision += 1
 
@@ -568,6 +583,7 @@ class Session:
         """Back to a live run of the scene's preset from step 0 (``play``: playing it)."""
         with self.lock:
             if self.replaying is not None:
+                self._share_budget(None)
                 self.restart(self.scenario.sim.seed)
                 self.revision += 1
                 if play:

@@ -11,6 +11,7 @@ import numpy as np
 from shoal.presets.models import Scenario
 
 from .beliefs import Ghosts
+from .history import Trails
 
 
 @dataclass(frozen=True)
@@ -28,12 +29,12 @@ class Snapshot:
     x: np.ndarray  # (N, d)
     heading: np.ndarray  # (N,)
     status: np.ndarray  # (N,) 0 active
-    trails: np.ndarray  # (M, L, d) oldest first, M ≤ N
+    trails: Trails  # (M, L, d ≤ 3) oldest first, M ≤ N, with the step of each point
     revision: int
     selected: int  # the robot the panels and the view single out
     y: np.ndarray | None = None  # (N, d) personal bests
     yg: np.ndarray | None = None  # (d,) global best
     ghosts: Ghosts | None = None  # the selected robot's beliefs (SLO positions)
-    twin: tuple[np.ndarray, np.ndarray] | None = None  # swarm B's robots (N, d) and trails at this step
+    twin: tuple[np.ndarray, Trails] | None = None  # swarm B's robots (N, d) and trails at this step
     live: bool = True
     extras: dict[str, Any] = field(default_factory=dict)  # kind-specific drawing data

@@ -12,9 +12,8 @@
 
 from __future__ import annotations
 
-import bisect
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, Protocol, Sequence
 
 import numpy as np
 
@@ -57,10 +56,11 @@ def verify_replay(fresh: Rerun, rec: Recording, steps: int = VERIFY_STEPS) -> tu
         return None, f"not checked: the recording starts at step {k0}"
     upto = [i for i in range(rec.frames) if rec.k[i] <= k0 + steps]
     fresh.advance(int(rec.k[upto[-1]]) - fresh.k)
-    frames = {f.k: f for f in fresh.history.frames}
+    history = fresh.history
     for i in upto:
         x, _, _ = rec.robots(i)
-        f = frames.get(int(rec.k[i]))
+        at = history.index_of(int(rec.k[i]))
+        f = history.frames[at] if at is not None else None
         if f is None or f.x.shape != x.shape or not np.allclose(f.x, x, rtol=0.0, atol=1e-9, equal_nan=True):
             gap = float(np.nanmax(np.abs(f.x - x))) if f is not None and f.x.shape == x.shape else float("nan")
             what = f"max gap {gap:.3g}" if np.isfinite(gap) else "other robots"
@@ -75,9 +75,8 @@ def recorded_frames(rec: Recording) -> list[Frame]:
     frames = []
     for i in range(rec.frames):
         x, heading, status = rec.robots(i)
-        zeros = np.zeros_like(x)
-        frames.append(Frame(k=int(rec.k[i]), t=float(rec.t[i]), x=x.copy(), u=zeros, a=zeros,
-                            heading=heading.copy(), status=status.copy(), scene=rec.scene_at(i)))
+        frames.append(Frame(int(rec.k[i]), float(rec.t[i]), x, np.zeros_like(x), heading, status,
+                            scene=rec.scene_at(i)))  # (k, t, x, u, heading, status)
     return frames
 
 
@@ -88,9 +87,7 @@ def twin_frames(rec: Recording) -> list[Frame]:
         b = rec.twin(i)
         if b is not None:
             x, status = b
-            zeros = np.zeros_like(x)
-            frames.append(Frame(k=int(rec.k[i]), t=float(rec.t[i]), x=x.copy(), u=zeros, a=zeros,
-                                heading=np.zeros(len(x)), status=status.copy()))
+            frames.append(Frame(int(rec.k[i]), float(rec.t[i]), x, np.zeros_like(x), np.zeros(len(x)), status))
     return frames
 
 
@@ -99,12 +96,18 @@ class Timeline:
 
     def __init__(self, history: History) -> None:
         self.history = history
+        self.twin = History(("t",))  # swarm B's frames in the replay shown
         self.clear()
 
     def clear(self) -> None:
         self.cursor: int | None = None
         self.replaying: ReplayInfo | None = None
-        self.twin_frames: list[Frame] = []  # swarm B's frames in the replay shown
+        self.twin.clear()
+
+    @property
+    def twin_frames(self) -> Sequence[Frame]:
+        """Swarm B's frames in the replay shown (none without B)."""
+        return self.twin.frames
 
     @property
     def live(self) -> bool:
@@ -112,62 +115,61 @@ class Timeline:
         return self.cursor is None and self.replaying is None
 
     def shown_index(self) -> int:
-        frames = self.history.frames
+        ks = self.history.ks
         if self.cursor is None:
-            return len(frames) - 1
-        ks = self.history.steps()
-        return min(bisect.bisect_left(ks, self.cursor), len(ks) - 1)
+            return len(ks) - 1
+        return min(int(np.searchsorted(ks, self.cursor)), len(ks) - 1)
 
     def shown_frame(self) -> Frame:
         return self.history.frames[self.shown_index()]
 
     def span(self) -> tuple[int, int, int]:
         """(first, last, shown) recorded step numbers."""
-        frames = self.history.frames
-        return frames[0].k, frames[-1].k, frames[self.shown_index()].k
+        ks = self.history.ks
+        return int(ks[0]), int(ks[-1]), int(ks[self.shown_index()])
 
     def scrub(self, k: int) -> int:
         """Put the cursor on the recorded step nearest ``k``; returns that step."""
-        ks = self.history.steps()
-        i = min(bisect.bisect_left(ks, int(k)), len(ks) - 1)
+        ks = self.history.ks
+        i = min(int(np.searchsorted(ks, int(k))), len(ks) - 1)
         if i > 0 and abs(ks[i - 1] - k) <= abs(ks[i] - k):
             i -= 1
-        self.cursor = ks[i]
+        self.cursor = int(ks[i])
         return self.cursor
 
     def advance(self, n: int) -> tuple[int, bool]:
         """Move ``n`` frames on; returns (frames moved, at the end)."""
-        frames = self.history.frames
+        ks = self.history.ks
         i = self.shown_index()
-        j = min(i + max(n, 0), len(frames) - 1)
-        self.cursor = frames[j].k
-        return j - i, j == len(frames) - 1
+        j = min(i + max(n, 0), len(ks) - 1)
+        self.cursor = int(ks[j])
+        return j - i, j == len(ks) - 1
 
     def rewind_if_at_end(self) -> bool:
         """A replay at its last frame goes back to its first (Play again); True if it did."""
-        frames = self.history.frames
-        if frames and self.cursor == frames[-1].k:
-            self.cursor = frames[0].k
+        ks = self.history.ks
+        if len(ks) and self.cursor == ks[-1]:
+            self.cursor = int(ks[0])
             return True
         return False
 
     def rewind(self) -> None:
         """The cursor on the first recorded frame."""
-        self.cursor = self.history.frames[0].k
+        self.cursor = int(self.history.ks[0])
 
     def load(self, rec: Recording, check: tuple[bool | None, str], metrics_match: bool) -> None:
         """Show ``rec`` instead of the live history (its metric rows too if their names match)."""
         self.history.replace(recorded_frames(rec), (tuple(float(v) for v in row) for row in rec.metrics)
-                             if metrics_match else ())
+                             if metrics_match else (), motion=False)
         self.rewind()  # a replay opens at its start: Play plays it from there
-        self.twin_frames = twin_frames(rec)
+        self.twin.replace(twin_frames(rec), (), motion=False)
         self.replaying = ReplayInfo(name=rec.name, seed=rec.seed, shoal=str(rec.meta["shoal"]), verified=check[0],
                                     check=check[1], live_edits=int(rec.meta["live_edits"]),
-                                    twin=rec.twin_overrides if self.twin_frames else None)
+                                    twin=rec.twin_overrides if len(self.twin_frames) else None)
 
     def shown_metrics(self, n: int) -> tuple[dict[str, np.ndarray], tuple[float, float]]:
         """The last ``n`` metric rows up to the time shown, and the time span of all ``n`` (the x range)."""
-        m = {k: v[-n:] for k, v in self.history.metric_arrays().items()}
+        m = self.history.metric_tail(n)
         t = m["t"]
         span = (float(t[0]), float(t[-1])) if len(t) else (0.0, 1.0)
         if not self.live:

@@ -17,7 +17,7 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
 
-from .history import History, robots_at
+from .history import History, Trails
 
 MAX_OVERRIDES = 40
 
@@ -123,15 +123,14 @@ class Twin(Generic[S]):
 
     def metric(self, name: str, t: np.ndarray) -> np.ndarray | None:
         """B's metric ``name`` at A's times ``t`` (None if B has no such metric yet)."""
+        t = np.asarray(t, float)
         with self.b.lock:
-            m = self.b.history.metric_arrays()
+            m = self.b.history.metric_around(float(t[0]) if len(t) else 0.0)  # (B's rows from A's first time on)
         if name not in m or not len(m["t"]):
             return None
-        return np.interp(np.asarray(t, float), m["t"], m[name])
+        return np.interp(t, m["t"], m[name])
 
-    def at(self, k: int) -> tuple[np.ndarray, np.ndarray] | None:
+    def at(self, k: int) -> tuple[np.ndarray, Trails] | None:
         """B's robots and trails at step ``k`` (None if B has no such step)."""
         with self.b.lock:
-            frames = list(self.b.history.frames)
-            horizon = self.b.scenario.view.trail_seconds
-        return robots_at(frames, k, horizon)
+            return self.b.history.robots_at(k, self.b.scenario.view.trail_seconds)

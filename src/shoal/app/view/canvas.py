@@ -43,6 +43,7 @@ class Canvas:
         self.viewport = Viewport()  # what the browser's camera shows (a scale bar follows its zoom)
         self.light = False  # light drawing: no line per robot (see the module's docstring)
         self.text_scale = 1.0  # labels' size
+        self.shown_revision = 0  # bumps whenever a node is shown or hidden (a legend follows it)
 
     # ------------------------------------------------------------------ lifecycle
     def reset(self, centre: np.ndarray, scale: float) -> None:
@@ -58,6 +59,7 @@ class Canvas:
         for node in reversed(list(self.nodes.values())):
             node.remove()
         self.nodes.clear()
+        self.shown_revision += 1
 
     def name(self, key: str, fresh: bool = False, under_root: bool = True) -> str:
         """The scene path of node ``key`` (``fresh``: a name not used before, for a re-created node)."""
@@ -67,17 +69,33 @@ class Canvas:
     def add(self, key: str, node: Any) -> Any:
         """Keep ``node`` as ``key`` (a node made by a layer itself: meshes, grids, images)."""
         self.nodes[key] = node
+        self.shown_revision += 1
         return node
 
     def drop(self, key: str) -> None:
         node = self.nodes.pop(key, None)
         if node is not None:
             node.remove()
+            self.shown_revision += 1
 
     def hide(self, *keys: str) -> None:
         for key in keys:
             if key in self.nodes:
-                self.nodes[key].visible = False
+                self.show(key, False)
+
+    def show(self, key: str, shown: bool = True) -> None:
+        """Show (or hide) node ``key``; a change bumps ``shown_revision``."""
+        node = self.nodes[key]
+        if bool(node.visible) != shown:
+            node.visible = shown
+            self.shown_revision += 1
+
+    def group(self, key: str, shown: bool) -> None:
+        """A frame node ``key`` whose children (nodes keyed ``key/…``) are shown and hidden with it."""
+        if key not in self.nodes:
+            self.nodes[key] = self.scene.add_frame(self.name(key), show_axes=False)
+            self.shown_revision += 1
+        self.show(key, shown)
 
     def shown(self, key: str) -> bool:
         node = self.nodes.get(key)
@@ -145,11 +163,12 @@ class Canvas:
         node = self.nodes.get(key)
         if node is None:
             self.nodes[key] = create()
+            self.shown_revision += 1
         else:
             node.points = pts
             if colors is not None:
                 node.colors = colors
-        self.nodes[key].visible = shown
+        self.show(key, shown)
 
     def label(self, key: str, text: str, xy: np.ndarray | None, z: float = 0.0, **style: Any) -> None:
         """A text label at world ``xy`` (hidden when None or not finite); ``style``: viser's
@@ -160,8 +179,9 @@ class Canvas:
         if node is None:
             style["font_screen_scale"] = style.get("font_screen_scale", 1.0) * self.text_scale
             self.nodes[key] = self.scene.add_label(self.name(key), text, position=pos, **style)
+            self.shown_revision += 1
         else:
             node.position = pos
             if node.text != text:
                 node.text = text
-        self.nodes[key].visible = ok
+        self.show(key, ok)

@@ -9,6 +9,9 @@ the snapshot (markers sized in metres). Heights ``z`` order the layers in the to
 In the light drawing (``canvas.light``, for a page drawn without a GPU, where every line segment
 is a few triangles a frame for the CPU to fill) a layer draws no line per robot: trails become a
 few dots each, heading strokes are left out; robots are one point cloud either way.
+
+Trails reach the page as appended pieces (:mod:`.trails`); what depends on the camera alone (the
+scale bar) is drawn again only when the camera or the scene's scale moved.
 """
 
 from __future__ import annotations
@@ -23,7 +26,8 @@ from shoal.presets.models import Scenario
 
 from ..session.snapshot import Snapshot
 from .canvas import Canvas, Colour
-from .shapes import circle_segments, grid_segments, plane, polyline, trail_dots, trail_segments
+from .shapes import circle_segments, grid_segments, plane, polyline
+from .trails import DOT, TRAIL_DOT_BUDGET, TRAIL_DOTS, TrailDrawing  # noqa: F401  (the light drawing's dots)
 
 Size = Union[float, Callable[[Canvas, Snapshot], float]]
 
@@ -34,9 +38,6 @@ GHOST_BEST = (30, 80, 220)
 ERR_LOW = np.array([40, 170, 70], float)
 ERR_HIGH = np.array([230, 40, 40], float)
 EMPTY_POINTS = np.zeros((0, 2))
-TRAIL_DOTS = 16  # dots a trail at most, in the light drawing …
-TRAIL_DOT_BUDGET = 4000  # … and all trails together at most (1000 robots: 4 dots each), 2 a trail at least
-DOT = 0.07  # scene units: a trail's dot in the light drawing (about 2–3 pixels at the home view)
 
 
 @dataclass(frozen=True)
@@ -233,9 +234,15 @@ class ScaleBar(Static):
 
     def __init__(self, z: float = 0.05) -> None:
         self.z = z
+        self._drawn: tuple | None = None  # what the bar was drawn for
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
+        """Drawn again only when the camera, the scene's scale or the world's place moved."""
         vp = canvas.viewport
+        key = (canvas.root, vp, canvas.scale, tuple(canvas.focus), tuple(canvas.centre))
+        if key == self._drawn:
+            return
+        self._drawn = key
         hh = vp.half_height
         hw = hh * max(vp.aspect, 1e-3)
         length = nice_length(0.35 * hw / canvas.scale)
@@ -288,20 +295,9 @@ class Headings(Static):
         canvas.lines("headings", np.stack([x, tip], axis=1), self.colour, self.px, self.z)
 
 
-def draw_trails(canvas: Canvas, key: str, trails: np.ndarray, colour: Colour, px: float, z: float) -> None:
-    """Trails (M, L, d) as segments ``px`` pixels thick (node ``key``) or, in the light drawing,
-    as at most :data:`TRAIL_DOTS` dots each, :data:`TRAIL_DOT_BUDGET` in all (node ``key + "_dots"``)."""
-    if canvas.light:
-        canvas.hide(key)
-        most = max(2, min(TRAIL_DOTS, TRAIL_DOT_BUDGET // max(len(trails), 1)))
-        canvas.points(key + "_dots", trail_dots(trails, most), colour, DOT, "circle", z)
-    else:
-        canvas.hide(key + "_dots")
-        canvas.lines(key, trail_segments(trails), colour, px, z)
-
-
 class Trails(Static):
-    """Each robot's path over the last ``view.trail_seconds``."""
+    """Each robot's path over the last ``view.trail_seconds`` (lines, or dots in the light drawing),
+    sent as appended pieces (:class:`~.trails.TrailDrawing`)."""
 
     name = "trails"
     keys = ("trails", "trails_dots")
@@ -309,9 +305,10 @@ class Trails(Static):
     def __init__(self, colour: Colour, px: float, z: float) -> None:
         self.colour, self.px, self.z = colour, px, z
         self.legend = (LegendEntry("—", colour, "trail"),)
+        self.drawing = TrailDrawing("trails")
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
-        draw_trails(canvas, "trails", snap.trails, self.colour, self.px, self.z)
+        self.drawing.draw(canvas, snap.trails, self.colour, self.px, self.z)
 
 
 class PersonalBests(Static):
@@ -375,14 +372,16 @@ class Twin(Static):
 
     def __init__(self, size: Size, z: tuple[float, float], px: float = 1.2) -> None:
         self.size, self.z, self.px = size, z, px
+        self.drawing = TrailDrawing("twin_trails")
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         if snap.twin is None:
-            canvas.hide(*self.keys)
+            canvas.hide("twin")
+            self.drawing.hide(canvas)
             return
         x, trails = snap.twin
         canvas.points("twin", x, TWIN, size_of(self.size, canvas, snap), "circle", self.z[0])
-        draw_trails(canvas, "twin_trails", trails, TWIN_TRAIL, self.px, self.z[1])
+        self.drawing.draw(canvas, trails, TWIN_TRAIL, self.px, self.z[1])
 
 
 def error_colors(err: np.ndarray, scale: float) -> np.ndarray:

@@ -12,7 +12,11 @@ viser passes no page events to Python, but it runs a script the server sends
   path of a user's click (the view row's *Display* button shows the boxes a moment for it);
 - closes viser's "Software WebGL rendering detected" toast whenever it shows (it covered the top
   left of the arena on every load): the status area names the light drawing instead;
-- scales the page's text (:func:`set_text_scale`: Mantine's ``--mantine-scale``) for a projector.
+- scales the page's text (:func:`set_text_scale`: Mantine's ``--mantine-scale``) for a projector;
+- takes a time plot's new rows (``__shoalPage.plot``, sent by :mod:`shoal.app.panel.plot_stream`)
+  into viser's GUI store, where a data push would put the whole window, once it has told the server
+  it can (through the hidden control the server names); a chart that does not hold the rows an
+  append was made for asks for its whole data again.
 
 The camera controls are reached through the page's React tree (the canvas' fiber up to viser's
 viewer context, ``mutable.current.cameraControl``, a camera-controls instance): viser's client
@@ -142,7 +146,39 @@ PAGE_JS = """
   new MutationObserver(dropToast).observe(document.body, {childList: true, subtree: true});
   dropToast();
   P.text = (scale) => document.documentElement.style.setProperty("--mantine-scale", String(scale));
-  setInterval(() => { P.apply(); P.applyDpr(); P.report(); }, 400);
+
+  // Plots: say once per panel (P.plotSync: its hidden control) that appended rows are taken here.
+  P.plotTold = 0; P.plotAsked = 0;
+  const tell = (v, word) => v.mutable.current.sendMessage(
+    {type: "GuiUpdateMessage", uuid: P.plotSync, updates: {value: word + " " + (++P.plotTold)}});
+  const store = (v) => v && v.useGuiConfig && v.useGuiConfig.get && v.useGuiConfig.set
+    && v.mutable.current.sendMessage ? v.useGuiConfig : null;
+  P.sayPlots = () => {
+    if (!P.plotSync || P.plotSaid === P.plotSync) return;
+    const v = P.viewer(), s = store(v);
+    if (!s || !s.get(P.plotSync)) return;  // (no store, or its control has not arrived yet)
+    tell(v, "appends");
+    P.plotSaid = P.plotSync;
+  };
+  // Rows for chart `uuid`, which holds n0 x values from x0 to x1: drop that many from the front,
+  // append cols[i] to series i, take `scales`; after the other messages of this batch.
+  P.plot = (sync, uuid, n0, x0, x1, drop, cols, scales) => queueMicrotask(() => {
+    const v = P.viewer(), s = store(v), conf = s && s.get(uuid);
+    if (!conf) return;  // (the chart was removed meanwhile)
+    const data = conf.props.data, xs = data && data[0];
+    const held = xs && data.length === cols.length && xs.length === n0 && xs[0] === x0 && xs[n0 - 1] === x1;
+    if (!held) {
+      if (sync === P.plotSync && Date.now() - P.plotAsked > 1000) { P.plotAsked = Date.now(); tell(v, "resync"); }
+      return;
+    }
+    const out = data.map((a, i) => {
+      const c = cols[i], r = new Float64Array(a.length - drop + c.length);
+      r.set(a.slice(drop)); r.set(c, a.length - drop);
+      return r;
+    });
+    s.set({[uuid]: {...conf, props: {...conf.props, data: out, scales: scales}}});
+  });
+  setInterval(() => { P.apply(); P.applyDpr(); P.report(); P.sayPlots(); }, 400);
 })();
 """
 

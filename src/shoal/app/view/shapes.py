@@ -73,16 +73,6 @@ def trail_segments(trails: np.ndarray) -> np.ndarray:
     return np.stack([xy[:, :-1], xy[:, 1:]], axis=2).reshape(-1, 2, 2)
 
 
-def trail_dots(trails: np.ndarray, most: int) -> np.ndarray:
-    """(M, L, d) trails → (P, 2) points in the ground plane: each trail's newest point and every
-    k-th before it, at most ``most`` a trail (the light drawing of a trail)."""
-    tr = np.asarray(trails, dtype=float)
-    if tr.ndim != 3 or not tr.shape[0] or not tr.shape[1] or most < 1:
-        return np.zeros((0, 2))
-    every = max(1, -(-tr.shape[1] // most))  # ceil(L / most)
-    return plane(tr[:, ::-1][:, ::every]).reshape(-1, 2)
-
-
 def grid_segments(lo: np.ndarray, hi: np.ndarray, origin: np.ndarray, cell: float,
                   every: int = 5) -> tuple[np.ndarray, np.ndarray]:
     """The lines of a grid over the box ``lo``–``hi`` at ``origin`` + k ``cell`` (k whole), as

@@ -142,6 +142,7 @@ class View:
         self._refit = False
         self._restyle = False  # the drawing style changed: lay the layers again at the same home
         self.following = False  # "follow swarm": the swarm's middle stays in the middle of the screen
+        self._legend: tuple[tuple[str, int], list[LegendEntry]] | None = None  # (what it was made for, legend)
 
     # ------------------------------------------------------------------ geometry (clicks, tests)
     @property
@@ -253,6 +254,10 @@ class View:
         self.drawn_revision = snap.revision
 
     def legend(self) -> list[LegendEntry]:
-        """What the glyphs on screen stand for: the entries of every layer with a node shown."""
-        return [entry for layer in self.layers if any(self.canvas.shown(k) for k in layer.keys)
-                for entry in layer.legend]
+        """What the glyphs on screen stand for: the entries of every layer with a node shown (made
+        again only when a node was shown or hidden)."""
+        key = (self.canvas.root, self.canvas.shown_revision)
+        if self._legend is None or self._legend[0] != key:
+            self._legend = (key, [entry for layer in self.layers if any(self.canvas.shown(k) for k in layer.keys)
+                                  for entry in layer.legend])
+        return self._legend[1]

@@ -1,0 +1,61 @@
+"""The plots in a real page take their new rows only (``panel/plot_stream.py`` and the page
+script's ``plot``), and draw what the server rendered: the chart uPlot draws holds the same
+numbers as the server's handle, row for row."""
+
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+
+CHROMIUM = shutil.which("chromium")
+pytestmark = [
+    pytest.mark.browser,
+    pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not on PATH (apt-get install chromium)"),
+]
+
+sync_api = pytest.importorskip("playwright.sync_api")
+
+from browser_helpers import wait_until  # noqa: E402
+
+DRAWN = """(uuid) => {
+  const tp = window.__viserTestpoints && window.__viserTestpoints.uplots && window.__viserTestpoints.uplots[uuid];
+  return tp ? tp.chart.data.map((a) => Array.from(a, (v) => (Number.isNaN(v) ? null : v))) : null;
+}"""
+HELD = """(uuid) => {
+  const v = window.__shoalPage.viewer(), conf = v && v.useGuiConfig.get(uuid);
+  return conf ? conf.props.data.map((a) => Array.from(a, (v) => (Number.isNaN(v) ? null : v))) : null;
+}"""
+
+
+def _equal(page_data, handle) -> bool:
+    if page_data is None:
+        return False
+    want = [np.asarray(a, dtype=float) for a in handle.data]
+    got = [np.array([np.nan if v is None else v for v in a], dtype=float) for a in page_data]
+    return len(got) == len(want) and all(np.array_equal(g, w, equal_nan=True) for g, w in zip(got, want))
+
+
+def test_the_page_takes_appended_rows_and_draws_what_the_server_rendered(server, page, cid):
+    tab = server.tabs[cid]
+    stream = tab.panels.plot_stream
+    wait_until(lambda: stream.appends, timeout=60, what="the page's answer: it takes appended rows")
+    tab.session.choose_at_end("run on")
+    tab.session.play()
+    wait_until(lambda: tab.session.k >= 200, timeout=120, what="200 steps")
+    page.get_by_role("tab", name="Plots").click()
+    speed = tab.panels.handles["speed"]
+    uuid = speed._impl.uuid
+    page.wait_for_function(f"() => !!(window.__viserTestpoints && window.__viserTestpoints.uplots"
+                           f" && window.__viserTestpoints.uplots[{uuid!r}])", timeout=30000)
+    appended = stream.appended
+    wait_until(lambda: stream.appended > appended + 8, timeout=60, what="appends while the chart is drawn")
+    tab.session.pause()
+    wait_until(lambda: _equal(page.evaluate(DRAWN, uuid), speed), timeout=30,
+               what="uPlot's data equal to the server's speed plot")
+    for key, h in tab.panels.handles.items():  # every chart the page holds, drawn or not
+        if type(h).__name__ == "GuiUplotHandle" and h.visible:
+            assert _equal(page.evaluate(HELD, h._impl.uuid), h), key
+    assert stream.appended > 10 * max(stream.keyframes, 1) // 2, (stream.appended, stream.keyframes)
+    assert len(speed.data[0]) > 100 and speed.data[0][-1] == pytest.approx(tab.session.clock())
