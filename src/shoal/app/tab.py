@@ -31,7 +31,8 @@ from .panel.panel import Panel, Services
 from .panel.view_row import DISPLAY, Display
 from .preset_menu import PresetMenu
 from .session.session import Session
-from .view import page
+from .view import page, projector
+from .view.access import Announcer
 from .view.camera import Viewport, home_camera, straighten, tipped
 from .warmup import WARMUP
 
@@ -66,6 +67,7 @@ class TabApp:
         experiments: ExperimentService | None = None,
         owner: Hashable = None,
         camera: Any = None,
+        projector: bool = False,
     ) -> None:
         self.session = session
         self.experiments, self.owner = experiments, owner  # the server's experiments; this tab's key there
@@ -85,9 +87,12 @@ class TabApp:
         self.control_hold = self.CONTROL_HOLD
         self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
         self.menu = PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included, across swaps
-        self.display = Display()  # how the arena is drawn, across swaps
+        self.display = Display(projector=projector)  # how the arena is drawn, across swaps
         self._page = Display()  # what the page was last told (flat camera, text scale)
-        self._home_when_resized: float | None = None  # the camera's aspect before the panel's width changed
+        self._aspect: float | None = None  # the arena's width / height at the camera's last report
+        self._window_height: float | None = None  # px, the arena's (the window's) at the camera's last report
+        self.announcer = Announcer(gui) if camera is not None else None  # status read out, the page's title
+        self.play_at: float | None = None  # play then, or at the page's first camera report (play_when_drawn)
         with self._ticking:
             self._build_kind()
         if camera is not None:
@@ -100,7 +105,7 @@ class TabApp:
                             experiments=self.experiments, owner=self.owner, view=self.view_action,
                             display=self.display)
         self.panels = Panel(self.gui, self.session, kind, services)
-        self.arena = kind.view(self.scene, self.panels.part)
+        self.arena = kind.view(self.scene, self.panels.part, labels=self._labels())
         self._show_display()
         if self.camera is not None:
             self._camera_moved(self.camera)
@@ -142,7 +147,11 @@ class TabApp:
         with self._ticking:
             if app_kind(self.session) is kind:
                 self.session.load_scenario(scenario, play=play)
-                self.panels.sync()
+                if self.panels.wanted_main() != self.panels.main_key:  # another plot to show beside the arena
+                    self._drop_kind()
+                    self._build_kind()
+                else:
+                    self.panels.sync()
                 return self.session
             new = kind.session(scenario)  # may refuse: then the old scene stays
             new.choose_at_end(self.session.at_end)  # the tab's choice outlives the scene
@@ -163,15 +172,29 @@ class TabApp:
             self.arena.follow_swarm()
         elif action == DISPLAY:
             with self._ticking:
-                self._show_display()
+                self._show_display(remember=True)
 
-    def _show_display(self) -> None:
-        """Draw the arena as ``display`` says, tell the page (held top view, text size) what changed
+    def set_projector(self, on: bool) -> None:
+        """Projector mode on or off (as the header's box does; a user's choice, remembered by the page)."""
+        with self._ticking:
+            self.display.projector = bool(on)
+            self._show_display(remember=True)
+
+    def _labels(self) -> Any:
+        """Where the arena's labels go: HTML over the canvas of a browser's page (None: viser's labels)."""
+        from .view.overlay import Labels
+
+        return Labels(self.scene) if self.camera is not None else None
+
+    def _show_display(self, remember: bool = False) -> None:
+        """Draw the arena as ``display`` says, tell the page (held top view, text size, projector
+        mode; ``remember``: the user's choice, which the page keeps) what changed, place the board
         and show the status area's note."""
         d = self.display
         self.arena.restyle(light=d.light, text_scale=d.text_scale)
         self.panels.show_light(d.light)
         self.panels.view_gui.sync(d)
+        self.panels.place(d.projector, self._window_height, page.PANEL_WIDTH * d.text_scale)
         if self.panels.text_scale != d.text_scale:
             self.panels.text_scale = d.text_scale
             self._plot_key = None  # the plots again, at the new size
@@ -183,17 +206,30 @@ class TabApp:
             page.set_flat(self.gui, not d.orbit)
         if d.light != self._page.light:
             page.set_light(self.gui, d.light)
-        if d.large_text != self._page.large_text:
-            with contextlib.suppress(Exception):  # no report yet
-                self._home_when_resized = float(self.camera.aspect)  # the panel's width changes the arena's
-            page.set_text_scale(self.gui, d.text_scale)
-        self._page = Display(d.light, d.orbit, d.large_text)
+        if d.projector != self._page.projector:
+            page.set_text_scale(self.gui, d.text_scale)  # (the arena's new width re-fits it: _camera_moved)
+            projector.set_projector(self.gui, d.projector, remember)
+        self._page = Display(d.light, d.orbit, d.projector)
+
+    def play_when_drawn(self, within: float) -> None:
+        """Start playing at the page's first camera report (its first frame is drawn), or after
+        ``within`` seconds whatever comes: the first view starts at step 0."""
+        self.play_at = time.monotonic() + within
 
     def _camera_moved(self, camera: Any) -> None:
+        if self.play_at is not None:
+            self.play_at = None
+            self.session.play()
         with contextlib.suppress(Exception):  # no report yet, or a tab closing
-            if self._home_when_resized is not None and abs(float(camera.aspect) - self._home_when_resized) > 1e-3:
-                self._home_when_resized = None  # the arena took its new width: show all of it again
-                home_camera(camera)
+            aspect = float(camera.aspect)
+            resized = self._aspect is not None and abs(aspect - self._aspect) > 1e-3
+            self._aspect = aspect
+            height = float(camera.image_height)
+            if height > 0 and height != self._window_height:
+                self._window_height = height
+                self.panels.place(self.display.projector, height, page.PANEL_WIDTH * self.display.text_scale)
+            if resized:  # the arena's width changed (a panel folded or widened, the window): show all of it again
+                home_camera(camera, self.display.text_scale)
                 return
             if not self.display.orbit and tipped(camera):  # a page that does not hold the top view itself
                 straighten(camera)
@@ -203,7 +239,7 @@ class TabApp:
     def _home_camera(self) -> None:
         if self.camera is not None:
             with contextlib.suppress(Exception):  # a tab closing meanwhile
-                home_camera(self.camera)
+                home_camera(self.camera, self.display.text_scale)
 
     def close(self) -> None:
         """The browser tab went away: stop listening to its scene and its experiment."""
@@ -253,6 +289,9 @@ class TabApp:
     def _tick(self, now: float, plots: bool = True) -> None:
         if self._retired:
             self._remove_retired(time.monotonic())
+        if self.play_at is not None and time.monotonic() >= self.play_at:  # no camera report came: play anyway
+            self.play_at = None
+            self.session.play()
         s = self.session
         elapsed = 0.0 if self._last is None else max(0.0, now - self._last)
         self._last = now
@@ -287,6 +326,9 @@ class TabApp:
             if key != self._plot_key:
                 with self._atomic():  # one wake-up for all of them (wake-ups cost the ticking thread the GIL)
                     self.panels.refresh_status()
+                    if self.announcer is not None:
+                        self.announcer.name(s.scenario.name)
+                        self.announcer.status(self.panels.status.content)
                     self.panels.refresh_readout()
                     self.panels.refresh_plots()
                     self.panels.refresh_timeline()

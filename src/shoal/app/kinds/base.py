@@ -47,10 +47,10 @@ class AppKind:
         """This kind's part of a tab's panel (built by the shared :class:`~shoal.app.panel.panel.Panel`)."""
         return self.make_panel(api)
 
-    def view(self, scene: Any, part: KindPanel | None, fit: Fit | None = None) -> View:
+    def view(self, scene: Any, part: KindPanel | None, fit: Fit | None = None, labels: Any = None) -> View:
         """The arena of a tab showing this kind on viser ``scene`` (``part``: where drags go; None on
-        a page that only plays a run back)."""
-        return View(scene, self.name, self.camera(), self.layers(part), fit)
+        a page that only plays a run back; ``labels``: the page's HTML labels, else viser's)."""
+        return View(scene, self.name, self.camera(), self.layers(part), fit, labels=labels)
 
 
 class BaseDriver:

@@ -806,7 +806,7 @@ def panel(api: PanelAPI) -> KindPanel:
         ),
         status=_status, compare=_compare, rebuilt=_rebuilt, export_note=EXPORT_NOTE, state=editor,
         click=lambda p, x, y, modifier: editor.click(x, y, modifier, p.handles["click"].value),
-        drag=editor.drag)
+        drag=editor.drag, main=lambda s: "com")
 
 
 def accepts(scenario: Scenario) -> bool:

@@ -469,7 +469,8 @@ def panel(api: PanelAPI) -> KindPanel:
             )),
             Tab("Plots", (ERROR_PLOT, DISTANCE_PLOT, FITNESS_PLOT)),
         ),
-        status=_status, compare=_compare, rebuilt=_rebuilt, click=_click, export_note=EXPORT_NOTE)
+        status=_status, compare=_compare, rebuilt=_rebuilt, click=_click, export_note=EXPORT_NOTE,
+        main=lambda s: "fitness" if _slo(s).motion == "pso" else "error")
 
 
 def _same_run(old: Scenario, new: Scenario) -> bool:

@@ -697,7 +697,7 @@ def panel(api: PanelAPI) -> KindPanel:
             Tab("Plots", (CORR_PLOT, CORR_NOTE, NO_CORR, DIST, SNR_PLOT)),
         ),
         status=_status, compare=_compare, export_note=EXPORT_NOTE, click=_click, drag=drag,
-        rebuilt=lambda s, what, changes: ("Swarm rebuilt", f"{what}: the robots start again"))
+        rebuilt=lambda s, what, changes: ("Swarm rebuilt", f"{what}: the robots start again"), main=lambda s: "dist")
 
 
 def accepts(scenario: Scenario) -> bool:

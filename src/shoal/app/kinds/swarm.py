@@ -437,7 +437,7 @@ def panel(api: PanelAPI) -> KindPanel:
                                  visible=lambda s: s.scenario.sim.d == 2),  # SLO localises in the plane
             )),
             Tab("Plots", (
-                Figure("stability", figs.stability, figs.refresh_stability, aspect=0.7),
+                Figure("stability", figs.stability, figs.refresh_stability, aspect=0.7, title="(ω, ĉ) stability plane"),
                 SPREAD,
                 BEST_DISTANCE,
                 BEST_F,
@@ -447,7 +447,13 @@ def panel(api: PanelAPI) -> KindPanel:
                 SPEED,
             )),
         ),
-        status=_status, compare=_compare)
+        status=_status, compare=_compare, main=_main)
+
+
+def _main(s: Session) -> str:
+    """The plot a scene is about: the speed against its bounds for the 1-D runs of Fig. 3-4 and
+    3-5, else the (ω, ĉ) plane of the Chapter 3 lessons."""
+    return "speed" if s.scenario.sim.d == 1 else "stability"
 
 
 def supported(scenario: Scenario) -> None:

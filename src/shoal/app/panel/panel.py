@@ -34,7 +34,9 @@ from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
 from ..warmup import WARMUP
+from .board import WIDTH, Board, plot_height
 from .compare import CompareFolder
+from .figures import text_scaled
 from .keys import PLAYING
 from .lesson_run import LessonRun
 from .plots import Chart, Frame, PlotSpec, scale_text
@@ -151,8 +153,10 @@ class Panel:
         self.controls = 0  # a count of the user's control events (the tab holds the scene a moment after one)
         self.text_scale = services.display.text_scale if services.display is not None else 1.0  # plots' text
         self.part = kind.panel(self)
-        self._build_header()
-        self.view_gui = ViewRow(self)
+        self._skip: Any = None  # the main plot: built on the board, not in its tab
+        self.main_key = self.wanted_main()
+        self.board, self.board_plot = self._build_board()
+        self._build_header()  # (with the view row: the projector switch on the first screen in both modes)
         badge = gui.add_markdown("", visible=False)  # names a loaded replay
         live = gui.add_button("Run live (leave the replay)", visible=False,
                               hint="a live run of the replay's preset and seed, from step 0")
@@ -190,6 +194,7 @@ class Panel:
         self.light = False  # the light drawing: said on a line under the status line
         self.playback = gui.add_button_group("playback", PLAYBACK)
         self.top += [self.preset, self.status, self.playback, self._build(SPEED_SLIDER)]
+        self.view_gui = ViewRow(self, legend=self.board_legend)
         self.at_end = gui.add_dropdown(
             "at the end", self._at_end_options(), initial_value=at_end_label(self.session.at_end, sc.sim.steps),
             hint="at the preset's last step the run stops (Play, Step or a changed control start it again), "
@@ -205,6 +210,58 @@ class Panel:
         @self.playback.on_click
         def _(event: Any) -> None:
             self.press(event.target.value)
+
+    # ------------------------------------------------------------------ the board
+    def wanted_main(self) -> str | None:
+        """The key of the plot the scene is about now (None: the kind names none)."""
+        main = self.part.main
+        return main(self.session) if main is not None else None
+
+    def _find(self, key: str | None) -> Any:
+        """The plot spec of the kind's tabs and folders with ``key`` (None if there is none)."""
+        def walk(items: Any) -> Any:
+            for item in items:
+                if isinstance(item, Folder):
+                    found = walk(item.items)
+                    if found is not None:
+                        return found
+                elif isinstance(item, (PlotSpec, Chart, Figure)) and item.key == key:
+                    return item
+            return None
+        return walk([*self.part.folders, *(i for tab in self.part.tabs for i in tab.items)]) if key else None
+
+    def _build_board(self) -> tuple[Board | None, Any]:
+        """The board beside the arena (the main plot, the legend); None where the GUI has no panels."""
+        self.board_legend: Any = None
+        item = self._find(self.main_key)
+        title = getattr(item, "title", "") or "legend"
+        try:
+            board = Board(self.gui, title)
+        except AttributeError:  # a GUI without panels: the legend stays under the view row
+            return None, None
+        self.top.append(board)
+        with board:
+            plot = self._build(item) if item is not None else None
+            self.board_legend = self.gui.add_markdown("")
+        self._skip = item
+        return board, plot
+
+    def place(self, projector: bool, window_height: float | None = None, panel_width: float | None = None) -> None:
+        """Dock the board for the mode and shape its plot for the room it has there (the window's
+        height and the control panel's width, px, where known)."""
+        if self.board is None:
+            return
+        self.board.place(projector)
+        h = self.board_plot
+        if h is not None:
+            width = (panel_width or 768.0) - 40 if projector else WIDTH - 24
+            tall = plot_height(projector, window_height, width)
+            aspect = 1.0 / tall if isinstance(self.control_of(h), (PlotSpec, Chart)) else tall  # uPlot: w/h
+            if abs(float(h.aspect) - aspect) > 1e-3:
+                h.aspect = aspect
+
+    def control_of(self, handle: Any) -> Any:
+        return next(item for item, h in self._controls if h is handle)
 
     def _at_end_options(self) -> tuple[str, ...]:
         steps = self.session.scenario.sim.steps
@@ -293,6 +350,8 @@ class Panel:
     def _build(self, item: Control) -> Any:
         """A handle for ``item`` (a folder with its items), kept as ``handles[key]`` and wired."""
         gui, s = self.gui, self.session
+        if item is self._skip:  # (on the board)
+            return None
         if isinstance(item, Folder):
             expand = item.expand(s) if callable(item.expand) else item.expand
             with gui.add_folder(item.label, expand_by_default=expand) as h:
@@ -321,7 +380,7 @@ class Panel:
         elif isinstance(item, Text):
             h = gui.add_markdown(item.text)
         elif isinstance(item, Figure):
-            h = gui.add_plotly(item.make(s), aspect=item.aspect)  # (plotly's aspect is height/width)
+            h = gui.add_plotly(text_scaled(item.make(s), self.text_scale), aspect=item.aspect)  # (height/width)
         elif isinstance(item, (PlotSpec, Chart)):
             f = self._frame(item)
             h = gui.add_uplot(data=f.data, series=f.series, scales=f.scales, axes=f.axes, title=item.title,
@@ -695,6 +754,8 @@ class Panel:
                 self.push_uplot(h, self._frame(item))
             elif isinstance(item, Figure):
                 item.refresh(self, h)
+                if (fig := text_scaled(h.figure, self.text_scale)) is not h.figure:
+                    h.figure = fig
 
     def _frame(self, item: PlotSpec | Chart) -> Frame:
         """What ``item`` shows now: the metrics up to the step shown (with swarm B's curve) or the chart."""

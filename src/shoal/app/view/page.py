@@ -14,6 +14,10 @@ viser passes no page events to Python, but it runs a script the server sends
   left of the arena on every load): the status area names the light drawing instead;
 - scales the page's text (:func:`set_text_scale`: Mantine's ``--mantine-scale``) for a projector.
 
+:func:`install_page` sends three more with it, one concept each: the style sheet and the projector
+mode's switch (:mod:`.projector`), the arena's labels as HTML (:mod:`.overlay`), and the names,
+announcements and title a screen reader needs (:mod:`.access`).
+
 The camera controls are reached through the page's React tree (the canvas' fiber up to viser's
 viewer context, ``mutable.current.cameraControl``, a camera-controls instance): viser's client
 internals, hence the upper bound on viser. Where they cannot be found the script leaves the
@@ -153,13 +157,21 @@ def page_script() -> str:
 
 
 def run_script(gui: Any, source: str) -> None:
-    """Run ``source`` in the page of ``gui`` (a client's ``GuiApi``)."""
+    """Run ``source`` in the page of ``gui`` (a client's ``GuiApi`` or ``SceneApi``)."""
     gui._websock_interface.queue_message(_messages.RunJavascriptMessage(source=source))
 
 
 def install_page(gui: Any) -> None:
-    """Send the page script to the page of ``gui`` (once per page; a second copy does nothing)."""
+    """Send the page scripts to the page of ``gui`` (once per page; a second copy does nothing).
+    Sent before the tab's panel, so that what the tab tells the page while it is built arrives."""
+    from .access import access_script
+    from .overlay import overlay_script
+    from .projector import projector_script
+
     run_script(gui, page_script())
+    run_script(gui, projector_script())
+    run_script(gui, overlay_script())
+    run_script(gui, access_script())
 
 
 def set_flat(gui: Any, flat: bool) -> None:
