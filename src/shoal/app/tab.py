@@ -103,7 +103,7 @@ class TabApp:
         services = Services(notify=self.notify, send_file=self.send_file, menu=self.menu, make_session=session_for,
                             replace=self.replace, share=share_page, lessons=self.lesson_progress,
                             experiments=self.experiments, owner=self.owner, view=self.view_action,
-                            display=self.display)
+                            display=self.display, veil=self._veil)
         self.panels = Panel(self.gui, self.session, kind, services)
         self.arena = kind.view(self.scene, self.panels.part, labels=self._labels())
         self._show_display()
@@ -173,6 +173,10 @@ class TabApp:
         elif action == DISPLAY:
             with self._ticking:
                 self._show_display(remember=True)
+
+    def _veil(self, text: str | None) -> None:
+        if self.camera is not None:
+            page.set_veil(self.gui, text)
 
     def set_projector(self, on: bool) -> None:
         """Projector mode on or off (as the header's box does; a user's choice, remembered by the page)."""

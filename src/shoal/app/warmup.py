@@ -11,8 +11,10 @@ between two ticks with the same numbers (tests/test_warmup.py). So:
   few that building a scene calls, so that opening one never waits long);
 - a scene whose group is not ready runs on its numpy tick meanwhile (:meth:`Warmup.use`) and
   changes over once it is (the acoustic swarm's one kernel is its receiver's correlation);
-  scenes on SLO positions and Mai's SLO swarm have no numpy tick: they wait for theirs
-  (:meth:`Warmup.waits`);
+- scenes on SLO positions and Mai's SLO swarm have no numpy tick: while the warm-up runs, every
+  kernel not compiled yet runs as plain Python outside its thread, the same numbers
+  (:func:`shoal.engine.core.compiled.defer`), so they play at once, slower
+  (:meth:`Warmup.interprets`): nothing waits;
 - :meth:`Warmup.status` says what is being compiled, for the app's status line;
 - ``shoal warmup`` runs it in the foreground (a machine that wants it done ahead).
 
@@ -27,6 +29,7 @@ import threading
 import time
 from typing import Any, Callable
 
+from shoal.engine.core import compiled
 from shoal.presets.build import build, kind_of
 from shoal.presets.io import list_presets, load
 from shoal.presets.models import Scenario
@@ -88,8 +91,8 @@ class Warmup:
         if hasattr(sim, "compiled"):  # (a swarm on SLO positions: its own kind's kernels too)
             sim.compiled = not self.active or all(self.is_ready(g) for g in {group_of(scenario), kind_of(scenario)})
 
-    def waits(self, scenario: Scenario) -> bool:
-        """Must a scene of ``scenario`` wait for its kernels (no numpy tick to run meanwhile)?"""
+    def interprets(self, scenario: Scenario) -> bool:
+        """Does a scene of ``scenario`` run its kernels as Python now (no numpy tick, not compiled yet)?"""
         group = group_of(scenario)
         return self.active and group not in NUMPY_TICK and not self.is_ready(group)
 
@@ -117,8 +120,8 @@ class Warmup:
             return None
         seconds = time.monotonic() - (self.started or time.monotonic())
         progress = f"scene {min(self.done + 1, self.total):d} of {self.total:d}, {seconds:.0f} s"
-        if self.waits(scenario):
-            return f"waiting for this scene's compiled kernels ({progress})"
+        if self.interprets(scenario):
+            return f"compiling kernels in the background ({progress}); Python meanwhile (slower), the same numbers"
         return f"compiling kernels in the background ({progress}); numpy meanwhile, the same numbers"
 
     # ------------------------------------------------------------------ compiling
@@ -133,11 +136,13 @@ class Warmup:
             group = group_of(first) if only and first is not None else None
             self.started = time.monotonic()
             self.scheduled = {group} & set(ORDER) if group is not None else set(ORDER)
+            compiled.defer(True)  # meanwhile what is not compiled yet runs as Python elsewhere
             self._thread = threading.Thread(target=self.run, name="shoal-warmup", daemon=True, kwargs={"only": group})
             self._thread.start()
 
     def run(self, only: str | None = None, say: Callable[[str], None] | None = None) -> float:
         """Compile every group (or ``only`` one) here and now; returns the seconds it took."""
+        compiled.compile_here()
         self.started = self.started or time.monotonic()
         todo = groups()
         if only is not None:
@@ -177,6 +182,7 @@ class Warmup:
             self.current = None
             self.finished = time.monotonic()
             self.revision += 1
+            compiled.defer(False)  # (a kernel no preset warmed compiles at its first call, as ever)
         return self.finished - self.started
 
 

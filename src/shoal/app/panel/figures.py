@@ -187,7 +187,7 @@ def _stability_title(omega: float, c_hat: float, adapted: bool, ok: bool) -> str
 
 
 def _stability_ylabel(adapted: bool) -> str:
-    return "ĉ = c1 + c2 [m/s]" if adapted else "ĉ = c1 + c2"  # (the title names the law's region)
+    return "ĉ = c1 + c2 [m/s]" if adapted else "ĉ = c1 + c2 (no unit)"  # (the title names the region)
 
 
 # --------------------------------------------------------------------- (u, a) plane

@@ -95,6 +95,7 @@ class Services:
     experiments: ExperimentService | None = None  # the server's experiments (None: no Experiment tab)
     owner: Hashable = None  # this browser tab's key among the experiments
     view: Callable[[str], None] | None = None  # the arena's view buttons: "fit", "follow" or "display"
+    veil: Callable[[str | None], None] | None = None  # marks the arena as the old scene's while another is built
     display: Display | None = None  # how the tab's arena is drawn (the tab keeps it: it outlives a swap of panels)
 
 
@@ -599,14 +600,28 @@ class Panel:
 
     # ------------------------------------------------------------------ loading
     def _load(self, scenario: Scenario) -> None:
-        waits = WARMUP.waits(scenario)  # an SLO scene is built once its kernels are: said while it waits
-        self.status.content = (f"**{escape(scenario.name)}** · building the scene" +
-                               (f"; {WARMUP.status(scenario)}" if waits else "") + " …")
-        if self.services.replace is not None:
-            self.services.replace(scenario)  # the tab syncs whichever panel is current afterwards
-        else:
-            self.session.load_scenario(scenario)
-            self.sync()
+        """Load ``scenario``; until it is built the arena is veiled, the legend and the kind's tabs
+        cleared: nothing of the old scene passes for the new one."""
+        self.status.content = f"**{escape(scenario.name)}** · building the scene …"
+        self._building(f"Building {scenario.name} …")
+        try:
+            if self.services.replace is not None:
+                self.services.replace(scenario)  # the tab syncs whichever panel is current afterwards
+            else:
+                self.session.load_scenario(scenario)
+                self.sync()
+        finally:
+            self._building(None)
+
+    def _building(self, text: str | None) -> None:
+        """Say that another scene is being built (``text``), or that this one is shown again (None)."""
+        if self.services.veil is not None:
+            self.services.veil(text)
+        if self.removed:
+            return
+        self.tabs.visible = text is None
+        if text is not None:
+            self.view_gui.show_legend(())
 
     def load_preset(self, choice: str) -> bool:
         """Load a choice of the preset dropdown: a shipped preset or one uploaded in this tab
@@ -629,6 +644,7 @@ class Panel:
         would be, loaded paused at step 0. Returns the refusal's messages (empty: loaded)."""
         try:
             scenario = load_scene(preset, values)
+            self._building(f"Setting up {scenario.name} …")
             if self.services.replace is not None:  # (never a step before it is paused)
                 self.services.replace(scenario, play=False)  # may rebuild the panel (another kind of scene)
             else:
@@ -636,6 +652,8 @@ class Panel:
                 self.sync()
         except PresetError as err:
             return list(err.messages)
+        finally:
+            self._building(None)
         return []
 
     def upload_preset(self, filename: str, content: bytes) -> bool:

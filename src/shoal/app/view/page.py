@@ -146,6 +146,29 @@ PAGE_JS = """
   new MutationObserver(dropToast).observe(document.body, {childList: true, subtree: true});
   dropToast();
   P.text = (scale) => document.documentElement.style.setProperty("--mantine-scale", String(scale));
+  // A veil over the arena while another scene is built: the old one is not taken for the new
+  // (shown after a moment, so that a quick swap does not flicker; its seconds count)
+  P.veil = (text) => {
+    clearTimeout(P.veilTimer); clearInterval(P.veilClock);
+    if (P.veilEl) { P.veilEl.remove(); P.veilEl = null; }
+    if (text === null) return;
+    const start = Date.now();
+    P.veilTimer = setTimeout(() => {
+      const c = arena(), r = c && c.getBoundingClientRect();
+      if (!r) return;
+      const v = document.createElement("div");
+      v.id = "shoal-veil";
+      v.setAttribute("role", "status");
+      v.style.cssText = `position:fixed;left:${r.left}px;top:${r.top}px;width:${r.width}px;height:${r.height}px;` +
+        "z-index:4;background:rgba(255,255,255,0.82);display:flex;align-items:center;justify-content:center;" +
+        "font-size:calc(18px * var(--shoal-k, 1));color:#111;text-align:center;padding:1em";
+      document.body.appendChild(v);
+      P.veilEl = v;
+      const say = () => { v.textContent = `${text} (${Math.round((Date.now() - start) / 1000)} s)`; };
+      say();
+      P.veilClock = setInterval(say, 500);
+    }, 250);
+  };
   setInterval(() => { P.apply(); P.applyDpr(); P.report(); }, 400);
 })();
 """
@@ -182,6 +205,12 @@ def set_flat(gui: Any, flat: bool) -> None:
 def set_light(gui: Any, light: bool) -> None:
     """Render the arena at :data:`LIGHT_DPR` (True) or as viser chooses (False)."""
     run_script(gui, f"window.__shoalPage && window.__shoalPage.setLight({json.dumps(bool(light))});")
+
+
+def set_veil(gui: Any, text: str | None) -> None:
+    """Veil the arena with ``text`` (and the seconds it has waited) while another scene is built;
+    None lifts it."""
+    run_script(gui, f"window.__shoalPage && window.__shoalPage.veil && window.__shoalPage.veil({json.dumps(text)});")
 
 
 def set_text_scale(gui: Any, scale: float) -> None:

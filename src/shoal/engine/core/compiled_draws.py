@@ -9,7 +9,8 @@ generator's C function for the next output through its ``ctypes`` interface (num
 stream, its state stepped in place) and repeats both conversions compiled; the ziggurat tables
 are numba's copy of numpy's. ``tests/test_compiled_draws.py`` compares the draws and the
 generators' states with numpy's own calls. What a run saves is a Python call a draw: one call
-fills every run's arrays.
+fills every run's arrays. While the kernels are not compiled yet and compiling is deferred
+(:func:`~.compiled.defer`) the draws are the generators' own calls.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from typing import Sequence
 import numpy as np
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
-from .compiled import kernel
+from .compiled import interpreted, kernel
 
 TO_DOUBLE = 1.0 / 9007199254740992.0  # 2⁻⁵³
 FF, ONE, MANTISSA = np.uint64(0xFF), np.uint64(1), np.uint64(0x000FFFFFFFFFFFFF)
@@ -98,4 +99,10 @@ class CompiledDraws:
             raise ValueError("CompiledDraws.fill: the arrays are filled in place and must be C-contiguous float64")
         if self.rngs:
             R = len(self.rngs)
-            _fill(self._next, self._states, tuple(a.reshape(R, -1) for a in arrays), np.array(normal, dtype=bool))
+            parts = tuple(a.reshape(R, -1) for a in arrays)
+            if interpreted(_fill):  # (its Python cannot call the C function): numpy's own calls, the same draws
+                for r, rng in enumerate(self.rngs):
+                    for a, n in zip(parts, normal):
+                        (rng.standard_normal if n else rng.random)(out=a[r])
+                return
+            _fill(self._next, self._states, parts, np.array(normal, dtype=bool))
