@@ -286,7 +286,7 @@ def colour_numbers(pkg: Path) -> dict[str, Any]:
 
 
 # ----------------------------------------------------------------------------- SLO first frame
-STEP = re.compile(r"slo-walk\b[^\n]*?\bstep (\d+)/\d+")
+STEP = re.compile(r"slo-walk\b[^\n]*?\b(?:step|gen) (\d+)/\d+")
 
 
 def _first_frame(pkg: Path, playwright: Any, switch: bool) -> float:

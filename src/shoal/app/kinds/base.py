@@ -14,6 +14,7 @@ from ..session.driver import Driver
 from ..session.history import Frame, frame_of
 from ..session.session import Session
 from ..view.layers import Layer
+from ..view.palette import Pair
 from ..view.view import Camera, Fit, View
 
 
@@ -30,6 +31,7 @@ class AppKind:
     layers: Callable[[KindPanel | None], tuple[Layer, ...]]  # the arena's layers (a drag goes to the panel part)
     camera: Callable[[], Camera]
     make_panel: Callable[[PanelAPI], KindPanel]
+    pairs: tuple[Pair, ...] = ()  # the colours its arena tells apart, each with a second cue (tests/test_palette.py)
 
     def check(self, scenario: Scenario) -> Scenario:
         """``scenario`` if this kind shows it, else :class:`PresetError` saying why not."""
