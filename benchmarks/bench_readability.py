@@ -262,9 +262,10 @@ out = {
     "Mai: low error / high error": [[int(v) for v in layers.ERR_LOW], [int(v) for v in layers.ERR_HIGH]],
   },
   "map": [[int(v) for v in c] for c in HeatScale.rgb(np.linspace(0, 1, 33))],
-  "on_map": {"A's robots": get(swarm, "ROBOT", "RED") or [220, 50, 50], "B's robots": get(layers, "TWIN"),
-             "A's trail": get(swarm, "TRAIL") or [110, 150, 255], "B's trail": get(layers, "TWIN_TRAIL")},
-  "outlined": sorted(getattr(layers, "OUTLINED", ())),
+  "on_map": {"A's robots": get(layers, "OUTLINE") or get(swarm, "ROBOT"),  # an outline, where the tree draws one
+             "B's robots": get(layers, "OUTLINE") or get(layers, "TWIN"),
+             "A's trail": get(swarm, "TRAIL"), "B's trail": get(layers, "TWIN_TRAIL")},
+  "outlined": hasattr(layers, "OUTLINE"),
 }
 print(json.dumps(out))
 """

@@ -52,7 +52,7 @@ Act = Callable[[PanelAPI, Any], None]
 
 
 class Host(PanelAPI, Protocol):
-    """What the shared sections (the Replay folder, the Compare tab) ask of the panel."""
+    """What the shared sections (the Replay folder, the Compare folder) ask of the panel."""
 
     gui: Any
     tabs: Any
