@@ -300,6 +300,18 @@ def test_every_number_an_answer_quotes_agrees_with_the_reading(lesson_id, index)
         assert quotes.holds(quotes.claim(words), r.value), f"{where}: {words!r} but the screen reads {r.shown}"
 
 
+PLAY_SECONDS = 60.0  # a step's run reaches its check's last step within this at the speed its Set up sets
+
+
+@pytest.mark.parametrize("lesson_id, index", CHECKED)
+def test_set_up_sets_a_speed_at_which_the_step_is_played_in_a_minute(lesson_id, index):
+    (preset, values), check = readings.step_check(LESSONS[lesson_id], index)
+    speed = load_scene(preset, values).view.steps_per_second
+    seconds = check.steps / speed
+    assert seconds <= PLAY_SECONDS, (f"{lesson_id}.md, step {index + 1}: {check.steps} steps at {speed:g} steps/s "
+                                     f"take {seconds:.0f} s: set view.steps_per_second")
+
+
 def test_the_answers_quote_their_readings():
     """Most steps' answers quote a number their check reads, and those numbers are tied to it."""
     quoted = [(lid, i) for lid, i in CHECKED if readings.step_check(LESSONS[lid], i)[1].quote]
