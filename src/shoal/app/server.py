@@ -36,6 +36,7 @@ from .session.upload import MAX_UPLOAD_BYTES
 from .tab import TabApp
 from .upload_guard import guard_uploads
 from .view.camera import home_camera, top_view
+from .pace import paced
 from .view.page import install_page
 from .view.projector import BRAND
 from .warmup import WARMUP
@@ -286,6 +287,8 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
     port beyond 0–65535 and :class:`SchedulerError` when the cluster cannot be reached.
     """
     scenario = check_supported(presets_io.load(preset))
+    if preset in presets_io.list_presets():  # a shipped scene opens at a speed one can watch (a file keeps its own)
+        scenario = paced(scenario)
     if not 0 <= port <= MAX_PORT:
         raise ValueError(f"--port {port}: a port is a whole number from 0 to {MAX_PORT}")
     if (why := _cannot_listen(host, port)) is not None:  # before viser starts: it would wait for ever

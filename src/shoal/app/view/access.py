@@ -20,6 +20,8 @@ import re
 import time
 from typing import Any
 
+from .script import run_script
+
 ANNOUNCE_SECONDS = 20.0  # the status read out at most this often while nothing changes in kind
 TITLE = "Shoal · {name}"
 
@@ -116,8 +118,6 @@ class Announcer:
         self.title = ""
 
     def _run(self, source: str) -> None:
-        from .page import run_script
-
         run_script(self.api, source)
 
     def status(self, markdown: str) -> bool:

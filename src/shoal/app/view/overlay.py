@@ -14,6 +14,8 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from .script import run_script
+
 LABEL_PX = 13.0  # a label of scale 1 (viser's screen labels are 12 px × their scale)
 
 OVERLAY_JS = """
@@ -105,8 +107,6 @@ class Labels:
         self.api = api
 
     def _run(self, source: str) -> None:
-        from .page import run_script
-
         run_script(self.api, source)
 
     def put(self, name: str, text: str | None = None, anchor: str | None = None, scale: float | None = None,

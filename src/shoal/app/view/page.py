@@ -30,7 +30,10 @@ import contextlib
 import json
 from typing import Any
 
-from viser import _messages
+from .access import access_script
+from .overlay import overlay_script
+from .projector import projector_script
+from .script import run_script
 
 LIGHT_LABEL = "light drawing"  # the Display box the script ticks …
 SHOW_BOXES = "Display"  # … after showing the boxes with the view row's button
@@ -179,18 +182,9 @@ def page_script() -> str:
                       "toast": json.dumps(SOFTWARE_TOAST), "light_dpr": json.dumps(LIGHT_DPR)}
 
 
-def run_script(gui: Any, source: str) -> None:
-    """Run ``source`` in the page of ``gui`` (a client's ``GuiApi`` or ``SceneApi``)."""
-    gui._websock_interface.queue_message(_messages.RunJavascriptMessage(source=source))
-
-
 def install_page(gui: Any) -> None:
     """Send the page scripts to the page of ``gui`` (once per page; a second copy does nothing).
     Sent before the tab's panel, so that what the tab tells the page while it is built arrives."""
-    from .access import access_script
-    from .overlay import overlay_script
-    from .projector import projector_script
-
     run_script(gui, page_script())
     run_script(gui, projector_script())
     run_script(gui, overlay_script())

@@ -19,6 +19,8 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from .script import run_script
+
 SWITCH = "projector mode"  # the header's box; the page script finds it by this label
 PROJECTOR_SCALE = 2.0  # of every text of the page
 PARAM = "projector"  # ?projector=1 / ?projector=0
@@ -104,7 +106,5 @@ def projector_script() -> str:
 def set_projector(gui: Any, on: bool, remember: bool) -> None:
     """Tell the page that projector mode is ``on`` (``remember``: a user's choice, kept for the
     browser and written into the address)."""
-    from .page import run_script
-
     run_script(gui, f"window.__shoalPage && window.__shoalPage.setProjector && "
                     f"window.__shoalPage.setProjector({json.dumps(bool(on))}, {json.dumps(bool(remember))});")
