@@ -29,6 +29,7 @@ from .kinds.registry import check_supported, session_for
 from .message_guard import install_message_guard, quiet_handler_errors
 from .native_memory import keep_large_blocks_returnable
 from .origin_guard import OriginPolicy, guarded_viser, is_loopback
+from .pace import paced
 from .panel.keys import install_keys
 from .replay import MAX_REPLAY_BYTES
 from .session.session import Session
@@ -36,7 +37,6 @@ from .session.upload import MAX_UPLOAD_BYTES
 from .tab import TabApp
 from .upload_guard import guard_uploads
 from .view.camera import home_camera, top_view
-from .pace import paced
 from .view.page import install_page
 from .view.projector import BRAND
 from .warmup import WARMUP
