@@ -43,8 +43,8 @@ from ..session.snapshot import Snapshot
 from ..view import palette, shapes
 from ..view.canvas import Canvas
 from ..view.layers import (
-    ERR_HIGH,
-    ERR_LOW,
+    ERR_LARGE,
+    ERR_SMALL,
     GHOST,
     OUTLINE,
     TRAIL_A,
@@ -512,8 +512,8 @@ def refuse(scenario: Scenario) -> None:
 
 
 PAIRS = compare_pairs(ROBOT, TRAIL) + (
-    palette.Pair("a belief's error: small / large", palette.Cue(tuple(int(v) for v in ERR_LOW), "—", width=1.5),
-                 palette.Cue(tuple(int(v) for v in ERR_HIGH), "━", width=3.5)),
+    palette.Pair("a belief's error: small / large", palette.Cue(ERR_SMALL, "—", width=1.5),
+                 palette.Cue(ERR_LARGE, "━", width=3.5)),
     palette.Pair("a robot / where the observer believes it is", palette.Cue(ROBOT, "●", shape="circle"),
                  palette.Cue(GHOST, "◆", shape="diamond")),)
 KIND = AppKind(name="mai", title="Mai's SLO swarm", engine="slo_swarm", refuse=refuse,

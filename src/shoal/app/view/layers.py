@@ -37,8 +37,9 @@ TRAIL_A = (160, 40, 40)  # A's trails, every kind: dark enough for the heat map 
 OUTLINE = (30, 30, 30)  # round the robots of a scene with a heat map: 3:1 against every colour of it
 GHOST = (60, 110, 230)
 GHOST_BEST = (30, 80, 220)
-ERR_LOW = np.array([40, 110, 220], float)  # a belief's error: blue when small …
-ERR_HIGH = np.array([220, 90, 0], float)  # … orange when large (and drawn thicker: its second cue)
+ERR_SMALL: Colour = (40, 110, 220)  # a belief's error: blue when small …
+ERR_LARGE: Colour = (220, 90, 0)  # … orange when large (and drawn thicker: its second cue)
+ERR_LOW, ERR_HIGH = np.array(ERR_SMALL, float), np.array(ERR_LARGE, float)
 EMPTY_POINTS = np.zeros((0, 2))
 TRAIL_DOTS = 16  # dots a trail at most, in the light drawing …
 TRAIL_DOT_BUDGET = 4000  # … and all trails together at most (1000 robots: 4 dots each), 2 a trail at least
@@ -420,8 +421,7 @@ class Ghosts(Static):
     name = "ghosts"
     keys = ("ghost_errors", "ghost_errors_large", "ghosts", "ghost_best", "ghost_best_error")
     legend = (LegendEntry("◆", GHOST, "believed position"),
-              LegendEntry("—", tuple(int(v) for v in ERR_LOW), "belief error: small"),  # type: ignore[arg-type]
-              LegendEntry("━", tuple(int(v) for v in ERR_HIGH), "large"),  # type: ignore[arg-type]
+              LegendEntry("—", ERR_SMALL, "belief error: small"), LegendEntry("━", ERR_LARGE, "large"),
               LegendEntry("◆", GHOST_BEST, "believed global best"))
 
     def __init__(self, size: Size, z: tuple[float, float] = (0.004, 0.008)) -> None:

@@ -59,7 +59,7 @@ def interpreted(fn: Callable) -> bool:
     return _deferred.is_set() and not getattr(fn, "overloads", True) and not getattr(_here, "compiles", False)
 
 
-class Kernel(CPUDispatcher):  # type: ignore[misc]  # (numba's dispatcher has no type hints)
+class Kernel(CPUDispatcher):
     """numba's dispatcher, which runs its Python function while compiling is deferred and nothing
     is compiled yet (:func:`defer`); a compiled kernel calling it calls the compiled one."""
 
