@@ -9,7 +9,9 @@ viser passes no page events to Python, but it runs a script the server sends
 - renders the arena at half its pixels in the light drawing (:func:`set_light`);
 - ticks the *light drawing* box once, when WebGL draws in software (a renderer named SwiftShader,
   llvmpipe, softpipe or "software": the test of viser's own warning), through the box itself, the
-  path of a user's click (the view row's *Display* button shows the boxes a moment for it);
+  path of a user's click (the view row's *Display* button shows the boxes a moment for it), in
+  each tab once it is in view, and without pressing the button again while its answer is on its
+  way (a second tab of a loaded server once hid the boxes it had asked for);
 - closes viser's "Software WebGL rendering detected" toast whenever it shows (it covered the top
   left of the arena on every load): the status area names the light drawing instead;
 - scales the page's text (:func:`set_text_scale`: Mantine's ``--mantine-scale``) for a projector.
@@ -125,20 +127,30 @@ PAGE_JS = """
     return l && document.getElementById(l.getAttribute("for"));
   };
   const button = (name) => [...document.querySelectorAll("button")].find((b) => b.textContent.trim() === name);
+  // Each tab decides for itself, once it is in view (a tab opened behind another draws nothing
+  // yet): the boxes are shown with the view row's button, the light drawing ticked, the boxes
+  // hidden again. A loaded server may take seconds to show them: the button is pressed again
+  // only after SHOW_WAIT (pressing it sooner would hide the boxes it asked for).
   P.report = () => {
-    if (P.reported) return;
+    if (P.reported || document.visibilityState === "hidden") return;
     if (P.renderer === undefined) P.renderer = renderer();
     if (!SOFTWARE.test(P.renderer)) { P.reported = true; return; }
     const b = box(LIGHT);
-    if (!b) {  // the boxes hide behind the view row's button: show them a moment (again if nothing came)
+    if (!b) {  // the boxes hide behind the view row's button: show them a moment
       const d = button(SHOW);
-      if (d && (!P.shownAt || Date.now() - P.shownAt > 4000)) { d.click(); P.shownAt = Date.now(); }
+      if (d && (!P.shownAt || Date.now() - P.shownAt > %(show_wait)s)) { d.click(); P.shownAt = Date.now(); }
       return;
     }
-    P.reported = true;
-    if (!b.checked) b.click();
-    if (P.shownAt) { const d = button(SHOW); if (d) d.click(); }  // and hide them again
+    if (!b.checked) {
+      if (P.tickedAt && Date.now() - P.tickedAt < %(show_wait)s) return;  // (its tick on its way)
+      b.click();
+      P.tickedAt = Date.now();
+      return;
+    }
+    P.reported = true;  // ticked: hide the boxes again if they were shown for it
+    if (P.shownAt) { const d = button(SHOW); if (d) d.click(); }
   };
+  document.addEventListener("visibilitychange", () => P.report());
   const dropToast = () => {
     for (const n of document.querySelectorAll(".mantine-Notification-root")) {
       if (!n.textContent.includes(TOAST)) continue;
@@ -177,9 +189,13 @@ PAGE_JS = """
 """
 
 
+SHOW_WAIT_MS = 15000  # the page presses Display or ticks the box again only after this long without an answer
+
+
 def page_script() -> str:
     return PAGE_JS % {"light": json.dumps(LIGHT_LABEL), "show": json.dumps(SHOW_BOXES),
-                      "toast": json.dumps(SOFTWARE_TOAST), "light_dpr": json.dumps(LIGHT_DPR)}
+                      "toast": json.dumps(SOFTWARE_TOAST), "light_dpr": json.dumps(LIGHT_DPR),
+                      "show_wait": SHOW_WAIT_MS}
 
 
 def install_page(gui: Any) -> None:

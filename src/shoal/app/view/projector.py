@@ -42,6 +42,9 @@ html.shoal-projector { --shoal-k: %(scale)s; }
 .mantine-Slider-markLabel { transform: translate(-50%%, 0.1rem) !important; }
 .mantine-Tooltip-tooltip { font-size: calc(%(min)spx * var(--mantine-scale)) !important; }
 .shoal-legend { font-size: calc(%(min)spx * var(--shoal-k)); line-height: 1.45; }
+.mantine-Notification-description { color: %(dimmed)s !important; }
+.u-legend { font-size: calc(%(min)spx * var(--shoal-k)) !important; }
+.u-title { font-size: calc(14px * var(--shoal-k)) !important; }
 .shoal-note { font-size: calc(%(min)spx * var(--shoal-k)); }
 /* a stray click on the strip above a docked panel no longer folds it away: only its chevron does */
 [data-dock-region-handle], [data-dock-column-handle] { pointer-events: none; }
