@@ -105,41 +105,6 @@ for line in sys.stdin:
 server.stop()
 """
 
-# Fonts the page's plots draw with (uPlot draws its axes on a canvas of its own): every
-# fillText on a canvas in the document, the fonts since the canvas was last cleared whole.
-CANVAS_FONTS = """
-(() => {
-  const fonts = new WeakMap();
-  const clear = CanvasRenderingContext2D.prototype.clearRect;
-  CanvasRenderingContext2D.prototype.clearRect = function (x, y, w, h) {
-    if (x <= 0 && y <= 0 && w >= this.canvas.width && h >= this.canvas.height) fonts.set(this.canvas, new Map());
-    return clear.apply(this, arguments);
-  };
-  const fill = CanvasRenderingContext2D.prototype.fillText;
-  CanvasRenderingContext2D.prototype.fillText = function (text) {
-    let m = fonts.get(this.canvas);
-    if (!m) { m = new Map(); fonts.set(this.canvas, m); }
-    if (String(text).trim()) m.set(this.font + "|" + String(text).slice(0, 20), this.font);
-    return fill.apply(this, arguments);
-  };
-  window.__shoalCanvasFonts = () => {
-    const out = [];
-    for (const c of document.querySelectorAll("canvas")) {
-      const m = fonts.get(c);
-      const r = c.getBoundingClientRect();
-      if (!m || r.width < 2 || r.bottom < 0 || r.top > innerHeight || r.right < 0 || r.left > innerWidth) continue;
-      const s = getComputedStyle(c);
-      if (s.visibility !== "visible" || !c.offsetParent) continue;
-      const scale = r.width / c.width;  // canvas pixels → CSS pixels
-      for (const [key, font] of m) {
-        const px = font.match(/([\\d.]+)px/);
-        if (px) out.push({text: key.split("|")[1], size: parseFloat(px[1]) * scale});
-      }
-    }
-    return out;
-  };
-})();
-"""
 
 
 class Child:
@@ -211,7 +176,7 @@ def walk(pkg: Path, label: str, presets: list[str], viewports: list[str], playwr
                 w, h = (int(v) for v in viewports[0].split("x"))
                 page = browser.new_page(viewport={"width": w, "height": h})
                 page.add_init_script(ARENA_IN_VIEW)
-                page.add_init_script(CANVAS_FONTS)
+                page.add_init_script(readability.CANVAS_FONTS)
                 query = "?projector=1" if mode == "projector" and projector else ""
                 page.goto(f"http://127.0.0.1:{child.port}/{query}")
                 page.wait_for_selector("label:has-text('robots')", timeout=180_000)

@@ -94,6 +94,49 @@ TEXT_JS = r"""
 })()
 """
 
+# Fonts the page's plots draw with (uPlot draws its axes on a canvas of its own): every
+# fillText on a canvas in the document, the fonts since the canvas was last cleared whole.
+CANVAS_FONTS = """
+(() => {
+  const fonts = new WeakMap();
+  const clear = CanvasRenderingContext2D.prototype.clearRect;
+  CanvasRenderingContext2D.prototype.clearRect = function (x, y, w, h) {
+    if (x <= 0 && y <= 0 && w >= this.canvas.width && h >= this.canvas.height) fonts.set(this.canvas, new Map());
+    return clear.apply(this, arguments);
+  };
+  const fill = CanvasRenderingContext2D.prototype.fillText;
+  CanvasRenderingContext2D.prototype.fillText = function (text) {
+    let m = fonts.get(this.canvas);
+    if (!m) { m = new Map(); fonts.set(this.canvas, m); }
+    if (String(text).trim()) m.set(this.font + "|" + String(text).slice(0, 20), this.font);
+    return fill.apply(this, arguments);
+  };
+  window.__shoalCanvasFonts = () => {
+    const out = [];
+    for (const c of document.querySelectorAll("canvas")) {
+      const m = fonts.get(c);
+      const r = c.getBoundingClientRect();
+      if (!m || r.width < 2 || r.bottom < 0 || r.top > innerHeight || r.right < 0 || r.left > innerWidth) continue;
+      const s = getComputedStyle(c);
+      if (s.visibility !== "visible" || !c.offsetParent) continue;
+      const scale = r.width / c.width;  // canvas pixels → CSS pixels
+      for (const [key, font] of m) {
+        const px = font.match(/([\\d.]+)px/);
+        if (px) out.push({text: key.split("|")[1], size: parseFloat(px[1]) * scale});
+      }
+    }
+    return out;
+  };
+})();
+"""
+
+
+def canvas_texts(page: Any) -> list[dict]:
+    """Text the page drew into its canvases since each was last cleared whole (:data:`CANVAS_FONTS`,
+    installed before the page loaded): text and size in CSS pixels."""
+    return page.evaluate("window.__shoalCanvasFonts ? window.__shoalCanvasFonts() : []")
+
+
 CONTROL_ROLES = ("button", "checkbox", "combobox", "slider", "spinbutton", "textbox", "switch", "radio", "tab",
                  "listbox", "searchbox", "menuitem")
 _LINE = re.compile(r"^\s*-\s+(?P<role>[a-z]+)(?P<rest>.*)$")

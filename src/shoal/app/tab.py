@@ -27,6 +27,7 @@ from . import share
 from .experiment.service import ExperimentService
 from .kinds.registry import app_kind, app_presets, kind_for, session_for
 from .lessons.panel import LessonProgress
+from .panel.board import Board
 from .panel.panel import Panel, Services
 from .panel.view_row import DISPLAY, Display
 from .preset_menu import PresetMenu
@@ -45,6 +46,13 @@ def share_page(session: Session) -> bytes:
         return share.session_html(session)
     except share.Busy as err:
         raise PresetError(err.messages) from None
+
+
+def _board(gui: Any) -> Board | None:
+    try:
+        return Board(gui)
+    except AttributeError:  # a GUI without panels
+        return None
 
 
 class TabApp:
@@ -88,6 +96,7 @@ class TabApp:
         self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
         self.menu = PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included, across swaps
         self.display = Display(projector=projector)  # how the arena is drawn, across swaps
+        self.board = _board(gui)  # the main plot and the legend beside the arena, across swaps
         self._page = Display()  # what the page was last told (flat camera, text scale)
         self._aspect: float | None = None  # the arena's width / height at the camera's last report
         self._window_height: float | None = None  # px, the arena's (the window's) at the camera's last report
@@ -103,7 +112,7 @@ class TabApp:
         services = Services(notify=self.notify, send_file=self.send_file, menu=self.menu, make_session=session_for,
                             replace=self.replace, share=share_page, lessons=self.lesson_progress,
                             experiments=self.experiments, owner=self.owner, view=self.view_action,
-                            display=self.display, veil=self._veil)
+                            display=self.display, veil=self._veil, board=self.board)
         self.panels = Panel(self.gui, self.session, kind, services)
         self.arena = kind.view(self.scene, self.panels.part, labels=self._labels())
         self._show_display()

@@ -45,8 +45,7 @@ def text_scaled(fig: go.Figure, scale: float) -> go.Figure:
         for note in out.layout.annotations:
             note.font.size = want
         m = _MARGIN
-        out.layout.margin = dict(l=round(m["l"] * scale), r=m["r"], t=round(m["t"] * scale), b=round(m["b"] * scale))
-        out.layout.xaxis.automargin = out.layout.yaxis.automargin = True  # axis titles push the plot in
+        out.layout.margin.update(l=round(m["l"] * scale), t=round(m["t"] * scale), b=round(m["b"] * scale))
     return out
 
 
@@ -132,6 +131,9 @@ def stability_figure(omega: float, c_hat: float, *, adapted: bool, n: int = 201)
     )
     fig.update_xaxes(range=[-1.05, 1.25], autorange=False, zeroline=True)
     fig.update_yaxes(range=[0, top], autorange=False)
+    # everything sits inside its margins, which never grow: no redraw of plotly's own after its first
+    # (one still under way as the figure leaves the page, at a swap of scenes, was an error in the page)
+    fig.update_layout(margin=dict(autoexpand=False))
     return fig
 
 

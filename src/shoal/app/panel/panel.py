@@ -97,6 +97,7 @@ class Services:
     view: Callable[[str], None] | None = None  # the arena's view buttons: "fit", "follow" or "display"
     veil: Callable[[str | None], None] | None = None  # marks the arena as the old scene's while another is built
     display: Display | None = None  # how the tab's arena is drawn (the tab keeps it: it outlives a swap of panels)
+    board: Board | None = None  # the panel beside the arena (the tab keeps it; None: the panel makes its own)
 
 
 def notes_text(name: str = "ch3") -> str:
@@ -232,18 +233,21 @@ class Panel:
         return walk([*self.part.folders, *(i for tab in self.part.tabs for i in tab.items)]) if key else None
 
     def _build_board(self) -> tuple[Board | None, Any]:
-        """The board beside the arena (the main plot, the legend); None where the GUI has no panels."""
+        """The main plot and the legend on the board beside the arena (the tab's, else one of
+        this panel's own); None where the GUI has no panels."""
         self.board_legend: Any = None
         item = self._find(self.main_key)
-        title = getattr(item, "title", "") or "legend"
-        try:
-            board = Board(self.gui, title)
-        except AttributeError:  # a GUI without panels: the legend stays under the view row
-            return None, None
-        self.top.append(board)
+        board = self.services.board
+        if board is None:
+            try:
+                board = Board(self.gui)
+            except AttributeError:  # a GUI without panels: the legend stays under the view row
+                return None, None
+            self.top.append(board)
         with board:
             plot = self._build(item) if item is not None else None
             self.board_legend = self.gui.add_markdown("")
+        self.top += [h for h in (plot, self.board_legend) if h is not None]
         self._skip = item
         return board, plot
 
@@ -256,8 +260,9 @@ class Panel:
         h = self.board_plot
         if h is not None:
             width = (panel_width or 768.0) - 40 if projector else WIDTH - 24
-            tall = plot_height(projector, window_height, width)
-            aspect = 1.0 / tall if isinstance(self.control_of(h), (PlotSpec, Chart)) else tall  # uPlot: w/h
+            time_plot = isinstance(self.control_of(h), (PlotSpec, Chart))
+            tall = plot_height(projector, window_height, width, "time" if time_plot else "figure")
+            aspect = 1.0 / tall if time_plot else tall  # (uPlot's aspect is width / height, plotly's the inverse)
             if abs(float(h.aspect) - aspect) > 1e-3:
                 h.aspect = aspect
 
@@ -614,12 +619,17 @@ class Panel:
             self._building(None)
 
     def _building(self, text: str | None) -> None:
-        """Say that another scene is being built (``text``), or that this one is shown again (None)."""
+        """Say that another scene is being built (``text``), or that this one is shown again (None).
+        The board's plot goes at once too: taken off the page in the same batch as the new one
+        arrives, plotly re-laid it out as it went (an error in the page)."""
         if self.services.veil is not None:
             self.services.veil(text)
         if self.removed:
             return
         self.tabs.visible = text is None
+        for h in (self.board_plot, self.board_legend):
+            if h is not None:
+                h.visible = text is None
         if text is not None:
             self.view_gui.show_legend(())
 

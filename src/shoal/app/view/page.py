@@ -14,6 +14,8 @@ viser passes no page events to Python, but it runs a script the server sends
   way (a second tab of a loaded server once hid the boxes it had asked for);
 - closes viser's "Software WebGL rendering detected" toast whenever it shows (it covered the top
   left of the arena on every load): the status area names the light drawing instead;
+- lays a plotly figure out only once it has a size and purges one that left the page only a while
+  later (plotly's work on a figure still under way as viser purged it was an error in the page);
 - scales the page's text (:func:`set_text_scale`: Mantine's ``--mantine-scale``) for a projector.
 
 :func:`install_page` sends three more with it, one concept each: the style sheet and the projector
@@ -158,6 +160,27 @@ PAGE_JS = """
       if (x) x.click(); else n.remove();
     }
   };
+  // viser lays out every plotly figure it holds, also those of a hidden tab at width 0, and
+  // purges a figure the moment it leaves the page; plotly's own work on it may still be under way
+  // then (a swap of panels), and finding the figure purged it threw (an error in the page). So a
+  // figure without a size is drawn once it has one, and a figure that left is purged a while later.
+  const guard = (Pl) => {
+    if (!Pl || Pl.__shoal) return Pl;
+    const react = Pl.react, purge = Pl.purge;
+    Pl.react = function (gd, data, layout) {
+      if (layout && (!layout.width || !layout.height)) return Promise.resolve(gd);
+      return react.apply(this, arguments);
+    };
+    Pl.purge = function (gd) { setTimeout(() => purge.call(Pl, gd), 10000); return gd; };
+    Pl.__shoal = true;
+    return Pl;
+  };
+  if (window.Plotly) guard(window.Plotly);
+  else {  // (viser sends plotly's bundle after this script: it sets window.Plotly)
+    let real;
+    Object.defineProperty(window, "Plotly", {configurable: true, enumerable: true, get: () => real,
+                                             set: (v) => { real = guard(v); }});
+  }
   new MutationObserver(dropToast).observe(document.body, {childList: true, subtree: true});
   dropToast();
   P.text = (scale) => document.documentElement.style.setProperty("--mantine-scale", String(scale));
