@@ -197,3 +197,17 @@ def test_the_command_exits_with_its_code_without_waiting_for_a_warmup_still_comp
     bad = subprocess.run([sys.executable, "-c", ENTRY_WHILE_COMPILING.replace('"list"', '"show", "nope"')],
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode != 0 and "nope" in bad.stderr
+
+
+def test_a_warmup_elsewhere_compiles_in_a_child_into_the_disk_cache_and_counts_its_progress(tmp_path, monkeypatch):
+    """``shoal serve``'s warm-up compiles in a child process (the server's own thread held the
+    interpreter's lock for most of a minute): the child writes the kernels into the cache this
+    process reads, each preset counted as it is done; a stopped warm-up compiles nothing more."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    w = Warmup()
+    assert w._compile_elsewhere(["slo-walk"])
+    assert w.done == 1 and w.revision == 1 and w._child is None
+    assert any(tmp_path.rglob("*.nbi")) and any(tmp_path.rglob("*.nbc"))  # numba's index and machine code
+    w.stop()
+    w.run(only="slo", elsewhere=True)
+    assert not w.ready["slo"].is_set() and w.done == 1  # (stopped: nothing more)

@@ -302,7 +302,7 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
         server.stop()
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
     if warm_up:
-        WARMUP.start(scenario)  # the page is up: compile the kernels behind it, this scene's first
+        WARMUP.start(scenario, elsewhere=True)  # the page is up: compile the kernels behind it, this scene's first
     return server
 
 
@@ -330,3 +330,4 @@ def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
         print("\nstopping", flush=True)
     finally:
         server.stop()
+        WARMUP.stop()  # (a child still compiling the kernels ends with the server)
