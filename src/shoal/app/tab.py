@@ -102,10 +102,12 @@ class TabApp:
         self._window_height: float | None = None  # px, the arena's (the window's) at the camera's last report
         self.announcer = Announcer(gui) if camera is not None else None  # status read out, the page's title
         self.play_at: float | None = None  # play then, or at the page's first camera report (play_when_drawn)
+        self._untouched: tuple[Any, int] | None = None  # (session, revision) when that was asked
+        self._reported = False  # the page has reported its camera (it has drawn)
         with self._ticking:
             self._build_kind()
         if camera is not None:
-            camera.on_update(self._camera_moved)
+            camera.on_update(self._camera_report)
 
     def _build_kind(self) -> None:
         kind = app_kind(self.session)
@@ -226,13 +228,27 @@ class TabApp:
 
     def play_when_drawn(self, within: float) -> None:
         """Start playing at the page's first camera report (its first frame is drawn), or after
-        ``within`` seconds whatever comes: the first view starts at step 0."""
-        self.play_at = time.monotonic() + within
+        ``within`` seconds whatever comes: the first view starts at step 0. Nothing is played if
+        the user (or a lesson's Set up) has touched the scene meanwhile."""
+        self._untouched = (self.session, self.session.revision)
+        if self._reported:  # (the page's first report came already)
+            self._play_first()
+        else:
+            self.play_at = time.monotonic() + within
+
+    def _play_first(self) -> None:
+        self.play_at = None
+        if self._untouched == (self.session, self.session.revision):
+            self.session.play()
+
+    def _camera_report(self, camera: Any) -> None:
+        """The page reported its camera: it has drawn (the first time), or the user moved it."""
+        self._reported = True
+        if self.play_at is not None:
+            self._play_first()
+        self._camera_moved(camera)
 
     def _camera_moved(self, camera: Any) -> None:
-        if self.play_at is not None:
-            self.play_at = None
-            self.session.play()
         with contextlib.suppress(Exception):  # no report yet, or a tab closing
             aspect = float(camera.aspect)
             resized = self._aspect is not None and abs(aspect - self._aspect) > 1e-3
@@ -303,8 +319,7 @@ class TabApp:
         if self._retired:
             self._remove_retired(time.monotonic())
         if self.play_at is not None and time.monotonic() >= self.play_at:  # no camera report came: play anyway
-            self.play_at = None
-            self.session.play()
+            self._play_first()
         s = self.session
         elapsed = 0.0 if self._last is None else max(0.0, now - self._last)
         self._last = now
