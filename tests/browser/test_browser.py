@@ -23,6 +23,7 @@ pytestmark = [
 sync_api = pytest.importorskip("playwright.sync_api")
 
 from shoal.app.kinds.swarm import ROBOT, ROBOT_SIZE  # noqa: E402
+from shoal.app.panel.board import TITLE as BOARD  # noqa: E402
 
 from browser_helpers import (  # noqa: E402
     ARGS,
@@ -39,7 +40,8 @@ from browser_helpers import (  # noqa: E402
     wait_until,
 )
 
-TAB_TOPS = ("[...new Set([...document.querySelectorAll('[role=tab]')]"
+TAB_TOPS = ("[...new Set([...document.querySelectorAll('[role=tab]')].filter(e => e.textContent.trim() !== "
+            f"{BOARD!r})"  # (the board beside the arena has a tab of its own)
             ".map(e => Math.round(e.getBoundingClientRect().top)))]")  # the tops of the tabs, measured in one go
 
 

@@ -253,7 +253,9 @@ class TabApp:
             aspect = float(camera.aspect)
             resized = self._aspect is not None and abs(aspect - self._aspect) > 1e-3
             self._aspect = aspect
-            height = float(camera.image_height)
+            # (the canvas' pixels, not CSS pixels: the light drawing renders half of them; a screen
+            # of two pixels a CSS pixel would count double, which the board's plot's cap absorbs)
+            height = float(camera.image_height) / (page.LIGHT_DPR if self.display.light else 1.0)
             if height > 0 and height != self._window_height:
                 self._window_height = height
                 self.panels.place(self.display.projector, height, page.PANEL_WIDTH * self.display.text_scale)

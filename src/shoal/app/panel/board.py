@@ -33,7 +33,7 @@ def plot_height(projector: bool, window_height: float | None, width: float, kind
     if not projector:
         return NORMAL_HEIGHT
     room = (window_height or 768.0) / 2 - CHROME[kind]
-    return min(0.6, max(0.15, room / max(width, 1.0)))
+    return min(0.5, max(0.15, room / max(width, 1.0)))
 
 
 class Board:

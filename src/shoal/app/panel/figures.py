@@ -35,7 +35,9 @@ def text_scaled(fig: go.Figure, scale: float) -> go.Figure:
     """``fig`` with every text at ``scale`` times its size (the title :data:`TITLE_PX`, the rest
     :data:`FONT_PX`); ``fig`` itself when it is already so, else a copy."""
     want = round(FONT_PX * scale)
-    if fig.layout.font.size == want and all(note.font.size in (None, want) for note in fig.layout.annotations):
+    long_title = scale > 1 and " = " in (fig.layout.yaxis.title.text or "")
+    if fig.layout.font.size == want and all(note.font.size in (None, want) for note in fig.layout.annotations) \
+            and not long_title:
         return fig
     out = go.Figure(fig)
     with out.batch_update():
@@ -46,6 +48,10 @@ def text_scaled(fig: go.Figure, scale: float) -> go.Figure:
             note.font.size = want
         m = _MARGIN
         out.layout.margin.update(l=round(m["l"] * scale), t=round(m["t"] * scale), b=round(m["b"] * scale))
+        title = out.layout.yaxis.title.text or ""
+        if scale > 1 and " = " in title:  # "ĉ = c1 + c2 [m/s]" → "ĉ [m/s]": a long axis title outgrows the axis
+            unit = title[title.index("["):] if "[" in title else ""
+            out.layout.yaxis.title.text = f"{title.split(' = ')[0]} {unit}".strip()
     return out
 
 
