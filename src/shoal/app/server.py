@@ -169,6 +169,8 @@ class ShoalServer:
             tab = self.tabs.pop(key, None)
         if tab is not None and not gone:
             tab.close()
+        elif tab is not None:
+            tab.gone()
 
     def _connect(self, client: viser.ClientHandle) -> None:
         if self._stopping.is_set():

@@ -104,6 +104,7 @@ class TabApp:
         self.play_at: float | None = None  # play then, or at the page's first camera report (play_when_drawn)
         self._untouched: tuple[Any, int] | None = None  # (session, revision) when that was asked
         self._reported = False  # the page has reported its camera (it has drawn)
+        self.closed = False  # the browser tab went away (close)
         with self._ticking:
             self._build_kind()
         if camera is not None:
@@ -186,7 +187,7 @@ class TabApp:
                 self._show_display(remember=True)
 
     def _veil(self, text: str | None) -> None:
-        if self.camera is not None:
+        if self.camera is not None and not self.closed:
             page.set_veil(self.gui, text)
 
     def set_projector(self, on: bool) -> None:
@@ -199,7 +200,7 @@ class TabApp:
         """Where the arena's labels go: HTML over the canvas of a browser's page (None: viser's labels)."""
         from .view.overlay import Labels
 
-        return Labels(self.scene) if self.camera is not None else None
+        return Labels(self.scene) if self.camera is not None and not self.closed else None
 
     def _show_display(self, remember: bool = False) -> None:
         """Draw the arena as ``display`` says, tell the page (held top view, text size, projector
@@ -272,8 +273,16 @@ class TabApp:
             with contextlib.suppress(Exception):  # a tab closing meanwhile
                 home_camera(self.camera, self.display.text_scale)
 
+    def gone(self) -> None:
+        """Its page is gone: send it no more scripts (a closed connection would only warn)."""
+        self.closed = True
+        self.announcer = None
+        self.arena.canvas.labels = None
+
     def close(self) -> None:
-        """The browser tab went away: stop listening to its scene and its experiment."""
+        """The browser tab went away: stop listening to its scene and its experiment, and stop
+        sending its page scripts (a closed connection would only warn)."""
+        self.gone()
         self.panels.detach()
         for cb in self._clicks:
             with contextlib.suppress(Exception):
