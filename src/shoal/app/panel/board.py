@@ -23,7 +23,7 @@ TITLE = "beside the arena"  # the board's tab (the plot carries its own title)
 NORMAL_HEIGHT = 0.87  # a plot's height / width on the board left of the arena
 # px of the projector board's height that are not its plot's drawing: its strip and tab, and a
 # time plot's title and legend (at twice their size; a plotly figure holds its own)
-CHROME = {"time": 250.0, "figure": 130.0}
+CHROME = {"time": 300.0, "figure": 170.0}
 
 
 def plot_height(projector: bool, window_height: float | None, width: float, kind: str = "time") -> float:
