@@ -15,7 +15,14 @@ serve`` has by default. This process holds the clients (``tests/viser_wire.py``)
 - **sweep**: runs the costliest experiment the server accepts (1000-robot swarms, 100 runs
   a cell, 10,000 steps) on the worker; and, where a version accepts it, the audit's
   ``sim.steps = 10000000, 9999999`` sweep;
-- **flood**: sends 20,000 values no control can hold, as fast as the socket takes them.
+- **flood**: sends 20,000 values no control can hold, as fast as the socket takes them;
+- (issue 30) **upload-d**: uploads a 2 KB preset of 2,000 robots in ``sim.d = 1000``, again and
+  again; **compare-d**: applies swarm B = A with ``sim.d = 1000, sim.robots = 1000``, again and
+  again; **sweep-d**: runs the Sweep tab's ``sim.d = 2, 500, 1000`` sweep of 2,000 robots;
+  **forest**: uploads a forest of 17,000 trees (width 1,000 m, density 0.5), again and again.
+  The hostile tab pauses its own scene first.
+  For these the server's resident memory is read too, at the end of the load and 10 s after
+  the hostile tab closed (``--rss``).
 
 Also, in this process: the time to refuse each of several 99 KiB hostile TOML texts
 (``parse_upload``, which bounds the text before ``tomllib``), and ``tomllib`` itself on them
@@ -51,7 +58,7 @@ print("PORT", srv.port, flush=True)
 sys.stdin.read()
 srv.stop()
 """
-SCENARIOS = ("idle", "upload", "replay", "sweep", "sweep-steps", "flood")
+SCENARIOS = ("idle", "upload", "replay", "sweep", "sweep-steps", "flood", "upload-d", "compare-d", "sweep-d", "forest")
 MEMORY_CAP = 4 * 2**30  # address space of the child that runs tomllib alone (the machine is shared)
 
 
@@ -201,6 +208,55 @@ def load_sweep_steps(c: Any, stop: threading.Event) -> None:
     stop.wait()
 
 
+def _preset(sets: list[str]) -> bytes:
+    from shoal.presets.io import load, to_toml
+
+    return to_toml(load("forest-dvc" if any(s.startswith("world.") for s in sets) else "default", sets)).encode()
+
+
+def _pause(c: Any) -> None:
+    """The hostile tab's own scene paused: only what it asks of the server counts."""
+    c.set_value("playback", "Pause")
+    time.sleep(0.5)
+
+
+def _uploads(c: Any, stop: threading.Event, data: bytes) -> None:
+    _pause(c)
+    while not stop.is_set():
+        n = len(c.notifications())
+        c.upload("Upload preset", "hostile.toml", data)
+        end = time.monotonic() + 20  # (an accepted one says nothing: upload it again after a while)
+        while len(c.notifications()) == n and not stop.is_set() and time.monotonic() < end:
+            time.sleep(0.02)
+
+
+def load_upload_d(c: Any, stop: threading.Event) -> None:
+    _uploads(c, stop, _preset(["sim.robots=2000", "sim.d=1000"]))
+
+
+def load_forest(c: Any, stop: threading.Event) -> None:
+    _uploads(c, stop, _preset(["world.width=1000", "world.density=0.5"]))
+
+
+def load_compare_d(c: Any, stop: threading.Event) -> None:
+    _pause(c)
+    c.set_value("B overrides", "sim.d = 1000\nsim.robots = 1000")
+    while not stop.is_set():
+        n = len(c.notifications())
+        c.set_value("Apply to B", True)
+        end = time.monotonic() + 20
+        while len(c.notifications()) == n and not stop.is_set() and time.monotonic() < end:
+            time.sleep(0.02)
+
+
+def load_sweep_d(c: Any, stop: threading.Event) -> None:
+    _pause(c)
+    c.set_value("robots", 2000)
+    time.sleep(1.0)
+    _experiment(c, "sim.d", "2, 500, 1000", 10, 1000)
+    stop.wait()
+
+
 def load_flood(c: Any, stop: threading.Event) -> None:
     from viser import _messages
 
@@ -212,11 +268,18 @@ def load_flood(c: Any, stop: threading.Event) -> None:
     stop.wait()
 
 
-def measure(src: Path, seconds: float, only: tuple[str, ...], replay_bytes: bytes) -> dict[str, float]:
+def rss_mb(server: Server) -> float:
+    import psutil
+
+    return psutil.Process(server.proc.pid).memory_info().rss / 2**20
+
+
+def measure(src: Path, seconds: float, only: tuple[str, ...], replay_bytes: bytes) -> dict[str, Any]:
     loads: dict[str, Callable[..., None]] = {
         "upload": load_upload, "replay": lambda c, s: load_replay(c, s, replay_bytes), "sweep": load_sweep,
-        "sweep-steps": load_sweep_steps, "flood": load_flood}
-    out = {}
+        "sweep-steps": load_sweep_steps, "flood": load_flood, "upload-d": load_upload_d, "compare-d": load_compare_d,
+        "sweep-d": load_sweep_d, "forest": load_forest}
+    out: dict[str, Any] = {}
     for name in only:
         server = Server(src)
         observer = tab(server.port)
@@ -229,12 +292,16 @@ def measure(src: Path, seconds: float, only: tuple[str, ...], replay_bytes: byte
                 out[name] = rate(observer, seconds)
                 continue
             hostile, stop = tab(server.port), threading.Event()
+            before = rss_mb(server)
             worker = threading.Thread(target=loads[name], args=(hostile, stop), daemon=True)
             worker.start()
-            time.sleep(2.0 if name in ("sweep", "sweep-steps") else 0.5)  # the load is on
+            time.sleep(2.0 if name in ("sweep", "sweep-steps", "sweep-d") else 0.5)  # the load is on
             out[name] = rate(observer, seconds)
+            loaded = rss_mb(server)
             stop.set()
             hostile.ws.close()
+            time.sleep(10.0)
+            out[f"{name}:rss"] = (before, loaded, rss_mb(server))
         finally:
             observer.ws.close()
             server.stop()
@@ -253,11 +320,13 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=10.0)
     ap.add_argument("--parse-limit", type=float, default=60.0, help="s tomllib may take on a hostile text")
     ap.add_argument("--only", nargs="*", default=list(SCENARIOS), choices=SCENARIOS)
+    ap.add_argument("--no-parse", action="store_true", help="skip the tomllib timings")
     args = ap.parse_args()
     print(f"# bench_hostile ({load_note()})\n")
-    print("## A 99 KiB hostile preset: refused before tomllib (this version), tomllib alone (the previous path)\n")
-    print(table(["text", "size", "refused in", "verdict", "tomllib alone"], time_bounds(hostile_toml(),
-                                                                                          args.parse_limit)))
+    if not args.no_parse:
+        print("## A 99 KiB hostile preset: refused before tomllib (this version), tomllib alone (the previous path)\n")
+        print(table(["text", "size", "refused in", "verdict", "tomllib alone"], time_bounds(hostile_toml(),
+                                                                                              args.parse_limit)))
     only = tuple(dict.fromkeys(["idle", *args.only]))
     replay_bytes = big_replay()
     with tempfile.TemporaryDirectory() as tmp:
@@ -274,6 +343,10 @@ def main() -> None:
         rows.append(row)
     heads = ["load"] + [h for v in versions for h in (f"{v}: updates/s", f"{v}: of idle")]
     print(table(heads, rows))
+    rows = [[name] + [" → ".join(f"{m:,.0f}" for m in results[v][f"{name}:rss"]) for v in versions]
+            for name in only if any(f"{name}:rss" in results[v] for v in versions)]
+    print("\n## The server's resident memory (MiB): before the load → at its end → 10 s after its tab closed\n")
+    print(table(["load", *versions], rows))
 
 
 if __name__ == "__main__":

@@ -42,5 +42,6 @@ _ESCAPED = re.compile(r"\\([!-/:-@\[-`{-~])")
 
 
 def shown(markdown: str) -> str:
-    """Markdown as the page reads it: the app's escapes (``markdown.escape``) undone."""
-    return html.unescape(_ESCAPED.sub(r"\1", markdown))
+    """Markdown as the page reads it: the app's escapes (``markdown.escape``) undone, and the
+    word joiners that keep addresses from becoming links (invisible) left out."""
+    return html.unescape(_ESCAPED.sub(r"\1", markdown)).replace("\u2060", "")

@@ -220,3 +220,31 @@ def test_the_sweep_lock_is_held_only_while_a_sweep_runs(tmp_path):
     with SweepDir(tmp_path / "s").locked():  # free again
         pass
     assert not (tmp_path / "s").exists()  # nothing was written: the folder made for the lock goes again
+
+
+def test_validate_refuses_what_run_refuses_with_the_same_words(tmp_path):
+    """A forest 7 m wide was valid for ``presets validate`` and refused by ``run``: one set of rules."""
+    import shoal.presets.io as presets_io
+
+    forest = tmp_path / "narrow.toml"
+    forest.write_text(presets_io.to_toml(presets_io.load("forest-dvc", ["world.width=7"])), encoding="utf-8")
+    checked = shoal("presets", "validate", str(forest))
+    ran = shoal("run", str(forest), "--steps", "2", "--out", str(tmp_path / "o"))
+    assert checked.returncode == 1 and "world.width: must be > 12 m" in checked.stderr, checked.stderr
+    assert ran.returncode == 2 and "world.width: must be > 12 m" in ran.stderr, ran.stderr
+    assert not (tmp_path / "o").exists()
+    assert shoal("presets", "validate", "forest-dvc").returncode == 0
+
+
+@pytest.mark.parametrize("argv", [["presets", "show", "default"], ["presets", "list"],
+                                  ["presets", "validate", "default"], ["reproduce", "--list"]])
+def test_a_reader_that_goes_away_ends_the_command_quietly(argv):
+    """``shoal presets show default | head -1``: a BrokenPipe traceback before."""
+    read, write = os.pipe()
+    proc = subprocess.Popen([sys.executable, "-c", CHILD, "-", "0", "-", *argv], stdout=write, stderr=subprocess.PIPE)
+    os.close(write)
+    os.close(read)  # the reader is gone before the command prints (as head is, after its lines)
+    _, err = proc.communicate(timeout=120)
+    text = err.decode()
+    assert "Traceback" not in text and "BrokenPipe" not in text and "Exception ignored" not in text, text[-2000:]
+    assert proc.returncode == 141, (proc.returncode, text)  # as a command SIGPIPE ended

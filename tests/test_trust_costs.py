@@ -17,10 +17,11 @@ from shoal.app import replay
 from shoal.app.experiment.request import AxisRequest, ExperimentRequest, Limits, Refused, resolve
 from shoal.app.experiment.service import CANCELLED, FINISHED, RUNNING, ExperimentService, experiment_pool
 from shoal.app.kinds.registry import session_for
-from shoal.app.limits import LIVE_TICK_SECONDS, MAX_ROBOTS, check_app_limits
+from shoal.app.limits import LIVE_TICK_SECONDS, MAX_DIMS, MAX_ROBOTS, check_app_limits
 from shoal.app.share import session_html
 from shoal.presets.io import PresetError, load
-from shoal.studies.cost import TICK_COSTS, cost, tick_cost
+from shoal.presets.kinds import BROWSER_DIMS
+from shoal.studies.cost import TICK_COSTS, cost, tick_cost, world_cost
 
 from app_helpers import wire_tab
 from browser.browser_helpers import wait_until
@@ -30,8 +31,10 @@ from browser.browser_helpers import wait_until
 def test_cost_is_steps_times_robots_times_runs_times_kind():
     sc = load("course-dvc", ["sim.robots=10"])
     one = cost(sc, steps=100, runs=1)
-    assert one.variant == "fleet" and one.seconds == pytest.approx(100 * (30e-6 + 10 * 3e-6))
-    assert cost(sc, steps=300, runs=4).seconds == pytest.approx(12 * one.seconds)
+    row = TICK_COSTS["fleet"]
+    assert one.variant == "fleet" and one.seconds == pytest.approx(100 * (row.run + 10 * row.robot) + one.world)
+    assert one.world == pytest.approx(world_cost(sc)) and one.world > 0
+    assert cost(sc, steps=300, runs=4).seconds == pytest.approx(12 * (one.seconds - one.world) + one.world)
     assert cost(load("course-physics", ["sim.robots=10"]), steps=100, runs=1).seconds > one.seconds
     assert set(TICK_COSTS) >= {"swarm", "fleet", "fleet/physics", "sonar", "sonar/surrogate", "slo_swarm"}
 
@@ -43,6 +46,110 @@ def test_every_kind_at_its_robot_cap_fits_a_live_tick():
         assert tick_cost(sc, robots=cap) <= LIVE_TICK_SECONDS, name
         with pytest.raises(PresetError, match="sim.robots"):
             check_app_limits(load(name, [f"sim.robots={cap + 1}"]))
+
+
+# ---------------------------------------------------------------------------- every term that scales the work
+def test_the_swarm_tick_counts_its_dimensions():
+    """2,000 robots at d = 1,000 tick in about 80–140 ms of CPU (benchmarks/bench_costs.py); it was
+    priced at 0.20 ms, and 2 000 robots at d = 2 cost a small fraction of it."""
+    big = tick_cost(load("default", ["sim.robots=2000", "sim.d=1000"]))
+    assert 0.04 < big < 0.3, big
+    assert tick_cost(load("default", ["sim.robots=2000", "sim.d=2"])) < big / 100
+    assert tick_cost(load("default", ["sim.robots=200", "sim.d=1000"])) == pytest.approx(
+        tick_cost(load("default", ["sim.robots=2000", "sim.d=100"])), rel=0.2)  # robots × d
+
+
+def test_pairs_obstacles_and_waveforms_count():
+    slo = [tick_cost(load("slo-walk", [f"sim.robots={n}"])) for n in (25, 50, 100)]
+    assert slo[2] - slo[1] > 2 * (slo[1] - slo[0]) > 0  # pairs: N²
+    host = load("slo-adapted")
+    assert tick_cost(host) > tick_cost(load("default", [f"sim.robots={host.sim.robots}"]))
+    few, many = (tick_cost(load("forest-dvc", ["sim.robots=10", f"world.width={w}", "world.density=0.5"]))
+                 for w in (40, 1000))
+    assert many > few
+    base = tick_cost(load("sonar-xb-pso", ["sim.robots=20"]))
+    for sets in (["acoustics.tbp=5000"], ["acoustics.fs=1000000"], ["acoustics.fs=1000000", "acoustics.full_lag=true"]):
+        assert tick_cost(load("sonar-xb-pso", ["sim.robots=20", *sets])) > 1.5 * base, sets  # (measured 2.7× to 60×)
+    hostile = load("sonar-xb-pso", ["acoustics.tbp=5000", "acoustics.fs=1000000", "acoustics.full_lag=true"])
+    assert tick_cost(hostile) > 1.0  # 10 robots measured at seconds a tick
+    with pytest.raises(PresetError, match="acoustics"):
+        check_app_limits(hostile)
+
+
+def test_laying_out_a_world_is_priced():
+    """A forest of 17,092 trees takes 4–5 CPU s to lay out; a sweep of it was estimated at 0.5 s."""
+    forest = load("forest-dvc", ["world.width=1000", "world.density=0.5", "sim.steps=20", "sim.robots=10"])
+    assert 3.0 < world_cost(forest) < 8.0
+    c = cost(forest, runs=2)
+    assert c.world == world_cost(forest) and c.seconds > c.world and "to lay out its world" in c.describe()
+    with pytest.raises(PresetError, match="world: laying out this world"):
+        check_app_limits(forest)
+    check_app_limits(load("forest-dvc", ["world.width=80", "world.density=0.2"]))  # the sliders' largest forest
+    plan, _ = resolve(forest.model_copy(update={"world": forest.world.model_copy(update={"density": 0.05,
+                                                                                          "width": 80.0})}),
+                      ExperimentRequest(axes=(AxisRequest("world.density", values="0.05, 0.1, 0.2"),), runs=1,
+                                        steps=20),
+                      Limits())
+    assert len(plan) == 3
+
+
+def test_a_plugin_kind_keeps_the_cost_of_its_entry(example_plugin):
+    from plugin_env import python
+
+    code = ("from shoal.presets.io import load\nfrom shoal.presets.kinds import KINDS\n"
+            "from shoal.studies.cost import tick_cost, cost\nsc = load('gather-demo')\n"
+            "run, robot = KINDS['gather'].cost[:2]\n"
+            "print(abs(tick_cost(sc) - (run + sc.sim.robots * robot)) < 1e-15, cost(sc).world == 0.0)")
+    out = python(example_plugin, code)
+    assert out.returncode == 0 and out.stdout.split() == ["True", "True"], out.stderr[-2000:]
+
+
+# ---------------------------------------------------------------------------- the browser's cap on sim.d
+def test_the_browser_caps_the_dimensions_of_a_swarm():
+    assert MAX_DIMS == {"free-space swarm": BROWSER_DIMS}
+    check_app_limits(load("default", ["sim.robots=2000", f"sim.d={BROWSER_DIMS}"]))
+    with pytest.raises(PresetError, match=f"sim.d = {BROWSER_DIMS + 1}: the browser app runs at most {BROWSER_DIMS} "
+                                          "dimensions"):
+        check_app_limits(load("default", [f"sim.d={BROWSER_DIMS + 1}"]))
+    session = session_for(load("default"))
+    with pytest.raises(PresetError, match="sim.d = 1000"):
+        session.enable_compare({"sim.d": 1000, "sim.robots": 1000})
+    assert session.compare is None
+    with pytest.raises(replay.ReplayError, match="expected .rows, d. with d = 1, 2 or 3"):  # (a replay's own bound)
+        replay.from_bytes(_replay(10, d=1000))
+
+
+def test_a_dimension_sweep_is_refused_beyond_the_cap_and_priced_with_d_within_it():
+    sc = load("default", ["sim.robots=2000"])
+    request = ExperimentRequest(axes=(AxisRequest("sim.d", values="2, 500, 1000"),), runs=10, steps=1000)
+    plan, _ = resolve(sc, dataclasses.replace(request, axes=(AxisRequest("sim.d", values="2, 5, 10"),)), Limits())
+    priced = [cost(plan.scenario(i), runs=10, steps=1000).seconds for i in plan.runnable]
+    assert priced[2] > 3 * priced[0]
+    try:
+        plan, _ = resolve(sc, request, Limits())
+    except Refused as err:
+        messages = err.messages
+    else:
+        messages = [m for ms in plan.skipped.values() for m in ms]
+    assert sum("sim.d = 500" in m or "sim.d = 1000" in m for m in messages) == 2, messages
+
+
+def test_a_preset_of_a_thousand_dimensions_uploaded_on_the_wire_is_refused(server):
+    from shoal.presets.io import to_toml
+
+    c, key = wire_tab(server, "Upload preset", "Load replay")
+    try:
+        tab = server.tabs[key]
+        before = tab.session.scenario
+        c.upload("Upload preset", "wide.toml", to_toml(load("default", ["sim.robots=2000", "sim.d=1000"])).encode())
+        wait_until(lambda: c.saw("sim.d = 1000: the browser app runs at most"), timeout=30, what="the refusal")
+        assert tab.session.scenario == before
+        c.set_value("B overrides", "sim.d = 1000\nsim.robots = 1000")
+        c.set_value("Apply to B", True)
+        wait_until(lambda: sum("sim.d = 1000" in t for t in c.texts) >= 2, timeout=30, what="B refused")
+        assert tab.session.compare is None
+    finally:
+        c.close()
 
 
 # ---------------------------------------------------------------------------- the sweep, whatever its fields

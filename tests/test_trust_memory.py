@@ -101,3 +101,21 @@ def test_unfinished_uploads_are_capped_per_tab_and_dropped_when_it_leaves(server
         client.close()
     wait_until(lambda: not states, what="the unfinished uploads dropped with the tab")
     wait_until(lambda: (gc.collect(), ref() is None)[1], what="the tab's GUI collected")
+
+
+def test_a_large_lag_table_is_not_kept_after_its_scene():
+    """The waveform sonar's lag tables (cos and sin, K bins × L lags) were cached, 32 of any
+    size, for the server's life: a band of 2,000 bins at 1 MHz made 32 MB each. Small ones
+    are still kept (a scene reuses its table every tick); a large one goes with its scene."""
+    from shoal.engine.acoustics.band import Band
+    from shoal.engine.acoustics.receiver import CACHED_PHASES, lag_table
+
+    small = Band(f_c=1000.0, Q=1.5, tbp=100.0, c=1500.0, fs=48_000.0)
+    assert lag_table(small, 0.75)[1] is lag_table(small, 0.75)[1]  # kept
+    big = Band(f_c=1000.0, Q=1.5, tbp=2000.0, c=1500.0, fs=1_000_000.0)
+    lags, cos, sin = lag_table(big, 0.75)
+    assert cos.size > CACHED_PHASES and cos.nbytes > 15 * 2**20
+    gone = weakref.ref(cos)
+    del lags, cos, sin
+    gc.collect()
+    assert gone() is None, "a large lag table is still referenced (cached)"

@@ -106,3 +106,58 @@ def test_html_typed_into_swarm_b_and_an_experiment_shows_escaped(server):
         _no_markup(c)
     finally:
         c.close()
+
+
+# ------------------------------------------------------------------ lone surrogates (issue 30, case 3)
+LONE = "\ud800"  # valid JSON ("\ud800"), not encodable as UTF-8: msgpack could not send a text holding it
+
+
+def test_a_replay_whose_meta_holds_a_lone_surrogate_loads_and_keeps_the_tab(server, capfd):
+    """It dropped the loading tab (close code 1011) and its run was lost."""
+    c, key = wire_tab(server, "Upload preset", "Load replay")
+    tab = server.tabs[key]
+    try:
+        data = hostile_replay(name=f"run {LONE} one", shoal=f"{LONE}x\udfff")
+        c.upload("Load replay", "lone.npz", data)
+        wait_until(lambda: tab.session.replaying is not None, what="the replay loaded")
+        wait_until(lambda: any("Replay of run \ufffd one" in t for t in c.markdown()), timeout=20,
+                   what="the replay badge, the surrogate shown as U+FFFD")
+        assert not c.closed.is_set() and key in server.tabs
+        c.set_value("seed", 11)  # the tab still answers
+        wait_until(lambda: tab.session.scenario.sim.seed == 11, what="the tab still answering")
+    finally:
+        c.close()
+    err = capfd.readouterr().err
+    assert "Traceback" not in err and "surrogates not allowed" not in err, err[-2000:]
+
+
+def test_a_json_preset_whose_name_holds_a_lone_surrogate_loads_and_keeps_the_tab(server, capfd):
+    import json
+
+    c, key = wire_tab(server, "Upload preset", "Load replay")
+    tab = server.tabs[key]
+    try:
+        raw = presets_io.load("default").model_dump(mode="json")
+        text = json.dumps({**raw, "name": f"lone {LONE} name"})  # ASCII: "\ud800" as an escape
+        c.upload("Upload preset", "lone.json", text.encode())
+        wait_until(lambda: tab.session.scenario.name.startswith("lone"), what="the preset loaded")
+        assert tab.session.scenario.name == "lone \ufffd name"
+        wait_until(lambda: any("lone \ufffd name" in t for t in c.markdown()), timeout=20, what="the status line")
+        assert not c.closed.is_set() and key in server.tabs
+    finally:
+        c.close()
+    err = capfd.readouterr().err
+    assert "Traceback" not in err and "surrogates not allowed" not in err, err[-2000:]
+
+
+def test_every_escaped_text_is_encodable():
+    import msgspec
+
+    from shoal.app.markdown import encodable, escape
+
+    for text in (LONE, "\udfff", f"a{LONE}b\udc00", "\ud83d\ude00", "ok"):
+        out = escape(text)
+        out.encode("utf-8")
+        msgspec.msgpack.encode({"content": out})
+    assert escape("\ud83d\ude00") == "😀"  # a pair written as two escapes is the character it stands for
+    assert encodable(f"a{LONE}b") == "a\ufffdb" and encodable({"k" + LONE: [LONE, 1]}) == {"k\ufffd": ["\ufffd", 1]}

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
+import time
 from pathlib import Path
 from typing import Any, Callable, NoReturn
 
@@ -77,9 +79,25 @@ def _cmd_serve(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_run(args: argparse.Namespace) -> int:
+WARM_AFTER = 1.0  # s: a run still going after this long has its kernels compiled beside it (a shorter one never waits)
+BAR_FROM = 200  # steps: a shorter run shows no progress bar (and never imports tqdm)
+
+
+class _NoBar:
+    def update(self) -> None:
+        pass
+
+
+def _progress(steps: int, desc: str) -> Any:
+    """A progress bar over ``steps`` (tqdm's, shown on a terminal) or one that shows nothing."""
+    if steps < BAR_FROM:
+        return contextlib.nullcontext(_NoBar())
     from tqdm import tqdm
 
+    return tqdm(total=steps, desc=desc, unit="step", disable=None)
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
     from shoal.app.warmup import NUMPY_TICK, WARMUP, group_of
     from shoal.engine.core.atomic import OutputDirError, check_output_dir
     from shoal.engine.core.runs import RUN_FILES, run_to_dir
@@ -109,16 +127,24 @@ def _cmd_run(args: argparse.Namespace) -> int:
         "steps": scenario.sim.steps,
     }
     steps = scenario.sim.steps
-    if group_of(scenario) in NUMPY_TICK:  # numpy ticks while the kernels compile beside, then compiled: same numbers
-        WARMUP.start(scenario, only=True)
-        WARMUP.use(sim, scenario)
+    # A kind with a numpy tick starts on it (the compiled tick's numbers, bit for bit), so a short run
+    # never loads numba; one that runs longer than WARM_AFTER has its kernels compiled beside it and
+    # changes over once they are ready.
+    numpy_first = group_of(scenario) in NUMPY_TICK and hasattr(sim, "compiled")
+    if numpy_first:
+        sim.compiled = False  # type: ignore[attr-defined]  # (the kinds with a numpy tick have it)
+    started = time.monotonic()
 
     def ticked(_k: int) -> None:
         bar.update()
-        WARMUP.use(sim, scenario)
+        if numpy_first:
+            if not WARMUP.active and time.monotonic() - started > WARM_AFTER:
+                WARMUP.start(scenario, only=True)
+            if WARMUP.active:
+                WARMUP.use(sim, scenario)
 
     try:
-        with tqdm(total=steps, desc=f"run {scenario.name}", unit="step", disable=steps < 200 or None) as bar:
+        with _progress(steps, f"run {scenario.name}") as bar:
             run_to_dir(sim, steps, out, meta, on_step=ticked)
     except OutputDirError as e:  # (a file appeared in --out meanwhile)
         return _err(str(e))
@@ -268,6 +294,7 @@ def _cmd_warmup(args: argparse.Namespace) -> int:
 
 
 def _cmd_presets(args: argparse.Namespace) -> int:
+    from shoal.presets.build import check_buildable
     from shoal.presets.io import PresetError, list_presets, load, to_toml
 
     if args.action == "list":
@@ -278,6 +305,8 @@ def _cmd_presets(args: argparse.Namespace) -> int:
         return _err(f"presets {args.action} needs a NAME or FILE")
     try:
         scenario = load(args.name)
+        if args.action == "validate":
+            check_buildable(scenario)  # the rules `shoal run` applies when it builds the scene, not only the model's
     except PresetError as e:
         print("\n".join(e.messages), file=sys.stderr)
         return 1 if args.action == "validate" else EXIT_USAGE
@@ -374,16 +403,34 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from shoal.app.terminate import EXIT_TERMINATED, Terminated, terminate_as_interrupt
 
-    args = build_parser().parse_args(argv)
     with terminate_as_interrupt():  # SIGTERM cleans up as Ctrl-C does (serve: tabs told, run: no partial folder)
         try:
-            return args.func(args)
+            args = build_parser().parse_args(argv)  # (--help prints too)
+            code = args.func(args)
+            sys.stdout.flush()  # (a closed pipe is found here, not at exit)
+            return code
+        except BrokenPipeError:
+            return _closed_pipe()
         except Terminated:
             print("terminated", file=sys.stderr)
             return EXIT_TERMINATED
         except KeyboardInterrupt:
             print("interrupted", file=sys.stderr)
             return 130
+
+
+EXIT_PIPE = 128 + 13  # as a process that SIGPIPE ended
+
+
+def _closed_pipe() -> int:
+    """The reader of standard output went away (``shoal presets show default | head``): stop
+    quietly, as a command killed by SIGPIPE does, with nothing more written to the pipe."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # (Python's own flush at exit then has nowhere to fail)
+    except (OSError, ValueError):
+        pass
+    return EXIT_PIPE
 
 
 def entry() -> NoReturn:

@@ -7,9 +7,12 @@ raises there and is lost without a word ("Task exception was never retrieved"); 
 A page only sends values its controls can hold, but anything that speaks the websocket
 protocol can send any value. So every ``GuiUpdateMessage`` of a tab passes :func:`problem`
 first: a value of the wrong kind, not finite, not whole for a whole-number control, not among
-a dropdown's options, or an update of anything but the value is refused with a red message
-(as an out-of-range value is, by the app) and the control shows the value in force again.
-Ranges stay the app's to check: it names the preset field.
+a dropdown's options, outside a slider's or number box's own range (its ``min`` and ``max``:
+what its page could send), or an update of anything but the value is refused with a red
+message naming the control, and the control shows the value in force again. A number box
+without a bound leaves that end to the app, which names the preset field; a number no control
+could hold (beyond :data:`MAX_MAGNITUDE`, e.g. 1e308, which viser would cast to a 309-digit
+integer that msgpack cannot send back) is refused here.
 
 It replaces viser's handler of these messages on the tab's ``GuiApi`` (viser 1.x:
 ``GuiApi._handle_gui_updates``) with one that checks and then calls it. If a viser version
@@ -26,23 +29,38 @@ from viser import _messages
 from shoal.presets.io import short
 
 MAX_TEXT = 10_000  # characters of a text control's value
+MAX_MAGNITUDE = 2.0**63  # the largest number a control takes (an int64 seed is the largest any holds)
 Refuse = Callable[[str, str], None]  # (title, body) of the red message
 
 
-def _number(value: Any, whole: bool) -> str | None:
+def _number(value: Any, whole: bool, low: Any = None, high: Any = None) -> str | None:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return "expected a whole number" if whole else "expected a number"
     if whole and isinstance(value, float) and not value.is_integer():  # NaN and ±inf are not either
         return "expected a whole number"
-    return "expected a finite number" if isinstance(value, float) and not math.isfinite(value) else None
+    if isinstance(value, float) and not math.isfinite(value):
+        return "expected a finite number"
+    if _bound(low) is not None and value < low:
+        return f"less than its least value {low:g}"
+    if _bound(high) is not None and value > high:
+        return f"more than its largest value {high:g}"
+    return f"beyond ±{MAX_MAGNITUDE:.3g}" if abs(value) > MAX_MAGNITUDE else None
 
 
-def problem(current: Any, value: Any, options: tuple[str, ...] | None = None) -> str | None:
-    """Why ``value`` cannot replace a control's ``current`` value (None: it can)."""
+def _bound(end: Any) -> float | None:
+    """A control's ``min`` or ``max``, if it has a finite one."""
+    ok = isinstance(end, (int, float)) and not isinstance(end, bool) and math.isfinite(end)
+    return float(end) if ok else None
+
+
+def problem(current: Any, value: Any, options: tuple[str, ...] | None = None, low: Any = None,
+            high: Any = None) -> str | None:
+    """Why ``value`` cannot replace a control's ``current`` value (None: it can); ``low`` and
+    ``high``: a number control's own range."""
     if isinstance(current, bool):
         return None if isinstance(value, bool) else "expected true or false"
     if isinstance(current, (int, float)):
-        return _number(value, whole=isinstance(current, int))
+        return _number(value, isinstance(current, int), low, high)
     if isinstance(current, str):
         if not isinstance(value, str):
             return "expected text"
@@ -73,7 +91,8 @@ def guard_inputs(gui: Any, refuse: Refuse) -> bool:
         updates = message.updates if isinstance(message.updates, dict) else {}
         value = updates.get("value")
         why = ("only a control's value can be set" if set(updates) != {"value"}
-               else problem(handle.value, value, getattr(handle, "options", None)))
+               else problem(handle.value, value, getattr(handle, "options", None), getattr(handle, "min", None),
+                            getattr(handle, "max", None)))
         if why is None:
             return await inner(client_id, message)
         label = str(getattr(handle, "label", "") or "control")

@@ -7,8 +7,10 @@ uploaded preset with ``sim.robots = 100000``, a replay of three million robots, 
 path by which a page asks for work is checked here, against the one cost function
 (:func:`shoal.studies.cost.cost`: steps × robots × runs × kind):
 
-- a live scene: at most :data:`MAX_ROBOTS` robots of its kind, and a tick within
-  :data:`LIVE_TICK_SECONDS` (:func:`check_app_limits`);
+- a live scene: at most :data:`MAX_ROBOTS` robots and :data:`MAX_DIMS` dimensions of its
+  kind, a tick within :data:`LIVE_TICK_SECONDS` (every term that scales it: robots, ``sim.d``,
+  pairs, obstacles, waveforms) and a world laid out within :data:`LIVE_WORLD_SECONDS`
+  (:func:`check_app_limits`; an upload, Compare's swarm B and every cell of a sweep pass it);
 - a replay (and the Share page drawn from a recording): at most that many robots in any frame,
   swarm A and swarm B (:func:`check_recording`; ``replay.from_bytes`` refuses more robot rows
   in all than a session records before it unpacks them);
@@ -30,11 +32,13 @@ import numpy as np
 from shoal.presets.io import PresetError
 from shoal.presets.kinds import KINDS, kind_for
 from shoal.presets.models import Scenario
-from shoal.studies.cost import Cost, cost, tick_cost
+from shoal.studies.cost import Cost, cost, costliest_field, forest_trees, tick_cost, world_cost
 
-# Robots per kind of scene in one tab: the caps of the kinds' registry entries (presets/kinds.py).
+# Robots and dimensions per kind of scene in one tab: the caps of the kinds' registry entries (presets/kinds.py).
 MAX_ROBOTS = {cap.label: cap.robots for kind in KINDS.values() for cap in kind.caps}
-LIVE_TICK_SECONDS = 0.005  # estimated CPU of one live tick (every built-in kind at its robot cap is within it)
+MAX_DIMS = {cap.label: cap.d for kind in KINDS.values() for cap in kind.caps if cap.d is not None}
+LIVE_TICK_SECONDS = 0.02  # estimated CPU of one live tick (every built-in kind at its robot cap is within it)
+LIVE_WORLD_SECONDS = 1.0  # estimated CPU of laying out a live scene's world (the sliders' largest forest is within it)
 
 
 def scene_kind(scenario: Scenario) -> str:
@@ -54,12 +58,27 @@ def check_app_limits(scenario: Scenario) -> Scenario:
     if scenario.sim.robots > cap:
         raise PresetError([f"sim.robots = {scenario.sim.robots}: the browser app runs at most {cap} robots "
                            f"in this kind of scene ({kind}); use `shoal run` for larger swarms"])
+    if limit.d is not None and scenario.sim.d > limit.d:
+        raise PresetError([f"sim.d = {scenario.sim.d}: the browser app runs at most {limit.d} dimensions "
+                           f"in this kind of scene ({kind}); use `shoal run` for more"])
     tick = tick_cost(scenario)
     if tick > LIVE_TICK_SECONDS:
-        raise PresetError([f"sim.robots = {scenario.sim.robots}: one step of this scene ({kind}) would cost about "
+        field = costliest_field(scenario)
+        raise PresetError([f"{field} = {_value(scenario, field)}: one step of this scene ({kind}) would cost about "
                            f"{tick * 1e3:.3g} ms, more than the {LIVE_TICK_SECONDS * 1e3:.3g} ms a browser tab may; "
-                           "use `shoal run` for larger swarms"])
+                           "use `shoal run` for larger scenes"])
+    world = world_cost(scenario)
+    if world > LIVE_WORLD_SECONDS:
+        raise PresetError([f"world: laying out this world (a forest of about {forest_trees(scenario):,.0f} trees) "
+                           f"would cost about {world:.3g} s of CPU, more than the {LIVE_WORLD_SECONDS:.3g} s a browser "
+                           "tab may; a smaller world.width or world.density, or `shoal run`"])
     return scenario
+
+
+def _value(scenario: Scenario, field: str) -> str:
+    section, name = field.split(".")
+    value = getattr(getattr(scenario, section, None), name, None)
+    return f"{len(value):,} circles" if isinstance(value, list) else f"{value}"
 
 
 def check_runs(scenario: Scenario, *, steps: int, runs: int, max_steps: int, max_seconds: float,
@@ -81,7 +100,7 @@ def check_runs(scenario: Scenario, *, steps: int, runs: int, max_steps: int, max
 def check_recording(rec: Any, scenario: Scenario, twin: Scenario | None = None, where: str = "replay") -> None:
     """Refuse (:class:`PresetError`) a recording (``replay.Recording``) of ``scenario`` (and of
     swarm B's ``twin``) a tab may not show: a frame of more robots than a live scene of its
-    kind may have."""
+    kind may have (a replay holds at most 3 dimensions: ``replay.from_bytes``)."""
     problems = []
     for swarm, counts, sc in (("", rec.n, scenario), ("swarm B: ", rec.b_n, twin or scenario)):
         cap, kind = robot_cap(sc), scene_kind(sc)

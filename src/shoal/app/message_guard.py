@@ -14,7 +14,8 @@ connection of every viser server of the process:
   client beyond it is not cut off: its next message is read later, so its flood waits in its own
   socket and the other tabs' updates go on;
 - a **check**: the message must be msgpack of a viser message type whose fields have the
-  types that type declares (``msgspec.convert`` against viser's own dataclass). Anything else
+  types that type declares (``msgspec.convert`` against viser's own dataclass), and a camera
+  report finite numbers and a canvas of some size. Anything else
   is dropped and said on stderr in one line (then at most once every :data:`QUIET_SECONDS`
   per connection, with a count); after :data:`MAX_MALFORMED` of them the connection is closed
   (1008, policy violation): a page never sends one.
@@ -27,6 +28,7 @@ install nothing and say so (the app's own guards still hold).
 from __future__ import annotations
 
 import asyncio
+import math
 import sys
 import time
 from typing import Any, Callable
@@ -92,6 +94,17 @@ def problem(raw: Any, message_class: Any) -> str | None:
         msgspec.convert(mapping, cls)
     except Exception as err:
         return f"{kind}: {str(err)[:160]}"
+    return _camera_problem(mapping) if kind == "ViewerCameraMessage" else None
+
+
+def _camera_problem(mapping: dict[str, Any]) -> str | None:
+    """A camera report must be finite, with a canvas of some size: viser keeps NaN, inf or a
+    zero height, and the home camera (or anything reading its aspect) then raises."""
+    numbers = [v for value in mapping.values() for v in (value if isinstance(value, (list, tuple)) else [value])]
+    if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in numbers):
+        return "a camera report with a number that is not finite"
+    if not (mapping.get("image_width", 0) > 0 and mapping.get("image_height", 0) > 0):
+        return "a camera report of an empty canvas"
     return None
 
 

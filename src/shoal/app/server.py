@@ -7,7 +7,9 @@ and meet the ticking thread only through each session's lock.
 
 from __future__ import annotations
 
+import contextlib
 import errno
+import gc
 import socket
 import sys
 import threading
@@ -27,7 +29,7 @@ from .experiment import ExperimentService, Limits, experiment_pool
 from .input_guard import guard_inputs
 from .kinds.registry import check_supported, session_for
 from .message_guard import install_message_guard, quiet_handler_errors
-from .native_memory import keep_large_blocks_returnable
+from .native_memory import TRIM_DELAY, give_back, keep_large_blocks_returnable
 from .origin_guard import OriginPolicy, guarded_viser, is_loopback
 from .pace import paced
 from .panel.keys import install_keys
@@ -80,6 +82,13 @@ def _cannot_listen(host: str, port: int) -> OSError | None:
     return None
 
 
+def _collect_and_give_back() -> None:
+    """A closed tab's objects held in reference cycles freed now (not at the next full
+    collection), then the C heap's free pages returned."""
+    gc.collect()
+    give_back()
+
+
 class ShoalServer:
     """A running app: ``port``, ``sessions`` (client id → Session), ``tabs`` (client id → TabApp), ``stop()``.
 
@@ -111,6 +120,7 @@ class ShoalServer:
         self.port = self.viser.get_port()
         self.tabs: dict[int, TabApp] = {}
         self._lock = threading.Lock()
+        self._trim: threading.Timer | None = None  # the next give_back of the C heap (after a tab closed)
         self._stopping = threading.Event()
         self._configure()
         self.viser.on_client_connect(self._connect)
@@ -171,6 +181,18 @@ class ShoalServer:
             tab.close()
         elif tab is not None:
             tab.gone()
+        if tab is not None:
+            self._give_back_later()
+
+    def _give_back_later(self) -> None:
+        """The C heap's free pages back to the system, once the closed tab's memory is freed
+        (one trim for a burst of closes)."""
+        with self._lock:
+            if self._trim is not None:
+                self._trim.cancel()
+            self._trim = threading.Timer(TRIM_DELAY, _collect_and_give_back)
+            self._trim.daemon = True
+            self._trim.start()
 
     def _connect(self, client: viser.ClientHandle) -> None:
         if self._stopping.is_set():
@@ -247,7 +269,8 @@ class ShoalServer:
         plots_until = start + PLOT_SHARE * period
         for tab in tabs[turn:] + tabs[:turn]:
             try:
-                tab.tick(start, plots=time.monotonic() < plots_until)
+                with closed_tab_quiet(tab.gui):
+                    tab.tick(start, plots=time.monotonic() < plots_until)
             except Exception as err:  # one broken tab must not stop the others
                 if self._errors.get(tab) != repr(err):  # said once per tab and error, not 60 times a second
                     self._errors[tab] = repr(err)
@@ -260,6 +283,9 @@ class ShoalServer:
         """Stop the experiments and the ticking, tell the open tabs, then stop the viser server
         (in that order: no updates on closed connections)."""
         self._stopping.set()
+        with self._lock:
+            if self._trim is not None:
+                self._trim.cancel()
         self.experiments.stop()
         if self._thread.is_alive() and threading.current_thread() is not self._thread:
             self._thread.join(timeout=5.0)
@@ -271,6 +297,17 @@ class ShoalServer:
         if clients:
             time.sleep(STOP_NOTICE_SECONDS)  # the notices leave before the connections close
         self.viser.stop()
+
+
+def closed_tab_quiet(gui: Any) -> contextlib.AbstractContextManager[Any]:
+    """A tab's updates may go to a client that closed mid-update (before ``on_client_disconnect``
+    forgets it): viser drops them and would warn ("Queued a … on a closed connection"); this
+    scope of viser's own tells it those writes are expected (its ``sanctioned_dead_writes``,
+    through ``GuiApi._websock_interface``: tests/test_internals.py). Other warnings still show."""
+    interface = getattr(gui, "_websock_interface", None)
+    buffer = interface.get_message_buffer() if interface is not None else None
+    scope = getattr(buffer, "sanctioned_dead_writes", None)
+    return scope() if scope is not None else contextlib.nullcontext()
 
 
 def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,

@@ -63,6 +63,9 @@ def warm(names: list[str], done: Callable[[str], None] | None = None) -> None:
         for _ in range(STEPS):
             sim.step()
         sim.info()
+        run = getattr(sim, "run", None)
+        if callable(run):  # the headless block of ticks (shoal run's)
+            run(2)
         if done is not None:
             done(name)
 

@@ -1,11 +1,11 @@
-"""Reading, writing, listing and overriding presets."""
+"""Reading, writing, listing and overriding presets (:class:`PresetError`, :func:`short` and
+:func:`format_errors` come from :mod:`.errors`; they are offered here too)."""
 
 from __future__ import annotations
 
 import copy
 import functools
 import json
-import reprlib
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -15,45 +15,29 @@ import tomli_w
 from pydantic import ValidationError
 
 from shoal.engine.core.plugins import load_plugins
+from shoal.engine.core.suggest import did_you_mean
 
+from . import errors
+from .errors import PresetError, fields_in, short
+from .kinds import plugin_sections
 from .models import Scenario
+from .text import encodable, has_surrogate_escape
 from .toml_bounds import check_toml
 
 
-class PresetError(ValueError):
-    """A preset could not be read or validated; ``messages`` name each bad field."""
-
-    def __init__(self, messages: list[str]) -> None:
-        self.messages = messages
-        super().__init__("\n".join(messages))
-
-
-_SHORT = reprlib.Repr()  # a bad value is shown short: a few items, a few levels
-_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxtuple, _SHORT.maxdict = 2, 4, 4, 4
-_SHORT.maxstring = _SHORT.maxother = _SHORT.maxlong = 40
-MAX_NAME = 60  # characters of a field name shown in a message
-
-
-def short(value: Any) -> str:
-    """A value as a message shows it: a few characters, a few items, a few levels."""
-    return _SHORT.repr(value)
-
-
-def _short_name(part: object) -> str:
-    text = str(part)
-    return text if len(text) <= MAX_NAME else text[: MAX_NAME - 3] + "..."
-
-
 def format_errors(err: ValidationError) -> list[str]:
-    """One line per error: ``dotted.field: message (got value)``, the value and names shortened."""
-    lines = []
-    for e in err.errors(include_url=False):
-        loc = ".".join(_short_name(p) for p in e["loc"])
-        msg = e["msg"].removeprefix("Value error, ")
-        quiet = e["type"] in ("missing",) or isinstance(e.get("input"), dict)
-        got = "" if quiet else f" (got {_SHORT.repr(e.get('input'))})"
-        lines.append(f"{loc}: {msg}{got}" if loc else f"{msg}{got}")
-    return lines
+    """One line per error of a scenario's validation (:func:`.errors.format_errors`), a mistyped
+    field or section with the closest names it could have been."""
+    return errors.format_errors(err, _fields_at)
+
+
+def _fields_at(loc: tuple[Any, ...]) -> list[str]:
+    """The field names at ``loc`` inside a scenario: at the top its sections, the plug-in kinds'
+    too; inside a plug-in kind's section, its model's."""
+    sections = plugin_sections()
+    if loc and loc[0] in sections and loc[0] not in Scenario.model_fields:
+        return fields_in(sections[loc[0]], loc[1:])
+    return fields_in(Scenario, loc) + (list(sections) if not loc else [])
 
 
 def validate(data: dict[str, Any]) -> Scenario:
@@ -89,7 +73,7 @@ def parse_text(text: str, fmt: str = "toml") -> dict[str, Any]:
         raise PresetError(["a preset must be a table of fields"])
     if _depth(data) > MAX_DEPTH:
         raise PresetError([f"{fmt.upper()} syntax: nested deeper than {MAX_DEPTH} levels; a preset needs a few"])
-    return data
+    return encodable(data) if fmt == "json" and has_surrogate_escape(text) else data  # (TOML has no lone surrogate)
 
 
 MAX_DEPTH = 16  # tables and arrays in a preset; the deepest shipped one has 4
@@ -174,7 +158,8 @@ def read_raw(name_or_path: str | Path) -> dict[str, Any]:
     if str(name_or_path) in shipped_names():
         return read_shipped(str(name_or_path))
     names = ", ".join(shipped_names())
-    raise PresetError([f"no preset or file named {short(str(name_or_path))} (shipped presets: {names})"])
+    hint = did_you_mean(str(name_or_path), shipped_names())
+    raise PresetError([f"no preset or file named {short(str(name_or_path))}{hint} (shipped presets: {names})"])
 
 
 def parse_value(text: str) -> Any:
@@ -224,7 +209,7 @@ def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any
     for item in overrides:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
-            raise PresetError([f"--set {_SHORT.repr(item)}: expected dotted.key=value"])
+            raise PresetError([f"--set {short(item)}: expected dotted.key=value"])
         set_dotted(out, key.strip(), parse_value(value.strip()))
     return out
 

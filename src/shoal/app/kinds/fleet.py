@@ -1,6 +1,6 @@
 """Chapter 4–5 robots with bodies in an obstacle world (a :class:`Fleet`).
 
-* changes: controller and sensing fields are :class:`FleetParams` fields and apply at the
+* changes (the kind's live rule, presets/kinds.py): controller and sensing fields apply at the
   next step; the world, the robot model, the robot count and the oracle/SLO positions switch
   rebuild the fleet (robots back in the start box, world edits dropped); the SLO error set
   and localisation settings retune the running fleet;
@@ -17,13 +17,15 @@ from typing import Any, Callable
 
 import numpy as np
 
-from shoal.engine.kinds.fleet import STALL_STEPS, Fleet, FleetParams
+from shoal.engine.kinds.fleet import STALL_STEPS, Fleet
 from shoal.engine.kinds.fleet_probe import RobotView, robot_view
 from shoal.engine.robots.dvc import TABLE_4_1
 from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.engine.robots.world import WorldSpec
-from shoal.presets.build import build_fleet, check_world, fleet_keywords, fleet_params_for, kind_of, world_for
+from shoal.presets.builders.fleet import build_fleet
+from shoal.presets.builders.world import check_world, world_for
 from shoal.presets.io import PresetError, kept_fields
+from shoal.presets.kinds import kind_of
 from shoal.presets.models import Scenario, required
 
 from ..markdown import escape
@@ -46,7 +48,6 @@ from ..panel.spec import (
     round_sig,
 )
 from ..session.history import Frame
-from ..session.positions import slo_retune
 from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..view import shapes
@@ -100,19 +101,6 @@ class FleetDriver(BaseDriver):
     def loaded(self) -> None:
         self.world_revision += 1
         self.dropped, self.edits = self.edits, 0
-
-    # ------------------------------------------------------------------ changes
-    def rebuilds(self, old: Scenario, new: Scenario) -> bool:
-        """A new fleet for another size, world or positions, or a robot model the fleet cannot
-        change running (a :class:`FleetParams` field outside ``Fleet.LIVE``)."""
-        a, b = fleet_params_for(old), fleet_params_for(new)
-        fixed = {f.name for f in dataclasses.fields(FleetParams)} - Fleet.LIVE
-        return (new.sim.robots != old.sim.robots or new.world != old.world or slo_retune(old, new) is None
-                or any(getattr(a, f) != getattr(b, f) for f in fixed))
-
-    def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
-        slo = slo_retune(old, new)  # slo: the running fleet keeps its beliefs
-        return {**fleet_keywords(new), **({"slo": slo} if slo else {})}
 
     # ------------------------------------------------------------------ world edits
     def _world_changed(self) -> None:
@@ -627,10 +615,22 @@ def _ratio(s: Session) -> float:
     return round_sig(min(_avoidance(s.scenario) / c12 if c12 > 0 else 4.0, 4.0), 4)
 
 
+C_HAT_RANGE = (0.05, 5.0)  # the budget sliders' ranges (ĉ in m/s)
+RATIO_RANGE = (0.0, 4.0)
+
+
 def _budget(panel: PanelAPI, total: float | None = None, ratio: float | None = None) -> None:
-    """ĉ and c3/(c1+c2) → c1, c2, c3 (split by c1 : c2)."""
+    """ĉ and c3/(c1+c2) → c1, c2, c3 (split by c1 : c2); a value outside its slider's range
+    (a ratio of −1 divided by zero) is refused by name."""
     total = float(panel.handles["c_hat"].value if total is None else total)
     ratio = float(panel.handles["ratio"].value if ratio is None else ratio)
+    what = f"ĉ = {total:.6g}, c3/(c1+c2) = {ratio:.6g}"
+    for name, value, (lo, hi) in (("ĉ", total, C_HAT_RANGE), ("c3 / (c1 + c2)", ratio, RATIO_RANGE)):
+        if not (math.isfinite(value) and lo <= value <= hi):
+            panel.notify(f"Refused: {what}", f"{name} = {value:.6g}: must be a number from {lo:g} to {hi:g}", "red")
+            panel.set_quietly(panel.handles["c_hat"], _c_hat(panel.session))
+            panel.set_quietly(panel.handles["ratio"], _ratio(panel.session))
+            return
     c = panel.session.scenario.controller
     if ROBOT_LAWS[c.law].terms <= 2:
         c12, c3 = total, c.c3
@@ -638,7 +638,7 @@ def _budget(panel: PanelAPI, total: float | None = None, ratio: float | None = N
         c12, c3 = total / (1.0 + ratio), total * ratio / (1.0 + ratio)
     changes = {"controller.c1": round_sig(c.c1_share * c12), "controller.c2": round_sig((1 - c.c1_share) * c12),
                "controller.c3": round_sig(c3)}
-    panel.apply(changes, f"ĉ = {total:g}, c3/(c1+c2) = {ratio:g}")
+    panel.apply(changes, what)
 
 
 def _drives(s: Session) -> tuple[str, ...]:
@@ -765,10 +765,12 @@ def panel(api: PanelAPI) -> KindPanel:
                 Slider("controller.beta", "β", 0.05, 1.0, 0.01, "ĉ = βU/√d [4.15]; ω = 1 − β under DVC", visible=_dvc),
                 Slider("controller.omega", "ω", 0.0, 0.99, 0.01, "inertia weight (constant coefficients)",
                        visible=lambda s: not _dvc(s)),
-                Slider("c_hat", "ĉ = c1 + c2 + c3", 0.05, 5.0, 0.01, "total budget of the constant coefficients [m/s]",
+                Slider("c_hat", "ĉ = c1 + c2 + c3", *C_HAT_RANGE, 0.01,
+                       "total budget of the constant coefficients [m/s]",
                        read=_c_hat, act=lambda p, v: _budget(p, total=v), visible=lambda s: not _dvc(s),
                        label_of=lambda sc: "ĉ = c1 + c2 + c3" if _omni(sc) else "ĉ = c1 + c2"),
-                Slider("ratio", "c3 / (c1 + c2)", 0.0, 4.0, 0.05, "avoidance against attraction; Table 4.1: ½, 1, 2",
+                Slider("ratio", "c3 / (c1 + c2)", *RATIO_RANGE, 0.05,
+                       "avoidance against attraction; Table 4.1: ½, 1, 2",
                        marks=RATIO_MARKS, read=_ratio, act=lambda p, v: _budget(p, ratio=v),
                        visible=lambda s: not _dvc(s) and omni(s)),
                 Slider("controller.gamma", "γ", 0.1, 10.0, 0.1,

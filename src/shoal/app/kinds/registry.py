@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import functools
 import importlib
+import sys
 
 from shoal.presets import io as presets_io
 from shoal.presets import kinds as scene_kinds
@@ -27,8 +28,20 @@ def _app_kind(module: str) -> AppKind:
 
 @functools.cache
 def app_kinds() -> dict[str, AppKind]:
-    """Engine kind → the app kind that shows it, for every registered kind with an app module."""
-    return {k.name: _app_kind(k.app) for k in scene_kinds.KINDS.values() if k.app is not None}
+    """Engine kind → the app kind that shows it, for every registered kind with an app module.
+    A kind whose module does not import or has no ``KIND`` (a plug-in's) is left out with one
+    line on stderr: the app shows every other kind."""
+    out: dict[str, AppKind] = {}
+    for k in scene_kinds.KINDS.values():
+        if k.app is None:
+            continue
+        try:
+            out[k.name] = _app_kind(k.app)
+        except (Exception, SystemExit) as err:  # noqa: BLE001 - one broken module must not take the others down
+            why = f"{type(err).__name__}: {str(err)[:200]}"
+            print(f"shoal: the app cannot show {k.label} (kind {k.name!r}): its module {k.app!r} did not load: "
+                  f"{why}; SHOAL_PLUGINS=off runs without plug-ins", file=sys.stderr, flush=True)
+    return out
 
 
 def kinds() -> tuple[AppKind, ...]:

@@ -18,8 +18,10 @@ from shoal.engine.core.objectives import OBJECTIVES, Objective
 from shoal.engine.kinds.swarm import Simulation
 from shoal.engine.pso import tuning
 from shoal.engine.pso.laws import LAWS
-from shoal.presets.build import build_simulation, kind_of, objective_for, slo_unit, swarm_keywords
+from shoal.engine.pso.stability import diverged
+from shoal.presets.builders.swarm import build_simulation, objective_for
 from shoal.presets.io import PresetError
+from shoal.presets.kinds import kind_of
 from shoal.presets.models import Scenario
 
 from ..markdown import escape
@@ -30,7 +32,6 @@ from ..panel.positions import positions_choices, positions_folder
 from ..panel.selection import robot_number
 from ..panel.spec import Dropdown, Figure, Folder, KindPanel, PanelAPI, Slider, Tab, Text, fmt, round_sig
 from ..session.history import Frame, frame_of
-from ..session.positions import positions_of, slo_retune
 from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..view.canvas import Canvas
@@ -81,14 +82,6 @@ class SwarmDriver(BaseDriver):
     def build(self, scenario: Scenario) -> Simulation:
         return build_simulation(scenario, runs=1)
 
-    def rebuilds(self, old: Scenario, new: Scenario) -> bool:
-        return (new.sim.d != old.sim.d or new.init != old.init or slo_retune(old, new) is None
-                or (positions_of(new) == "slo" and slo_unit(new) != slo_unit(old)))
-
-    def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
-        slo = slo_retune(old, new)  # errors, selection, neighbourhood…: the running SLO source keeps its beliefs
-        return {**swarm_keywords(new), **({"slo": slo} if slo else {})}
-
     def frame(self, t: float) -> Frame:
         return frame_of(self.sim.state, t, accelerations=True)
 
@@ -122,7 +115,7 @@ class SwarmDriver(BaseDriver):
             "omega": omega, "c_hat": c_hat, "beta": (1.0 - omega) if bounded else math.nan,
             "U": U_j * math.sqrt(d), "U_j": U_j, "A_plus": A_plus, "A_minus": 2 * A_plus,
             "t": self.session.clock(), "k": float(self.sim.state.k), "best": float(self.sim.state.best_fitness[0]),
-            "outside": float(self.outside_arena()),
+            "outside": float(self.outside_arena()), "diverged": float(diverged(self.sim.state.u[:1])[0]),
         }
 
     def outside_arena(self) -> int:
@@ -245,6 +238,9 @@ def _readout(s: Session) -> str:
     physical mode: β, ω, ĉ, U_j, A−; in raw mode U and A+ too)."""
     r, c = s.readout(), s.scenario.controller
     law = LAWS[c.law]
+    if r["diverged"]:
+        return (_table([("ω", fmt(r["omega"])), ("ĉ = c1 + c2", fmt(r["c_hat"]))])
+                + f"\n\n*The swarm {DIVERGED_WORDS}; Reset starts it again.*")
     if not law.adapted:
         return (_table([("ω", fmt(r["omega"])), ("ĉ = c1 + c2", fmt(r["c_hat"]))])
                 + f"\n\n*{escape(law.label)}: ĉ has no unit and nothing bounds the speed.*")
@@ -286,8 +282,12 @@ def _set_coefficient(name: str) -> Any:
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
-    return (f"**{escape(sc.name)}** · {state} · t = {r['t']:.1f} s · {s.progress()} · "
-            f"best f = {r['best']:.4g}" + (f" · {int(r['outside'])} outside the arena" if r["outside"] else ""))
+    best = DIVERGED_WORDS if r["diverged"] else f"best f = {r['best']:.4g}"
+    return (f"**{escape(sc.name)}** · {state} · t = {r['t']:.1f} s · {s.progress()} · {best}"
+            + (f" · {int(r['outside'])} outside the arena" if r["outside"] else ""))
+
+
+DIVERGED_WORDS = "**diverged** (robots faster than 10⁹ m/s: these coefficients are outside the law's stable region)"
 
 
 def _compare(s: Session) -> dict[str, dict[str, Any]]:

@@ -13,6 +13,7 @@ load, a change or a refusal; a guard tells those Python-side assignments from a 
 from __future__ import annotations
 
 import contextlib
+import math
 import threading
 from dataclasses import dataclass, field
 from importlib import resources
@@ -124,7 +125,12 @@ def marks_text(scenario: Scenario) -> str:
             "the sources name the thesis' tables and the sections of docs/readings.md.\n\n" + "\n".join(rows))
 
 
+SEED_MAX = 2**63 - 1  # sim.seed's largest value (the seed box's own range)
+
+
 def _coerce(control: Any, value: Any) -> Any:
+    """A control's value as its item reads it; never an integer no message can carry (a
+    number box holding 1e308 stays a float: ``int(1e308)`` has 309 digits)."""
     if isinstance(control, Slider):
         return int(round(value)) if control.integer else float(value)
     if isinstance(control, Number):
@@ -132,7 +138,8 @@ def _coerce(control: Any, value: Any) -> Any:
             v = float(value)
         except (TypeError, ValueError):
             return -1
-        return int(v) if control.step == 1 and v == int(v) else v
+        whole = control.step == 1 and math.isfinite(v) and v.is_integer() and abs(v) <= SEED_MAX
+        return int(v) if whole else v
     if isinstance(control, Checkbox):
         return bool(value)
     return value
@@ -201,7 +208,7 @@ class Panel:
             "at the end", self._at_end_options(), initial_value=at_end_label(self.session.at_end, sc.sim.steps),
             hint="at the preset's last step the run stops (Play, Step or a changed control start it again), "
                  "starts again from step 0, or runs on")
-        self.seed = gui.add_number("seed", initial_value=int(sc.sim.seed), min=0, step=1,
+        self.seed = gui.add_number("seed", initial_value=int(sc.sim.seed), min=0, max=SEED_MAX, step=1,
                                    hint="random seed; changing it restarts the run")
         self.top += [self.at_end, self.seed]
 

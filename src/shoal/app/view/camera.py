@@ -37,8 +37,14 @@ def top_view(server: Any) -> None:
 
 def home_camera(camera: Any, text_scale: float = 1.0) -> None:
     """Put a client's camera (viser ``CameraHandle``) back straight above the middle of the
-    screen at the height that shows the arena (undoes a user's orbit, pan and zoom)."""
-    camera.position = (0.0, 0.0, camera_height(camera.aspect, text_scale))
+    screen at the height that shows the arena (undoes a user's orbit, pan and zoom), its labels at
+    ``text_scale``. A camera whose report is not finite or of an empty canvas (the message guard
+    drops such reports) gets the height of a square one."""
+    try:
+        aspect = float(camera.aspect)
+    except (ArithmeticError, TypeError, ValueError):
+        aspect = 1.0
+    camera.position = (0.0, 0.0, camera_height(aspect, text_scale))
     camera.look_at = (0.0, 0.0, 0.0)
     camera.up_direction = (0.0, 1.0, 0.0)
 

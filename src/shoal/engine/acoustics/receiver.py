@@ -85,10 +85,25 @@ def _project(X: np.ndarray, cos: np.ndarray, sin: np.ndarray, compiled: bool = T
     return ordered_matmul(X.real, cos, compiled) - ordered_matmul(X.imag, sin, compiled)
 
 
-@lru_cache(maxsize=32)
+CACHED_PHASES = 250_000  # K × L of a lag table kept for reuse (cos and sin: 4 MB); a larger one is not kept
+
+
 def lag_table(band: Band, D: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The search grid of a band and hydrophone separation: lags (L,) in s and the cos and sin
-    of 2π f_k τ (K, L) that :func:`correlate` needs, worked out once (read-only arrays)."""
+    of 2π f_k τ (K, L) that :func:`correlate` needs (read-only arrays), worked out once and kept
+    while small: a process serving many scenes keeps at most 32 tables of 4 MB, not 32 of any
+    size (a band of 5,000 bins at 1 MHz made 80 MB each, held until the server stopped)."""
+    if band.K * lag_samples(band, D).size > CACHED_PHASES:
+        return _lag_table(band, D)
+    return _kept_lag_table(band, D)
+
+
+@lru_cache(maxsize=32)
+def _kept_lag_table(band: Band, D: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return _lag_table(band, D)
+
+
+def _lag_table(band: Band, D: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     lags = lag_samples(band, D) / band.fs
     table = (lags, *_phases(band, lags))
     for a in table:

@@ -20,7 +20,7 @@ from typing import ClassVar, Literal, Protocol
 
 import numpy as np
 
-from ..core.registry import Registry
+from ..core.registry import Registry, shape
 from .forgetting import best_of, centroid_of, forget_update, improves
 from .intersections import EPS, furthest, intersect, pair_intersections, rho_consistent
 from .partners import Rngs, random_partner
@@ -228,7 +228,9 @@ class GTPSO:
         return f_hat, y, y_g, info
 
 
-STRATEGIES: Registry[type[Strategy]] = Registry[type[Strategy]]("strategy", APSO, XPSO, BPSO, XBPSO, GTPSO)
+STRATEGIES: Registry[type[Strategy]] = Registry[type[Strategy]](
+    "strategy", APSO, XPSO, BPSO, XBPSO, GTPSO,
+    check=shape("update", min_robots=int, needs=tuple, hydrophones=int, global_best=frozenset({"best", "centroid"})))
 
 
 def make_strategy(name: str, **params: float | bool) -> Strategy:

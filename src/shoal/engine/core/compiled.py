@@ -30,6 +30,8 @@ from numba import njit
 from numba.core import config as numba_config
 from numba.core.registry import CPUDispatcher
 
+from . import parallel
+
 config: Any = numba_config  # numba's settings (CACHE_DIR is set when numba starts; its stubs do not list it)
 NO_LOCATOR = "no locator available"  # numba's words when no cache folder can be written
 
@@ -54,9 +56,15 @@ def compile_here() -> None:
     _here.compiles = True
 
 
+def _compiles_here() -> bool:
+    """Does this thread compile: the warm-up's, or a thread of the runs' pool (which carries on a
+    call its caller made compiled: :mod:`.parallel`)?"""
+    return getattr(_here, "compiles", False) or getattr(parallel._inside, "active", False)
+
+
 def interpreted(fn: Callable) -> bool:
     """Would a call of kernel ``fn`` in this thread run as Python now (nothing compiled, deferred)?"""
-    return _deferred.is_set() and not getattr(fn, "overloads", True) and not getattr(_here, "compiles", False)
+    return _deferred.is_set() and not getattr(fn, "overloads", True) and not _compiles_here()
 
 
 class Kernel(CPUDispatcher):
@@ -64,7 +72,7 @@ class Kernel(CPUDispatcher):
     is compiled yet (:func:`defer`); a compiled kernel calling it calls the compiled one."""
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
-        if _deferred.is_set() and not self.overloads and not getattr(_here, "compiles", False):
+        if _deferred.is_set() and not self.overloads and not _compiles_here():
             return self.py_func(*args, **kwargs)
         return CPUDispatcher.__call__(self, *args, **kwargs)
 

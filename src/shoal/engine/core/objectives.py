@@ -1,8 +1,9 @@
 """Fitness and cost functions (Rossides Alg. 1, p. 90; §3.5, p. 74; common PSO benchmarks).
 
 Every objective returns a value per robot, shape ``(runs, robots)``, and says whether
-it is maximised; :meth:`Objective.is_better` is the single comparison the swarm uses
-(docs/readings.md, "Fitness or cost"). :data:`OBJECTIVES` is their registry: a plug-in adds its
+it is maximised; the swarms compare values through ``engine/pso/bests.py``, where NaN and the
+worst infinity are never bests (docs/readings.md, "Fitness or cost", "Bests that are NaN or
+infinite"). :data:`OBJECTIVES` is their registry: a plug-in adds its
 own vectorised function there.
 """
 
@@ -13,7 +14,7 @@ from typing import Callable, Literal
 
 import numpy as np
 
-from .registry import Registry
+from .registry import Registry, shape
 
 
 def source_distance(x: np.ndarray, source: np.ndarray) -> np.ndarray:
@@ -66,13 +67,25 @@ class ObjectiveFunction:
     """One objective of :data:`OBJECTIVES`: a vectorised ``f`` of positions (..., d) → (...)
     (a numpy function, or a numba-compiled one), whether it is maximised, and the frame it sees.
     A plug-in's objective sees ``(x − source)/scale`` as the benchmarks do, so a preset's
-    ``objective.source`` and ``objective.scale`` place and size it on the scene."""
+    ``objective.source`` and ``objective.scale`` place and size it on the scene.
+
+    ``name`` is the preset's ``objective.kind``, ``label`` what a panel shows; ``maximise``: the
+    best is the largest value; ``frame``: what ``f`` sees, ``"scaled"`` (x − source)/scale,
+    ``"offset"`` x − source or ``"x"`` the position itself."""
 
     name: str
     label: str
     f: Callable[[np.ndarray], np.ndarray]
     maximise: bool = False
     frame: Frame = "scaled"
+
+
+def shape_message(name: str, given: tuple[int, ...], got: tuple[int, ...]) -> str:
+    """Why objective ``name``'s values cannot be a fitness per robot: it mapped ``given`` to ``got``."""
+    hint = (" (a function of one point? make it work on the last axis, e.g. np.sum(z**2, axis=-1))"
+            if len(got) < len(given) - 1 or got == given[-1:] else "")
+    return (f"objective {name!r}: f must map (..., d) to (...), one value per point: given an array of shape "
+            f"{given} it returned shape {got}, not {given[:-1]}{hint}")
 
 
 OBJECTIVES: Registry[ObjectiveFunction] = Registry(
@@ -85,6 +98,7 @@ OBJECTIVES: Registry[ObjectiveFunction] = Registry(
     ObjectiveFunction("ackley", "Ackley", ackley),
     ObjectiveFunction("rosenbrock", "Rosenbrock", rosenbrock),
     ObjectiveFunction("griewank", "Griewank", griewank),
+    check=shape("f", maximise=bool, frame=frozenset({"x", "offset", "scaled"})),
 )
 
 
@@ -98,13 +112,28 @@ class Objective:
     name: str = "source-distance"
     source: np.ndarray = field(default_factory=lambda: np.zeros(2))
     scale: float = 1.0
+    bounds: tuple[float, float] | None = None  # every component of f's argument in [lo, hi]; None: unbounded
+    boundary: str = "periodic"  # how a swarm keeps to the bounds (engine/pso/bounds.py)
 
     def __post_init__(self) -> None:
         OBJECTIVES.pick(self.name)
+        if self.bounds is not None and not self.bounds[0] < self.bounds[1]:
+            raise ValueError(f"bounds: need lo < hi, got {self.bounds}")
 
     def __eq__(self, other: object) -> bool:
         return (isinstance(other, Objective) and (self.name, self.scale) == (other.name, other.scale)
-                and np.array_equal(self.source, other.source))
+                and np.array_equal(self.source, other.source)
+                and (self.bounds, self.boundary) == (other.bounds, other.boundary))
+
+    def box(self, d: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """The bounds as positions, (d,) each: where f's argument is ``bounds`` in every component."""
+        if self.bounds is None:
+            return None
+        frame = OBJECTIVES[self.name].frame
+        origin = np.zeros(d) if frame == "x" else self._source(d)
+        size = self.scale if frame == "scaled" else 1.0
+        lo, hi = self.bounds
+        return origin + size * lo, origin + size * hi
 
     @property
     def maximise(self) -> bool:
@@ -117,9 +146,13 @@ class Objective:
     def __call__(self, x: np.ndarray) -> np.ndarray:
         entry = OBJECTIVES[self.name]
         if entry.frame == "x":
-            return entry.f(x)
-        z = x - self._source(x.shape[-1])
-        return np.asarray(entry.f(z if entry.frame == "offset" else z / self.scale), dtype=float)
+            out = entry.f(x)
+        else:
+            z = x - self._source(x.shape[-1])
+            out = np.asarray(entry.f(z if entry.frame == "offset" else z / self.scale), dtype=float)
+        if np.shape(out) != x.shape[:-1]:
+            raise ValueError(shape_message(self.name, x.shape, np.shape(out)))
+        return out
 
     def is_better(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """True where fitness ``a`` beats ``b`` (strictly)."""

@@ -9,20 +9,39 @@ from __future__ import annotations
 
 import operator
 from dataclasses import dataclass, fields
-from typing import Any, ClassVar, Literal, get_args
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, get_args
 
 import numpy as np
 
+from ..core import parallel
 from ..core.contract import check_live
 from ..core.objectives import Objective
+from ..core.positions import Oracle, PositionSource
 from ..core.rng import BlockDraws, run_generators
 from ..core.schema import Column, Schema
-from ..pso import kernels
-from ..pso.bests import best_index, global_best, update_personal
-from ..pso.coeffs import CoefficientPolicy
-from ..pso.laws import Law
+from ..core.snapshot import SnapshotError, arrays, integer, part, rng_states, set_rng_states
+from ..core.steering import Steering
+from ..pso.bests import best_index, global_best, update_personal, warn_unfound
+from ..pso.bounds import confine
+from ..pso.coeffs import CoefficientPolicy, Constant
+from ..pso.laws import LAWS, Law, reachable
 from ..pso.laws import motion_heading as _heading
-from ..slo.positions import Oracle, PositionSource
+
+if TYPE_CHECKING:
+    from ..core.compiled_draws import CompiledDraws
+    from ..pso import kernels
+else:
+    class _Kernels:
+        """The compiled Chapter 3 kernels (numba), imported at their first use: a swarm on its numpy
+        tick never loads numba. That first use puts the module itself under this name."""
+
+        def __getattr__(self, name: str) -> Any:
+            global kernels
+            from ..pso import kernels
+
+            return getattr(kernels, name)
+
+    kernels = _Kernels()
 
 Attractors = Literal["literal", "ahead"]
 PbestOrder = Literal["before_velocity", "after_velocity"]
@@ -141,6 +160,15 @@ class RunSeries:
     tracked: np.ndarray  # (steps, R, d): velocity of the tracked robot
 
 
+def check_coefficients(law: Law, policy: CoefficientPolicy) -> None:
+    """The law's coefficient rule (:meth:`~shoal.engine.pso.laws.VelocityLaw.check`) for raw
+    coefficients; a ``ValueError`` naming them. Physical tuning gives coefficients inside it."""
+    if isinstance(policy, Constant):
+        why = LAWS[law.name].check(policy.omega, policy.c)
+        if why:
+            raise ValueError(f"policy: {why}")
+
+
 def _per_run(value: np.ndarray | float, R: int) -> np.ndarray:
     """A scalar or per-robot ``(R, N)`` coefficient as one value per run (mean over robots)."""
     v = np.asarray(value, dtype=float)
@@ -162,6 +190,7 @@ class Simulation:
     LIVE: ClassVar[frozenset[str]] = frozenset(
         {"policy", "law", "dt", "slo", "robots", "attractors", "pbest_order", "objective"})
     COLUMNS: ClassVar[Schema] = COLUMNS
+    steering: Steering | None = None  # the next tick's command from outside the law (core/steering.py)
 
     def __init__(
         self,
@@ -191,6 +220,7 @@ class Simulation:
             raise ValueError(f"dt must be > 0, got {dt}")
         self.d, self.dt, self.runs, self.seed, self.first_run = d, float(dt), runs, seed, first_run
         self.law = law or Law()
+        check_coefficients(self.law, policy)
         self.policy = policy
         self.objective = objective or Objective()
         self.attractors: Attractors = attractors
@@ -220,6 +250,7 @@ class Simulation:
         if seed is not None:
             self.seed = int(seed)
         self._rngs = run_generators(self.seed, self.first_run, self.runs)
+        self.steering = None
         self._block: BlockDraws | None = None
         self._setup: tuple | None = None
         x, u = self._spawn(self._robots)
@@ -227,6 +258,13 @@ class Simulation:
         self._coefficients: tuple[np.ndarray | float, np.ndarray] = (np.nan, np.full(1, np.nan))
         s = self.state
         self.positions.start(s.x, s.y, s.k, self.seed, self.first_run)
+        self._warned = False
+        self._honest()
+
+    def _honest(self) -> None:
+        """Say once if some run has no best yet (every value NaN or the worst infinity)."""
+        self._warned = warn_unfound(self.state.best_fitness, self.objective.maximise, self.objective.name,
+                                    self._warned)
 
     @property
     def rngs(self) -> list[np.random.Generator]:
@@ -241,7 +279,8 @@ class Simulation:
         shape = (n, self.d)
         x = np.stack([self.init_center + self.init_spread * (g.random(shape) - 0.5) for g in self.rngs])
         u = np.stack([self.init_speed * (2.0 * g.random(shape) - 1.0) for g in self.rngs])
-        return x, u
+        box = self.objective.box(self.d)
+        return (x, u) if box is None else (np.clip(x, box[0], box[1]), u)  # bounded: the start inside
 
     def _fresh_state(self, x: np.ndarray, u: np.ndarray) -> SwarmState:
         f = self.objective(x)
@@ -293,6 +332,8 @@ class Simulation:
         for name, kind in (("attractors", Attractors), ("pbest_order", PbestOrder)):
             if name in changes and changes[name] not in get_args(kind):
                 raise ValueError(f"{name}: unknown {changes[name]!r}, choose from {get_args(kind)}")
+        if "policy" in changes or "law" in changes:
+            check_coefficients(changes.get("law", self.law), changes.get("policy", self.policy))
         slo = changes.pop("slo", None)
         now = {"policy": self.policy, "law": self.law, "dt": self.dt, "robots": self.robots,
                "attractors": self.attractors, "pbest_order": self.pbest_order, "objective": self.objective}
@@ -345,25 +386,48 @@ class Simulation:
         return np.stack([g.random(shape) for g in self.rngs], axis=1)
 
     def step(self) -> StepInfo:
-        """Advance every run by one control tick Δt."""
-        if self._compiled_tick():
-            return self._compiled_step()
+        """Advance every run by one control tick Δt (steered by :attr:`steering`, if set)."""
+        steering, self.steering = self.steering, None
+        if self._compiled_tick() and (steering is None or steering.velocity is None):
+            info = self._compiled_step(steering)
+        else:
+            info = self._numpy_step(steering)
+        if not self._warned:
+            self._honest()
+        return info
+
+    def _numpy_step(self, steering: Steering | None = None) -> StepInfo:
+        """The tick of :meth:`step` in numpy (the reference of the compiled one)."""
         s = self.state
         if self.pbest_order == "before_velocity":  # Algorithm 1 phase A first
             self._update_bests()
-        omega, c = self.policy.coefficients(self.t, self.dt, self.d)
+        omega, c = self._tick_coefficients(steering)
         self._coefficients = (omega, np.asarray(c))
         g = self._directions()
         u_new = self.law.velocity(s.u, g, c, omega, self._draw(g.shape[0]))
+        if steering is not None and steering.velocity is not None:  # the law's draws are made all the same
+            command = np.asarray(steering.velocity, dtype=float)
+            u_new = reachable(command, s.u, c, omega) if self.law.adapted else command
         if self.pbest_order == "after_velocity":  # the velocity saw last tick's bests
             self._update_bests()
+        x_new = self.law.position(s.x, u_new, self.dt)
+        box = self.objective.box(self.d)
+        if box is not None:  # the search-space bounds (pso/bounds.py)
+            x_new, u_new = confine(x_new, u_new, box[0], box[1], self.objective.boundary)  # type: ignore[arg-type]
         s.a = (u_new - s.u) / self.dt  # [3.22]
-        s.x = self.law.position(s.x, u_new, self.dt)
+        s.x = x_new
         s.u = u_new
         s.heading = _heading(u_new, s.heading)
         s.k += 1
         self.positions.observe(s.x, s.k)  # where the moves ended: current beliefs for drawing
         return self.info()
+
+    def _tick_coefficients(self, steering: Steering | None) -> tuple[np.ndarray | float, np.ndarray]:
+        """ω and c of this tick: the policy's, or those of ``steering`` where it gives them."""
+        omega, c = self.policy.coefficients(self.t, self.dt, self.d)
+        if steering is None:
+            return omega, c
+        return steering.coefficients(omega, c, self.state.x.shape[:2])
 
     def _compiled_tick(self) -> bool:
         """:func:`kernels.swarm_step` does the tick: the laws it knows (standard, Adapted with
@@ -371,6 +435,7 @@ class Simulation:
         made with ``compiled=False``."""
         s = self.state
         return (self.compiled and self.law.name in ("standard", "adapted-sgn") and self.d <= kernels.MAX_TERMS
+                and self.objective.bounds is None
                 and isinstance(self.positions, Oracle) and s.x.dtype == s.u.dtype == s.y.dtype == np.float64)
 
     # U(0,1) draws a block holds at most (R × ticks × 2N d), and its ticks at most
@@ -408,11 +473,11 @@ class Simulation:
         self._setup = (key, setup) if np.shares_memory(source, obj.source) else None
         return setup
 
-    def _compiled_step(self) -> StepInfo:
+    def _compiled_step(self, steering: Steering | None = None) -> StepInfo:
         """The tick of :meth:`step` in one compiled call; the same numbers."""
         s, d = self.state, self.d
         R, N = s.x.shape[:2]
-        omega, c = self.policy.coefficients(self.t, self.dt, d)
+        omega, c = self._tick_coefficients(steering)
         c = np.asarray(c, dtype=float)
         self._coefficients = (omega, c)
         block = self._draws((2, N, d))
@@ -443,8 +508,9 @@ class Simulation:
     def run(self, steps: int, track: int = 0) -> RunSeries:
         """Advance ``steps`` ticks without a caller between them (headless use): the same
         numbers as ``steps`` calls of :meth:`step`. Where the compiled tick applies and the
-        coefficients are the same for every robot, whole blocks of ticks run in one compiled
-        call (:func:`kernels.swarm_run`); other ticks go through :meth:`step`."""
+        coefficients are the same for every robot, all the ticks of a block of runs go in one
+        compiled call (:func:`kernels.swarm_runs`), the blocks on every core; other ticks go
+        through :meth:`step` (a steered tick too)."""
         if steps < 0 or not 0 <= track < self.robots:
             raise ValueError(f"need steps >= 0 and 0 <= track < {self.robots}, got {steps}, {track}")
         R, d = self.runs, self.d
@@ -463,16 +529,22 @@ class Simulation:
         out.c.append(info.c)
         return 1
 
+    # ticks one compiled call of :meth:`run` takes at most (bounds the coefficient lists)
+    RUN_TICKS = 1 << 14
+
     def _run_compiled(self, k: int, steps: int, track: int, out: RunSeries) -> int:
-        """Ticks k … of :meth:`run` in one compiled call, as many as the block of draws holds
-        and while the coefficients are the same for every robot; 0 if none."""
-        if not self._compiled_tick():
+        """Ticks k … of :meth:`run` in compiled calls while the coefficients are the same for
+        every robot (and no steering is set), each block of runs in its own thread
+        (:mod:`~shoal.engine.core.parallel`), drawing from the runs' own generators; 0 if none."""
+        if not self._compiled_tick() or self.steering is not None:
+            return 0
+        ahead, literal, adapted, before, maximise, code, source, scale = self._kernel_setup()
+        if code == kernels.GIVEN:
             return 0
         s, d, dt = self.state, self.d, self.dt
         R, N = s.x.shape[:2]
-        block = self._draws((2, N, d))
         omegas, cs = [], []
-        for j in range(min(steps - k, block.ticks - block.used)):
+        for j in range(min(steps - k, self.RUN_TICKS)):
             omega, c = self.policy.coefficients((s.k + j) * dt, dt, d)  # self.t at that tick
             c = np.asarray(c, dtype=float)
             if not isinstance(omega, float) or c.shape != (2,):
@@ -482,27 +554,80 @@ class Simulation:
         n = len(omegas)
         if not n:
             return 0
-        ahead, literal, adapted, before, maximise, code, source, scale = self._kernel_setup()
-        if code == kernels.GIVEN:
-            return 0
+        gen = self._compiled_draws()  # settles a block of draws of the single-tick path first
         new, f = np.empty((2, 3) + s.x.shape), np.empty((R, N))
         y, f_y, yg, best = s.y.copy(), s.f_y.copy(), s.yg.copy(), s.best_fitness.copy()
         turns = s.turns()
-        first = block.used
-        block.used += n
-        last = kernels.swarm_run(s.x, s.u, y, f_y, f, block.draws, first, np.array(omegas), np.array(cs), ahead,
-                                 literal, adapted, dt, before, maximise, code, source, scale, new, yg, best,
-                                 turns.turn, turns.turned, out.speeds[k:k + n], out.best_fitness[k:k + n], track,
-                                 out.tracked[k:k + n])
+        w, c_all = np.array(omegas), np.array(cs)
+        speeds, bests, tracked = out.speeds[k:k + n], out.best_fitness[k:k + n], out.tracked[k:k + n]
+
+        def block(lo: int, hi: int) -> int:
+            return kernels.swarm_runs(lo, hi, s.x, s.u, y, f_y, f, gen.address, gen.states, w, c_all, ahead,
+                                      literal, adapted, dt, before, maximise, code, source, scale, new, yg, best,
+                                      turns.turn, turns.turned, speeds, bests, track, tracked)
+
+        parallel.each_block(block, R)
         turns.pending = True
         s.f, s.y, s.f_y, s.yg, s.best_fitness = f, y, f_y, yg, best
-        s.x, s.u, s.a = new[last]
+        s.x, s.u, s.a = new[(n - 1) % 2]
         out.t[k:k + n] = [(s.k + j + 1) * dt for j in range(n)]
         out.omega += omegas
         out.c += cs
         s.k += n
         self._coefficients = (omegas[-1], cs[-1])
+        if not self._warned:
+            self._honest()
         return n
+
+    def _compiled_draws(self) -> "CompiledDraws":
+        """The runs' generators as a kernel draws from them (where one call a tick leaves them)."""
+        from ..core.compiled_draws import CompiledDraws  # (numba: imported with the kernels, at first use)
+
+        rngs = self.rngs
+        kept = self.__dict__.get("_gen")
+        if kept is None or kept[0] is not rngs:
+            kept = self._gen = (rngs, CompiledDraws(rngs))
+        return kept[1]
+
+    # ------------------------------------------------------------------ snapshot
+    STATE = ("x", "u", "a", "y", "f_y", "yg", "best_fitness", "f", "heading", "status")
+
+    def snapshot(self) -> dict[str, Any]:
+        """Everything the runs depend on beyond the settings they were built with, as plain data
+        (:mod:`~shoal.engine.core.snapshot`); settles draws taken ahead and pending headings first,
+        which changes no number."""
+        s = self.state
+        rngs, _ = self.rngs, s.heading  # (both settle)
+        omega, c = self._coefficients
+        return {"k": s.k, "seed": self.seed, "dt": self.dt, "state": {n: getattr(s, n).copy() for n in self.STATE},
+                "rngs": rng_states(rngs), "omega": omega, "c": np.array(c), "positions": self.positions.snapshot()}
+
+    def restore(self, data: dict[str, Any]) -> None:
+        """Continue from :meth:`snapshot`'s ``data`` (of a swarm built with the same settings and runs)."""
+        st = part(data, "state")
+        got = {n: arrays(part(st, n, "state"), f"state.{n}") for n in self.STATE}
+        R, N, d = got["x"].shape if got["x"].ndim == 3 else (0, 0, 0)
+        shapes = {"x": (R, N, d), "u": (R, N, d), "a": (R, N, d), "y": (R, N, d), "f_y": (R, N), "yg": (R, d),
+                  "best_fitness": (R,), "f": (R, N), "heading": (R, N), "status": (R, N)}
+        if (R, d) != (self.runs, self.d) or N < 1:
+            raise SnapshotError(f"state.x: expected ({self.runs}, robots, {self.d}), got {got['x'].shape}")
+        for n, shape in shapes.items():
+            if got[n].shape != shape:
+                raise SnapshotError(f"state.{n}: expected shape {shape}, got {got[n].shape}")
+        omega = part(data, "omega")
+        omega = arrays(omega, "omega") if isinstance(omega, np.ndarray) else omega
+        if not isinstance(omega, (float, np.ndarray)):  # an array: ω per robot (a steered tick)
+            raise SnapshotError("omega: expected a float or an array")
+        k, seed, dt = integer(part(data, "k"), "k"), integer(part(data, "seed"), "seed"), part(data, "dt")
+        if not isinstance(dt, float) or not dt > 0:
+            raise SnapshotError(f"dt: expected a float > 0, got {dt!r}")
+        c = arrays(part(data, "c"), "c", dtype=np.floating)
+        set_rng_states(self._rngs, part(data, "rngs"), "rngs")
+        self.positions.restore(part(data, "positions"), got["x"])
+        self.seed, self.dt, self._robots = seed, dt, N
+        self._block, self._setup = None, None
+        self.state = SwarmState(**got, k=k)
+        self._coefficients = (omega, c)
 
     def info(self) -> StepInfo:
         """The metrics of the current step, with the coefficients of the last tick."""

@@ -8,13 +8,13 @@ random draws are ``(n, runs, robots, d)`` and coefficients ``c`` are ``(n,)`` or
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any, Callable, Literal
 
 import numpy as np
-from scipy.special import expit
 
-from ..core.registry import Registry
+from ..core.registry import Registry, shape
 from . import stability
 
 Squash = Literal["sgn", "tanh", "logistic"]
@@ -35,6 +35,8 @@ def squash(z: np.ndarray, kind: Squash = "sgn", width: float = 1.0) -> np.ndarra
         if kind == "tanh":
             return np.tanh(z / width)
         if kind == "logistic":
+            from scipy.special import expit  # (scipy.special takes a fifth of a second to import: only here)
+
             return 2.0 * expit(z / width) - 1.0
     raise ValueError(f"unknown squash {kind!r}")
 
@@ -76,6 +78,16 @@ def adapted_velocity(
     return _omega(omega) * u + terms.sum(axis=0)
 
 
+def reachable(command: np.ndarray, u: np.ndarray, c: np.ndarray, omega: np.ndarray | float) -> np.ndarray:
+    """``command`` clipped, component by component, to what an Adapted law [3.36] can reach from
+    ``u`` in one tick: ω u ± Σ |c_n| (each term adds at most c_n). So |u_j| ≤ ĉ/(1 − ω) = U_j holds
+    once it holds [3.26], and the acceleration stays within A+ and A− [3.27]–[3.28]. Rounding is
+    monotone, so the law's own next velocity lies inside and passes unchanged."""
+    wu = _omega(omega) * u
+    reach = np.abs(_coeffs(c, u.ndim + 1)).sum(axis=0)
+    return np.minimum(np.maximum(command, wu - reach), wu + reach)
+
+
 # (u, g, c, omega, r, smooth width) → u[k+1]
 Velocity = Callable[[np.ndarray, np.ndarray, np.ndarray, "np.ndarray | float", np.ndarray, float], np.ndarray]
 
@@ -86,7 +98,14 @@ Region = Literal["adapted", "order-2"]  # the (ω, ĉ) regions the panel draws: 
 @dataclass(frozen=True)
 class VelocityLaw:
     """One Chapter 3 velocity law and what the rest of Shoal needs to know about it: how it
-    moves, its coefficient rule and its stability region."""
+    moves, its coefficient rule and its stability region.
+
+    ``name`` is the preset's ``controller.law``, ``label`` what a panel shows; ``adapted``: bounded
+    per-component terms with the position update x + Δt u (the physical tuning U, A+, Δt and the
+    speed bounds need it); ``velocity(u, g, c, omega, r, width)``: the next velocities (see
+    :func:`standard_velocity`); ``omega_range`` (lo, hi): the raw ω it needs, lo ≤ ω < hi, with
+    ``rule`` the rule in words that a refusal names; ``region``: its stability region in the
+    (ω, ĉ) plane, ``"adapted"`` [3.13]–[3.14] or ``"order-2"`` [3.9], which the panel draws."""
 
     name: str
     label: str
@@ -103,6 +122,23 @@ class VelocityLaw:
             return None
         lo, hi = self.omega_range
         return None if lo <= omega < hi else f"omega = {omega:g}: {self.label} needs {self.rule}"
+
+    def check(self, omega: float | np.ndarray, c: Any) -> str | None:
+        """The law's coefficient rule, the one place it is applied (the preset model, the engine's
+        constructor and retune, so ``make``, ``Scene.retune`` and the app): why raw ``omega`` and
+        the coefficients ``c`` do not suit this law, or None. Every c_n must be a finite number
+        ≥ 0, and ω within the law's range (``omega_range``, e.g. 0 ≤ ω < 1 [3.14])."""
+        cs = np.asarray(c, dtype=float)
+        if not np.isfinite(cs).all() or (cs < 0).any():
+            return f"c = {np.round(cs.ravel(), 6).tolist()}: {self.label} needs finite coefficients c_n >= 0"
+        w = np.asarray(omega, dtype=float)
+        if not np.isfinite(w).all():
+            return f"omega = {omega}: not a number"
+        for value in np.unique(w):
+            why = self.check_omega(float(value))
+            if why:
+                return why
+        return None
 
     def stable(self, omega: float, c_hat: float) -> bool:
         """Is (ω, ĉ) inside this law's stability region?"""
@@ -121,12 +157,14 @@ def _standard(u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | f
     return standard_velocity(u, g, c, omega, r)
 
 
-def _adapted(kind: Squash) -> Velocity:
-    def velocity(u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | float, r: np.ndarray,
-                 width: float) -> np.ndarray:
-        return adapted_velocity(u, g, c, omega, r, kind, width)
+def _adapted_law(u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | float, r: np.ndarray,
+                 width: float, *, kind: Squash) -> np.ndarray:
+    return adapted_velocity(u, g, c, omega, r, kind, width)
 
-    return velocity
+
+def _adapted(kind: Squash) -> Velocity:
+    """[3.11] with the squash ``kind``: a partial of a module function, so a law pickles."""
+    return functools.partial(_adapted_law, kind=kind)
 
 
 _ADAPTED_RULE: dict[str, Any] = dict(omega_range=(0.0, 1.0), region="adapted", rule="0 <= omega < 1 [3.14]")
@@ -137,6 +175,8 @@ LAWS: Registry[VelocityLaw] = Registry(
     VelocityLaw("adapted-tanh", "Adapted PSO (tanh)", True, _adapted("tanh"),  # Rossides §3.2.1 smooth option
                 **_ADAPTED_RULE),
     VelocityLaw("adapted-logistic", "Adapted PSO (logistic)", True, _adapted("logistic"), **_ADAPTED_RULE),
+    check=shape("velocity", "check_omega", "stable", adapted=bool, region=frozenset({"adapted", "order-2"}), rule=str,
+                omega_range=(tuple, type(None))),
 )
 
 

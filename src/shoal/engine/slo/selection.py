@@ -14,7 +14,7 @@ from typing import Callable, Literal, Protocol
 
 import numpy as np
 
-from ..core.registry import Registry
+from ..core.registry import Registry, shape
 from . import select_kernels
 from .candidates import Candidates, Kind
 
@@ -240,4 +240,5 @@ SELECTIONS: Registry[SelectionRule] = Registry(
     SelectionRule("css", "CSS (closest solution)", _css, reads_candidates=False),  # [3.7]
     SelectionRule("rts", "RTS (round trip)", _rts),  # [3.8]
     SelectionRule("akcan", "Akcan (GDL)", _akcan),  # [3.9]
+    check=shape("select", reads_candidates=bool),
 )
