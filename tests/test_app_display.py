@@ -1,6 +1,6 @@
-"""The Display boxes of a tab without a browser: the light drawing, the 3-D view and large text
-reach the arena, the plots and the status area, and outlive a swap of scene kinds; a tipped
-camera is put straight above what it looks at."""
+"""The Display boxes of a tab without a browser: the light drawing, the 3-D view and the
+projector mode reach the arena, the plots, the board and the status area, and outlive a swap of
+scene kinds; a tipped camera is put straight above what it looks at."""
 
 from __future__ import annotations
 
@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 from viser import GuiEvent
 
-from shoal.app.panel.view_row import BOXES, DISPLAY_BUTTON, LIGHT_NOTE, TEXT_SCALE
+from shoal.app.panel.view_row import BOXES, DISPLAY_BUTTON, LIGHT_NOTE, SWITCH, TEXT_SCALE
+from shoal.app.view import projector
 from shoal.app.view.camera import straighten, tipped
 from shoal.app.view.page import LIGHT_LABEL, SHOW_BOXES, SOFTWARE_TOAST, page_script
 from shoal.presets.io import load
@@ -40,6 +41,10 @@ def test_the_page_script_names_the_box_it_ticks_and_the_toast_it_closes():
     js = page_script()
     assert "%(" not in js and f'"{LIGHT_LABEL}"' in js and f'"{SOFTWARE_TOAST}"' in js and f'"{SHOW_BOXES}"' in js
     assert LIGHT_LABEL == BOXES[0][0] and SHOW_BOXES == DISPLAY_BUTTON  # the panel's names, as the script finds them
+    js = projector.projector_script()
+    assert "%(" not in js and f'"{SWITCH}"' in js and SWITCH == projector.SWITCH
+    assert TEXT_SCALE == projector.PROJECTOR_SCALE == 2.0  # every text twice its size
+    assert f'"{projector.PARAM}"' in js and f'"{projector.STORE}"' in js  # the address and the browser keep it
 
 
 def _box(tab, field):
@@ -65,19 +70,29 @@ def test_ticking_light_drawing_draws_the_arena_lightly_and_says_so_in_the_status
     assert tab.arena.canvas.shown("trails")
 
 
-def test_large_text_scales_the_arena_labels_and_the_plots_axes(tab):
+def test_projector_mode_doubles_the_arena_labels_the_plots_axes_and_figures_and_moves_the_board(tab):
     tab.session.step(5)
     tab.tick(1.0)
     small = tab.arena.nodes["source_label"].font_screen_scale
-    axes = tab.panels.handles["speed"].axes
+    axes = tab.panels.handles["best_distance"].axes
     assert "font" not in axes[0]
-    _box(tab, "large_text").value = True
+    fig = tab.panels.handles["stability"].figure
+    assert fig.layout.font.size == 12 and fig.layout.title.font.size == 14  # nothing under 12 px
+    assert tab.panels.board.placed is False  # left of the arena
+    _box(tab, "projector").value = True
     tab.session.step(1)
     tab.tick(2.0)
-    assert tab.arena.canvas.text_scale == TEXT_SCALE
+    assert tab.display.projector and tab.arena.canvas.text_scale == TEXT_SCALE
     assert tab.arena.nodes["source_label"].font_screen_scale == pytest.approx(TEXT_SCALE * small)
-    big = tab.panels.handles["speed"].axes
+    big = tab.panels.handles["best_distance"].axes
     assert big[0]["font"].startswith(f"{round(12 * TEXT_SCALE)}px") and big[1]["size"] > axes[1]["size"]
+    fig = tab.panels.handles["stability"].figure
+    assert fig.layout.font.size == 24 and fig.layout.title.font.size == 28
+    assert all(note.font.size == 24 for note in fig.layout.annotations)
+    assert tab.panels.board.placed is True  # under the controls
+    _box(tab, "projector").value = False
+    tab.tick(3.0)
+    assert tab.panels.handles["stability"].figure.layout.font.size == 12 and tab.panels.board.placed is False
 
 
 def test_the_display_outlives_a_swap_to_another_kind_of_scene(tab):
@@ -87,7 +102,7 @@ def test_the_display_outlives_a_swap_to_another_kind_of_scene(tab):
     tab.session.step(3)
     tab.tick(1.0)
     assert tab.session.kind.name == "fleet" and tab.arena.canvas.light and LIGHT_NOTE in tab.panels.status.content
-    assert _box(tab, "light").value and _box(tab, "orbit").value and not _box(tab, "large_text").value
+    assert _box(tab, "light").value and _box(tab, "orbit").value and not _box(tab, "projector").value
     assert tab.arena.canvas.shown("trails_dots") and not tab.arena.canvas.shown("obstacle_edges")
 
 
@@ -98,12 +113,12 @@ def test_a_tick_that_arrives_while_another_display_change_is_drawn_is_not_lost(t
     light = _box(tab, "light")
     light._impl.value = True  # what viser does as a user's value arrives, before its callback runs
     light._impl.update_timestamp = time.time()
-    _box(tab, "large_text").value = True  # another change, drawn and synced meanwhile
+    _box(tab, "projector").value = True  # another change, drawn and synced meanwhile
     assert light.value and not tab.display.light
     for cb in light._impl.update_cb:
         cb(GuiEvent(client=None, client_id=None, target=light))
     assert tab.display.light and light.value
     tab.tick(1.0)
     assert tab.arena.canvas.light and LIGHT_NOTE in tab.panels.status.content
-    _box(tab, "large_text").value = False  # once taken, the box follows the display again
+    _box(tab, "projector").value = False  # once taken, the box follows the display again
     assert light.value and tab.display.light

@@ -43,13 +43,16 @@ def test_sonar_preset_builds_an_acoustic_swarm_and_draws_rays_from_the_robots(ta
     s.step(3)
     view = _drawn(tab, 1.0)
     x = s.sim.state.x[0]
-    for key in ("rays_true", "rays_mirror"):
-        pts = np.asarray(view.nodes[key].points)
+    dashes = np.asarray(view.nodes["rays_mirror"].points).reshape(s.sim.robots, -1, 2, 3)  # a mirror ray: dashed
+    assert dashes.shape[1] == 5
+    ends = {"rays_true": np.asarray(view.nodes["rays_true"].points),
+            "rays_mirror": np.stack([dashes[:, 0, 0], dashes[:, -1, 1]], axis=1)}
+    for pts in ends.values():
         assert pts.shape == (s.sim.robots, 2, 3)
         np.testing.assert_allclose(pts[:, 0, :2], view.to_view(x)[:, :2], atol=1e-4)
-    # green = the ray of the pair that points nearer the true source
-    true = np.asarray(view.nodes["rays_true"].points)[:, :, :2] / view.scale
-    mirror = np.asarray(view.nodes["rays_mirror"].points)[:, :, :2] / view.scale
+    # blue = the ray of the pair that points nearer the true source
+    true = ends["rays_true"][:, :, :2] / view.scale
+    mirror = ends["rays_mirror"][:, :, :2] / view.scale
     to_src = s.sim.state.source[0] - x
     cos = lambda seg: np.einsum("nd,nd->n", seg[:, 1] - seg[:, 0], to_src)  # noqa: E731
     assert np.all(cos(true) >= cos(mirror) - 1e-6)

@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from shoal.app.kinds.registry import kind_for
-from shoal.app.lessons import LessonError, library, parse_lesson, readings
+from shoal.app.lessons import LessonError, library, parse_lesson, quotes, readings
 from shoal.app.lessons.library import read_lesson, shipped
 from shoal.app.lessons.model import Check
 from shoal.app.lessons.readings import Run, format_value
@@ -282,6 +282,57 @@ def test_the_screen_reads_what_the_check_computes(lesson_id, index):
     assert all(r.complete and r.value is not None for r in shown)
     session.apply({"sim.seed": scenario.sim.seed + 1})  # another scene than the step's: no numbers
     assert measure(preset, values, readings.names(check)) == NOT_THIS_SCENE
+
+
+@pytest.mark.parametrize("lesson_id, index", CHECKED)
+def test_every_number_an_answer_quotes_agrees_with_the_reading(lesson_id, index):
+    """The words of an answer that quote a reading (its check's ``quote``) are in the answer and
+    borne out by the reading the step's scene gives, headless (what the screen reads: the test
+    above): "about 4 units" is not said of 4.2 as "about 6"."""
+    step = LESSONS[lesson_id].steps[index]
+    (preset, values), check = readings.step_check(LESSONS[lesson_id], index)
+    got = {f"{r.kind}.{r.metric}": r for r in readings.headless(check, _headless(lesson_id, index))}
+    answer = " ".join(step.answer.split())
+    where = f"{lesson_id}.md, step {index + 1} '{step.title}'"
+    for key, words in check.quote.items():
+        assert words in answer, f"{where}: the answer does not say {words!r}"
+        r = got[key]
+        assert quotes.holds(quotes.claim(words), r.value), f"{where}: {words!r} but the screen reads {r.shown}"
+
+
+PLAY_SECONDS = 60.0  # a step's run reaches its check's last step within this at the speed its Set up sets
+
+
+@pytest.mark.parametrize("lesson_id, index", CHECKED)
+def test_set_up_sets_a_speed_at_which_the_step_is_played_in_a_minute(lesson_id, index):
+    (preset, values), check = readings.step_check(LESSONS[lesson_id], index)
+    speed = load_scene(preset, values).view.steps_per_second
+    seconds = check.steps / speed
+    assert seconds <= PLAY_SECONDS, (f"{lesson_id}.md, step {index + 1}: {check.steps} steps at {speed:g} steps/s "
+                                     f"take {seconds:.0f} s: set view.steps_per_second")
+
+
+def test_the_answers_quote_their_readings():
+    """Most steps' answers quote a number their check reads, and those numbers are tied to it."""
+    quoted = [(lid, i) for lid, i in CHECKED if readings.step_check(LESSONS[lid], i)[1].quote]
+    assert len(quoted) >= 30 and {lid for lid, _ in quoted} == set(LESSONS)
+
+
+def test_a_quote_claims_what_its_words_say():
+    c = quotes.claim
+    assert quotes.holds(c("about 4 units"), 4.203) and not quotes.holds(c("about 6 units"), 4.203)
+    assert quotes.holds(c("Past 10^−25"), 1.1e-30) and not quotes.holds(c("Past 10^−25"), 1e-20)
+    assert quotes.holds(c("past 10⁶ m/s"), 2.1e6) and quotes.holds(c("near 10^−5"), 9.2e-6)
+    assert quotes.holds(c("about 7 %"), 0.068) and not quotes.holds(c("about 7 %"), 7.0)
+    assert quotes.holds(c("2.12 m/s"), 2.121) and not quotes.holds(c("2.12 m/s"), 2.13)
+    assert quotes.holds(c("under 10 m/s"), 8.97) and not quotes.holds(c("over 3 m/s"), 2.9)
+    with pytest.raises(ValueError):
+        c("a few units")
+
+
+def test_a_quote_of_no_reading_is_refused():
+    with pytest.raises(LessonError, match="quote"):
+        parse_lesson(GOOD.replace("[check]", '[check]\nquote."mean.nothing" = "about 3"'), "x")
 
 
 def test_every_step_with_numbers_in_its_answer_is_checked():

@@ -1,6 +1,7 @@
 """Nothing waits for the kernels: a scene runs on its numpy tick while they compile and changes
-over between two ticks with the same numbers; SLO scenes, which have no numpy tick, wait and
-say so; ``shoal run`` and ``shoal warmup`` (app/warmup.py)."""
+over between two ticks with the same numbers; SLO scenes, which have no numpy tick, run their
+kernels as Python meanwhile and say so (tests/test_compiled.py: the same bits); ``shoal run``
+and ``shoal warmup`` (app/warmup.py)."""
 
 from __future__ import annotations
 
@@ -70,15 +71,16 @@ def test_a_fleet_session_runs_on_numpy_until_its_kernels_are_ready_with_the_same
     assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(_state(s.sim), _state(reference)))
 
 
-def test_an_slo_scene_waits_for_its_kernels_and_the_status_says_so(cold, server):
+def test_an_slo_scene_plays_while_its_kernels_compile_and_the_status_says_how(cold, server):
     from app_helpers import hand_tab
 
     server.scenario = load("slo-walk")
     with hand_tab(server) as tab:
         s = tab.session
-        assert s.step(3) == 0 and s.k == 0  # no numpy tick: it waits
+        assert s.step(3) == 3 and s.k == 3  # no numpy tick, and yet it never waits
         tab.panels.refresh_status()
-        assert "waiting for this scene's compiled kernels" in tab.panels.status.content
+        assert "compiling kernels in the background (scene 1 of 30" in tab.panels.status.content
+        assert "Python meanwhile (slower), the same numbers" in tab.panels.status.content
         cold.ready["slo"].set()
         assert s.step(3) == 3
         tab.panels.refresh_status()
@@ -140,7 +142,7 @@ def test_only_the_groups_a_warmup_compiles_wait_or_run_on_numpy():
     w.started, w.scheduled = 0.0, {"fleet"}
     sim = build(load("default"))
     w.use(sim, load("default"))
-    assert sim.compiled and not w.waits(load("slo-walk")) and w.status(load("slo-walk")) is None
+    assert sim.compiled and not w.interprets(load("slo-walk")) and w.status(load("slo-walk")) is None
     fleet = build(load("course-dvc"))
     w.use(fleet, load("course-dvc"))
     assert not fleet.compiled and w.status(load("course-dvc")) is not None
@@ -150,10 +152,10 @@ def test_a_process_without_a_warmup_compiles_as_before():
     w = Warmup()
     sim = build(load("default"))
     w.use(sim, load("default"))
-    assert sim.compiled and not w.waits(load("slo-walk")) and w.status(load("course-dvc")) is None
+    assert sim.compiled and not w.interprets(load("slo-walk")) and w.status(load("course-dvc")) is None
 
 
-def test_the_status_line_says_a_scene_is_being_built_and_what_it_waits_for(cold, server):
+def test_the_status_line_says_a_scene_is_being_built(cold, server):
     from app_helpers import hand_tab, shown
 
     def status_while_built(tab, preset: str) -> str:
@@ -169,12 +171,9 @@ def test_the_status_line_says_a_scene_is_being_built_and_what_it_waits_for(cold,
         return seen[0]
 
     with hand_tab(server) as tab:
-        cold.ready["slo"].set()
         assert shown(status_while_built(tab, "course-dvc")) == "**course-dvc** · building the scene …"
-        cold.ready["slo"].clear()
-        said = status_while_built(tab, "slo-walk")
-        assert shown(said).startswith("**slo-walk** · building the scene; waiting for this scene's compiled "
-                                      "kernels"), said
+        said = status_while_built(tab, "slo-walk")  # (its kernels not compiled: it is built all the same)
+        assert shown(said) == "**slo-walk** · building the scene …", said
 
 
 ENTRY_WHILE_COMPILING = """
@@ -198,3 +197,17 @@ def test_the_command_exits_with_its_code_without_waiting_for_a_warmup_still_comp
     bad = subprocess.run([sys.executable, "-c", ENTRY_WHILE_COMPILING.replace('"list"', '"show", "nope"')],
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode != 0 and "nope" in bad.stderr
+
+
+def test_a_warmup_elsewhere_compiles_in_a_child_into_the_disk_cache_and_counts_its_progress(tmp_path, monkeypatch):
+    """``shoal serve``'s warm-up compiles in a child process (the server's own thread held the
+    interpreter's lock for most of a minute): the child writes the kernels into the cache this
+    process reads, each preset counted as it is done; a stopped warm-up compiles nothing more."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    w = Warmup()
+    assert w._compile_elsewhere(["slo-walk"])
+    assert w.done == 1 and w.revision == 1 and w._child is None
+    assert any(tmp_path.rglob("*.nbi")) and any(tmp_path.rglob("*.nbc"))  # numba's index and machine code
+    w.stop()
+    w.run(only="slo", elsewhere=True)
+    assert not w.ready["slo"].is_set() and w.done == 1  # (stopped: nothing more)

@@ -166,8 +166,10 @@ def point_radius_px(server, cid, page, size: float) -> float:
 
 def open_folder(page, title: str, probe: str) -> None:
     """Open the folder titled ``title`` (folders may start closed) unless the control labelled
-    or named ``probe`` inside it already shows."""
-    inside = page.get_by_text(probe, exact=True).or_(page.get_by_role("button", name=probe, exact=True)).first
+    or named ``probe`` inside it already shows (a control: the legend beside the arena says
+    "robot" too)."""
+    exact = re.compile(rf"^\s*{re.escape(probe)}\s*$")
+    inside = page.locator("label").filter(has_text=exact).or_(page.get_by_role("button", name=probe, exact=True)).first
     if not (inside.count() and inside.is_visible()):
         page.get_by_text(title, exact=True).first.click()
         inside.wait_for(state="visible", timeout=30000)

@@ -1,10 +1,10 @@
 """A/B comparison and replays in a real headless Chromium.
 
 One server (``default``, a Chapter 3 swarm) and one page for the module; tests run in file
-order. The first switches swarm B on from the Compare tab and finds it in the picture (teal
+order. The first switches swarm B on from the Compare tab and finds it in the picture (blue
 where B's robots are, apart from A's) and in the plot's legend. The second exports a replay
 from that page, loads it into a second server started on a fleet scene, scrubs the
-timeline and checks the robots drawn there are the recorded ones, and swarm B's in teal.
+timeline and checks the robots drawn there are the recorded ones, and swarm B's in blue.
 """
 
 from __future__ import annotations
@@ -100,7 +100,7 @@ def seen(page, pixels: np.ndarray, colour_ok, attempts: int = 6, reach: int = 1)
     return hits
 
 
-def teal(patch: np.ndarray) -> np.ndarray:
+def blue(patch: np.ndarray) -> np.ndarray:
     r, g, b = patch[..., 0], patch[..., 1], patch[..., 2]
     return (r < 100) & (g > 130) & (b > 130)
 
@@ -133,7 +133,7 @@ def test_compare_runs_b_in_lock_step_and_draws_it_in_teal(server, page, cid, tmp
     wait_until(lambda: tab.arena.drawn_revision == session.revision, what="the paused step drawn")
     assert session.twin.sim.state.k == session.sim.state.k
     dismiss_toasts(page)
-    # B's robots that lie clear of A's are teal on screen, within a robot's diameter of where B is
+    # B's robots that lie clear of A's are blue on screen, within a robot's diameter of where B is
     xa, xb = session.sim.state.x[0], session.twin.sim.state.x[0]
     body = ROBOT_SIZE / tab.arena.scale  # a robot's radius in metres
     clear = np.sqrt(((xb[:, None] - xa[None]) ** 2).sum(-1)).min(axis=1) > 4 * body
@@ -144,16 +144,16 @@ def test_compare_runs_b_in_lock_step_and_draws_it_in_teal(server, page, cid, tmp
     pixels = np.round(b[clear & inside]).astype(int)
     assert len(pixels) >= 3, (f"B should have moved apart from A: A about {xa.mean(axis=0).round(2)} m, B about "
                               f"{xb.mean(axis=0).round(2)} m")
-    hits = seen(page, pixels, teal, reach=int(np.ceil(2 * r)))
+    hits = seen(page, pixels, blue, reach=int(np.ceil(2 * r)))
     if hits < 0.8 * len(pixels):
         shot = tmp_path / "compare.png"
         shot.write_bytes(page.screenshot())
         x0, y0 = int(box["x"]), int(box["y"])
         arena = screenshot(page)[y0: y0 + int(box["height"]), x0: x0 + int(box["width"])]
-        found = np.argwhere(teal(arena))[:, ::-1] + (x0, y0)  # (x, y) of every teal pixel in the arena
-        where = (f"{len(found)} teal pixels in x {found[:, 0].min()}–{found[:, 0].max()}, y {found[:, 1].min()}–"
-                 f"{found[:, 1].max()}" if len(found) else "no teal in the arena")
-        raise AssertionError(f"only {hits}/{len(pixels)} of B's robots seen in teal, expected about "
+        found = np.argwhere(blue(arena))[:, ::-1] + (x0, y0)  # (x, y) of every blue pixel in the arena
+        where = (f"{len(found)} blue pixels in x {found[:, 0].min()}–{found[:, 0].max()}, y {found[:, 1].min()}–"
+                 f"{found[:, 1].max()}" if len(found) else "no blue in the arena")
+        raise AssertionError(f"only {hits}/{len(pixels)} of B's robots seen in blue, expected about "
                              f"{pixels.mean(axis=0).round(1)}, {where}; page camera {page_camera(page)}, "
                              f"reported {server_camera(server, cid)}; screenshot {shot}")
     # ...and its curve is in the speed plot
@@ -206,7 +206,7 @@ def test_a_replay_exported_here_plays_back_in_another_server(server, browser, pa
             hits = seen(page2, pixels, red)
             assert hits >= 0.9 * len(pixels), f"only {hits}/{len(pixels)} recorded robots seen where they were"
             assert tab2.session.sim.state.k == 0  # a replay does not advance the engine
-            # Compare was on when it was exported: swarm B is in the file and drawn in teal where it was
+            # Compare was on when it was exported: swarm B is in the file and drawn in blue where it was
             last = int(rec.k[-1])
             x_b = rec.twin(rec.frames - 1)[0]
             box.fill(str(last))
@@ -225,9 +225,9 @@ def test_a_replay_exported_here_plays_back_in_another_server(server, browser, pa
             pixels = np.round(b[clear & inside]).astype(int)
             assert len(pixels) >= 3, "B should lie apart from A at the last step"
             dismiss_toasts(page2)
-            hits = seen(page2, pixels, teal)
-            assert hits >= 0.8 * len(pixels), f"only {hits}/{len(pixels)} of B's recorded robots seen in teal"
-            page2.wait_for_selector("text=with swarm B (teal)", timeout=30000)
+            hits = seen(page2, pixels, blue)
+            assert hits >= 0.8 * len(pixels), f"only {hits}/{len(pixels)} of B's recorded robots seen in blue"
+            page2.wait_for_selector("text=with swarm B (blue)", timeout=30000)
         finally:
             page2.context.close()
     finally:

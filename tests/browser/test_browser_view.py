@@ -1,7 +1,7 @@
 """The arena's page in a real headless Chromium, which draws WebGL in software (SwiftShader), as a
 classroom PC without a GPU does: the light drawing comes on by itself and viser's software-WebGL
 toast goes; a mouse drag pans the top view and never tips it, unless the user asks for 3-D;
-large text. One server and one page for the module, the tests in file order."""
+projector mode. One server and one page for the module, the tests in file order."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ pytestmark = [
 
 pytest.importorskip("playwright.sync_api")
 
-from shoal.app.panel.view_row import TEXT_SCALE  # noqa: E402
+from shoal.app.panel.view_row import SWITCH, TEXT_SCALE  # noqa: E402
 from shoal.app.view.page import LIGHT_DPR, SOFTWARE_TOAST  # noqa: E402
 
 from browser_helpers import canvas_box, root_for, wait_until  # noqa: E402
@@ -126,16 +126,20 @@ def test_the_3d_view_orbits_on_request_and_the_top_view_holds_again_after(server
     assert max((t for t, _ in reports.seen), default=0.0) < 1.0 and tilt(camera) < 1.0
 
 
-def test_large_text_for_a_projector(server, page, cid):
+def test_projector_mode_is_one_box_on_the_first_screen(server, page, cid):
     tab = server.tabs[cid]
     width = canvas_box(page)["width"]
-    tick_box(page, "large text")
-    wait_until(lambda: tab.display.large_text and tab.arena.canvas.text_scale == TEXT_SCALE, what="large text")
+    box = root_for(page, SWITCH)
+    assert box.is_visible()  # not behind the Display button
+    box.click()
+    wait_until(lambda: tab.display.projector and tab.arena.canvas.text_scale == TEXT_SCALE, what="projector mode")
     wait_until(lambda: page.evaluate(
-        "getComputedStyle(document.documentElement).getPropertyValue('--mantine-scale')").strip() == str(TEXT_SCALE),
-        what="the page's text scaled")
-    wait_until(lambda: canvas_box(page)["width"] < width - 50, what="a wider panel")
-    tick_box(page, "large text")
+        "getComputedStyle(document.documentElement).getPropertyValue('--mantine-scale')").strip()
+        in (str(TEXT_SCALE), str(int(TEXT_SCALE))), what="the page's text scaled")
+    # the panel twice as wide, the board moved from beside the arena to under the controls
+    wait_until(lambda: abs(canvas_box(page)["width"] - width) > 20 and tab.panels.board.placed is True,
+               what="a wider panel, the board under it")
+    root_for(page, SWITCH).click()
     wait_until(lambda: abs(canvas_box(page)["width"] - width) < 2 and tab.arena.canvas.text_scale == 1.0,
                what="the usual text again")
 

@@ -72,7 +72,8 @@ def _cmd_serve(args: argparse.Namespace) -> int:
         return _err(str(e))
     try:
         serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions,
-              allow_origins=origins, scheduler=args.scheduler, experiment_workers=args.experiment_workers)
+              allow_origins=origins, scheduler=args.scheduler, experiment_workers=args.experiment_workers,
+              projector=args.projector)
     except OSError as e:
         return _err(str(e))
     return 0
@@ -337,6 +338,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--scheduler", help="run the Sweep tab's sweeps on this Dask scheduler (tcp://HOST:PORT)")
     s.add_argument("--experiment-workers", type=whole(1), default=1, metavar="W",
                    help="without --scheduler: local worker processes for the Sweep tab (default 1)")
+    s.add_argument("--projector", action="store_true",
+                   help="every tab opens in projector mode (text twice its size; a browser's own choice wins)")
     s.set_defaults(func=_cmd_serve)
 
     r = sub.add_parser("run", help="headless seeded runs")

@@ -11,6 +11,8 @@ from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError, short
 from shoal.presets.models import Scenario
 
+from .pace import paced
+
 UPLOADED = " (uploaded)"  # an uploaded preset's choice is its name and this
 MAX_UPLOADED = 8  # uploads a tab keeps to choose again (the oldest goes first)
 
@@ -32,7 +34,7 @@ class PresetMenu:
         if isinstance(choice, str) and choice in self._uploaded:
             return self._uploaded[choice]
         if isinstance(choice, str) and choice in self.shipped:
-            return presets_io.load_shipped(choice)
+            return paced(presets_io.load_shipped(choice))  # (opens at a speed one can watch)
         raise PresetError([f"preset {short(choice)}: not one of this tab's presets "
                            "(the shipped ones and those uploaded here)"])
 

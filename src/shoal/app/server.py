@@ -31,6 +31,7 @@ from .kinds.registry import check_supported, session_for
 from .message_guard import install_message_guard, quiet_handler_errors
 from .native_memory import TRIM_DELAY, give_back, keep_large_blocks_returnable
 from .origin_guard import OriginPolicy, guarded_viser, is_loopback
+from .pace import paced
 from .panel.keys import install_keys
 from .replay import MAX_REPLAY_BYTES
 from .session.session import Session
@@ -38,7 +39,9 @@ from .session.upload import MAX_UPLOAD_BYTES
 from .tab import TabApp
 from .upload_guard import guard_uploads
 from .view.camera import home_camera, top_view
-from .view.page import install_page, run_script
+from .view.page import install_page
+from .view.projector import BRAND
+from .view.script import run_script
 from .warmup import WARMUP
 
 TICK_HZ = 60.0
@@ -47,6 +50,7 @@ MAX_TRANSFER_BYTES = max(MAX_UPLOAD_BYTES, MAX_REPLAY_BYTES)  # any upload; bigg
 MAX_PENDING_BYTES = 2 * MAX_TRANSFER_BYTES  # one tab's unfinished uploads together
 STOPPED_TITLE = "This Shoal server has stopped"
 STOP_NOTICE_SECONDS = 0.3
+FIRST_FRAME_SECONDS = 8.0  # a new tab plays at its page's first camera report, or after this long
 DEFAULT_MAX_SESSIONS = 24  # browser tabs with a simulation at once (``shoal serve --max-sessions``)
 FULL_TITLE = "This Shoal server is full"
 FULL_MESSAGE = ("This server already runs {n} sessions (its maximum), so this tab has no simulation. "
@@ -105,13 +109,14 @@ class ShoalServer:
 
     def __init__(self, scenario: Scenario, host: str = "127.0.0.1", port: int = 8080,
                  max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
-                 experiments: ExperimentService | None = None) -> None:
+                 experiments: ExperimentService | None = None, projector: bool = False) -> None:
         if max_sessions < 1:
             raise ValueError(f"max_sessions must be >= 1 (got {max_sessions})")
         self.scenario = scenario
         # the Experiment tab's sweeps: by default on one worker process beside the server
         self.experiments = experiments or ExperimentService(experiment_pool(1))
         self.host = host
+        self.projector = projector  # every tab opens in projector mode (a browser's own choice wins)
         self.max_sessions = max_sessions
         self.turned_away: set[int] = set()  # client ids shown the "server is full" message
         self._opening: set[int] = set()  # client ids whose session is being built
@@ -144,7 +149,7 @@ class ShoalServer:
 
     def _configure(self) -> None:
         gui = self.viser.gui
-        gui.configure_theme(control_width="large", show_share_button=False, brand_color=(40, 90, 200))
+        gui.configure_theme(control_width="large", show_share_button=False, brand_color=BRAND)
         gui.main_panel.dock_right()
         gui.set_panel_label("Shoal · PSO for robot swarms")
         top_view(self.viser)
@@ -171,7 +176,7 @@ class ShoalServer:
                 script=lambda source: run_script(client.gui, source),
                 backlog=lambda: waiting(client),
             )
-        tab = TabApp(session, gui, scene, experiments=self.experiments, owner=key, **kwargs)
+        tab = TabApp(session, gui, scene, experiments=self.experiments, owner=key, projector=self.projector, **kwargs)
         tab.auto_tick = auto_tick
         with self._lock:
             self.tabs[key] = tab
@@ -185,6 +190,8 @@ class ShoalServer:
             tab = self.tabs.pop(key, None)
         if tab is not None and not gone:
             tab.close()
+        elif tab is not None:
+            tab.gone()
         if tab is not None:
             self._give_back_later()
 
@@ -233,7 +240,8 @@ class ShoalServer:
             if fitted.is_set():
                 return
             fitted.set()  # once: the first report tells the canvas' aspect; later moves are the user's
-            home_camera(camera)
+            tab = self.tabs.get(client.client_id)
+            home_camera(camera, tab.display.text_scale if tab is not None else 1.0)
 
         def refuse(title: str, body: str) -> None:
             client.add_notification(title, body, color="red", auto_close_seconds=10.0)
@@ -241,10 +249,10 @@ class ShoalServer:
         guard_inputs(client.gui, refuse)
         guard_uploads(client.gui, MAX_TRANSFER_BYTES, MAX_PENDING_BYTES,
                       lambda name, why: refuse(f"Refused: uploaded {name}", why))
+        install_page(client.gui)  # the top view held, light drawing without a GPU, projector mode, names, labels
         tab = self.open_tab(client.client_id, client.gui, client.scene, client)
         install_keys(client.gui)  # space, →, r
-        install_page(client.gui)  # the top view held, light drawing on a page without a GPU, no software-WebGL toast
-        tab.session.play()
+        tab.play_when_drawn(FIRST_FRAME_SECONDS)  # the first view starts at step 0
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
@@ -316,7 +324,7 @@ def closed_tab_quiet(gui: Any) -> contextlib.AbstractContextManager[Any]:
 def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
                  max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
                  scheduler: str | None = None, experiment_workers: int = 1,
-                 limits: Limits | None = None, warm_up: bool = False) -> ShoalServer:
+                 limits: Limits | None = None, warm_up: bool = False, projector: bool = False) -> ShoalServer:
     """Start the app without blocking. ``port=0`` picks a free port (see ``.port``). With
     ``warm_up`` (``shoal serve``) the kernels compile in the background once it listens
     (:mod:`.warmup`) and scenes run on numpy meanwhile; else they compile on first use.
@@ -329,6 +337,8 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
     port beyond 0–65535 and :class:`SchedulerError` when the cluster cannot be reached.
     """
     scenario = check_supported(presets_io.load(preset))
+    if preset in presets_io.list_presets():  # a shipped scene opens at a speed one can watch (a file keeps its own)
+        scenario = paced(scenario)
     if not 0 <= port <= MAX_PORT:
         raise ValueError(f"--port {port}: a port is a whole number from 0 to {MAX_PORT}")
     if (why := _cannot_listen(host, port)) is not None:  # before viser starts: it would wait for ever
@@ -337,23 +347,23 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
         raise ValueError(f"experiment_workers must be >= 1 (got {experiment_workers})")
     pool = DaskCluster(scheduler) if scheduler is not None else experiment_pool(experiment_workers)
     server = ShoalServer(scenario, host=host, port=port, max_sessions=max_sessions, allow_origins=allow_origins,
-                         experiments=ExperimentService(pool, limits, owns_scheduler=True))
+                         experiments=ExperimentService(pool, limits, owns_scheduler=True), projector=projector)
     if port and server.port != port:  # viser moved to the next free port: refuse instead
         server.stop()
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")
     if warm_up:
-        WARMUP.start(scenario)  # the page is up: compile the kernels behind it, this scene's first
+        WARMUP.start(scenario, elsewhere=True)  # the page is up: compile the kernels behind it, this scene's first
     return server
 
 
 def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
           max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
-          scheduler: str | None = None, experiment_workers: int = 1) -> None:
+          scheduler: str | None = None, experiment_workers: int = 1, projector: bool = False) -> None:
     """Run the browser app until Ctrl-C (``shoal serve``). Exits with a message if the port is
     taken or the Dask scheduler cannot be reached."""
     try:
         server = start_server(preset, host, port, max_sessions, allow_origins, scheduler, experiment_workers,
-                              warm_up=True)
+                              warm_up=True, projector=projector)
     except (OSError, SchedulerError, ValueError) as err:
         raise SystemExit(f"shoal serve: {err}") from None
     except PresetError as err:
@@ -370,3 +380,4 @@ def serve(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
         print("\nstopping", flush=True)
     finally:
         server.stop()
+        WARMUP.stop()  # (a child still compiling the kernels ends with the server)

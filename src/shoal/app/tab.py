@@ -27,11 +27,13 @@ from . import share
 from .experiment.service import ExperimentService
 from .kinds.registry import app_kind, app_presets, kind_for, session_for
 from .lessons.panel import LessonProgress
+from .panel.board import Board
 from .panel.panel import Panel, Services
 from .panel.view_row import DISPLAY, Display
 from .preset_menu import PresetMenu
 from .session.session import Session
-from .view import page
+from .view import page, projector
+from .view.access import Announcer
 from .view.camera import Viewport, home_camera, straighten, tipped
 from .warmup import WARMUP
 
@@ -44,6 +46,13 @@ def share_page(session: Session) -> bytes:
         return share.session_html(session)
     except share.Busy as err:
         raise PresetError(err.messages) from None
+
+
+def _board(gui: Any) -> Board | None:
+    try:
+        return Board(gui)
+    except AttributeError:  # a GUI without panels
+        return None
 
 
 class TabApp:
@@ -68,6 +77,7 @@ class TabApp:
         camera: Any = None,
         script: Callable[[str], None] | None = None,
         backlog: Callable[[], int] | None = None,
+        projector: bool = False,
     ) -> None:
         self.session = session
         self.experiments, self.owner = experiments, owner  # the server's experiments; this tab's key there
@@ -88,22 +98,30 @@ class TabApp:
         self.control_hold = self.CONTROL_HOLD
         self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
         self.menu = PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included, across swaps
-        self.display = Display()  # how the arena is drawn, across swaps
+        self.display = Display(projector=projector)  # how the arena is drawn, across swaps
+        self.board = _board(gui)  # the main plot and the legend beside the arena, across swaps
         self._page = Display()  # what the page was last told (flat camera, text scale)
-        self._home_when_resized: float | None = None  # the camera's aspect before the panel's width changed
+        self._aspect: float | None = None  # the arena's width / height at the camera's last report
+        self._window_height: float | None = None  # px, the arena's (the window's) at the camera's last report
+        self.announcer = Announcer(gui) if camera is not None else None  # status read out, the page's title
+        self.play_at: float | None = None  # play then, or at the page's first camera report (play_when_drawn)
+        self._untouched: tuple[Any, int] | None = None  # (session, revision) when that was asked
+        self._reported = False  # the page has reported its camera (it has drawn)
+        self.closed = False  # the browser tab went away (close)
         with self._ticking:
             self._build_kind()
         if camera is not None:
-            camera.on_update(self._camera_moved)
+            camera.on_update(self._camera_report)
 
     def _build_kind(self) -> None:
         kind = app_kind(self.session)
         services = Services(notify=self.notify, send_file=self.send_file, menu=self.menu, make_session=session_for,
                             replace=self.replace, share=share_page, lessons=self.lesson_progress,
                             experiments=self.experiments, owner=self.owner, view=self.view_action,
-                            display=self.display, script=self.script, backlog=self.backlog)
+                            display=self.display, script=self.script, backlog=self.backlog, veil=self._veil,
+                            board=self.board)
         self.panels = Panel(self.gui, self.session, kind, services)
-        self.arena = kind.view(self.scene, self.panels.part)
+        self.arena = kind.view(self.scene, self.panels.part, labels=self._labels())
         self._show_display()
         if self.camera is not None:
             self._camera_moved(self.camera)
@@ -145,7 +163,11 @@ class TabApp:
         with self._ticking:
             if app_kind(self.session) is kind:
                 self.session.load_scenario(scenario, play=play)
-                self.panels.sync()
+                if self.panels.wanted_main() != self.panels.main_key:  # another plot to show beside the arena
+                    self._drop_kind()
+                    self._build_kind()
+                else:
+                    self.panels.sync()
                 return self.session
             new = kind.session(scenario)  # may refuse: then the old scene stays
             new.choose_at_end(self.session.at_end)  # the tab's choice outlives the scene
@@ -166,15 +188,33 @@ class TabApp:
             self.arena.follow_swarm()
         elif action == DISPLAY:
             with self._ticking:
-                self._show_display()
+                self._show_display(remember=True)
 
-    def _show_display(self) -> None:
-        """Draw the arena as ``display`` says, tell the page (held top view, text size) what changed
+    def _veil(self, text: str | None) -> None:
+        if self.camera is not None and not self.closed:
+            page.set_veil(self.gui, text)
+
+    def set_projector(self, on: bool) -> None:
+        """Projector mode on or off (as the header's box does; a user's choice, remembered by the page)."""
+        with self._ticking:
+            self.display.projector = bool(on)
+            self._show_display(remember=True)
+
+    def _labels(self) -> Any:
+        """Where the arena's labels go: HTML over the canvas of a browser's page (None: viser's labels)."""
+        from .view.overlay import Labels
+
+        return Labels(self.scene) if self.camera is not None and not self.closed else None
+
+    def _show_display(self, remember: bool = False) -> None:
+        """Draw the arena as ``display`` says, tell the page (held top view, text size, projector
+        mode; ``remember``: the user's choice, which the page keeps) what changed, place the board
         and show the status area's note."""
         d = self.display
         self.arena.restyle(light=d.light, text_scale=d.text_scale)
         self.panels.show_light(d.light)
         self.panels.view_gui.sync(d)
+        self.panels.place(d.projector, self._window_height, page.PANEL_WIDTH * d.text_scale)
         if self.panels.text_scale != d.text_scale:
             self.panels.text_scale = d.text_scale
             self._plot_key = None  # the plots again, at the new size
@@ -186,17 +226,46 @@ class TabApp:
             page.set_flat(self.gui, not d.orbit)
         if d.light != self._page.light:
             page.set_light(self.gui, d.light)
-        if d.large_text != self._page.large_text:
-            with contextlib.suppress(Exception):  # no report yet
-                self._home_when_resized = float(self.camera.aspect)  # the panel's width changes the arena's
-            page.set_text_scale(self.gui, d.text_scale)
-        self._page = Display(d.light, d.orbit, d.large_text)
+        if d.projector != self._page.projector:
+            page.set_text_scale(self.gui, d.text_scale)  # (the arena's new width re-fits it: _camera_moved)
+            projector.set_projector(self.gui, d.projector, remember)
+        self._page = Display(d.light, d.orbit, d.projector)
+
+    def play_when_drawn(self, within: float) -> None:
+        """Start playing at the page's first camera report (its first frame is drawn), or after
+        ``within`` seconds whatever comes: the first view starts at step 0. Nothing is played if
+        the user (or a lesson's Set up) has touched the scene meanwhile."""
+        self._untouched = (self.session, self.session.revision)
+        if self._reported:  # (the page's first report came already)
+            self._play_first()
+        else:
+            self.play_at = time.monotonic() + within
+
+    def _play_first(self) -> None:
+        self.play_at = None
+        if self._untouched == (self.session, self.session.revision):
+            self.session.play()
+
+    def _camera_report(self, camera: Any) -> None:
+        """The page reported its camera: it has drawn (the first time), or the user moved it."""
+        self._reported = True
+        if self.play_at is not None:
+            self._play_first()
+        self._camera_moved(camera)
 
     def _camera_moved(self, camera: Any) -> None:
         with contextlib.suppress(Exception):  # no report yet, or a tab closing
-            if self._home_when_resized is not None and abs(float(camera.aspect) - self._home_when_resized) > 1e-3:
-                self._home_when_resized = None  # the arena took its new width: show all of it again
-                home_camera(camera)
+            aspect = float(camera.aspect)
+            resized = self._aspect is not None and abs(aspect - self._aspect) > 1e-3
+            self._aspect = aspect
+            # (the canvas' pixels, not CSS pixels: the light drawing renders half of them; a screen
+            # of two pixels a CSS pixel would count double, which the board's plot's cap absorbs)
+            height = float(camera.image_height) / (page.LIGHT_DPR if self.display.light else 1.0)
+            if height > 0 and height != self._window_height:
+                self._window_height = height
+                self.panels.place(self.display.projector, height, page.PANEL_WIDTH * self.display.text_scale)
+            if resized:  # the arena's width changed (a panel folded or widened, the window): show all of it again
+                home_camera(camera, self.display.text_scale)
                 return
             if not self.display.orbit and tipped(camera):  # a page that does not hold the top view itself
                 straighten(camera)
@@ -206,10 +275,18 @@ class TabApp:
     def _home_camera(self) -> None:
         if self.camera is not None:
             with contextlib.suppress(Exception):  # a tab closing meanwhile
-                home_camera(self.camera)
+                home_camera(self.camera, self.display.text_scale)
+
+    def gone(self) -> None:
+        """Its page is gone: send it no more scripts (a closed connection would only warn)."""
+        self.closed = True
+        self.announcer = None
+        self.arena.canvas.labels = None
 
     def close(self) -> None:
-        """The browser tab went away: stop listening to its scene and its experiment."""
+        """The browser tab went away: stop listening to its scene and its experiment, and stop
+        sending its page scripts (a closed connection would only warn)."""
+        self.gone()
         self.panels.detach()
         for cb in self._clicks:
             with contextlib.suppress(Exception):
@@ -256,6 +333,8 @@ class TabApp:
     def _tick(self, now: float, plots: bool = True) -> None:
         if self._retired:
             self._remove_retired(time.monotonic())
+        if self.play_at is not None and time.monotonic() >= self.play_at:  # no camera report came: play anyway
+            self._play_first()
         s = self.session
         elapsed = 0.0 if self._last is None else max(0.0, now - self._last)
         self._last = now
@@ -290,6 +369,9 @@ class TabApp:
             if key != self._plot_key:
                 with self._atomic():  # one wake-up for all of them (wake-ups cost the ticking thread the GIL)
                     self.panels.refresh_status()
+                    if self.announcer is not None:
+                        self.announcer.name(s.scenario.name)
+                        self.announcer.status(self.panels.status.content)
                     self.panels.refresh_readout()
                     self.panels.refresh_plots()
                     self.panels.refresh_timeline()

@@ -7,12 +7,16 @@ references, bit for bit (docs/architecture.md, "Compiled kernels"), and a run ma
 between two ticks with the same numbers (tests/test_warmup.py). So:
 
 - :class:`Warmup` compiles the kernels of each group of scenes in a daemon thread, by a few
-  steps of every shipped preset of the group, the group asked for first (and before that the
-  few that building a scene calls, so that opening one never waits long);
+  steps of every shipped preset of the group, the group asked for first. In ``shoal serve`` the
+  compiling itself happens in a child process at a lower priority (:func:`warm`, into the disk
+  cache both read; numba compiling in the server's own thread held the interpreter's lock for
+  most of a minute and slowed every tab), and the thread then loads what it wrote;
 - a scene whose group is not ready runs on its numpy tick meanwhile (:meth:`Warmup.use`) and
   changes over once it is (the acoustic swarm's one kernel is its receiver's correlation);
-  scenes on SLO positions and Mai's SLO swarm have no numpy tick: they wait for theirs
-  (:meth:`Warmup.waits`);
+- scenes on SLO positions and Mai's SLO swarm have no numpy tick: while the warm-up runs, every
+  kernel not compiled yet runs as plain Python outside its thread, the same numbers
+  (:func:`shoal.engine.core.compiled.defer`), so they play at once, slower
+  (:meth:`Warmup.interprets`): nothing waits;
 - :meth:`Warmup.status` says what is being compiled, for the app's status line;
 - ``shoal warmup`` runs it in the foreground (a machine that wants it done ahead).
 
@@ -22,11 +26,15 @@ on first call, as before.
 
 from __future__ import annotations
 
+import atexit
+import os
+import subprocess
 import sys
 import threading
 import time
 from typing import Any, Callable
 
+from shoal.engine.core import compiled
 from shoal.presets.build import build, kind_of
 from shoal.presets.io import list_presets, load
 from shoal.presets.models import Scenario
@@ -43,6 +51,45 @@ def group_of(scenario: Scenario) -> str:
     if slo is not None and (slo.swarm == "slo" or slo.positions != "oracle"):
         return "slo"
     return kind_of(scenario)
+
+
+def warm(names: list[str], done: Callable[[str], None] | None = None) -> None:
+    """Compile (or load from the disk cache) the kernels of the shipped presets ``names``: a few
+    steps of each, compiled (``done(name)`` after each)."""
+    for name in names:
+        sim = build(load(name, ["sim.runs=1"]))
+        if hasattr(sim, "compiled"):
+            sim.compiled = True
+        for _ in range(STEPS):
+            sim.step()
+        sim.info()
+        run = getattr(sim, "run", None)
+        if callable(run):  # the headless block of ticks (shoal run's)
+            run(2)
+        if done is not None:
+            done(name)
+
+
+CHILD = """
+import sys
+from shoal.app.warmup import warm
+warm(sys.argv[1:], lambda name: print("warmed", name, flush=True))
+"""
+CHILD_NICE = 10  # the child compiles below the server and the browser in the machine's eyes
+PR_SET_PDEATHSIG = 1  # Linux prctl: a signal for the child when its parent dies
+
+
+def _child_setup() -> None:
+    """In the child, before it runs: a lower priority, and (Linux) an end when the server ends,
+    however it ends (an exit that skips Python's clean-up too)."""
+    os.nice(CHILD_NICE)
+    try:
+        import ctypes
+        import signal
+
+        ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, int(signal.SIGTERM))
+    except (OSError, AttributeError):  # not Linux: the server's exit stops it (Warmup.stop, at exit)
+        pass
 
 
 def groups() -> dict[str, list[str]]:
@@ -71,6 +118,8 @@ class Warmup:
         self._order: list[str] = list(ORDER)
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
+        self._child: subprocess.Popen | None = None
+        self._stopped = False  # stop() was called: compile nothing more
 
     # ------------------------------------------------------------------ what a scene does meanwhile
     @property
@@ -93,8 +142,8 @@ class Warmup:
         if hasattr(sim, "compiled"):  # (a swarm on SLO positions: its own kind's kernels too)
             sim.compiled = self.all_ready() or all(self.is_ready(g) for g in {group_of(scenario), kind_of(scenario)})
 
-    def waits(self, scenario: Scenario) -> bool:
-        """Must a scene of ``scenario`` wait for its kernels (no numpy tick to run meanwhile)?"""
+    def interprets(self, scenario: Scenario) -> bool:
+        """Does a scene of ``scenario`` run its kernels as Python now (no numpy tick, not compiled yet)?"""
         if self.all_ready():
             return False
         group = group_of(scenario)
@@ -124,14 +173,15 @@ class Warmup:
             return None
         seconds = time.monotonic() - (self.started or time.monotonic())
         progress = f"scene {min(self.done + 1, self.total):d} of {self.total:d}, {seconds:.0f} s"
-        if self.waits(scenario):
-            return f"waiting for this scene's compiled kernels ({progress})"
+        if self.interprets(scenario):
+            return f"compiling kernels in the background ({progress}); Python meanwhile (slower), the same numbers"
         return f"compiling kernels in the background ({progress}); numpy meanwhile, the same numbers"
 
     # ------------------------------------------------------------------ compiling
-    def start(self, first: Scenario | None = None, only: bool = False) -> None:
+    def start(self, first: Scenario | None = None, only: bool = False, elsewhere: bool = False) -> None:
         """Compile in a daemon thread (once per process): ``first``'s group first; with ``only``
-        nothing but that group (``shoal run``)."""
+        nothing but that group (``shoal run``); ``elsewhere``: in a child process, the thread
+        only loading what it wrote (``shoal serve``)."""
         if first is not None:
             self.prefer(first)
         with self._lock:
@@ -140,11 +190,43 @@ class Warmup:
             group = group_of(first) if only and first is not None else None
             self.started = time.monotonic()
             self.scheduled = {group} & set(ORDER) if group is not None else set(ORDER)
-            self._thread = threading.Thread(target=self.run, name="shoal-warmup", daemon=True, kwargs={"only": group})
+            compiled.defer(True)  # meanwhile what is not compiled yet runs as Python elsewhere
+            self._thread = threading.Thread(target=self.run, name="shoal-warmup", daemon=True,
+                                            kwargs={"only": group, "elsewhere": elsewhere})
             self._thread.start()
 
-    def run(self, only: str | None = None, say: Callable[[str], None] | None = None) -> float:
-        """Compile every group (or ``only`` one) here and now; returns the seconds it took."""
+    def _compile_elsewhere(self, names: list[str]) -> bool:
+        """Compile ``names``' kernels in a child process into the disk cache this process reads
+        (its progress counted as it goes); False where it cannot (no cache to share, or it failed)."""
+        if compiled.uncached:  # (kernels compiled in memory: a child's work would not reach this process)
+            return False
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(compiled.cache_dir())}
+        try:
+            child = self._child = subprocess.Popen([sys.executable, "-c", CHILD, *names], env=env,
+                                                   stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                                                   preexec_fn=_child_setup)
+        except OSError:
+            return False
+        assert child.stdout is not None
+        for line in child.stdout:
+            if line.startswith("warmed "):
+                self._count()
+        code = child.wait()
+        self._child = None
+        return code == 0
+
+    def stop(self) -> None:
+        """End a child still compiling (the server stops; the thread then finds its work undone and
+        the scenes compile on first use)."""
+        self._stopped = True
+        child = self._child
+        if child is not None and child.poll() is None:
+            child.terminate()
+
+    def run(self, only: str | None = None, say: Callable[[str], None] | None = None, elsewhere: bool = False) -> float:
+        """Compile every group (or ``only`` one) here and now (``elsewhere``: in a child process,
+        then load it here); returns the seconds it took."""
+        compiled.compile_here()
         self.started = self.started or time.monotonic()
         todo = groups()
         if only is not None:
@@ -152,28 +234,22 @@ class Warmup:
         self.scheduled = self.scheduled or set(todo) & set(ORDER)
         self.total = sum(len(v) for v in todo.values())
         try:
-            for first in NUMPY_TICK:  # what building such a scene compiles (spawning a fleet), first: seconds
+            for first in NUMPY_TICK if not elsewhere else ():  # what building such a scene compiles, first: seconds
                 if todo.get(first):
                     build(load(todo[first][0], ["sim.runs=1"]))
             while True:
                 with self._lock:
                     group = next((g for g in self._order if g in todo and not self.ready[g].is_set()), None)
-                if group is None:
+                if group is None or self._stopped:
                     break
                 self.current = group
                 start = time.monotonic()
-                for name in todo[group]:
-                    sim = build(load(name, ["sim.runs=1"]))
-                    if hasattr(sim, "compiled"):
-                        sim.compiled = True
-                    for _ in range(STEPS):
-                        sim.step()
-                    sim.info()
-                    run = getattr(sim, "run", None)
-                    if callable(run):  # the headless block of ticks (shoal run's)
-                        run(2)
-                    self.done += 1
-                    self.revision += 1
+                if elsewhere and self._compile_elsewhere(todo[group]):
+                    warm(todo[group])  # (loaded from the cache the child wrote: seconds)
+                elif self._stopped:
+                    break
+                else:
+                    warm(todo[group], lambda name: self._count())
                 self.ready[group].set()
                 if say is not None:
                     say(f"{group}: {len(todo[group])} scenes, {time.monotonic() - start:.1f} s")
@@ -187,7 +263,14 @@ class Warmup:
             self.current = None
             self.finished = time.monotonic()
             self.revision += 1
+            compiled.defer(False)  # (a kernel no preset warmed compiles at its first call, as ever)
         return self.finished - self.started
 
 
+    def _count(self) -> None:
+        self.done += 1
+        self.revision += 1
+
+
 WARMUP = Warmup()  # this process' own: the server, ``shoal run`` and the sessions share it
+atexit.register(WARMUP.stop)

@@ -16,6 +16,7 @@ from ..session.driver import Driver
 from ..session.history import Frame, frame_of
 from ..session.session import Session
 from ..view.layers import Layer
+from ..view.palette import Pair
 from ..view.view import Camera, Fit, View
 
 
@@ -32,6 +33,7 @@ class AppKind:
     layers: Callable[[KindPanel | None], tuple[Layer, ...]]  # the arena's layers (a drag goes to the panel part)
     camera: Callable[[], Camera]
     make_panel: Callable[[PanelAPI], KindPanel]
+    pairs: tuple[Pair, ...] = ()  # the colours its arena tells apart, each with a second cue (tests/test_palette.py)
 
     def check(self, scenario: Scenario) -> Scenario:
         """``scenario`` if this kind shows it, else :class:`PresetError` saying why not."""
@@ -49,10 +51,10 @@ class AppKind:
         """This kind's part of a tab's panel (built by the shared :class:`~shoal.app.panel.panel.Panel`)."""
         return self.make_panel(api)
 
-    def view(self, scene: Any, part: KindPanel | None, fit: Fit | None = None) -> View:
+    def view(self, scene: Any, part: KindPanel | None, fit: Fit | None = None, labels: Any = None) -> View:
         """The arena of a tab showing this kind on viser ``scene`` (``part``: where drags go; None on
-        a page that only plays a run back)."""
-        return View(scene, self.name, self.camera(), self.layers(part), fit)
+        a page that only plays a run back; ``labels``: the page's HTML labels, else viser's)."""
+        return View(scene, self.name, self.camera(), self.layers(part), fit, labels=labels)
 
 
 class BaseDriver:

@@ -55,6 +55,7 @@ from ..view.camera import VIEW_HALF
 from ..view.canvas import Canvas
 from ..view.layers import (
     GRID_KEYS,
+    TRAIL_A,
     Ghosts,
     GlobalBest,
     Headings,
@@ -65,9 +66,11 @@ from ..view.layers import (
     Static,
     Trails,
     Twin,
+    compare_pairs,
     draw_grid,
     metres,
 )
+from ..view.palette import Cue, Pair
 from ..view.view import Home
 from .base import AppKind, BaseDriver
 from .fleet_budget import budget_markdown
@@ -243,10 +246,10 @@ ROBOT = (220, 50, 50)
 COLLIDED = (150, 150, 150)
 STALLED = (255, 120, 0)
 HEADING = (90, 15, 15)
-TRAIL = (110, 150, 255)
+TRAIL = TRAIL_A
 PBEST = (120, 120, 120)
 GBEST = (240, 170, 0)
-SELECTED = (255, 190, 0)
+SELECTED = (120, 30, 180)  # a ring: apart from the global best's orange diamond in colour (ΔE ≥ 30) and shape
 SECTOR_NEAR = np.array([215, 70, 20], float)  # lit meshes render lighter than these
 SECTOR_FAR = np.array([70, 175, 70], float)
 SECTOR_EDGE = (120, 130, 120)
@@ -515,7 +518,7 @@ def layers(part: KindPanel | None) -> tuple[Layer, ...]:
         Stalled(),
         Headings(HEADING, lambda canvas, snap: 1.3 * snap.extras["params"].robot_radius, Z["headings"],
                  angle=_heading_angle),
-        Trails(TRAIL, 1.5, Z["trails"]),
+        Trails(TRAIL, 2.0, Z["trails"]),
         PersonalBests(PBEST, metres(0.25), Z["pbests"]),
         GlobalBest(GBEST, metres(0.75), Z["gbest"]),
         Probe(),
@@ -689,9 +692,13 @@ def _readout(s: Session) -> str:
 
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
+    """Time and step, how far along the course the swarm's middle is (its fitness [4.17], as a
+    share of the course), the layers passed, the robots still operational."""
     sc, edits = s.scenario, driver(s).edits
-    return (f"**{escape(sc.name)}** · {state} · t = {r['t']:.0f} s · {s.progress()} · "
-            f"CoM x = {r['com']:.1f} m"
+    length = float(sc.world.length) if sc.world is not None else 0.0
+    along = (f"CoM {r['com']:.1f} of {length:.0f} m ({100 * max(r['com'], 0.0) / length:.0f} % of the course)"
+             if length > 0 else f"CoM x = {r['com']:.1f} m")
+    return (f"**{escape(sc.name)}** · {state} · t = {r['t']:.0f} s · {s.progress()} · {along}"
             + (f" · layers passed {int(r['layers_passed'])}/{int(r['layers'])}" if r["layers"] else "")
             + f" · {int(r['operational'])}/{int(r['operational'] + r['collided'])} operational"
             + (f" · {int(r['stalled'])} stalled" if r.get("stalled") else "")
@@ -808,7 +815,7 @@ def panel(api: PanelAPI) -> KindPanel:
         ),
         status=_status, compare=_compare, rebuilt=_rebuilt, export_note=EXPORT_NOTE, state=editor,
         click=lambda p, x, y, modifier: editor.click(x, y, modifier, p.handles["click"].value),
-        drag=editor.drag)
+        drag=editor.drag, main=lambda s: "com")
 
 
 def accepts(scenario: Scenario) -> bool:
@@ -820,8 +827,11 @@ def refuse(scenario: Scenario) -> None:
         raise PresetError([f"world: {scenario.name} has no [world]; it runs as a free-space swarm"])
 
 
+PAIRS = compare_pairs(ROBOT, TRAIL) + (
+    Pair("global best / selected robot", Cue(GBEST, "◆", shape="diamond"), Cue(SELECTED, "○", shape="ring")),)
 KIND = AppKind(name="fleet", title="Chapter 4–5 fleet", engine="fleet", refuse=refuse,
-               make_driver=FleetDriver, notes="ch4-5", layers=layers, camera=FollowCamera, make_panel=panel)
+               make_driver=FleetDriver, notes="ch4-5", layers=layers, camera=FollowCamera, make_panel=panel,
+               pairs=PAIRS)
 
 
 def driver(session: Session) -> FleetDriver:

@@ -41,9 +41,26 @@ from ..session.beliefs import ghosts_of
 from ..session.history import Frame
 from ..session.session import Session
 from ..session.snapshot import Snapshot
-from ..view import shapes
+from ..view import palette, shapes
 from ..view.canvas import Canvas
-from ..view.layers import Ghosts, Ground, Landscape, Layer, LegendEntry, Robots, Selected, Static, Trails, Twin
+from ..view.layers import (
+    ERR_LARGE,
+    ERR_SMALL,
+    GHOST,
+    OUTLINE,
+    TRAIL_A,
+    Ghosts,
+    Ground,
+    Landscape,
+    Layer,
+    LegendEntry,
+    Robots,
+    Selected,
+    Static,
+    Trails,
+    Twin,
+    compare_pairs,
+)
 from ..view.view import KeepSwarmInView
 from .base import AppKind, BaseDriver
 
@@ -159,10 +176,10 @@ class MaiDriver(BaseDriver):
 # ---------------------------------------------------------------------------- view
 ROBOT = (220, 50, 50)
 ROBOT_SIZE = 0.24  # scene units
-TRAIL = (150, 175, 255)
+TRAIL = TRAIL_A
 EDGE = (175, 175, 175)
 ARENA = (40, 40, 40)
-SELECTED = (255, 190, 0)
+SELECTED = (120, 30, 180)  # the observer's ring
 MIRROR = (150, 60, 200)
 DEAD_RECKONING = (240, 140, 20)
 PREVIOUS = (130, 130, 130)
@@ -235,18 +252,18 @@ def landscape(scenario: Scenario) -> Callable[[np.ndarray], np.ndarray] | None:
 
 def layers(part: KindPanel | None) -> tuple[Layer, ...]:
     """Truth against belief: the true robots (red) and their neighbourhood (grey), trails, the
-    observer (yellow ring) and its ghosts, the triangle inspector; swarm B."""
+    observer (purple ring) and its ghosts, the triangle inspector; swarm B."""
     return (
         Ground(cell=lambda half: half / 10, cell_colour=(228, 228, 224), section_colour=(200, 200, 196), z=Z["grid"],
                border=ARENA, border_px=2.5, border_z=0.0),
         Landscape(landscape, z=-0.04),
         Edges(),
-        Trails(TRAIL, 1.2, Z["trails"]),
-        Robots(ROBOT, ROBOT_SIZE, Z["robots"]),
+        Trails(TRAIL, 2.0, Z["trails"]),
+        Robots(ROBOT, ROBOT_SIZE, Z["robots"], outline=OUTLINE),
         Selected(SELECTED, lambda canvas, snap: 1.7 * ROBOT_SIZE / canvas.scale, Z["selected"]),
         Ghosts(ROBOT_SIZE, (Z["errors"], Z["ghosts"])),
         Pair(),
-        Twin(ROBOT_SIZE, (0.009, -0.006)),
+        Twin(ROBOT_SIZE, (0.009, -0.006), outline=OUTLINE),
     )
 
 
@@ -369,9 +386,12 @@ def _inspector(s: Session, snap: Snapshot) -> str:
 
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
+    """The generation, the localisation error and what the swarm does: its best fitness under PSO,
+    the median distance between robots on a random walk (which optimises nothing)."""
     sc = s.scenario
-    return (f"**{escape(sc.name)}** · {state} · {s.progress('gen')} · "
-            f"mean e_abs {fmt(r['e_abs_mean'])} · best f {fmt(r['generation_best'])}")
+    doing = (f"best f {fmt(r['generation_best'])}" if _slo(s).motion == "pso"
+             else f"median distance {fmt(r['distance_median'])}")
+    return f"**{escape(sc.name)}** · {state} · {s.progress('gen')} · mean e_abs {fmt(r['e_abs_mean'])} · {doing}"
 
 
 def _compare(s: Session) -> dict[str, dict[str, Any]]:
@@ -464,7 +484,8 @@ def panel(api: PanelAPI) -> KindPanel:
             )),
             Tab("Plots", (ERROR_PLOT, DISTANCE_PLOT, FITNESS_PLOT)),
         ),
-        status=_status, compare=_compare, rebuilt=_rebuilt, click=_click, export_note=EXPORT_NOTE)
+        status=_status, compare=_compare, rebuilt=_rebuilt, click=_click, export_note=EXPORT_NOTE,
+        main=lambda s: "fitness" if _slo(s).motion == "pso" else "error")
 
 
 def accepts(scenario: Scenario) -> bool:
@@ -480,9 +501,14 @@ def refuse(scenario: Scenario) -> None:
                            "'host'); its own scene shows it, with a Positions folder"])
 
 
+PAIRS = compare_pairs(ROBOT, TRAIL) + (
+    palette.Pair("a belief's error: small / large", palette.Cue(ERR_SMALL, "—", width=1.5),
+                 palette.Cue(ERR_LARGE, "━", width=3.5)),
+    palette.Pair("a robot / where the observer believes it is", palette.Cue(ROBOT, "●", shape="circle"),
+                 palette.Cue(GHOST, "◆", shape="diamond")),)
 KIND = AppKind(name="mai", title="Mai's SLO swarm", engine="slo_swarm", refuse=refuse,
                make_driver=MaiDriver, notes="slo", layers=layers,
-               camera=lambda: KeepSwarmInView(view_centre, home_first=False), make_panel=panel)
+               camera=lambda: KeepSwarmInView(view_centre, home_first=False), make_panel=panel, pairs=PAIRS)
 
 
 def driver(session: Session) -> MaiDriver:

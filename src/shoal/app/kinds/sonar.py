@@ -41,6 +41,7 @@ from ..view import shapes
 from ..view.camera import VIEW_HALF
 from ..view.canvas import Canvas
 from ..view.layers import (
+    TRAIL_A,
     Ghosts,
     GlobalBest,
     Ground,
@@ -53,7 +54,9 @@ from ..view.layers import (
     Static,
     Trails,
     Twin,
+    compare_pairs,
 )
+from ..view.palette import Cue, Pair
 from ..view.view import Home, arena_home
 from .base import AppKind, BaseDriver
 
@@ -216,9 +219,9 @@ class SonarDriver(BaseDriver):
 BORDER = (60, 60, 60)
 ROBOT = (220, 50, 50)
 HEADING = (90, 15, 15)
-TRAIL = (110, 150, 255)
-RAY_TRUE = (30, 150, 60)  # the ray of the pair nearer the true source direction
-RAY_MIRROR = (235, 120, 20)  # its mirror image about the robot's axis
+TRAIL = TRAIL_A
+RAY_TRUE = (0, 90, 200)  # the ray of the pair nearer the true source direction: blue, solid, thick
+RAY_MIRROR = (230, 120, 0)  # its mirror image about the robot's axis: orange, dashed, thin
 HIT_KEPT = (130, 50, 200)  # intersections ahead of both rays (and passing [7.12] under XB-PSO)
 HIT_DROPPED = (170, 170, 170)  # ahead of both rays but removed by [7.12]
 PICK = (200, 0, 140)  # the selected intersection p_s of each robot
@@ -229,7 +232,7 @@ SOURCE = (20, 150, 60)
 DC_RING = (20, 150, 60)
 ESCORT = (240, 170, 0)
 TRIANGLE = (40, 90, 200)
-SELECTED = (255, 190, 0)
+SELECTED = (120, 30, 180)
 SIDE = 2 * VIEW_HALF  # the arena's side in scene units
 ROBOT_SIZE = 0.009 * SIDE
 RAY_SHARE = 0.3  # ray length as a share of the arena side
@@ -311,21 +314,24 @@ RAY_Z = dict(mirror=-0.002, true=0.0, sel_mirror=0.002, sel_true=0.004)
 
 
 class Rays(Static):
-    """Each robot's pair of bearing rays (green: the one nearer the true source; orange: its
-    mirror), the selected robot's thicker. A true ray lies over every mirror ray: where a robot
-    faces the source the two nearly coincide, and the ray through the source reads green."""
+    """Each robot's pair of bearing rays (blue, solid and thicker: the one nearer the true source;
+    orange, dashed and thin: its mirror), the selected robot's thicker. A true ray lies over every
+    mirror ray: where a robot faces the source the two nearly coincide, and the ray through the
+    source reads blue."""
 
     name = "rays"
     keys = ("rays_mirror", "rays_true", "rays_sel_mirror", "rays_sel_true")  # (the order they are drawn in)
-    legend = (LegendEntry("—", RAY_TRUE, "bearing ray"), LegendEntry("—", RAY_MIRROR, "mirror ray"))
+    legend = (LegendEntry("━", RAY_TRUE, "bearing ray"), LegendEntry("╌", RAY_MIRROR, "mirror ray"))
+    PX = {"true": 2.2, "mirror": 1.2, "sel_true": 4.0, "sel_mirror": 2.6}
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         true, mirror = ray_segments(snap)
-        i, z = snap.selected, Z["rays"]
-        canvas.lines("rays_mirror", mirror, RAY_MIRROR, 1.2, z + RAY_Z["mirror"])
-        canvas.lines("rays_true", true, RAY_TRUE, 1.2, z + RAY_Z["true"])
-        canvas.lines("rays_sel_mirror", mirror[i:i + 1], RAY_MIRROR, 3.0, z + RAY_Z["sel_mirror"])
-        canvas.lines("rays_sel_true", true[i:i + 1], RAY_TRUE, 3.0, z + RAY_Z["sel_true"])
+        i, z, px = snap.selected, Z["rays"], self.PX
+        canvas.lines("rays_mirror", shapes.dashes(mirror), RAY_MIRROR, px["mirror"], z + RAY_Z["mirror"])
+        canvas.lines("rays_true", true, RAY_TRUE, px["true"], z + RAY_Z["true"])
+        canvas.lines("rays_sel_mirror", shapes.dashes(mirror[i:i + 1]), RAY_MIRROR, px["sel_mirror"],
+                     z + RAY_Z["sel_mirror"])
+        canvas.lines("rays_sel_true", true[i:i + 1], RAY_TRUE, px["sel_true"], z + RAY_Z["sel_true"])
 
 
 class Hits(Static):
@@ -415,7 +421,7 @@ def layers(part: KindPanel | None) -> tuple[Layer, ...]:
         Source(part.drag if part is not None else None),
         Robots(ROBOT, ROBOT_SIZE, Z["robots"]),
         Headings(HEADING, lambda canvas, snap: 0.025 * _half(snap), Z["headings"]),
-        Trails(TRAIL, 1.2, Z["trails"]),
+        Trails(TRAIL, 2.0, Z["trails"]),
         PersonalBests(PBEST, 0.006 * SIDE, Z["pbests"]),
         GlobalBest(GBEST, 0.016 * SIDE, Z["gbest"]),
         Selected(SELECTED, lambda canvas, snap: 0.02 * _half(snap), Z["selected"]),
@@ -696,7 +702,7 @@ def panel(api: PanelAPI) -> KindPanel:
             Tab("Plots", (CORR_PLOT, CORR_NOTE, NO_CORR, DIST, SNR_PLOT)),
         ),
         status=_status, compare=_compare, export_note=EXPORT_NOTE, click=_click, drag=drag,
-        rebuilt=lambda s, what, changes: ("Swarm rebuilt", f"{what}: the robots start again"))
+        rebuilt=lambda s, what, changes: ("Swarm rebuilt", f"{what}: the robots start again"), main=lambda s: "dist")
 
 
 def accepts(scenario: Scenario) -> bool:
@@ -708,8 +714,13 @@ def refuse(scenario: Scenario) -> None:
         raise PresetError([f"acoustics: {scenario.name} has no [acoustics] section"])
 
 
+PAIRS = compare_pairs(ROBOT, TRAIL) + (
+    Pair("bearing ray / mirror ray", Cue(RAY_TRUE, "━", width=Rays.PX["true"]),
+         Cue(RAY_MIRROR, "╌", dash=True, width=Rays.PX["mirror"])),
+    Pair("global best / selected robot", Cue(GBEST, "◆", shape="diamond"), Cue(SELECTED, "○", shape="ring")),)
 KIND = AppKind(name="sonar", title="Chapter 6–8 acoustic swarm", engine="sonar", refuse=refuse,
-               make_driver=SonarDriver, notes="ch6-8", layers=layers, camera=SourceCamera, make_panel=panel)
+               make_driver=SonarDriver, notes="ch6-8", layers=layers, camera=SourceCamera, make_panel=panel,
+               pairs=PAIRS)
 
 
 def driver(session: Session) -> SonarDriver:

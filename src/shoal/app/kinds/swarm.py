@@ -36,6 +36,8 @@ from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..view.canvas import Canvas
 from ..view.layers import (
+    OUTLINE,
+    TRAIL_A,
     Ghosts,
     GlobalBest,
     Ground,
@@ -48,14 +50,16 @@ from ..view.layers import (
     Static,
     Trails,
     Twin,
+    compare_pairs,
 )
+from ..view.palette import Cue, Pair
 from ..view.view import KeepSwarmInView
 from .base import AppKind, BaseDriver
 
 ROBOT = (220, 50, 50)
 ROBOT_SIZE = 0.24  # scene units: the disc drawn has this radius
 HEADING = (120, 20, 20)
-TRAIL = (80, 120, 255)
+TRAIL = TRAIL_A
 PBEST = (110, 110, 110)
 GBEST = (240, 170, 0)
 SOURCE = (20, 150, 60)
@@ -158,12 +162,12 @@ def layers(panels: Any) -> tuple[Layer, ...]:
                border=ARENA, border_px=2.5, border_z=0.0),
         Landscape(landscape, z=-0.04),
         Optimum(),
-        Trails(TRAIL, 1.5, 0.0),
+        Trails(TRAIL, 2.0, 0.0),
         PersonalBests(PBEST, 0.1, 0.005),
         Headings(HEADING, lambda canvas, snap: 0.35 / canvas.scale, 0.015),
-        Robots(ROBOT, ROBOT_SIZE, 0.02),
+        Robots(ROBOT, ROBOT_SIZE, 0.02, outline=OUTLINE),
         GlobalBest(GBEST, 0.4, 0.012),
-        Twin(ROBOT_SIZE, (0.018, -0.001), px=1.5),
+        Twin(ROBOT_SIZE, (0.018, -0.001), outline=OUTLINE),
         Ghosts(ROBOT_SIZE),
     )
 
@@ -440,7 +444,7 @@ def panel(api: PanelAPI) -> KindPanel:
                                  visible=lambda s: s.scenario.sim.d == 2),  # SLO localises in the plane
             )),
             Tab("Plots", (
-                Figure("stability", figs.stability, figs.refresh_stability, aspect=0.7),
+                Figure("stability", figs.stability, figs.refresh_stability, aspect=0.7, title="(ω, ĉ) stability plane"),
                 SPREAD,
                 BEST_DISTANCE,
                 BEST_F,
@@ -450,7 +454,13 @@ def panel(api: PanelAPI) -> KindPanel:
                 SPEED,
             )),
         ),
-        status=_status, compare=_compare)
+        status=_status, compare=_compare, main=_main)
+
+
+def _main(s: Session) -> str:
+    """The plot a scene is about: the speed against its bounds for the 1-D runs of Fig. 3-4 and
+    3-5, else the (ω, ĉ) plane of the Chapter 3 lessons."""
+    return "speed" if s.scenario.sim.d == 1 else "stability"
 
 
 def supported(scenario: Scenario) -> None:
@@ -474,8 +484,11 @@ def refuse(scenario: Scenario) -> None:
                            "Chapter 3 swarm; set slo.swarm = 'host' for the Chapter 3 swarm on SLO positions"])
 
 
+PAIRS = compare_pairs(ROBOT, TRAIL) + (
+    Pair("global best / personal best", Cue(GBEST, "◆", shape="diamond"), Cue(PBEST, "■", shape="square")),)
 KIND = AppKind(name="swarm", title="Chapter 3 swarm", engine="swarm", refuse=refuse,
-               make_driver=SwarmDriver, notes="ch3", layers=layers, camera=KeepSwarmInView, make_panel=panel)
+               make_driver=SwarmDriver, notes="ch3", layers=layers, camera=KeepSwarmInView, make_panel=panel,
+               pairs=PAIRS)
 
 
 def driver(session: Session) -> SwarmDriver:

@@ -32,7 +32,9 @@ AGGREGATES = ("final", "max", "min", "mean")
 class Check(_Model):
     """After ``steps`` steps of ``runs`` seeded runs (run 0 is what the app shows), every
     named metric lies in its bounds: ``final`` at the last step; ``max``, ``min`` and
-    ``mean`` over steps ``after``..``steps``."""
+    ``mean`` over steps ``after``..``steps``. ``quote``: the words of the step's answer that
+    quote a reading (``"mean.e_abs_mean" = "about 4 units"``), which must agree with it
+    (:mod:`.quotes`)."""
 
     steps: Annotated[int, Field(ge=1, le=20_000)]
     runs: Annotated[int, Field(ge=1, le=20)] = 1
@@ -41,6 +43,7 @@ class Check(_Model):
     max: dict[str, Bounds] = Field(default_factory=dict)
     min: dict[str, Bounds] = Field(default_factory=dict)
     mean: dict[str, Bounds] = Field(default_factory=dict)
+    quote: dict[str, Annotated[str, Field(min_length=1, max_length=80)]] = Field(default_factory=dict)
 
     @model_validator(mode="after")
     def _bounds(self) -> "Check":
@@ -54,6 +57,10 @@ class Check(_Model):
                     raise ValueError(f"{kind}.{metric}: bounds [{lo:g}, {hi:g}] are empty")
         if not named:
             raise ValueError("names no metric: add e.g. final.max_speed = [0, 10]")
+        for key in self.quote:
+            kind, _, metric = key.partition(".")
+            if kind not in AGGREGATES or metric not in getattr(self, kind):
+                raise ValueError(f"quote.{key!r}: quotes no reading of this check (kind.metric of one it names)")
         return self
 
 

@@ -20,7 +20,8 @@ from .spec import Host
 
 CUSTOM = "custom (type below)"
 INTRO = ("**Swarm B** runs the same preset and seed as A with the overrides below, in lock-step with "
-         "the playback. In the arena B is drawn in teal under A; in the main plot its curve is teal and dashed.")
+         "the playback. In the arena B is drawn as blue squares under A; in the main plot its curve is blue and "
+         "dashed.")
 
 
 class CompareFolder:

@@ -27,20 +27,45 @@ ROBOT_FILL = "rgba(60, 170, 90, 0.22)"
 POINT_OK = "rgb(20, 130, 60)"
 POINT_BAD = "rgb(210, 40, 40)"
 
-_FONT = dict(size=11)
+FONT_PX, TITLE_PX = 12, 14  # nothing smaller (projector mode: twice these, ``text_scaled``)
+_FONT = dict(size=FONT_PX)
 _MARGIN = dict(l=48, r=10, t=34, b=40)
+
+
+def text_scaled(fig: go.Figure, scale: float) -> go.Figure:
+    """``fig`` with every text at ``scale`` times its size (the title :data:`TITLE_PX`, the rest
+    :data:`FONT_PX`); ``fig`` itself when it is already so, else a copy."""
+    want = round(FONT_PX * scale)
+    long_title = scale > 1 and " = " in (fig.layout.yaxis.title.text or "")
+    if fig.layout.font.size == want and all(note.font.size in (None, want) for note in fig.layout.annotations) \
+            and not long_title:
+        return fig
+    out = go.Figure(fig)
+    with out.batch_update():
+        out.layout.font.size = want
+        out.layout.title.font.size = round(TITLE_PX * scale)
+        out.layout.legend.font.size = want
+        for note in out.layout.annotations:
+            note.font.size = want
+        m = _MARGIN
+        out.layout.margin.update(l=round(m["l"] * scale), t=round(m["t"] * scale), b=round(m["b"] * scale))
+        title = out.layout.yaxis.title.text or ""
+        if scale > 1 and " = " in title:  # "ĉ = c1 + c2 [m/s]" → "ĉ [m/s]": a long axis title outgrows the axis
+            unit = title[title.index("["):] if "[" in title else ""
+            out.layout.yaxis.title.text = f"{title.split(' = ')[0]} {unit}".strip()
+    return out
 
 
 def _layout(fig: go.Figure, *, title: str, x: str, y: str, revision: str, legend: dict | None = None) -> go.Figure:
     fig.update_layout(
-        title=dict(text=title, font=dict(size=13), x=0.02, y=0.98),
+        title=dict(text=title, font=dict(size=TITLE_PX), x=0.02, y=0.98),
         xaxis_title=x,
         yaxis_title=y,
         uirevision=revision,  # keep the user's zoom across updates
         margin=_MARGIN,
         font=_FONT,
         template="plotly_white",
-        legend=legend or dict(orientation="h", yanchor="top", y=-0.2, x=0.0, font=dict(size=10)),
+        legend=legend or dict(orientation="h", yanchor="top", y=-0.2, x=0.0, font=dict(size=FONT_PX)),
         showlegend=True,
     )
     return fig
@@ -108,11 +133,14 @@ def stability_figure(omega: float, c_hat: float, *, adapted: bool, n: int = 201)
     fig = _layout(
         fig, title=_stability_title(omega, c_hat, adapted, ok),
         x="inertia weight ω", y=_stability_ylabel(adapted), revision="stability",
-        legend=dict(orientation="v", yanchor="top", y=0.99, xanchor="left", x=0.01, font=dict(size=9),
+        legend=dict(orientation="v", yanchor="top", y=0.99, xanchor="left", x=0.01, font=dict(size=FONT_PX),
                     bgcolor="rgba(255,255,255,0.8)"),  # inside the plot: the spread below stays on screen
     )
     fig.update_xaxes(range=[-1.05, 1.25], autorange=False, zeroline=True)
     fig.update_yaxes(range=[0, top], autorange=False)
+    # everything sits inside its margins, which never grow: no redraw of plotly's own after its first
+    # (one still under way as the figure leaves the page, at a swap of scenes, was an error in the page)
+    fig.update_layout(margin=dict(autoexpand=False))
     return fig
 
 
@@ -156,7 +184,7 @@ def _meaning(omega: float, c_hat: float, top: float, ok: bool) -> dict[str, Any]
     y = float(np.clip(c_hat, 0.0, top)) if math.isfinite(c_hat) else 0.0
     return dict(x=x, y=y, text=STABLE_MEANS if ok else OUTSIDE_MEANS, showarrow=True, arrowhead=2, arrowwidth=1,
                 arrowcolor="rgb(90,90,90)", ax=-70 if x > 0.2 else 70, ay=-45 if y < 0.6 * top else 45,
-                font=dict(size=10, color=POINT_OK if ok else POINT_BAD), bgcolor="rgba(255,255,255,0.85)",
+                font=dict(size=FONT_PX, color=POINT_OK if ok else POINT_BAD), bgcolor="rgba(255,255,255,0.85)",
                 align="left")
 
 
@@ -168,7 +196,7 @@ def _stability_title(omega: float, c_hat: float, adapted: bool, ok: bool) -> str
 
 
 def _stability_ylabel(adapted: bool) -> str:
-    return "ĉ = c1 + c2 [m/s] (Adapted law)" if adapted else "ĉ = c1 + c2 (no unit: standard law)"
+    return "ĉ = c1 + c2 [m/s]" if adapted else "ĉ = c1 + c2 (no unit)"  # (the title names the region)
 
 
 # --------------------------------------------------------------------- (u, a) plane

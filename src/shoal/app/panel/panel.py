@@ -35,7 +35,9 @@ from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..session.upload import parse_upload
 from ..warmup import WARMUP
+from .board import WIDTH, Board, plot_height
 from .compare import CompareFolder
+from .figures import text_scaled
 from .keys import PLAYING
 from .lesson_run import LessonRun
 from .plot_stream import Backlog, PlotStream, Script
@@ -95,9 +97,11 @@ class Services:
     experiments: ExperimentService | None = None  # the server's experiments (None: no Experiment tab)
     owner: Hashable = None  # this browser tab's key among the experiments
     view: Callable[[str], None] | None = None  # the arena's view buttons: "fit", "follow" or "display"
+    veil: Callable[[str | None], None] | None = None  # marks the arena as the old scene's while another is built
     display: Display | None = None  # how the tab's arena is drawn (the tab keeps it: it outlives a swap of panels)
     script: Script | None = None  # runs JavaScript in the tab's page (None: no page; plots always sent whole)
     backlog: Backlog | None = None  # messages still on their way to the page
+    board: Board | None = None  # the panel beside the arena (the tab keeps it; None: the panel makes its own)
 
 
 def notes_text(name: str = "ch3") -> str:
@@ -164,8 +168,10 @@ class Panel:
         if self.plot_stream.sync is not None:
             self.top.append(self.plot_stream.sync)
         self.part = kind.panel(self)
-        self._build_header()
-        self.view_gui = ViewRow(self)
+        self._skip: Any = None  # the main plot: built on the board, not in its tab
+        self.main_key = self.wanted_main()
+        self.board, self.board_plot = self._build_board()
+        self._build_header()  # (with the view row: the projector switch on the first screen in both modes)
         badge = gui.add_markdown("", visible=False)  # names a loaded replay
         live = gui.add_button("Run live (leave the replay)", visible=False,
                               hint="a live run of the replay's preset and seed, from step 0")
@@ -203,6 +209,7 @@ class Panel:
         self.light = False  # the light drawing: said on a line under the status line
         self.playback = gui.add_button_group("playback", PLAYBACK)
         self.top += [self.preset, self.status, self.playback, self._build(SPEED_SLIDER)]
+        self.view_gui = ViewRow(self, legend=self.board_legend)
         self.at_end = gui.add_dropdown(
             "at the end", self._at_end_options(), initial_value=at_end_label(self.session.at_end, sc.sim.steps),
             hint="at the preset's last step the run stops (Play, Step or a changed control start it again), "
@@ -218,6 +225,62 @@ class Panel:
         @self.playback.on_click
         def _(event: Any) -> None:
             self.press(event.target.value)
+
+    # ------------------------------------------------------------------ the board
+    def wanted_main(self) -> str | None:
+        """The key of the plot the scene is about now (None: the kind names none)."""
+        main = self.part.main
+        return main(self.session) if main is not None else None
+
+    def _find(self, key: str | None) -> Any:
+        """The plot spec of the kind's tabs and folders with ``key`` (None if there is none)."""
+        def walk(items: Any) -> Any:
+            for item in items:
+                if isinstance(item, Folder):
+                    found = walk(item.items)
+                    if found is not None:
+                        return found
+                elif isinstance(item, (PlotSpec, Chart, Figure)) and item.key == key:
+                    return item
+            return None
+        return walk([*self.part.folders, *(i for tab in self.part.tabs for i in tab.items)]) if key else None
+
+    def _build_board(self) -> tuple[Board | None, Any]:
+        """The main plot and the legend on the board beside the arena (the tab's, else one of
+        this panel's own); None where the GUI has no panels."""
+        self.board_legend: Any = None
+        item = self._find(self.main_key)
+        board = self.services.board
+        if board is None:
+            try:
+                board = Board(self.gui)
+            except AttributeError:  # a GUI without panels: the legend stays under the view row
+                return None, None
+            self.top.append(board)
+        with board:
+            plot = self._build(item) if item is not None else None
+            self.board_legend = self.gui.add_markdown("")
+        self.top += [h for h in (plot, self.board_legend) if h is not None]
+        self._skip = item
+        return board, plot
+
+    def place(self, projector: bool, window_height: float | None = None, panel_width: float | None = None) -> None:
+        """Dock the board for the mode and shape its plot for the room it has there (the window's
+        height and the control panel's width, px, where known)."""
+        if self.board is None:
+            return
+        self.board.place(projector)
+        h = self.board_plot
+        if h is not None:
+            width = (panel_width or 768.0) - 40 if projector else WIDTH - 24
+            time_plot = isinstance(self.control_of(h), (PlotSpec, Chart))
+            tall = plot_height(projector, window_height, width, "time" if time_plot else "figure")
+            aspect = 1.0 / tall if time_plot else tall  # (uPlot's aspect is width / height, plotly's the inverse)
+            if abs(float(h.aspect) - aspect) > 1e-3:
+                h.aspect = aspect
+
+    def control_of(self, handle: Any) -> Any:
+        return next(item for item, h in self._controls if h is handle)
 
     def _at_end_options(self) -> tuple[str, ...]:
         steps = self.session.scenario.sim.steps
@@ -306,6 +369,8 @@ class Panel:
     def _build(self, item: Control) -> Any:
         """A handle for ``item`` (a folder with its items), kept as ``handles[key]`` and wired."""
         gui, s = self.gui, self.session
+        if item is self._skip:  # (on the board)
+            return None
         if isinstance(item, Folder):
             expand = item.expand(s) if callable(item.expand) else item.expand
             with gui.add_folder(item.label, expand_by_default=expand) as h:
@@ -334,7 +399,7 @@ class Panel:
         elif isinstance(item, Text):
             h = gui.add_markdown(item.text)
         elif isinstance(item, Figure):
-            h = gui.add_plotly(item.make(s), aspect=item.aspect)  # (plotly's aspect is height/width)
+            h = gui.add_plotly(text_scaled(item.make(s), self.text_scale), aspect=item.aspect)  # (height/width)
         elif isinstance(item, (PlotSpec, Chart)):
             f = self._frame(item)
             h = gui.add_uplot(data=f.data, series=f.series, scales=f.scales, axes=f.axes, title=item.title,
@@ -553,14 +618,33 @@ class Panel:
 
     # ------------------------------------------------------------------ loading
     def _load(self, scenario: Scenario) -> None:
-        waits = WARMUP.waits(scenario)  # an SLO scene is built once its kernels are: said while it waits
-        self.status.content = (f"**{escape(scenario.name)}** · building the scene" +
-                               (f"; {WARMUP.status(scenario)}" if waits else "") + " …")
-        if self.services.replace is not None:
-            self.services.replace(scenario)  # the tab syncs whichever panel is current afterwards
-        else:
-            self.session.load_scenario(scenario)
-            self.sync()
+        """Load ``scenario``; until it is built the arena is veiled, the legend and the kind's tabs
+        cleared: nothing of the old scene passes for the new one."""
+        self.status.content = f"**{escape(scenario.name)}** · building the scene …"
+        self._building(f"Building {scenario.name} …")
+        try:
+            if self.services.replace is not None:
+                self.services.replace(scenario)  # the tab syncs whichever panel is current afterwards
+            else:
+                self.session.load_scenario(scenario)
+                self.sync()
+        finally:
+            self._building(None)
+
+    def _building(self, text: str | None) -> None:
+        """Say that another scene is being built (``text``), or that this one is shown again (None).
+        The board's plot goes at once too: taken off the page in the same batch as the new one
+        arrives, plotly re-laid it out as it went (an error in the page)."""
+        if self.services.veil is not None:
+            self.services.veil(text)
+        if self.removed:
+            return
+        self.tabs.visible = text is None
+        for h in (self.board_plot, self.board_legend):
+            if h is not None:
+                h.visible = text is None
+        if text is not None:
+            self.view_gui.show_legend(())
 
     def load_preset(self, choice: str) -> bool:
         """Load a choice of the preset dropdown: a shipped preset or one uploaded in this tab
@@ -583,6 +667,7 @@ class Panel:
         would be, loaded paused at step 0. Returns the refusal's messages (empty: loaded)."""
         try:
             scenario = load_scene(preset, values)
+            self._building(f"Setting up {scenario.name} …")
             if self.services.replace is not None:  # (never a step before it is paused)
                 self.services.replace(scenario, play=False)  # may rebuild the panel (another kind of scene)
             else:
@@ -590,6 +675,8 @@ class Panel:
                 self.sync()
         except PresetError as err:
             return list(err.messages)
+        finally:
+            self._building(None)
         return []
 
     def upload_preset(self, filename: str, content: bytes) -> bool:
@@ -710,6 +797,8 @@ class Panel:
                 self.push_uplot(h, self._frame(item))
             elif isinstance(item, Figure):
                 item.refresh(self, h)
+                if (fig := text_scaled(h.figure, self.text_scale)) is not h.figure:
+                    h.figure = fig
 
     def _frame(self, item: PlotSpec | Chart) -> Frame:
         """What ``item`` shows now: the metrics up to the step shown (with swarm B's curve) or the chart."""

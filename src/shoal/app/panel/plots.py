@@ -5,7 +5,7 @@ uPlot (not against time) whose data a kind computes from the session.
 
 Time plots share their x axis with the timeline: the last ``history`` rows up to the step
 shown, over the time span of all of them (so a scrubbed curve ends at the cursor). With
-swarm B on, B's value of the ``twin`` column is one more (dashed teal) series.
+swarm B on, B's value of the ``twin`` column is one more (dashed blue) series.
 
 Every chart is framed the same way (:func:`frame`): an axis range is never empty (one point,
 or all values equal, still spans a width); the y range snaps to 1–2–5 steps, so it changes
@@ -27,7 +27,7 @@ from shoal.presets.models import Scenario
 from ..session.session import Session
 
 Columns = dict[str, np.ndarray]
-TWIN_STROKE = "rgb(20,170,180)"  # swarm B's curve
+TWIN_STROKE = "rgb(0,140,210)"  # swarm B's curve (its robots' blue, dashed: view/layers.TWIN)
 TWIN_DASH = (5.0, 4.0)
 PADDING = (12, 16, 0, 0)  # px above, right, below, left of the plot area: the top tick is not cut
 MIN_SPAN = 1.0  # an x range of one point spans this (a second, a generation, a robot)

@@ -148,7 +148,7 @@ class ReplayFolder:
             return
         mark = {True: "✓", False: "✗", None: "·"}[info.verified]
         edits = f" · {info.live_edits:d} live edit(s) while it ran" if info.live_edits else ""
-        edits += " · with swarm B (teal)" if info.twin is not None else ""
+        edits += " · with swarm B (blue)" if info.twin is not None else ""
         self.badge.content = (f"**Replay of {escape(info.name)}, seed {info.seed:d}** (shoal {escape(info.shoal)})"
                               f"{edits}  \n{mark} {escape(info.check)} · "
                               "Play plays it, Reset goes back to its first step")

@@ -52,7 +52,7 @@ Act = Callable[[PanelAPI, Any], None]
 
 
 class Host(PanelAPI, Protocol):
-    """What the shared sections (the Replay folder, the Compare tab) ask of the panel."""
+    """What the shared sections (the Replay folder, the Compare folder) ask of the panel."""
 
     gui: Any
     tabs: Any
@@ -247,6 +247,7 @@ class Figure:
     make: Callable[[Session], Any]
     refresh: Callable[[PanelAPI, Any], None]
     aspect: float = 1.0
+    title: str = ""  # what the board calls it when it is the scene's main plot
 
 
 Control = Union[Slider, Dropdown, Checkbox, Number, Button, Text, Figure, PlotSpec, Chart, "Folder"]
@@ -288,3 +289,4 @@ class KindPanel:
     drag: Callable[..., None] | None = None
     export_note: str = ""
     state: Any = None  # the kind's own state of this panel (the fleet's world editor)
+    main: Callable[[Session], Union[str, None]] | None = None  # the key of the plot the scene is about (the board's)

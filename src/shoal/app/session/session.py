@@ -146,7 +146,7 @@ class Session:
     # ------------------------------------------------------------------ loading
     def _load(self, scenario: Scenario) -> None:
         check_app_limits(scenario)  # a shared server: no scene far beyond the sliders' reach
-        WARMUP.prefer(scenario)  # a scene that waits for its kernels has them compiled next
+        WARMUP.prefer(scenario)  # a scene whose kernels run as Python meanwhile has them compiled next
         sim = self.driver.build(scenario)  # may refuse: then nothing has changed
         WARMUP.use(sim, scenario)  # its numpy tick while its kernels compile (the same numbers)
         self.scenario = scenario
@@ -349,8 +349,6 @@ class Session:
                 if moved:
                     self.revision += 1
                 return moved
-            if WARMUP.waits(self.scenario):  # no numpy tick: the step waits for the kernels (the status says so)
-                return 0
             if self.timeline.cursor is not None:
                 self.timeline.cursor = None
                 self.revision += 1

@@ -143,7 +143,7 @@ STYLE = """
 #shoal-run details details{margin-top:.3rem}
 #shoal-run pre{font-size:11px;max-height:16rem;overflow:auto;background:#f5f6f8;padding:.3rem}
 #shoal-run code{font-size:12px}
-#shoal-run .twin{color:#14aab4;font-weight:600}
+#shoal-run .twin{color:#006fa8;font-weight:600}
 #shoal-run .legend{margin:.3rem 0}
 """
 
@@ -189,7 +189,8 @@ def panel(info: PageInfo, file_stem: str) -> str:
         parts.append(f'<p class="legend">{legend_html(info.legend)}</p>')
     if info.twin_toml is not None:
         lines = ", ".join(f"<code>{e(k)}={e(literal(v))}</code>" for k, v in info.twin_overrides.items())
-        parts.append(f'<p><span class="twin">Teal: swarm B</span>, the same preset and seed with {lines or "no change"}'
+        parts.append(f'<p><span class="twin">Blue squares: swarm B</span>, the same preset and seed with '
+                     f'{lines or "no change"}'
                      f" ({_download(f'{file_stem}-B.toml', info.twin_toml, 'its preset')}).</p>")
     if info.live_edits:
         parts.append(f"<p>Changed {info.live_edits} time(s) while it ran: a fresh run of this preset and seed "

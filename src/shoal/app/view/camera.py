@@ -12,13 +12,15 @@ VIEW_HALF = 10.0  # the arena's half size in scene units
 CAMERA_FOV = math.radians(8.0)
 CAMERA_HEIGHT = 1.12 * VIEW_HALF / math.tan(CAMERA_FOV / 2)
 WIDE = 1.25  # the home view shows at least ±WIDE·VIEW_HALF across: the colour bar and its labels beside the arena
+WIDE_PER_SCALE = 0.15  # … and this much more per unit of text scale above 1 (the labels of projector mode)
 
 
-def camera_height(aspect: float) -> float:
+def camera_height(aspect: float, text_scale: float = 1.0) -> float:
     """Camera height that shows the whole arena (plus a margin, and across it the colour bar
-    beside it) in a canvas of ``aspect`` = width/height."""
+    beside it, with its labels at ``text_scale``) in a canvas of ``aspect`` = width/height."""
     aspect = aspect if math.isfinite(aspect) and aspect > 0 else 1.0
-    return CAMERA_HEIGHT * max(1.0, WIDE / 1.12 / aspect)
+    wide = WIDE + WIDE_PER_SCALE * max(0.0, text_scale - 1.0)
+    return CAMERA_HEIGHT * max(1.0, wide / 1.12 / aspect)
 
 
 def top_view(server: Any) -> None:
@@ -33,16 +35,16 @@ def top_view(server: Any) -> None:
     server.scene.configure_default_lights(enabled=True, cast_shadow=False)
 
 
-def home_camera(camera: Any) -> None:
+def home_camera(camera: Any, text_scale: float = 1.0) -> None:
     """Put a client's camera (viser ``CameraHandle``) back straight above the middle of the
-    screen at the height that shows the arena (undoes a user's orbit, pan and zoom). A camera
-    whose report is not finite or of an empty canvas (the message guard drops such reports)
-    gets the height of a square one."""
+    screen at the height that shows the arena (undoes a user's orbit, pan and zoom), its labels at
+    ``text_scale``. A camera whose report is not finite or of an empty canvas (the message guard
+    drops such reports) gets the height of a square one."""
     try:
         aspect = float(camera.aspect)
     except (ArithmeticError, TypeError, ValueError):
         aspect = 1.0
-    camera.position = (0.0, 0.0, camera_height(aspect))
+    camera.position = (0.0, 0.0, camera_height(aspect, text_scale))
     camera.look_at = (0.0, 0.0, 0.0)
     camera.up_direction = (0.0, 1.0, 0.0)
 

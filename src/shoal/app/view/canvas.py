@@ -10,6 +10,10 @@ hidden when they have nothing to show.
 Two styles of drawing, both read by the layers: ``light`` (a page drawn without a GPU: dots for
 what would be a line per robot, no heading strokes) and ``text_scale`` (the labels' size, a
 projector); a change of either builds the scene again (:meth:`~.view.View.restyle`).
+
+A label is text at a world point. On a browser's page it is HTML over the canvas (``labels``,
+:mod:`.overlay`: sharp at the light drawing's half resolution, sized by the page's projector
+mode), placed by an invisible node of the scene; elsewhere (a Share page) a viser label.
 """
 
 from __future__ import annotations
@@ -33,8 +37,10 @@ Colour = tuple[int, int, int]
 class Canvas:
     """Nodes (``nodes``: key → viser handle) of one view on a viser ``SceneApi``."""
 
-    def __init__(self, scene: Any, prefix: str) -> None:
+    def __init__(self, scene: Any, prefix: str, labels: Any = None) -> None:
         self.scene, self.prefix = scene, prefix
+        self.labels = labels  # the page's HTML labels (overlay.Labels), None: viser's labels
+        self.texts: dict[str, str] = {}  # label key → its text (what the page shows)
         self.nodes: dict[str, Any] = {}
         self.root = f"/{prefix}"
         self.scale = 1.0
@@ -58,8 +64,15 @@ class Canvas:
     def clear(self) -> None:
         for node in reversed(list(self.nodes.values())):
             node.remove()
+        if self.labels is not None and self.texts:
+            self.labels.drop([self.name_of(key) for key in self.texts])
         self.nodes.clear()
         self.shown_revision += 1
+        self.texts.clear()
+
+    def name_of(self, key: str) -> str:
+        """The scene path of the node kept as ``key``."""
+        return str(self.nodes[key].name) if key in self.nodes else self.name(key)
 
     def name(self, key: str, fresh: bool = False, under_root: bool = True) -> str:
         """The scene path of node ``key`` (``fresh``: a name not used before, for a re-created node)."""
@@ -77,6 +90,8 @@ class Canvas:
         if node is not None:
             node.remove()
             self.shown_revision += 1
+        if self.texts.pop(key, None) is not None and self.labels is not None and node is not None:
+            self.labels.drop([str(node.name)])
 
     def hide(self, *keys: str) -> None:
         for key in keys:
@@ -176,7 +191,18 @@ class Canvas:
         ok = xy is not None and bool(np.all(np.isfinite(xy)))
         pos = tuple(float(v) for v in self.to_view(np.asarray(xy, dtype=float), z)) if ok else (0.0, 0.0, 0.0)
         node = self.nodes.get(key)
-        if node is None:
+        if self.labels is not None:  # HTML over the canvas, placed by an invisible node
+            if node is None:
+                node = self.nodes[key] = self.scene.add_frame(self.name(key), show_axes=False, position=pos)
+                self.shown_revision += 1
+                self.labels.put(str(node.name), text, style.get("anchor", "top-left"),
+                                style.get("font_screen_scale", 1.0), True)
+            else:
+                node.position = pos
+                if self.texts.get(key) != text:
+                    self.labels.put(str(node.name), text)
+            self.texts[key] = text
+        elif node is None:
             style["font_screen_scale"] = style.get("font_screen_scale", 1.0) * self.text_scale
             self.nodes[key] = self.scene.add_label(self.name(key), text, position=pos, **style)
             self.shown_revision += 1

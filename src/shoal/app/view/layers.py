@@ -26,18 +26,26 @@ from shoal.presets.models import Scenario
 
 from ..session.snapshot import Snapshot
 from .canvas import Canvas, Colour
+from .palette import Cue, Pair
 from .shapes import circle_segments, grid_segments, plane, polyline
 from .trails import DOT, TRAIL_DOT_BUDGET, TRAIL_DOTS, TrailDrawing  # noqa: F401  (the light drawing's dots)
 
 Size = Union[float, Callable[[Canvas, Snapshot], float]]
 
-TWIN = (20, 170, 180)  # swarm B's robots
-TWIN_TRAIL = (150, 215, 220)  # B's trails
+# Swarm A is drawn in reds (each kind's robots and a maroon trail), swarm B in blues, each with a
+# second cue: B's robots are squares, its trail thinner (in the light drawing: square dots).
+# Colour pairs that carry meaning are listed by each kind (``AppKind.pairs``, view/palette.py).
+TWIN = (0, 140, 210)  # swarm B's robots
+TWIN_TRAIL = (20, 80, 200)  # B's trails
+TRAIL_A = (160, 40, 40)  # A's trails, every kind: dark enough for the heat map (3:1), apart from B's (ΔE ≥ 30)
+OUTLINE = (30, 30, 30)  # round the robots of a scene with a heat map: 3:1 against every colour of it
 GHOST = (60, 110, 230)
 GHOST_BEST = (30, 80, 220)
-ERR_LOW = np.array([40, 170, 70], float)
-ERR_HIGH = np.array([230, 40, 40], float)
+ERR_SMALL: Colour = (40, 110, 220)  # a belief's error: blue when small …
+ERR_LARGE: Colour = (220, 90, 0)  # … orange when large (and drawn thicker: its second cue)
+ERR_LOW, ERR_HIGH = np.array(ERR_SMALL, float), np.array(ERR_LARGE, float)
 EMPTY_POINTS = np.zeros((0, 2))
+EDGE, EDGE_Z = 1.4, 0.0005  # an outline's size over its marker's, and how far under it
 
 
 @dataclass(frozen=True)
@@ -131,8 +139,9 @@ class Ground(Static):
         canvas.lines("arena", polyline(box, closed=True), self.border, self.border_px, self.border_z)
 
 
-LANDSCAPE_MAP = "YlGn"  # low cost light (where the swarm gathers), high green: red robots and blue trails read on both
-LANDSCAPE_TINT = 0.8  # of the colour map, the rest white
+LANDSCAPE_MAP = "YlGn"  # low cost light (where the swarm gathers), high green
+LANDSCAPE_TINT = 0.55  # of the colour map, the rest white: light enough for dark trails and outlined robots (3:1)
+LANDSCAPE_SPAN = 0.55  # of the colour map used (from its light end)
 
 
 def landscape_values(fitness: Callable[[np.ndarray], np.ndarray], half_size: float, n: int = 160) -> np.ndarray:
@@ -164,7 +173,7 @@ class HeatScale:
     def rgb(level: np.ndarray) -> np.ndarray:
         from matplotlib import colormaps
 
-        rgb = colormaps[LANDSCAPE_MAP](0.02 + 0.7 * np.asarray(level))[..., :3]  # no dark end: trails stay seen
+        rgb = colormaps[LANDSCAPE_MAP](0.02 + LANDSCAPE_SPAN * np.asarray(level))[..., :3]  # no dark end
         return (255 * (LANDSCAPE_TINT * rgb + 1 - LANDSCAPE_TINT)).astype(np.uint8)
 
 
@@ -184,7 +193,7 @@ class Landscape(Static):
 
     name = "landscape"
     keys = ("landscape", "colour_bar", "bar_low", "bar_mid", "bar_high", "bar_title")
-    legend = (LegendEntry("■", (95, 175, 100), "objective (light: low cost)"),)
+    legend = (LegendEntry("■", (190, 226, 168), "objective (light: low cost)"),)
 
     def __init__(self, objective: Callable[[Scenario], Callable[[np.ndarray], np.ndarray] | None], z: float) -> None:
         self.objective, self.z = objective, z
@@ -259,10 +268,12 @@ class Robots(Static):
     """Run 0's robots as discs (``collided``: a colour of their own for disabled robots)."""
 
     name = "robots"
-    keys = ("robots",)
+    keys = ("robots", "robots_edge")
 
-    def __init__(self, colour: Colour, size: Size, z: float, *, collided: Colour | None = None) -> None:
-        self.colour, self.size, self.z, self.collided = colour, size, z, collided
+    def __init__(self, colour: Colour, size: Size, z: float, *, collided: Colour | None = None,
+                 outline: Colour | None = None) -> None:
+        """``outline``: a dark edge round each disc (a scene with a heat map: every robot reads on it)."""
+        self.colour, self.size, self.z, self.collided, self.outline = colour, size, z, collided, outline
         self.legend = (LegendEntry("●", colour, "robot"),) + (
             (LegendEntry("●", collided, "collided"),) if collided is not None else ())
 
@@ -270,7 +281,10 @@ class Robots(Static):
         colour: Colour | np.ndarray = self.colour
         if self.collided is not None:
             colour = np.where((snap.status != 0)[:, None], self.collided, self.colour).astype(np.uint8)
-        canvas.points("robots", snap.x, colour, size_of(self.size, canvas, snap), "circle", self.z)
+        size = size_of(self.size, canvas, snap)
+        if self.outline is not None:
+            canvas.points("robots_edge", snap.x, self.outline, EDGE * size, "circle", self.z - EDGE_Z)
+        canvas.points("robots", snap.x, colour, size, "circle", self.z)
 
 
 class Headings(Static):
@@ -304,7 +318,7 @@ class Trails(Static):
 
     def __init__(self, colour: Colour, px: float, z: float) -> None:
         self.colour, self.px, self.z = colour, px, z
-        self.legend = (LegendEntry("—", colour, "trail"),)
+        self.legend = (LegendEntry("━" if px >= 2.0 else "—", colour, "trail"),)
         self.drawing = TrailDrawing("trails")
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
@@ -364,28 +378,32 @@ class Selected(Static):
 
 # ---------------------------------------------------------------------------- swarm B and beliefs
 class Twin(Static):
-    """Swarm B (compare): its robots just under A's and its trails, in teal; hidden without B."""
+    """Swarm B (compare): its robots (blue squares) just under A's and its trails (thinner than
+    A's, square dots in the light drawing); hidden without B. ``outline`` as :class:`Robots`."""
 
     name = "twin"
-    keys = ("twin", "twin_trails", "twin_trails_dots")
-    legend = (LegendEntry("●", TWIN, "swarm B"), LegendEntry("—", TWIN_TRAIL, "swarm B's trail"))
+    keys = ("twin", "twin_edge", "twin_trails", "twin_trails_dots")
+    legend = (LegendEntry("■", TWIN, "swarm B"), LegendEntry("—", TWIN_TRAIL, "swarm B's trail"))
 
-    def __init__(self, size: Size, z: tuple[float, float], px: float = 1.2) -> None:
-        self.size, self.z, self.px = size, z, px
+    def __init__(self, size: Size, z: tuple[float, float], px: float = 1.0, outline: Colour | None = None) -> None:
+        self.size, self.z, self.px, self.outline = size, z, px, outline
         self.drawing = TrailDrawing("twin_trails")
 
     def draw(self, canvas: Canvas, snap: Snapshot) -> None:
         if snap.twin is None:
-            canvas.hide("twin")
+            canvas.hide("twin", "twin_edge")
             self.drawing.hide(canvas)
             return
         x, trails = snap.twin
-        canvas.points("twin", x, TWIN, size_of(self.size, canvas, snap), "circle", self.z[0])
-        self.drawing.draw(canvas, trails, TWIN_TRAIL, self.px, self.z[1])
+        size = size_of(self.size, canvas, snap)
+        if self.outline is not None:
+            canvas.points("twin_edge", x, self.outline, EDGE * size, "square", self.z[0] - EDGE_Z)
+        canvas.points("twin", x, TWIN, size, "square", self.z[0])
+        self.drawing.draw(canvas, trails, TWIN_TRAIL, self.px, self.z[1], dot="square")
 
 
 def error_colors(err: np.ndarray, scale: float) -> np.ndarray:
-    """(G, 2, 3) uint8: green for no error to red at ``scale`` and beyond."""
+    """(G, 2, 3) uint8: blue for no error to orange at ``scale`` and beyond."""
     f = np.clip(np.asarray(err, dtype=float) / max(scale, 1e-12), 0.0, 1.0)[:, None]
     rgb = (ERR_LOW + (ERR_HIGH - ERR_LOW) * f).astype(np.uint8)
     return np.repeat(rgb[:, None, :], 2, axis=1)
@@ -393,12 +411,14 @@ def error_colors(err: np.ndarray, scale: float) -> np.ndarray:
 
 class Ghosts(Static):
     """The selected robot's beliefs: a ghost (blue diamond) where it believes each robot it
-    localised is, joined to the truth by a segment from green (no error) to red; the large
-    ghost is where it believes the global best is. Hidden on true positions and recorded frames."""
+    localised is, joined to the truth by a segment from blue (no error) to orange, thin below
+    half of the error scale and thick above it; the large ghost is where it believes the global
+    best is. Hidden on true positions and recorded frames."""
 
     name = "ghosts"
-    keys = ("ghost_errors", "ghosts", "ghost_best", "ghost_best_error")
-    legend = (LegendEntry("◆", GHOST, "believed position"), LegendEntry("—", (40, 170, 70), "belief error"),
+    keys = ("ghost_errors", "ghost_errors_large", "ghosts", "ghost_best", "ghost_best_error")
+    legend = (LegendEntry("◆", GHOST, "believed position"),
+              LegendEntry("—", ERR_SMALL, "belief error: small"), LegendEntry("━", ERR_LARGE, "large"),
               LegendEntry("◆", GHOST_BEST, "believed global best"))
 
     def __init__(self, size: Size, z: tuple[float, float] = (0.004, 0.008)) -> None:
@@ -413,7 +433,10 @@ class Ghosts(Static):
         z_err, z_ghost = self.z
         size = size_of(self.size, canvas, snap)
         errs = np.stack([g.points, g.truth], axis=1) if len(g.of) else np.zeros((0, 2, 2))
-        canvas.lines("ghost_errors", errs, error_colors(g.error, g.scale), 2.0, z_err)
+        large = np.asarray(g.error, dtype=float) > 0.5 * g.scale if len(g.of) else np.zeros(0, bool)
+        colours = error_colors(g.error, g.scale)
+        canvas.lines("ghost_errors", errs[~large], colours[~large], 1.5, z_err)
+        canvas.lines("ghost_errors_large", errs[large], colours[large], 3.5, z_err)
         canvas.points("ghosts", g.points, GHOST, 0.8 * size, "diamond", z_ghost)
         if g.best is None or g.true_best is None:
             canvas.hide("ghost_best", "ghost_best_error")
@@ -422,3 +445,9 @@ class Ghosts(Static):
         canvas.lines("ghost_best_error", np.stack([g.best, g.true_best])[None],
                      error_colors(np.array([err]), g.scale), 1.5, z_err)
         canvas.points("ghost_best", g.best[None], GHOST_BEST, 1.2 * size, "diamond", z_ghost)
+
+
+def compare_pairs(robot: Colour, trail: Colour = TRAIL_A) -> tuple[Pair, ...]:
+    """Swarm A (a kind's ``robot`` discs and ``trail``) against swarm B: colour and a second cue."""
+    return (Pair("Compare: A's robots / B's robots", Cue(robot, "●", shape="circle"), Cue(TWIN, "■", shape="square")),
+            Pair("Compare: A's trail / B's trail", Cue(trail, "━", width=2.0), Cue(TWIN_TRAIL, "—", width=1.0)))

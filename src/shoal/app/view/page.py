@@ -9,14 +9,22 @@ viser passes no page events to Python, but it runs a script the server sends
 - renders the arena at half its pixels in the light drawing (:func:`set_light`);
 - ticks the *light drawing* box once, when WebGL draws in software (a renderer named SwiftShader,
   llvmpipe, softpipe or "software": the test of viser's own warning), through the box itself, the
-  path of a user's click (the view row's *Display* button shows the boxes a moment for it);
+  path of a user's click (the view row's *Display* button shows the boxes a moment for it), in
+  each tab once it is in view, and without pressing the button again while its answer is on its
+  way (a second tab of a loaded server once hid the boxes it had asked for);
 - closes viser's "Software WebGL rendering detected" toast whenever it shows (it covered the top
   left of the arena on every load): the status area names the light drawing instead;
-- scales the page's text (:func:`set_text_scale`: Mantine's ``--mantine-scale``) for a projector;
 - takes a time plot's new rows (``__shoalPage.plot``, sent by :mod:`shoal.app.panel.plot_stream`)
   into viser's GUI store, where a data push would put the whole window, once it has told the server
   it can (through the hidden control the server names); a chart that does not hold the rows an
-  append was made for asks for its whole data again.
+  append was made for asks for its whole data again;
+- lays a plotly figure out only once it has a size and purges one that left the page only a while
+  later (plotly's work on a figure still under way as viser purged it was an error in the page);
+- scales the page's text (:func:`set_text_scale`: Mantine's ``--mantine-scale``) for a projector.
+
+:func:`install_page` sends three more with it, one concept each: the style sheet and the projector
+mode's switch (:mod:`.projector`), the arena's labels as HTML (:mod:`.overlay`), and the names,
+announcements and title a screen reader needs (:mod:`.access`).
 
 The camera controls are reached through the page's React tree (the canvas' fiber up to viser's
 viewer context, ``mutable.current.cameraControl``, a camera-controls instance): viser's client
@@ -30,7 +38,10 @@ import contextlib
 import json
 from typing import Any
 
-from viser import _messages
+from .access import access_script
+from .overlay import overlay_script
+from .projector import projector_script
+from .script import run_script
 
 LIGHT_LABEL = "light drawing"  # the Display box the script ticks …
 SHOW_BOXES = "Display"  # … after showing the boxes with the view row's button
@@ -122,20 +133,30 @@ PAGE_JS = """
     return l && document.getElementById(l.getAttribute("for"));
   };
   const button = (name) => [...document.querySelectorAll("button")].find((b) => b.textContent.trim() === name);
+  // Each tab decides for itself, once it is in view (a tab opened behind another draws nothing
+  // yet): the boxes are shown with the view row's button, the light drawing ticked, the boxes
+  // hidden again. A loaded server may take seconds to show them: the button is pressed again
+  // only after SHOW_WAIT (pressing it sooner would hide the boxes it asked for).
   P.report = () => {
-    if (P.reported) return;
+    if (P.reported || document.visibilityState === "hidden") return;
     if (P.renderer === undefined) P.renderer = renderer();
     if (!SOFTWARE.test(P.renderer)) { P.reported = true; return; }
     const b = box(LIGHT);
-    if (!b) {  // the boxes hide behind the view row's button: show them a moment (again if nothing came)
+    if (!b) {  // the boxes hide behind the view row's button: show them a moment
       const d = button(SHOW);
-      if (d && (!P.shownAt || Date.now() - P.shownAt > 4000)) { d.click(); P.shownAt = Date.now(); }
+      if (d && (!P.shownAt || Date.now() - P.shownAt > %(show_wait)s)) { d.click(); P.shownAt = Date.now(); }
       return;
     }
-    P.reported = true;
-    if (!b.checked) b.click();
-    if (P.shownAt) { const d = button(SHOW); if (d) d.click(); }  // and hide them again
+    if (!b.checked) {
+      if (P.tickedAt && Date.now() - P.tickedAt < %(show_wait)s) return;  // (its tick on its way)
+      b.click();
+      P.tickedAt = Date.now();
+      return;
+    }
+    P.reported = true;  // ticked: hide the boxes again if they were shown for it
+    if (P.shownAt) { const d = button(SHOW); if (d) d.click(); }
   };
+  document.addEventListener("visibilitychange", () => P.report());
   const dropToast = () => {
     for (const n of document.querySelectorAll(".mantine-Notification-root")) {
       if (!n.textContent.includes(TOAST)) continue;
@@ -143,6 +164,27 @@ PAGE_JS = """
       if (x) x.click(); else n.remove();
     }
   };
+  // viser lays out every plotly figure it holds, also those of a hidden tab at width 0, and
+  // purges a figure the moment it leaves the page; plotly's own work on it may still be under way
+  // then (a swap of panels), and finding the figure purged it threw (an error in the page). So a
+  // figure without a size is drawn once it has one, and a figure that left is purged a while later.
+  const guard = (Pl) => {
+    if (!Pl || Pl.__shoal) return Pl;
+    const react = Pl.react, purge = Pl.purge;
+    Pl.react = function (gd, data, layout) {
+      if (layout && (!layout.width || !layout.height)) return Promise.resolve(gd);
+      return react.apply(this, arguments);
+    };
+    Pl.purge = function (gd) { setTimeout(() => purge.call(Pl, gd), 10000); return gd; };
+    Pl.__shoal = true;
+    return Pl;
+  };
+  if (window.Plotly) guard(window.Plotly);
+  else {  // (viser sends plotly's bundle after this script: it sets window.Plotly)
+    let real;
+    Object.defineProperty(window, "Plotly", {configurable: true, enumerable: true, get: () => real,
+                                             set: (v) => { real = guard(v); }});
+  }
   new MutationObserver(dropToast).observe(document.body, {childList: true, subtree: true});
   dropToast();
   P.text = (scale) => document.documentElement.style.setProperty("--mantine-scale", String(scale));
@@ -178,24 +220,50 @@ PAGE_JS = """
     });
     s.set({[uuid]: {...conf, props: {...conf.props, data: out, scales: scales}}});
   });
+  // A veil over the arena while another scene is built: the old one is not taken for the new
+  // (shown after a moment, so that a quick swap does not flicker; its seconds count)
+  P.veil = (text) => {
+    clearTimeout(P.veilTimer); clearInterval(P.veilClock);
+    if (P.veilEl) { P.veilEl.remove(); P.veilEl = null; }
+    if (text === null) return;
+    const start = Date.now();
+    P.veilTimer = setTimeout(() => {
+      const c = arena(), r = c && c.getBoundingClientRect();
+      if (!r) return;
+      const v = document.createElement("div");
+      v.id = "shoal-veil";
+      v.setAttribute("role", "status");
+      v.style.cssText = `position:fixed;left:${r.left}px;top:${r.top}px;width:${r.width}px;height:${r.height}px;` +
+        "z-index:4;background:rgba(255,255,255,0.82);display:flex;align-items:center;justify-content:center;" +
+        "font-size:calc(18px * var(--shoal-k, 1));color:#111;text-align:center;padding:1em";
+      document.body.appendChild(v);
+      P.veilEl = v;
+      const say = () => { v.textContent = `${text} (${Math.round((Date.now() - start) / 1000)} s)`; };
+      say();
+      P.veilClock = setInterval(say, 500);
+    }, 250);
+  };
   setInterval(() => { P.apply(); P.applyDpr(); P.report(); P.sayPlots(); }, 400);
 })();
 """
 
 
+SHOW_WAIT_MS = 15000  # the page presses Display or ticks the box again only after this long without an answer
+
+
 def page_script() -> str:
     return PAGE_JS % {"light": json.dumps(LIGHT_LABEL), "show": json.dumps(SHOW_BOXES),
-                      "toast": json.dumps(SOFTWARE_TOAST), "light_dpr": json.dumps(LIGHT_DPR)}
-
-
-def run_script(gui: Any, source: str) -> None:
-    """Run ``source`` in the page of ``gui`` (a client's ``GuiApi``)."""
-    gui._websock_interface.queue_message(_messages.RunJavascriptMessage(source=source))
+                      "toast": json.dumps(SOFTWARE_TOAST), "light_dpr": json.dumps(LIGHT_DPR),
+                      "show_wait": SHOW_WAIT_MS}
 
 
 def install_page(gui: Any) -> None:
-    """Send the page script to the page of ``gui`` (once per page; a second copy does nothing)."""
+    """Send the page scripts to the page of ``gui`` (once per page; a second copy does nothing).
+    Sent before the tab's panel, so that what the tab tells the page while it is built arrives."""
     run_script(gui, page_script())
+    run_script(gui, projector_script())
+    run_script(gui, overlay_script())
+    run_script(gui, access_script())
 
 
 def set_flat(gui: Any, flat: bool) -> None:
@@ -206,6 +274,12 @@ def set_flat(gui: Any, flat: bool) -> None:
 def set_light(gui: Any, light: bool) -> None:
     """Render the arena at :data:`LIGHT_DPR` (True) or as viser chooses (False)."""
     run_script(gui, f"window.__shoalPage && window.__shoalPage.setLight({json.dumps(bool(light))});")
+
+
+def set_veil(gui: Any, text: str | None) -> None:
+    """Veil the arena with ``text`` (and the seconds it has waited) while another scene is built;
+    None lifts it."""
+    run_script(gui, f"window.__shoalPage && window.__shoalPage.veil && window.__shoalPage.veil({json.dumps(text)});")
 
 
 def set_text_scale(gui: Any, scale: float) -> None:

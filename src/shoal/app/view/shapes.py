@@ -73,6 +73,16 @@ def trail_segments(trails: np.ndarray) -> np.ndarray:
     return np.stack([xy[:, :-1], xy[:, 1:]], axis=2).reshape(-1, 2, 2)
 
 
+def dashes(segs: np.ndarray, parts: int = 9) -> np.ndarray:
+    """(S, 2, 2) segments → their dashes: each cut into ``parts`` (odd) pieces, every other one
+    kept, the first and the last among them (a dashed line's second cue: not its colour alone)."""
+    segs = np.asarray(segs, dtype=float).reshape(-1, 2, 2)
+    t = np.linspace(0.0, 1.0, parts + 1)
+    a, b = segs[:, None, 0], segs[:, None, 1]
+    points = a + (b - a) * t[None, :, None]  # (S, parts + 1, 2)
+    return np.stack([points[:, 0:-1:2], points[:, 1::2]], axis=2).reshape(-1, 2, 2)
+
+
 def grid_segments(lo: np.ndarray, hi: np.ndarray, origin: np.ndarray, cell: float,
                   every: int = 5) -> tuple[np.ndarray, np.ndarray]:
     """The lines of a grid over the box ``lo``–``hi`` at ``origin`` + k ``cell`` (k whole), as

@@ -105,9 +105,9 @@ class TrailDrawing:
         self.lines.clear(canvas)
         self.dots.clear(canvas)
 
-    def draw(self, canvas: Canvas, trails: Trails, colour: Colour, px: float, z: float) -> None:
+    def draw(self, canvas: Canvas, trails: Trails, colour: Colour, px: float, z: float, dot: str = "circle") -> None:
         """Trails (M, L, d) as segments ``px`` pixels thick or, in the light drawing, as at most
-        :func:`dots_per_trail` dots each."""
+        :func:`dots_per_trail` dots each, of shape ``dot``."""
         p = np.asarray(trails.points)
         empty = p.ndim != 3 or not p.shape[0] or p.shape[1] < 2
         if canvas.light:
@@ -115,7 +115,7 @@ class TrailDrawing:
             if empty:
                 self.dots.clear(canvas)
             else:
-                self._dots(canvas, trails, colour, z)
+                self._dots(canvas, trails, colour, z, dot)
         else:
             self.dots.clear(canvas)
             if empty:
@@ -155,7 +155,7 @@ class TrailDrawing:
 
         self.lines.keep(canvas, want, make, update)
 
-    def _dots(self, canvas: Canvas, trails: Trails, colour: Colour, z: float) -> None:
+    def _dots(self, canvas: Canvas, trails: Trails, colour: Colour, z: float, dot: str) -> None:
         p, steps, s = trails.points, np.asarray(trails.steps), max(int(trails.stride), 1)
         m, last = p.shape[0], len(steps) - 1
         need = max(1, math.ceil(last / (dots_per_trail(m) - 1)))  # (the end's dot and one every e before it)
@@ -163,7 +163,7 @@ class TrailDrawing:
             self.every = need
         e = self.every
         self.dots.start(canvas, True)
-        base = (trails.epoch, m, s, e)
+        base = (trails.epoch, m, s, e, dot)
 
         def points(cols: list[int]) -> Any:
             def build() -> np.ndarray:
@@ -181,7 +181,7 @@ class TrailDrawing:
 
         def make(key: str, pts: np.ndarray) -> None:
             canvas.add(key, canvas.scene.add_point_cloud(
-                canvas.name(key, fresh=True), pts, colors=colour, point_size=DOT, point_shape="circle",
+                canvas.name(key, fresh=True), pts, colors=colour, point_size=DOT, point_shape=dot,
                 precision="float32", point_shading="flat"))
 
         def update(node: Any, pts: np.ndarray) -> None:

@@ -131,10 +131,11 @@ class KeepSwarmInView:
 class View:
     """The arena of one tab for one kind of scene (``name``). ``scene`` is a viser ``SceneApi``."""
 
-    def __init__(self, scene: Any, name: str, camera: Camera, layers: Sequence[Layer], fit: Fit | None = None) -> None:
+    def __init__(self, scene: Any, name: str, camera: Camera, layers: Sequence[Layer], fit: Fit | None = None,
+                 labels: Any = None) -> None:
         self.name, self.camera, self.fit = name, camera, fit
         self.layers: tuple[Layer, ...] = (*layers, ScaleBar())
-        self.canvas = Canvas(scene, name)
+        self.canvas = Canvas(scene, name, labels)
         self.drawn_revision = -1
         self.built_revision = -1
         self._home: Home | None = None  # the scene's home, fitted to what mattered when it was built

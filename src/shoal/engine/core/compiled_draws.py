@@ -10,7 +10,8 @@ stream, its state stepped in place) and repeats both conversions compiled; the z
 are numba's copy of numpy's. ``tests/test_compiled_draws.py`` compares the draws and the
 generators' states with numpy's own calls. What a run saves is a Python call a draw: one call
 fills every run's arrays, blocks of runs in parallel threads (:mod:`.parallel`) when there are
-enough draws to share.
+enough draws to share. While the kernels are not compiled yet and compiling is deferred
+(:func:`~.compiled.defer`) the draws are the generators' own calls.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from numba.extending import intrinsic
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
 from . import parallel
-from .compiled import kernel
+from .compiled import interpreted, kernel
 
 BLOCK_DRAWS = 1 << 15  # draws a thread is given at least
 
@@ -148,6 +149,11 @@ class CompiledDraws:
         if self.rngs:
             R = len(self.rngs)
             parts, kinds = tuple(a.reshape(R, -1) for a in arrays), np.array(normal, dtype=bool)
+            if interpreted(_fill):  # (its Python cannot call the C function): numpy's own calls, the same draws
+                for r, rng in enumerate(self.rngs):
+                    for a, n in zip(parts, normal):
+                        (rng.standard_normal if n else rng.random)(out=a[r])
+                return
             per_run = sum(a.shape[1] for a in parts)
 
             def block(lo: int, hi: int) -> None:  # a run's draws touch its own generator and rows only
