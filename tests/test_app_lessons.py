@@ -183,10 +183,10 @@ def test_the_panel_needs_only_a_gui_and_two_callbacks(server):
                              lambda *toast: toasts.append(toast))
     panel.lesson_menu.value = _label(panel, "escorting")
     panel.setup_button.value = True
-    assert calls == [("escort-stationary", {})] and toasts[-1][2] == "green"
+    assert calls == [("escort-stationary", {"view.steps_per_second": 100.0})] and toasts[-1][2] == "green"
     panel.nav.value = NAV[1]
     panel.setup_button.value = True
-    assert calls[-1] == ("escort-stationary", {"sim.robots": 10})
+    assert calls[-1] == ("escort-stationary", {"view.steps_per_second": 100.0, "sim.robots": 10})
     folder.remove()
 
 
