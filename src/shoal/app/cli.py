@@ -13,6 +13,7 @@ from shoal import __version__
 EXIT_FAILED = 1
 EXIT_USAGE = 2
 DEFAULT_MAX_SESSIONS = 24  # as shoal.app.server.DEFAULT_MAX_SESSIONS (not imported: viser loads slowly)
+DEFAULT_MAX_WATCHERS = 500  # as shoal.app.hall.lecture.DEFAULT_MAX_WATCHERS
 MAX_PORT = 65535
 
 
@@ -69,8 +70,15 @@ def _cmd_serve(args: argparse.Namespace) -> int:
     except ValueError as e:
         return _err(str(e))
     try:
-        serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions,
-              allow_origins=origins, scheduler=args.scheduler, experiment_workers=args.experiment_workers)
+        if args.lecture:
+            from shoal.app.hall.command import serve_lecture
+
+            serve_lecture(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions,
+                          max_watchers=args.max_watchers, allow_origins=origins, scheduler=args.scheduler,
+                          experiment_workers=args.experiment_workers)
+        else:
+            serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions,
+                  allow_origins=origins, scheduler=args.scheduler, experiment_workers=args.experiment_workers)
     except OSError as e:
         return _err(str(e))
     return 0
@@ -308,6 +316,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--scheduler", help="run the Sweep tab's sweeps on this Dask scheduler (tcp://HOST:PORT)")
     s.add_argument("--experiment-workers", type=whole(1), default=1, metavar="W",
                    help="without --scheduler: local worker processes for the Sweep tab (default 1)")
+    s.add_argument("--lecture", action="store_true",
+                   help="teach a class: prints the lecturer's address (with a secret key: it drives one run) and "
+                        "the class's (every tab there watches that run, and may take it over or answer a round)")
+    s.add_argument("--max-watchers", type=whole(1), default=DEFAULT_MAX_WATCHERS, metavar="N",
+                   help=f"with --lecture: class tabs at once (default {DEFAULT_MAX_WATCHERS})")
     s.set_defaults(func=_cmd_serve)
 
     r = sub.add_parser("run", help="headless seeded runs")

@@ -66,6 +66,9 @@ class TabApp:
         experiments: ExperimentService | None = None,
         owner: Hashable = None,
         camera: Any = None,
+        lesson_progress: LessonProgress | None = None,
+        menu: PresetMenu | None = None,
+        display: Display | None = None,
     ) -> None:
         self.session = session
         self.experiments, self.owner = experiments, owner  # the server's experiments; this tab's key there
@@ -83,9 +86,10 @@ class TabApp:
         self._retired: deque[tuple[float, Panel]] = deque()  # (when to remove, panel) of swapped-out kinds
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
         self.control_hold = self.CONTROL_HOLD
-        self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
-        self.menu = PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included, across swaps
-        self.display = Display()  # how the arena is drawn, across swaps
+        # kept when the panels are rebuilt (and, given, by whoever outlives the tab: a lecture)
+        self.lesson_progress = lesson_progress or LessonProgress()  # the Lessons tab's place
+        self.menu = menu or PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included
+        self.display = display or Display()  # how the arena is drawn
         self._page = Display()  # what the page was last told (flat camera, text scale)
         self._home_when_resized: float | None = None  # the camera's aspect before the panel's width changed
         with self._ticking:

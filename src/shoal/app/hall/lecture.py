@@ -1,0 +1,310 @@
+"""``shoal serve --lecture``: one run shown to a whole class, driven from the lecturer's tab.
+
+A :class:`LectureServer` is a :class:`~shoal.app.server.ShoalServer` whose connections are told
+apart by the path of their page (:mod:`.routes`):
+
+- the class page ``/``: a **watcher**. It holds no session; it sees the broadcast
+  (:mod:`.broadcast`: the lecture drawn once on the server's own scene and GUI, sent to every
+  watcher as the same bytes by :mod:`.fanout`) and has its own *Take over* button
+  (:mod:`.watcher`);
+- ``/lecturer`` with the lecturer's key: the lecturer's tab, the full panel on the **lecture
+  session** (:class:`Lecture`), which outlives it: a reload or a second lecturer's tab finds the
+  run where it was (a second tab takes the lecture from the first);
+- ``/p/<id>``: a private session the lecture handed out (:mod:`.desk`): a take-over, or a plain
+  session (``/solo``). Private tabs see none of the broadcast and have *Back to the lecture*.
+
+The run advances while the lecturer's tab is connected (its tab steps it, as every tab steps
+its own); without it the class is told the run waits.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+import threading
+import traceback
+from typing import Any, Hashable
+
+import viser
+
+from shoal.presets.models import Scenario
+
+from ..experiment import ExperimentService
+from ..kinds.registry import app_presets, session_for
+from ..lessons.panel import LessonProgress
+from ..panel.view_row import Display
+from ..preset_menu import PresetMenu
+from ..server import DEFAULT_MAX_SESSIONS, ShoalServer
+from ..session.session import Session
+from ..tab import TabApp
+from ..view.camera import home_camera
+from ..view.page import install_page, run_script
+from . import fanout, routes
+from .broadcast import ORDER_OWN, Broadcast
+from .desk import PLAIN, TAKEOVER, Claim, Desk, Refused
+from .watcher import Watcher
+
+DEFAULT_MAX_WATCHERS = 500
+HERE = "lecture"  # this process, as a holder of private sessions on the desk
+BACK = "Back to the lecture"
+LECTURER_ONLY = ("**This is the lecturer's page.** It opens with the key that `shoal serve --lecture` printed "
+                 "(the whole address, `…/lecturer#key=…`). The class watches at the server's own address.")
+NOWHERE = "**No such page.** The class watches at this server's address (`/`)."
+DISMISSED = "**The lecture is driven from another tab now.** Reload this page to drive it from here again."
+FULL = "**This lecture has {n} watchers, its maximum.** Reload this page later."
+
+
+class Lecture:
+    """The lecture's run and what outlives the lecturer's tab: the session (``session``: the
+    lecturer's tab's, which a lesson or a preset may swap for one of another kind), where the
+    lessons are, the preset menu (uploads included) and the display."""
+
+    def __init__(self, scenario: Scenario) -> None:
+        self._session = session_for(scenario)  # paused at step 0: the lecturer presses Play
+        self.lessons = LessonProgress()
+        self.menu = PresetMenu(tuple(app_presets()))
+        self.display = Display()
+        self.lecturer: TabApp | None = None
+        self.lecturer_client: int | None = None
+
+    @property
+    def session(self) -> Session:
+        tab = self.lecturer
+        return tab.session if tab is not None else self._session
+
+    def keep(self) -> dict[str, Any]:
+        """What a lecturer's tab takes over from the last one."""
+        return dict(lesson_progress=self.lessons, menu=self.menu, display=self.display)
+
+    def drop(self, tab: TabApp) -> None:
+        """The lecturer's ``tab`` went: the run stays as it left it."""
+        if self.lecturer is tab:
+            self._session = tab.session
+            self.lecturer, self.lecturer_client = None, None
+
+
+def configure_client(client: Any) -> None:
+    """A private tab's page set up as the server's own is for the class (theme, panel, lights):
+    a private connection gets none of the server's broadcast (:mod:`.fanout`)."""
+    gui = client.gui
+    gui.configure_theme(control_width="large", show_share_button=False, brand_color=(40, 90, 200))
+    gui.main_panel.dock_right()
+    gui.set_panel_label("Shoal · PSO for robot swarms")
+    client.scene.set_up_direction("+z")
+    client.scene.configure_default_lights(enabled=True, cast_shadow=False)
+
+
+class LectureServer(ShoalServer):
+    """A lecture (see the module doc): ``key`` is the lecturer's (made here if not given),
+    ``desk`` hands out and takes back the private sessions (this process's own by default)."""
+
+    def __init__(self, scenario: Scenario, host: str = "127.0.0.1", port: int = 8080, *, key: str | None = None,
+                 max_sessions: int = DEFAULT_MAX_SESSIONS, max_watchers: int = DEFAULT_MAX_WATCHERS,
+                 allow_origins: tuple[str, ...] = (), experiments: ExperimentService | None = None,
+                 proxy_key: str | None = None, desk: Desk | None = None) -> None:
+        self.key = key or routes.new_key()
+        self.desk = desk if desk is not None else Desk()
+        self.lecture = Lecture(scenario)
+        self.max_watchers = max_watchers
+        self.watchers: dict[int, Watcher] = {}
+        self.held: dict[int, str] = {}  # client id → the private id its tab holds
+        self._claims: dict[int, Claim] = {}  # client id → its claim, while its session is built
+        self._said: set[str] = set()
+        super().__init__(scenario, host, port, max_sessions, allow_origins, experiments, proxy_key)
+
+    # ------------------------------------------------------------------ set-up
+    def route(self) -> Any:
+        return routes.page_router(self.desk.issue_plain)
+
+    def _configure(self) -> None:
+        super()._configure()
+        self.frames = fanout.share(self.viser, routes.is_private)
+        self.broadcast = Broadcast(self.viser, self.lecture)
+
+    @property
+    def lecturer_url(self) -> str:
+        return f"{self.url.rstrip('/')}{routes.LECTURER_PATH}#key={self.key}"
+
+    # ------------------------------------------------------------------ connections
+    def _connect(self, client: viser.ClientHandle) -> None:
+        if self._stopping.is_set():
+            return
+        path, headers = routes.request_of(self.viser, client.client_id)
+        which = routes.role(path)
+        if which == routes.WATCH:
+            self._open_watcher(client)
+        elif which == routes.LECTURER:
+            self._open_lecturer(client, headers)
+        elif which == routes.PRIVATE:
+            self._open_private(client, path)
+        else:
+            client.gui.add_markdown(NOWHERE)
+
+    def _gone(self, cid: int) -> bool:
+        return cid not in self.viser.get_clients()
+
+    def _open_watcher(self, client: viser.ClientHandle) -> None:
+        cid = client.client_id
+        with self._lock:
+            full = len(self.watchers) >= self.max_watchers
+        if full:
+            client.gui.add_markdown(FULL.format(n=f"{self.max_watchers:d}"), order=ORDER_OWN)
+            return
+        home_camera(client.camera)
+        fitted = threading.Event()
+
+        @client.camera.on_update
+        def _(camera: viser.CameraHandle) -> None:
+            if not fitted.is_set():
+                fitted.set()
+                home_camera(camera)
+
+        install_page(client.gui)  # the top view held, as for every tab
+        watcher = Watcher(client, self.take_over)
+        with self._lock:
+            self.watchers[cid] = watcher
+        if self._gone(cid):
+            self._disconnect(client)
+
+    def _open_lecturer(self, client: viser.ClientHandle, headers: Any) -> None:
+        if not routes.holds_key(headers, self.key):
+            client.gui.add_markdown(LECTURER_ONLY)
+            run_script(client.gui, routes.key_script())  # a key in the address: into the cookie, and again
+            return
+        cid = client.client_id
+        configure_client(client)
+        run_script(client.gui, routes.clean_address_script())
+        with self._lock:
+            before = self.lecture.lecturer_client
+        if before is not None:
+            self._dismiss(before)
+        tab = self._open_client(client, self.lecture.session, play=False, **self.lecture.keep())
+        with self._lock:
+            self.lecture.lecturer, self.lecture.lecturer_client = tab, cid
+        if self._gone(cid):
+            self._disconnect(client)
+
+    def _dismiss(self, cid: int) -> None:
+        """A second lecturer's tab takes the lecture from the tab ``cid``."""
+        with self._lock:
+            tab = self.tabs.get(cid)
+        if tab is not None:
+            self.lecture.drop(tab)
+        self.close_tab(cid)
+        client = self.viser.get_clients().get(cid)
+        if client is not None:
+            with contextlib.suppress(Exception):
+                client.gui.reset()
+                client.gui.add_markdown(DISMISSED)
+
+    def _open_private(self, client: viser.ClientHandle, path: str) -> None:
+        """A ``/p/<id>`` page: its id claimed on the desk, then a session within ``--max-sessions``."""
+        cid, pid = client.client_id, routes.private_id(path)
+        try:
+            if pid is None:
+                raise Refused("this is no private session's address")
+            claim = self.desk.claim(pid, (HERE, cid))
+        except Refused as err:
+            configure_client(client)
+            client.gui.add_markdown(f"**No private session here.** {err}")
+            self._back_button(client)
+            return
+        with self._lock:
+            self.held[cid] = pid
+            self._claims[cid] = claim
+        configure_client(client)
+        self._back_button(client)
+        try:
+            super()._connect(client)  # (→ _open_client, unless the server is full)
+        finally:
+            with self._lock:
+                self._claims.pop(cid, None)
+                opened = cid in self.tabs
+            if not opened:
+                self._release(cid)
+
+    def _open_client(self, client: viser.ClientHandle, session: Session | None = None, *, play: bool = True,
+                     **keep: Any) -> TabApp:
+        with self._lock:
+            claim = self._claims.get(client.client_id)
+        if session is not None or claim is None:  # the lecturer's tab (or a plain one)
+            return super()._open_client(client, session, play=play, **keep)
+        session, playing = self._session_of(claim)
+        tab = super()._open_client(client, session, play=playing)
+        if claim.again:
+            tab.notify("Started again", "This tab's connection was lost (or the server that ran it stopped): "
+                       + ("it starts again from where you took over." if claim.kind == TAKEOVER
+                          else "this is a new session."), "yellow")
+        return tab
+
+    def _release(self, cid: int) -> None:
+        with self._lock:
+            pid = self.held.pop(cid, None)
+        if pid is not None:
+            self.desk.release(pid, (HERE, cid))
+
+    def _session_of(self, claim: Claim) -> tuple[Session, bool]:
+        """The session a claimed id opens, and whether it plays."""
+        if claim.kind == PLAIN:
+            return session_for(self.scenario), True
+        from . import takeover
+
+        return takeover.restore(claim.state)
+
+    def _back_button(self, client: viser.ClientHandle) -> None:
+        button = client.gui.add_button(BACK, hint="watch the lecture again (this private session ends)")
+
+        @button.on_click
+        def _(event: Any) -> None:
+            run_script(client.gui, routes.go_script(routes.CLASS_PATH))
+
+    def _disconnect(self, client: viser.ClientHandle) -> None:
+        cid = client.client_id
+        with self._lock:
+            self.watchers.pop(cid, None)
+            tab = self.tabs.get(cid) if self.lecture.lecturer_client == cid else None
+        if tab is not None:
+            self.lecture.drop(tab)
+        self._release(cid)
+        super()._disconnect(client)
+
+    # ------------------------------------------------------------------ take over
+    def take_over(self, watcher: Watcher) -> str | None:
+        """``watcher``'s *Take over*: the lecture's state now, under a new id its page then opens.
+        Returns the id (None: refused, and the watcher told why)."""
+        from . import takeover
+
+        s = self.lecture.session
+        try:
+            with s.lock:
+                state, step = takeover.capture(s), s.k
+            pid = self.desk.issue(TAKEOVER, state, step)
+        except (Refused, takeover.CannotTakeOver) as err:
+            watcher.refuse("Cannot take over", str(err))
+            return None
+        run_script(watcher.client.gui, routes.go_script(routes.private_path(pid)))
+        return pid
+
+    # ------------------------------------------------------------------ ticking
+    def _round(self, turn: int, start: float, period: float) -> int:
+        """Every tab's tick (the lecturer's steps the run), then the class's screen."""
+        turn = super()._round(turn, start, period)
+        tab = self.lecture.lecturer
+        lock = tab._ticking if tab is not None else contextlib.nullcontext()
+        try:
+            with lock:  # (not while the lecturer's tab swaps its scene)
+                self.broadcast.tick(start)
+        except Exception as err:
+            self._say_once(err)
+        return turn
+
+    def _say_once(self, err: Exception) -> None:
+        if repr(err) in self._said or len(self._said) > 32:
+            return
+        self._said.add(repr(err))
+        where = traceback.extract_tb(err.__traceback__)[-3:]
+        at = " < ".join(f"{f.filename.rsplit('/', 1)[-1]}:{f.lineno} {f.name}" for f in reversed(where))
+        print(f"shoal: the class's screen failed to update: {err!r} at {at}", file=sys.stderr)
+
+    def holders(self) -> dict[str, Hashable]:
+        return self.desk.holders()
