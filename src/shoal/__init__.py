@@ -21,8 +21,8 @@ from typing import Any
 
 __version__ = "0.1.0"
 
-API = ("Scene", "as_table", "make", "plugins", "register", "register_objective", "registry_for", "run",
-       "scenario_of", "sweep")
+API = ("Scene", "Snapshot", "SnapshotError", "as_table", "make", "plugins", "register", "register_objective",
+       "registry_for", "run", "scenario_of", "sweep")
 __all__ = ["__version__", *API]
 
 

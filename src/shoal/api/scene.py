@@ -11,6 +11,7 @@ its state and metrics, retunes it live and collects its metrics as a table.
 from __future__ import annotations
 
 import copy
+import dataclasses
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
@@ -24,6 +25,7 @@ from shoal.presets.io import PresetError, apply_overrides, read_raw, set_dotted,
 from shoal.presets.kinds import SceneKind, kind_for
 from shoal.presets.models import Scenario
 
+from .snapshot import Snapshot, SnapshotError, snapshot_of
 from .tables import as_table
 
 SIM_KEYWORDS = ("runs", "seed", "steps", "robots", "d")  # make(..., runs=4) sets sim.runs
@@ -58,31 +60,56 @@ def scenario_of(preset: str | Path | Mapping[str, Any] | Scenario = "default", o
 
 
 def _objective_name(value: Any) -> Any:
-    """A function given as an objective: its registered name (registering it under ``__name__``)."""
+    """A function given as an objective: its registered name. A function met for the first time is
+    registered under its ``__name__`` or, where another objective holds that (a built-in
+    ``rastrigin``, another module's function), under ``module.qualname``; a function with the
+    module and qualname of one registered so (a notebook cell run again) replaces it, so scenes
+    made from then on, and those already made from their next tick, use the new definition."""
     if not callable(value):
         return value
     for name, entry in OBJECTIVES.items():
         if entry.f is value:
             return name
-    name = getattr(value, "__name__", "")
-    if not name or name == "<lambda>":
+    bare = getattr(value, "__name__", "")
+    if not bare or bare == "<lambda>":
         raise PresetError(["objective: register a lambda first (shoal.register_objective(name, f)) or pass a "
                            "named function"])
-    if name in OBJECTIVES:
-        raise ValueError(f"objective: {name!r} names another objective already; register yours under a name of its "
-                         "own (shoal.register_objective(name, f)) and give that name")
-    OBJECTIVES.register(ObjectiveFunction(name, name, value))
-    return name
+    origin = _origin(value)
+    names = (bare, ".".join(p for p in origin if p))
+    for name in names:
+        found = OBJECTIVES.get(name)
+        if found is None:
+            OBJECTIVES.register(ObjectiveFunction(name, name, value))
+            return name
+        if _origin(found.f) == origin:  # the same function, defined again
+            OBJECTIVES.register(dataclasses.replace(found, f=value), replace=True)
+            return name
+    raise ValueError(f"objective: {names[0]!r} and {names[1]!r} name other objectives already; register yours under "
+                     "a name of its own (shoal.register_objective(name, f)) and give that name")
 
 
-def make(preset: str | Path | Mapping[str, Any] | Scenario = "default", overrides: Sequence[str] = (),
-         **sections: Any) -> Scene:
-    """A :class:`Scene` of ``preset`` with overrides (see :func:`scenario_of`), at step 0.
+def _origin(f: Any) -> tuple[str, str]:
+    """Where a function was defined: its module and qualified name (a numba dispatcher's, its Python function's)."""
+    f = getattr(f, "py_func", f)
+    qualname = getattr(f, "__qualname__", None) or getattr(f, "__name__", "")
+    return str(getattr(f, "__module__", None) or ""), str(qualname)
+
+
+def make(preset: str | Path | Mapping[str, Any] | Scenario = "default", overrides: Sequence[str] = (), *,
+         snapshot: Snapshot | bytes | str | Path | None = None, **sections: Any) -> Scene:
+    """A :class:`Scene` of ``preset`` with overrides (see :func:`scenario_of`), at step 0; or, with
+    ``snapshot`` (a :class:`~shoal.api.snapshot.Snapshot`, its bytes or a saved file's path), the
+    scene it was taken of, at its step, going on with the same bits.
 
     >>> scene = make("default", runs=2, seed=7, controller={"mode": "raw", "omega": 0.6})
     >>> scene.step().t
     0.1
     """
+    if snapshot is not None:
+        if preset != "default" or overrides or sections:
+            raise ValueError("make: give a snapshot or a preset with overrides, not both (a snapshot holds its "
+                             "scenario; retune the scene it gives)")
+        return Scene.from_snapshot(snapshot)
     return Scene(scenario_of(preset, overrides, **sections))
 
 
@@ -99,7 +126,49 @@ class Scene:
         self.engine: Engine = self.kind.build(scenario)
         self.record = record
         self._rows: list[dict[str, np.ndarray]] = []
+        self._detached: set[str] = set()  # engine keywords retuned that the scenario does not hold
         self._note(self.engine.info())
+
+    # ------------------------------------------------------------------ keeping
+    def snapshot(self, *, metrics: bool = True) -> Snapshot:
+        """This scene now, to go on from later or elsewhere (``shoal.make(snapshot=...)``) with the
+        same bits: the scenario, the engine's whole state (every generator included) and, with
+        ``metrics``, the rows recorded so far. ``snapshot().to_bytes()`` is an ``.npz`` archive, no
+        pickle. The scene is not changed."""
+        take = getattr(self.engine, "snapshot", None)
+        if take is None:
+            raise SnapshotError(f"the {self.kind.label} engine ({type(self.engine).__name__}) offers no snapshot()")
+        if self._detached:
+            raise SnapshotError(f"snapshot: {', '.join(sorted(self._detached))} were retuned as engine keywords, which "
+                                "the scenario does not hold; retune them as preset sections "
+                                "(e.g. controller={...}) to keep this scene")
+        rows = None
+        if metrics and self.record and self._rows:
+            rows = {n: np.stack([np.asarray(r[n]) for r in self._rows]) for n in self._rows[-1]}
+        return Snapshot(self.scenario, self.kind.name, self.k, take(), rows)
+
+    @classmethod
+    def from_snapshot(cls, snapshot: Snapshot | bytes | str | Path, *, record: bool = True) -> Scene:
+        """The scene ``snapshot`` was taken of, at its step (see :meth:`snapshot`)."""
+        snap = snapshot_of(snapshot)
+        scene = cls(snap.scenario, record=record)
+        if scene.kind.name != snap.kind:
+            raise SnapshotError(f"snapshot: of a {snap.kind!r} scene, but its scenario builds a "
+                                f"{scene.kind.name!r} one")
+        restore = getattr(scene.engine, "restore", None)
+        if restore is None:
+            raise SnapshotError(f"the {scene.kind.label} engine ({type(scene.engine).__name__}) offers no restore()")
+        restore(snap.engine)
+        if scene.k != snap.k:
+            raise SnapshotError(f"snapshot: its engine is at step {scene.k}, its header says {snap.k}")
+        scene._rows = []
+        if record and snap.rows is not None:
+            names = list(snap.rows)
+            steps = snap.rows[names[0]].shape[0] if names else 0
+            scene._rows = [{n: snap.rows[n][i].copy() for n in names} for i in range(steps)]
+        if record and not scene._rows:
+            scene._note(scene.engine.info())
+        return scene
 
     # ------------------------------------------------------------------ reading
     @property
@@ -181,7 +250,9 @@ class Scene:
         if sections and engine_keywords:
             raise ValueError("retune: give preset sections or engine keywords, not both in one call")
         if engine_keywords:
-            return self.engine.retune(**engine_keywords)
+            changed = self.engine.retune(**engine_keywords)
+            self._detached.update(changed)
+            return changed
         new = scenario_of(self.scenario, (), **sections)
         live = self.kind.live(self.scenario, new) if self.kind.live is not None else None
         if kind_for(new) is not self.kind or live is None:

@@ -1,8 +1,9 @@
 """Fitness and cost functions (Rossides Alg. 1, p. 90; §3.5, p. 74; common PSO benchmarks).
 
 Every objective returns a value per robot, shape ``(runs, robots)``, and says whether
-it is maximised; :meth:`Objective.is_better` is the single comparison the swarm uses
-(docs/readings.md, "Fitness or cost"). :data:`OBJECTIVES` is their registry: a plug-in adds its
+it is maximised; the swarms compare values through ``engine/pso/bests.py``, where NaN and the
+worst infinity are never bests (docs/readings.md, "Fitness or cost", "Bests that are NaN or
+infinite"). :data:`OBJECTIVES` is their registry: a plug-in adds its
 own vectorised function there.
 """
 
@@ -75,6 +76,14 @@ class ObjectiveFunction:
     frame: Frame = "scaled"
 
 
+def shape_message(name: str, given: tuple[int, ...], got: tuple[int, ...]) -> str:
+    """Why objective ``name``'s values cannot be a fitness per robot: it mapped ``given`` to ``got``."""
+    hint = (" (a function of one point? make it work on the last axis, e.g. np.sum(z**2, axis=-1))"
+            if len(got) < len(given) - 1 or got == given[-1:] else "")
+    return (f"objective {name!r}: f must map (..., d) to (...), one value per point: given an array of shape "
+            f"{given} it returned shape {got}, not {given[:-1]}{hint}")
+
+
 OBJECTIVES: Registry[ObjectiveFunction] = Registry(
     "objective",
     ObjectiveFunction("source-distance", "distance to the source", lambda z: np.linalg.norm(z, axis=-1),
@@ -117,9 +126,13 @@ class Objective:
     def __call__(self, x: np.ndarray) -> np.ndarray:
         entry = OBJECTIVES[self.name]
         if entry.frame == "x":
-            return entry.f(x)
-        z = x - self._source(x.shape[-1])
-        return np.asarray(entry.f(z if entry.frame == "offset" else z / self.scale), dtype=float)
+            out = entry.f(x)
+        else:
+            z = x - self._source(x.shape[-1])
+            out = np.asarray(entry.f(z if entry.frame == "offset" else z / self.scale), dtype=float)
+        if np.shape(out) != x.shape[:-1]:
+            raise ValueError(shape_message(self.name, x.shape, np.shape(out)))
+        return out
 
     def is_better(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """True where fitness ``a`` beats ``b`` (strictly)."""

@@ -17,6 +17,8 @@ import numpy as np
 from ..core.contract import check_live
 from ..core.rng import run_generators
 from ..core.schema import Column, Schema
+from ..core.snapshot import SnapshotError, arrays, fields_of, from_fields, integer, part, rng_states, set_rng_states
+from ..pso.bests import best_of, improves
 from ..robots import kernels
 from ..robots.dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
 from ..robots.laws import ROBOT_LAWS, Inertia, Limits, rotational_energy_factor
@@ -238,7 +240,7 @@ class Fleet:
         heading = np.zeros(x.shape[:2])
         f = self.cost(x)
         R, N = f.shape
-        best = np.argmin(f, axis=1)
+        best = best_of(f, False, axis=1)
         self.state = FleetState(
             x=x, heading=heading, u=np.zeros_like(x), cmd=np.zeros_like(x), y=x.copy(), f_y=f.copy(),
             yg=x[np.arange(R), best], best_fitness=f[np.arange(R), best], f=f, status=np.zeros((R, N), np.int8),
@@ -317,10 +319,11 @@ class Fleet:
         before = s.f_y.copy()
         active = s.status == ACTIVE
         s.f = self.cost(s.x)
-        better = active & (s.f < s.f_y)  # disabled robots keep their last best: docs/readings.md, "Disabled robots"
+        better = active & improves(s.f, s.f_y, False)  # disabled robots keep their last best: docs/readings.md,
+        # "Disabled robots"; NaN is never a best (pso/bests.py)
         s.y = np.where(better[..., None], s.x, s.y)
         s.f_y = np.where(better, s.f, s.f_y)
-        idx = np.argmin(s.f_y, axis=1)
+        idx = best_of(s.f_y, False, axis=1)
         runs = np.arange(self.runs)
         s.yg, s.best_fitness = s.y[runs, idx], s.f_y[runs, idx]
         self.positions.keep(s.f_y != before)  # a new best is where the robot stands
@@ -351,7 +354,7 @@ class Fleet:
 
     def _to_global(self) -> np.ndarray:
         s = self.state
-        return self.positions.to_owner(s.x, s.y, np.argmin(s.f_y, axis=1))
+        return self.positions.to_owner(s.x, s.y, best_of(s.f_y, False, axis=1))
 
     def believed_gbest(self) -> np.ndarray:
         """(R, N, 2) where each robot believes the global best is (y_g itself on true positions)."""
@@ -526,6 +529,71 @@ class Fleet:
                                  grid, out)
         self._stale = True
         return bool(sensed)
+
+    # ------------------------------------------------------------------ snapshot
+    STATE = ("x", "heading", "u", "cmd", "y", "f_y", "yg", "best_fitness", "f", "status", "slow", "a")
+    OPTIONAL = ("force", "omega", "c")  # the last tick's decisions (None before the first)
+
+    def snapshot(self) -> dict[str, Any]:
+        """Everything the runs depend on beyond the settings they were built with, as plain data
+        (:mod:`~shoal.engine.core.snapshot`): the state, the world as edited, every generator, and
+        in physics mode every body's motion."""
+        s = self.state
+        state: dict[str, Any] = {n: np.array(getattr(s, n)) for n in self.STATE}
+        state.update({n: None if getattr(s, n) is None else np.array(getattr(s, n)) for n in self.OPTIONAL})
+        state["reading"] = None if s.reading is None else fields_of(s.reading)
+        world = fields_of(self.world)
+        world["polygons"] = list(world["polygons"])
+        bodies = np.stack([sp.bodies() for sp in self.spaces]) if self.params.motion == "physics" else None
+        return {"k": s.k, "seed": self.seed, "state": state, "world": world, "rngs": rng_states(self.rngs),
+                "bodies": bodies, "positions": self.positions.snapshot()}
+
+    def restore(self, data: dict[str, Any]) -> None:
+        """Continue from :meth:`snapshot`'s ``data`` (of a fleet built with the same settings and runs):
+        the world as it was edited, the pymunk spaces built again round the robots."""
+        st = part(data, "state")
+        got: dict[str, Any] = {n: arrays(part(st, n, "state"), f"state.{n}") for n in self.STATE}
+        x = got["x"]
+        if x.ndim != 3 or x.shape[0] != self.runs or x.shape[2] != 2 or x.shape[1] != self.robots:
+            raise SnapshotError(f"state.x: expected shape {self.state.x.shape}, got {x.shape}")
+        R, N = x.shape[:2]
+        for n in self.STATE:
+            want = (R, N, 2) if n in ("x", "u", "cmd", "y") else (R, 2) if n == "yg" else (R,) if n == "best_fitness" \
+                else (R, N)
+            if n != "a" and got[n].shape != want:
+                raise SnapshotError(f"state.{n}: expected shape {want}, got {got[n].shape}")
+        got["status"] = got["status"].astype(np.int8)
+        for n in self.OPTIONAL:
+            v = part(st, n, "state")
+            got[n] = None if v is None else arrays(v, f"state.{n}")
+        got["reading"] = None if part(st, "reading", "state") is None else from_fields(
+            SectorReading, {k: arrays(v, f"state.reading.{k}") for k, v in part(st, "reading", "state").items()},
+            "state.reading")
+        raw = dict(part(data, "world"))
+        raw["polygons"] = tuple(arrays(p, "world.polygons") for p in part(raw, "polygons", "world"))
+        world = from_fields(WorldSpec, raw, "world")
+        bodies = part(data, "bodies")
+        if (bodies is None) != (self.params.motion != "physics"):
+            raise SnapshotError("bodies: the snapshot and this fleet differ in motion (kinematic or physics)")
+        if bodies is not None:
+            bodies = arrays(bodies, "bodies", dtype=np.floating)
+            if bodies.shape != (R, N, 6):
+                raise SnapshotError(f"bodies: expected shape {(R, N, 6)}, got {bodies.shape}")
+        k, seed = integer(part(data, "k"), "k"), integer(part(data, "seed"), "seed")
+        set_rng_states(self.rngs, part(data, "rngs"), "rngs")
+        self.positions.restore(part(data, "positions"), x)
+        self.seed = seed
+        self.state = FleetState(**got, k=k)
+        self.world, self._world_arrays, self._spaces, self._stale = world, None, None, False
+        self._tick_params = (None, None)
+        if bodies is not None:
+            self._build_spaces()  # bodies at the robots, disabled ones kinematic
+            for sp, b in zip(self.spaces, bodies):
+                for body, (bx, by, angle) in zip(sp.robot_bodies, b[:, :3].tolist()):
+                    body.position, body.angle = (bx, by), angle
+                    sp.space.reindex_shapes_for_body(body)
+                sp.bodies()
+                sp.set_velocities(b[:, 3:5], b[:, 5])
 
     def info(self) -> FleetInfo:
         s = self.state

@@ -23,10 +23,24 @@ from ..core.contract import check_live
 from ..core.portable import arctan2
 from ..core.rng import component_generators
 from ..core.schema import Column, Schema
+from ..core.snapshot import SnapshotError, arrays, integer, part
+from ..pso.bests import admissible
 from ..pso.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
 from ..pso.spso_kernels import local_velocity
 from ..slo import metrics
-from ..slo.beliefs import Beliefs, EntryPolicy, Localiser, LocaliserParams, Selection, random_estimates, relative_truth
+from ..slo.beliefs import (
+    Beliefs,
+    EntryPolicy,
+    Localiser,
+    LocaliserParams,
+    Selection,
+    beliefs_data,
+    beliefs_from,
+    random_estimates,
+    relative_truth,
+    restore_streams,
+    streams_data,
+)
 from ..slo.candidates import Candidates
 from ..slo.formation import AttractionRepulsion
 from ..slo.kernels import local_best
@@ -392,6 +406,40 @@ class SLOSwarm:
         self._met = np.full(self.runs, np.inf)
         self._last = self._record()
 
+    # ------------------------------------------------------------------ snapshot
+    STATE = ("x", "u", "P", "fP", "f", "heading", "status", "best_fitness")
+
+    def snapshot(self) -> dict[str, Any]:
+        """Everything the runs depend on beyond the settings they were built with, as plain data
+        (:mod:`~shoal.engine.core.snapshot`): truth, PSO memory, beliefs, calibration, every stream."""
+        s = self.state
+        return {"k": s.k, "seed": self.seed, "state": {n: np.array(getattr(s, n)) for n in self.STATE},
+                "beliefs": beliefs_data(s.beliefs), "met": self._met.copy(), "localiser": self.localiser.snapshot(),
+                "streams": streams_data(self.streams)}
+
+    def restore(self, data: dict[str, Any]) -> None:
+        """Continue from :meth:`snapshot`'s ``data`` (of a swarm built with the same settings and runs)."""
+        st = part(data, "state")
+        got: dict[str, Any] = {n: arrays(part(st, n, "state"), f"state.{n}") for n in self.STATE}
+        R, N = self.runs, self.config.particles
+        for n in self.STATE:
+            want = (R, N, 2) if n in ("x", "u", "P") else (R,) if n == "best_fitness" else (R, N)
+            if got[n].shape != want:
+                raise SnapshotError(f"state.{n}: expected shape {want}, got {got[n].shape}")
+        got["status"] = got["status"].astype(np.int8)
+        beliefs = beliefs_from(part(data, "beliefs"))
+        if beliefs.est.shape != (R, N, N, 2):
+            raise SnapshotError(f"beliefs.est: expected shape {(R, N, N, 2)}, got {beliefs.est.shape}")
+        met = arrays(part(data, "met"), "met", dtype=np.floating)
+        if met.shape != (R,):
+            raise SnapshotError(f"met: expected shape {(R,)}, got {met.shape}")
+        k, seed = integer(part(data, "k"), "k"), integer(part(data, "seed"), "seed")
+        self.localiser.restore(part(data, "localiser"))
+        restore_streams(self.streams, part(data, "streams"))
+        self.seed, self._met = seed, met
+        self.state = SLOState(**got, beliefs=beliefs, k=k)
+        self._last = self._record()
+
     def info(self) -> SLOInfo:
         """Metrics of the current generation."""
         return self._last
@@ -457,7 +505,7 @@ class SLOSwarm:
 
     def _record(self) -> SLOInfo:
         s = self.state
-        best = s.f.min(axis=1)
+        best = np.where(admissible(s.f, False), s.f, np.inf).min(axis=1)  # NaN is never a best (pso/bests.py)
         s.best_fitness = np.minimum(s.best_fitness, best)
         self._met = np.where(np.isinf(self._met) & (best <= self.config.threshold()), float(s.k), self._met)
         return SLOInfo(k=s.k, best_fitness=best, best_so_far=s.best_fitness.copy(), quality_met_at=self._met.copy(),

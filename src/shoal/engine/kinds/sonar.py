@@ -54,9 +54,11 @@ from ..acoustics.receiver import Bearing, bearing
 from ..acoustics.signals import hydrophone_positions, intensity, synthesise
 from ..acoustics.strategies import LocInfo, Sensed, Strategy, initial_memory, make_strategy
 from ..acoustics.surrogate import surrogate
+from ..acoustics.triangulation import Triangles
 from ..core.contract import check_live
 from ..core.rng import run_generators
 from ..core.schema import Column, Schema
+from ..core.snapshot import SnapshotError, arrays, fields_of, from_fields, integer, part, rng_states, set_rng_states
 from ..pso.laws import adapted_velocity, motion_heading
 from ..pso.tuning import from_beta, split
 from ..robots.dvc import dvc_nonomni, forward_guard, w_max
@@ -496,6 +498,55 @@ class AcousticSwarm:
         s.intensity, s.bearing, s.loc, s.reading, s.stepped = power, b, d.loc, reading, idx
         self._refresh(idx)  # 5 metrics
         self._converge(idx)
+
+    # ------------------------------------------------------------------ snapshot
+    STATE = ("x", "heading", "u", "cmd", "y", "f_hat", "y_g", "source", "snr_db", "status", "steps", "running",
+             "first_converged", "stepped")
+
+    def snapshot(self) -> dict[str, Any]:
+        """Everything the runs depend on beyond the settings they were built with, as plain data
+        (:mod:`~shoal.engine.core.snapshot`): the swarms, their memories, the source (where it
+        started its motion too), every generator, and the last tick's hearing and decisions."""
+        s = self.state
+        state: dict[str, Any] = {n: np.array(getattr(s, n)) for n in self.STATE}
+        state["intensity"] = None if s.intensity is None else np.array(s.intensity)
+        state["bearing"] = None if s.bearing is None else fields_of(s.bearing)
+        state["loc"] = None if s.loc is None else fields_of(s.loc, nested=("triangles",))
+        state["reading"] = None if s.reading is None else fields_of(s.reading)
+        return {"k": s.k, "seed": self.seed, "state": state, "source0": self.source0.copy(),
+                "rngs": rng_states(self.rngs), "positions": self.positions.snapshot()}
+
+    def restore(self, data: dict[str, Any]) -> None:
+        """Continue from :meth:`snapshot`'s ``data`` (of a swarm built with the same settings and runs)."""
+        st = part(data, "state")
+        got: dict[str, Any] = {n: arrays(part(st, n, "state"), f"state.{n}") for n in self.STATE}
+        R, N = self.runs, self._robots
+        for n in self.STATE:
+            want = {"x": (R, N, 2), "u": (R, N, 2), "cmd": (R, N, 2), "y": (R, N, 2), "y_g": (R, 2), "source": (R, 2),
+                    "steps": (R,), "running": (R,), "first_converged": (R,)}.get(n, (R, N))
+            if n != "stepped" and got[n].shape != want:
+                raise SnapshotError(f"state.{n}: expected shape {want}, got {got[n].shape}")
+        got["status"] = got["status"].astype(np.int8)
+        got["running"] = got["running"].astype(bool)
+        v = part(st, "intensity", "state")
+        got["intensity"] = None if v is None else arrays(v, "state.intensity")
+        for name, cls in (("bearing", Bearing), ("loc", LocInfo), ("reading", SectorReading)):
+            v = part(st, name, "state")
+            if v is not None:
+                v = {k: (arrays(a, f"state.{name}.{k}") if isinstance(a, np.ndarray) else a) for k, a in v.items()}
+                tri = v.get("triangles") if name == "loc" else None
+                if tri is not None:
+                    v["triangles"] = from_fields(Triangles, {k: arrays(a, f"state.loc.triangles.{k}")
+                                                            for k, a in tri.items()}, "state.loc.triangles")
+            got[name] = None if v is None else from_fields(cls, v, f"state.{name}")
+        source0 = arrays(part(data, "source0"), "source0", dtype=np.floating)
+        if source0.shape != (R, 2):
+            raise SnapshotError(f"source0: expected shape {(R, 2)}, got {source0.shape}")
+        k, seed = integer(part(data, "k"), "k"), integer(part(data, "seed"), "seed")
+        set_rng_states(self.rngs, part(data, "rngs"), "rngs")
+        self.positions.restore(part(data, "positions"), got["x"])
+        self.seed, self.source0 = seed, source0
+        self.state = SonarState(**got, k=k)
 
     def info(self) -> SonarInfo:
         """Metrics of the current state."""

@@ -17,8 +17,9 @@ from ..core.contract import check_live
 from ..core.objectives import Objective
 from ..core.rng import BlockDraws, run_generators
 from ..core.schema import Column, Schema
+from ..core.snapshot import SnapshotError, arrays, integer, part, rng_states, set_rng_states
 from ..pso import kernels
-from ..pso.bests import best_index, global_best, update_personal
+from ..pso.bests import best_index, global_best, update_personal, warn_unfound
 from ..pso.coeffs import CoefficientPolicy
 from ..pso.laws import Law
 from ..pso.laws import motion_heading as _heading
@@ -227,6 +228,13 @@ class Simulation:
         self._coefficients: tuple[np.ndarray | float, np.ndarray] = (np.nan, np.full(1, np.nan))
         s = self.state
         self.positions.start(s.x, s.y, s.k, self.seed, self.first_run)
+        self._warned = False
+        self._honest()
+
+    def _honest(self) -> None:
+        """Say once if some run has no best yet (every value NaN or the worst infinity)."""
+        self._warned = warn_unfound(self.state.best_fitness, self.objective.maximise, self.objective.name,
+                                    self._warned)
 
     @property
     def rngs(self) -> list[np.random.Generator]:
@@ -346,8 +354,13 @@ class Simulation:
 
     def step(self) -> StepInfo:
         """Advance every run by one control tick Δt."""
-        if self._compiled_tick():
-            return self._compiled_step()
+        info = self._compiled_step() if self._compiled_tick() else self._numpy_step()
+        if not self._warned:
+            self._honest()
+        return info
+
+    def _numpy_step(self) -> StepInfo:
+        """The tick of :meth:`step` in numpy (the reference of the compiled one)."""
         s = self.state
         if self.pbest_order == "before_velocity":  # Algorithm 1 phase A first
             self._update_bests()
@@ -502,7 +515,49 @@ class Simulation:
         out.c += cs
         s.k += n
         self._coefficients = (omegas[-1], cs[-1])
+        if not self._warned:
+            self._honest()
         return n
+
+    # ------------------------------------------------------------------ snapshot
+    STATE = ("x", "u", "a", "y", "f_y", "yg", "best_fitness", "f", "heading", "status")
+
+    def snapshot(self) -> dict[str, Any]:
+        """Everything the runs depend on beyond the settings they were built with, as plain data
+        (:mod:`~shoal.engine.core.snapshot`); settles draws taken ahead and pending headings first,
+        which changes no number."""
+        s = self.state
+        rngs, _ = self.rngs, s.heading  # (both settle)
+        omega, c = self._coefficients
+        return {"k": s.k, "seed": self.seed, "dt": self.dt, "state": {n: getattr(s, n).copy() for n in self.STATE},
+                "rngs": rng_states(rngs), "omega": omega, "c": np.array(c), "positions": self.positions.snapshot()}
+
+    def restore(self, data: dict[str, Any]) -> None:
+        """Continue from :meth:`snapshot`'s ``data`` (of a swarm built with the same settings and runs)."""
+        st = part(data, "state")
+        got = {n: arrays(part(st, n, "state"), f"state.{n}") for n in self.STATE}
+        R, N, d = got["x"].shape if got["x"].ndim == 3 else (0, 0, 0)
+        shapes = {"x": (R, N, d), "u": (R, N, d), "a": (R, N, d), "y": (R, N, d), "f_y": (R, N), "yg": (R, d),
+                  "best_fitness": (R,), "f": (R, N), "heading": (R, N), "status": (R, N)}
+        if (R, d) != (self.runs, self.d) or N < 1:
+            raise SnapshotError(f"state.x: expected ({self.runs}, robots, {self.d}), got {got['x'].shape}")
+        for n, shape in shapes.items():
+            if got[n].shape != shape:
+                raise SnapshotError(f"state.{n}: expected shape {shape}, got {got[n].shape}")
+        omega = part(data, "omega")
+        omega = arrays(omega, "omega") if isinstance(omega, np.ndarray) else omega
+        if not isinstance(omega, float):
+            raise SnapshotError("omega: expected a float or an array")
+        k, seed, dt = integer(part(data, "k"), "k"), integer(part(data, "seed"), "seed"), part(data, "dt")
+        if not isinstance(dt, float) or not dt > 0:
+            raise SnapshotError(f"dt: expected a float > 0, got {dt!r}")
+        c = arrays(part(data, "c"), "c", dtype=np.floating)
+        set_rng_states(self._rngs, part(data, "rngs"), "rngs")
+        self.positions.restore(part(data, "positions"), got["x"])
+        self.seed, self.dt, self._robots = seed, dt, N
+        self._block, self._setup = None, None
+        self.state = SwarmState(**got, k=k)
+        self._coefficients = (omega, c)
 
     def info(self) -> StepInfo:
         """The metrics of the current step, with the coefficients of the last tick."""

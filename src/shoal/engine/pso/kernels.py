@@ -107,23 +107,30 @@ def _better(a: float, b: float, maximise: bool) -> bool:
 
 
 @kernel
+def _admissible(v: float, maximise: bool) -> bool:
+    """Not NaN, nor the worst infinity (``bests.admissible``)."""
+    return v == v and v != (-np.inf if maximise else np.inf)
+
+
+@kernel
 def _bests(r: int, x: np.ndarray, f: np.ndarray, y: np.ndarray, f_y: np.ndarray, yg: np.ndarray, best: np.ndarray,
            maximise: bool) -> None:
-    """[3.2] keep each robot's best, [3.3] the run's best of them (the first on ties; the first
-    NaN if any, as numpy's argmin/argmax)."""
+    """[3.2] keep each robot's best, [3.3] the run's best of them (the first on ties), honestly as
+    ``bests.improves`` and ``bests.best_of``: NaN and the worst infinity are never bests."""
     n, d = x.shape[1], x.shape[2]
     for i in range(n):
-        if _better(f[r, i], f_y[r, i], maximise):
-            f_y[r, i] = f[r, i]
+        v = f[r, i]
+        if _admissible(v, maximise) and (_better(v, f_y[r, i], maximise) or not _admissible(f_y[r, i], maximise)):
+            f_y[r, i] = v
             for k in range(d):
                 y[r, i, k] = x[r, i, k]
-    g = 0
-    for i in range(1, n):
-        v, w = f_y[r, i], f_y[r, g]
-        if w != w:
-            break
-        if v != v or (v > w if maximise else v < w):
+    g = -1
+    for i in range(n):
+        v = f_y[r, i]
+        if _admissible(v, maximise) and (g < 0 or _better(v, f_y[r, g], maximise)):
             g = i
+    if g < 0:
+        g = 0
     for k in range(d):
         yg[r, k] = y[r, g, k]
     best[r] = f_y[r, g]

@@ -9,12 +9,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property, partial
-from typing import Callable, Literal
+from typing import Any, Callable, Literal
 
 import numpy as np
 
 from ..core.compiled_draws import CompiledDraws
 from ..core.rng import Streams
+from ..core.snapshot import SnapshotError, arrays, from_fields, integer, part, rng_states, set_rng_states
 from .candidates import Candidates, Flag
 from .kernels import carry, localise, pair_candidates
 from .neighbourhoods import distances
@@ -85,6 +86,51 @@ class Beliefs:
         return self.pairs() if callable(self.pairs) else self.pairs
 
 
+def beliefs_data(b: Beliefs) -> dict[str, Any]:
+    """``b`` as plain data (:mod:`~shoal.engine.core.snapshot`): its arrays and its candidate sets,
+    worked out now if they were left to be worked out when read."""
+    out: dict[str, Any] = {name: getattr(b, name) for name in BELIEF_ARRAYS}
+    out["triangle"], out["round_trip"] = b.triangle, b.round_trip
+    c = b.candidates
+    out["candidates"] = None if c is None else {f: getattr(c, f) for f in CANDIDATE_FIELDS}
+    return out
+
+
+def beliefs_from(data: Any, where: str = "beliefs") -> Beliefs:
+    """The :class:`Beliefs` of :func:`beliefs_data`'s ``data``."""
+    values: dict[str, Any] = {n: arrays(part(data, n, where), f"{where}.{n}") for n in BELIEF_ARRAYS}
+    for n in ("triangle", "round_trip"):
+        v = part(data, n, where)
+        values[n] = None if v is None else arrays(v, f"{where}.{n}")
+    c = part(data, "candidates", where)
+    if c is not None:
+        sets = {f: arrays(part(c, f, f"{where}.candidates"), f"{where}.candidates.{f}") for f in CANDIDATE_FIELDS}
+        values["pairs"] = from_fields(Candidates, sets, f"{where}.candidates")
+    est = values["est"]
+    if est.ndim != 4 or est.shape[-1] != 2 or est.shape[1] != est.shape[2]:
+        raise SnapshotError(f"{where}.est: expected (R, N, N, 2), got {est.shape}")
+    for n in ("valid", "adjacency", "ranges", "kind", "flag"):
+        if values[n].shape != est.shape[:3]:
+            raise SnapshotError(f"{where}.{n}: expected shape {est.shape[:3]}, got {values[n].shape}")
+    return Beliefs(**values)
+
+
+BELIEF_ARRAYS = ("est", "valid", "adjacency", "ranges", "kind", "flag", "odometry")
+CANDIDATE_FIELDS = ("points", "mask", "flag", "cos_alpha", "thinness")
+
+
+def streams_data(streams: Streams) -> dict[str, Any]:
+    return {name: rng_states(gens) for name, gens in streams.items()}
+
+
+def restore_streams(streams: Streams, data: Any, where: str = "streams") -> None:
+    """Every component's generators put where ``data`` says, in place."""
+    if not isinstance(data, dict) or set(data) != set(streams):
+        raise SnapshotError(f"{where}: expected the streams {sorted(streams)}")
+    for name, gens in streams.items():
+        set_rng_states(gens, data[name], f"{where}.{name}")
+
+
 def relative_truth(x: np.ndarray) -> np.ndarray:
     """r_ij = x_j − x_i for every ordered pair, (R, N, N, 2)."""
     return x[:, None, :, :] - x[:, :, None, :]
@@ -126,6 +172,19 @@ class Localiser:
         z = self._z[:, :, :m]
         if n > m:
             z = np.concatenate([z, permanent_normals(self.streams["permanent"], n - m)], axis=2)
+        self._z, self.n = z, n
+        self.permanent = permanent_errors(self.errors, z)
+
+    def snapshot(self) -> dict[str, Any]:
+        """The calibration draws (the offsets follow from them and the errors; the streams belong to
+        whoever made them)."""
+        return {"n": self.n, "z": self._z}
+
+    def restore(self, data: Any) -> None:
+        n = integer(part(data, "n", "localiser"), "localiser.n", 1)
+        z = arrays(part(data, "z", "localiser"), "localiser.z", dtype=np.floating)
+        if z.shape != (self._z.shape[0], self._z.shape[1], n):
+            raise SnapshotError(f"localiser.z: expected shape {(self._z.shape[0], self._z.shape[1], n)}, got {z.shape}")
         self._z, self.n = z, n
         self.permanent = permanent_errors(self.errors, z)
 
@@ -175,4 +234,5 @@ class Localiser:
             odometry=v_meas,
             triangle=triangle, round_trip=round_trip, pairs=pairs,
         )
+
 

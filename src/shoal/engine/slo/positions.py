@@ -22,6 +22,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ..core.snapshot import SnapshotError, arrays, integer, part
 from .beliefs import Beliefs
 from .tracker import BeliefTracker
 
@@ -67,6 +68,14 @@ class PositionSource(Protocol):
         """New localisation settings (errors, selection, …), beliefs kept."""
         ...
 
+    def snapshot(self) -> dict[str, Any]:
+        """What this source keeps from tick to tick, as plain data (:mod:`~shoal.engine.core.snapshot`)."""
+        ...
+
+    def restore(self, data: Any, x: np.ndarray) -> None:
+        """Continue from :meth:`snapshot`'s ``data`` for the robots at ``x``."""
+        ...
+
 
 class Oracle:
     """Every robot knows every true position."""
@@ -99,6 +108,13 @@ class Oracle:
 
     def retune(self, **slo: Any) -> None:
         raise ValueError("slo: this swarm acts on true positions; switch it to SLO positions first")
+
+    def snapshot(self) -> dict[str, Any]:
+        return {"source": "oracle"}
+
+    def restore(self, data: Any, x: np.ndarray) -> None:
+        if part(data, "source", "positions") != "oracle":
+            raise SnapshotError("positions: the snapshot is of a swarm on SLO positions, this one acts on true ones")
 
 
 class Estimated:
@@ -185,3 +201,19 @@ class Estimated:
         self.tracker.retune(**{k: merged[k] for k in slo if k != "unit"}, unit=merged["unit"],
                             **({"neighbourhood_param": merged.get("neighbourhood_param")} if keep_param else {}))
         self.params = merged
+
+    def snapshot(self) -> dict[str, Any]:
+        return {"source": "estimated", "pbest": self.pbest.copy(), "sensed_k": self.sensed_k,
+                "tracker": self.tracker.snapshot()}
+
+    def restore(self, data: Any, x: np.ndarray) -> None:
+        if part(data, "source", "positions") != "estimated":
+            raise SnapshotError("positions: the snapshot is of a swarm on true positions, this one acts on SLO ones")
+        pbest = arrays(part(data, "pbest", "positions"), "positions.pbest", dtype=np.floating)
+        if pbest.shape != x.shape:
+            raise SnapshotError(f"positions.pbest: expected shape {x.shape}, got {pbest.shape}")
+        sensed_k = integer(part(data, "sensed_k", "positions"), "positions.sensed_k")
+        self.tracker.restore(part(data, "tracker", "positions"))
+        if self.tracker.x.shape != x.shape:
+            raise SnapshotError(f"positions.tracker.x: expected shape {x.shape}, got {self.tracker.x.shape}")
+        self.pbest, self.sensed_k = pbest, sensed_k

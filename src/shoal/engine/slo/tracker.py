@@ -16,7 +16,18 @@ from typing import Any, Literal
 import numpy as np
 
 from ..core.rng import component_generators
-from .beliefs import Beliefs, Localiser, LocaliserParams, random_estimates, relative_truth
+from ..core.snapshot import SnapshotError, arrays, part
+from .beliefs import (
+    Beliefs,
+    Localiser,
+    LocaliserParams,
+    beliefs_data,
+    beliefs_from,
+    random_estimates,
+    relative_truth,
+    restore_streams,
+    streams_data,
+)
 from .neighbourhoods import Neighbourhood, NeighbourhoodKind
 from .sensors import ErrorModel, error_model
 
@@ -66,6 +77,22 @@ class BeliefTracker:
         self.x = x0.copy()
         self.beliefs: Beliefs = self.localiser.start(x0, self.rule.adjacency(x0, self.streams["topology"]),
                                                      self._initial(x0))
+
+    def snapshot(self) -> dict[str, Any]:
+        """The beliefs, the positions they were last updated at, the calibration and every stream's state."""
+        return {"x": self.x.copy(), "beliefs": beliefs_data(self.beliefs), "localiser": self.localiser.snapshot(),
+                "streams": streams_data(self.streams)}
+
+    def restore(self, data: Any) -> None:
+        """Continue from :meth:`snapshot`'s ``data`` (a tracker made with the same settings and runs)."""
+        x = arrays(part(data, "x", "tracker"), "tracker.x", ndim=3, dtype=np.floating)
+        beliefs = beliefs_from(part(data, "beliefs", "tracker"), "tracker.beliefs")
+        if x.shape[0] != self.x.shape[0] or x.shape[-1] != 2 or beliefs.est.shape[:2] != x.shape[:2]:
+            raise SnapshotError(f"tracker.x: expected ({self.x.shape[0]}, N, 2) beside beliefs of N robots, got "
+                                f"{x.shape} and {beliefs.est.shape}")
+        self.localiser.restore(part(data, "localiser", "tracker"))
+        restore_streams(self.streams, part(data, "streams", "tracker"), "tracker.streams")
+        self.x, self.beliefs = x, beliefs
 
     def _initial(self, x: np.ndarray) -> np.ndarray:
         """x̂(−1) of a swarm deployed at ``x`` (R, N, 2): the truth or random vectors
