@@ -22,6 +22,7 @@ from pathlib import Path
 import msgspec
 import numpy as np
 import pytest
+from hall_helpers import lecturer, press, robots_of, status_of, watcher
 from viser import _messages
 from websockets.exceptions import InvalidStatus
 
@@ -40,33 +41,6 @@ def lecture():
     srv = start_lecture("default", port=0, key=routes.new_key())
     yield srv
     srv.stop()
-
-
-def lecturer(srv) -> WireClient:
-    c = WireClient(srv.port, decode=True, path=routes.LECTURER_PATH,
-                   headers={"Cookie": f"{routes.KEY_COOKIE}={srv.key}"})
-    wait_until(lambda: srv.lecture.lecturer is not None and c.uuid_of("playback"), what="the lecturer's tab")
-    return c
-
-
-def watcher(srv) -> WireClient:
-    before = set(srv.watchers)
-    c = WireClient(srv.port, decode=True)
-    wait_until(lambda: set(srv.watchers) - before and c.uuid_of(TAKE_OVER), what="a watcher")
-    return c
-
-
-def press(c: WireClient, button: str) -> None:
-    c.send(_messages.GuiUpdateMessage(c.uuid_of("playback"), {"value": button}))
-
-
-def status_of(c: WireClient) -> str:
-    """The last status line a tab was sent (the markdown that names the step)."""
-    return next((m for m in reversed(c.markdown()) if re.search(r"step \d+/\d+", m)), "")
-
-
-def robots_of(c: WireClient) -> np.ndarray | None:
-    return next((p for name, p in c.points.items() if name.endswith("/robots")), None)
 
 
 def test_the_lecturer_drives_and_every_watcher_sees_the_same_step(lecture):

@@ -39,7 +39,7 @@ from ..session.session import Session
 from ..tab import TabApp
 from ..view.camera import home_camera
 from ..view.page import install_page, run_script
-from . import fanout, routes
+from . import fanout, routes, takeover
 from .broadcast import ORDER_OWN, Broadcast
 from .desk import PLAIN, TAKEOVER, Claim, Desk, Refused
 from .watcher import Watcher
@@ -216,6 +216,8 @@ class LectureServer(ShoalServer):
         self._back_button(client)
         try:
             super()._connect(client)  # (→ _open_client, unless the server is full)
+        except takeover.CannotTakeOver as err:
+            client.gui.add_markdown(f"**This take-over cannot start.** {err}")
         finally:
             with self._lock:
                 self._claims.pop(cid, None)
@@ -229,8 +231,8 @@ class LectureServer(ShoalServer):
             claim = self._claims.get(client.client_id)
         if session is not None or claim is None:  # the lecturer's tab (or a plain one)
             return super()._open_client(client, session, play=play, **keep)
-        session, playing = self._session_of(claim)
-        tab = super()._open_client(client, session, play=playing)
+        session, playing, keep = self._session_of(claim)
+        tab = super()._open_client(client, session, play=playing, **keep)
         if claim.again:
             tab.notify("Started again", "This tab's connection was lost (or the server that ran it stopped): "
                        + ("it starts again from where you took over." if claim.kind == TAKEOVER
@@ -243,13 +245,13 @@ class LectureServer(ShoalServer):
         if pid is not None:
             self.desk.release(pid, (HERE, cid))
 
-    def _session_of(self, claim: Claim) -> tuple[Session, bool]:
-        """The session a claimed id opens, and whether it plays."""
+    def _session_of(self, claim: Claim) -> tuple[Session, bool, dict[str, Any]]:
+        """The session a claimed id opens, whether it plays, and the tab's state it starts with."""
         if claim.kind == PLAIN:
-            return session_for(self.scenario), True
-        from . import takeover
-
-        return takeover.restore(claim.state)
+            return session_for(self.scenario), True, {}
+        session, playing = takeover.restore(claim.state)
+        lessons = takeover.lesson_of(claim.state)
+        return session, playing, ({"lesson_progress": lessons} if lessons is not None else {})
 
     def _back_button(self, client: viser.ClientHandle) -> None:
         button = client.gui.add_button(BACK, hint="watch the lecture again (this private session ends)")
@@ -272,12 +274,10 @@ class LectureServer(ShoalServer):
     def take_over(self, watcher: Watcher) -> str | None:
         """``watcher``'s *Take over*: the lecture's state now, under a new id its page then opens.
         Returns the id (None: refused, and the watcher told why)."""
-        from . import takeover
-
         s = self.lecture.session
         try:
             with s.lock:
-                state, step = takeover.capture(s), s.k
+                state, step = takeover.capture(s, self.lecture.lessons), s.k
             pid = self.desk.issue(TAKEOVER, state, step)
         except (Refused, takeover.CannotTakeOver) as err:
             watcher.refuse("Cannot take over", str(err))
