@@ -22,7 +22,6 @@ from pathlib import Path
 import msgspec
 import numpy as np
 import pytest
-from hall_helpers import lecturer, press, robots_of, status_of, watcher
 from viser import _messages
 from websockets.exceptions import InvalidStatus
 
@@ -31,6 +30,7 @@ from shoal.app.hall.command import start_lecture
 from shoal.app.hall.watcher import TAKE_OVER
 
 from browser.browser_helpers import wait_until
+from hall_helpers import lecturer, press, robots_of, status_of, watcher
 from viser_wire import WireClient
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -14,7 +14,6 @@ import re
 
 import numpy as np
 import pytest
-from hall_helpers import lecturer, press, watcher
 from viser import _messages
 
 import shoal
@@ -27,6 +26,7 @@ from shoal.app.kinds.registry import session_for
 from shoal.presets.io import load
 
 from browser.browser_helpers import wait_until
+from hall_helpers import lecturer, press, watcher
 from viser_wire import WireClient
 
 STEPS_BEFORE, STEPS_AFTER = 7, 100

@@ -69,6 +69,7 @@ class TabApp:
         lesson_progress: LessonProgress | None = None,
         menu: PresetMenu | None = None,
         display: Display | None = None,
+        ask: Callable[..., None] | None = None,
     ) -> None:
         self.session = session
         self.experiments, self.owner = experiments, owner  # the server's experiments; this tab's key there
@@ -90,6 +91,7 @@ class TabApp:
         self.lesson_progress = lesson_progress or LessonProgress()  # the Lessons tab's place
         self.menu = menu or PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included
         self.display = display or Display()  # how the arena is drawn
+        self.ask = ask  # a lesson's question asked of a class (a lecturer's tab)
         self._page = Display()  # what the page was last told (flat camera, text scale)
         self._home_when_resized: float | None = None  # the camera's aspect before the panel's width changed
         with self._ticking:
@@ -102,7 +104,7 @@ class TabApp:
         services = Services(notify=self.notify, send_file=self.send_file, menu=self.menu, make_session=session_for,
                             replace=self.replace, share=share_page, lessons=self.lesson_progress,
                             experiments=self.experiments, owner=self.owner, view=self.view_action,
-                            display=self.display)
+                            display=self.display, ask=self.ask)
         self.panels = Panel(self.gui, self.session, kind, services)
         self.arena = kind.view(self.scene, self.panels.part)
         self._show_display()

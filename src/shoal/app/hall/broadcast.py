@@ -29,6 +29,8 @@ from ..panel.view_row import LIGHT_NOTE, legend_html
 from ..session.session import Session
 from ..tab import TabApp
 from ..view.view import View
+from .round_view import class_html
+from .rounds import Rounds
 
 
 class Shown(Protocol):
@@ -62,11 +64,13 @@ class Broadcast:
     SCENE_HZ = TabApp.SCENE_HZ
     PLOT_HZ = TabApp.PLOT_HZ
 
-    def __init__(self, server: Any, lecture: Shown) -> None:
-        self.server, self.lecture = server, lecture
+    def __init__(self, server: Any, lecture: Shown, rounds: Rounds | None = None) -> None:
+        self.server, self.lecture, self.rounds = server, lecture, rounds
         gui = server.gui
         self.title = gui.add_markdown(TITLE, order=ORDER_TITLE)
         self.status = gui.add_markdown("", order=ORDER_STATUS)
+        self.round = gui.add_html("", order=ORDER_ROUND, visible=False)
+        self._round_shown = -1  # the rounds' revision on screen
         self.legend = gui.add_markdown("", order=ORDER_LEGEND)
         self.plots_folder = gui.add_folder("Plots", order=ORDER_PLOTS)
         self._session: Session | None = None
@@ -76,6 +80,7 @@ class Broadcast:
         self._next_scene = self._next_plot = 0.0
         self._plot_key: tuple | None = None
         self._legend: str | None = None
+        self.plots_due = False  # the last tick refreshed status and plots
         self.draws = 0  # arena draws so far (tests, benchmarks)
         self.step_drawn = -1  # the engine step of the last snapshot drawn
 
@@ -101,9 +106,22 @@ class Broadcast:
             self.draws += 1
             self.step_drawn = int(snap.k)
             self._next_scene = now + 1.0 / self.SCENE_HZ
-        if plots and now >= self._next_plot:
+        self.plots_due = plots and now >= self._next_plot
+        if self.plots_due:
             self._refresh(s)
+            self._show_round()
             self._next_plot = now + 1.0 / self.PLOT_HZ
+
+    def _show_round(self) -> None:
+        """The round's block: the question while it is open, the results once revealed."""
+        rounds = self.rounds
+        if rounds is None or rounds.revision == self._round_shown:
+            return
+        self._round_shown = rounds.revision
+        r = rounds.current
+        with self.server.atomic():
+            self.round.content = class_html(r)
+            self.round.visible = r is not None
 
     def _show(self, session: Session) -> None:
         """The lecture now shows ``session`` (at first, or another kind's): a new arena for it."""
@@ -164,5 +182,5 @@ class Broadcast:
         with self.server.atomic():
             if self.arena is not None:
                 self.arena.clear()
-            for h in (self.title, self.status, self.legend, self.plots_folder):
+            for h in (self.title, self.status, self.round, self.legend, self.plots_folder):
                 h.remove()

@@ -41,8 +41,11 @@ from ..view.camera import home_camera
 from ..view.page import install_page, run_script
 from . import fanout, routes, takeover
 from .broadcast import ORDER_OWN, Broadcast
+from .class_panel import ClassPanel, lesson_question
 from .desk import PLAIN, TAKEOVER, Claim, Desk, Refused
-from .watcher import Watcher
+from .rounds import Question, Round, Rounds
+from .rounds import Refused as RoundRefused
+from .watcher import Watcher, notify
 
 DEFAULT_MAX_WATCHERS = 500
 HERE = "lecture"  # this process, as a holder of private sessions on the desk
@@ -105,6 +108,8 @@ class LectureServer(ShoalServer):
         self.key = key or routes.new_key()
         self.desk = desk if desk is not None else Desk()
         self.lecture = Lecture(scenario)
+        self.rounds = Rounds()
+        self.class_panel: ClassPanel | None = None  # on the lecturer's tab
         self.max_watchers = max_watchers
         self.watchers: dict[int, Watcher] = {}
         self.held: dict[int, str] = {}  # client id → the private id its tab holds
@@ -119,7 +124,7 @@ class LectureServer(ShoalServer):
     def _configure(self) -> None:
         super()._configure()
         self.frames = fanout.share(self.viser, routes.is_private)
-        self.broadcast = Broadcast(self.viser, self.lecture)
+        self.broadcast = Broadcast(self.viser, self.lecture, self.rounds)
 
     @property
     def lecturer_url(self) -> str:
@@ -160,9 +165,10 @@ class LectureServer(ShoalServer):
                 home_camera(camera)
 
         install_page(client.gui)  # the top view held, as for every tab
-        watcher = Watcher(client, self.take_over)
+        watcher = Watcher(client, self.take_over, self.rounds)
         with self._lock:
             self.watchers[cid] = watcher
+        watcher.show(self.rounds.current)
         if self._gone(cid):
             self._disconnect(client)
 
@@ -178,9 +184,12 @@ class LectureServer(ShoalServer):
             before = self.lecture.lecturer_client
         if before is not None:
             self._dismiss(before)
-        tab = self._open_client(client, self.lecture.session, play=False, **self.lecture.keep())
+        panel = ClassPanel(client.gui, self, notify=lambda title, body, colour: notify(client, title, body, colour),
+                           send_file=lambda name, data: client.send_file_download(name, data, save_immediately=True))
+        tab = self._open_client(client, self.lecture.session, play=False, ask=self.ask_lesson, **self.lecture.keep())
         with self._lock:
             self.lecture.lecturer, self.lecture.lecturer_client = tab, cid
+            self.class_panel = panel
         if self._gone(cid):
             self._disconnect(client)
 
@@ -191,6 +200,8 @@ class LectureServer(ShoalServer):
         if tab is not None:
             self.lecture.drop(tab)
         self.close_tab(cid)
+        with self._lock:
+            self.class_panel = None
         client = self.viser.get_clients().get(cid)
         if client is not None:
             with contextlib.suppress(Exception):
@@ -265,8 +276,11 @@ class LectureServer(ShoalServer):
         with self._lock:
             self.watchers.pop(cid, None)
             tab = self.tabs.get(cid) if self.lecture.lecturer_client == cid else None
+            if tab is not None:
+                self.class_panel = None
         if tab is not None:
             self.lecture.drop(tab)
+        self.rounds.forget(cid)
         self._release(cid)
         super()._disconnect(client)
 
@@ -285,6 +299,50 @@ class LectureServer(ShoalServer):
         run_script(watcher.client.gui, routes.go_script(routes.private_path(pid)))
         return pid
 
+    # ------------------------------------------------------------------ rounds
+    def watching(self) -> int:
+        with self._lock:
+            return len(self.watchers)
+
+    def _watchers(self) -> list[Watcher]:
+        with self._lock:
+            return list(self.watchers.values())
+
+    def _show_round(self) -> None:
+        r = self.rounds.current
+        for w in self._watchers():
+            with contextlib.suppress(Exception):  # (a tab closing meanwhile)
+                w.show(r)
+        panel = self.class_panel
+        if panel is not None:
+            panel.refresh()
+
+    def open_round(self, question: Question) -> Round:
+        """Ask every class tab ``question`` (the round before closes)."""
+        r = self.rounds.open(question)
+        self._show_round()
+        return r
+
+    def close_round(self) -> None:
+        self.rounds.close()
+        self._show_round()
+
+    def reveal_round(self) -> None:
+        """Show every tab the distribution and the answer, and play the run on all screens."""
+        self.rounds.close()
+        self.rounds.reveal()
+        self._show_round()
+        self.lecture.session.play()
+
+    def ask_lesson(self, lesson: Any, index: int) -> None:
+        """A lesson step's question, asked of the class with one click (its ``round`` block)."""
+        panel = self.class_panel
+        try:
+            self.open_round(lesson_question(lesson, index))
+        except RoundRefused as err:
+            if panel is not None:
+                panel.notify("Refused: round", str(err), "red")
+
     # ------------------------------------------------------------------ ticking
     def _round(self, turn: int, start: float, period: float) -> int:
         """Every tab's tick (the lecturer's steps the run), then the class's screen."""
@@ -294,6 +352,9 @@ class LectureServer(ShoalServer):
         try:
             with lock:  # (not while the lecturer's tab swaps its scene)
                 self.broadcast.tick(start)
+            panel = self.class_panel
+            if panel is not None and self.broadcast.plots_due:
+                panel.refresh()
         except Exception as err:
             self._say_once(err)
         return turn

@@ -94,6 +94,7 @@ class Services:
     owner: Hashable = None  # this browser tab's key among the experiments
     view: Callable[[str], None] | None = None  # the arena's view buttons: "fit", "follow" or "display"
     display: Display | None = None  # how the tab's arena is drawn (the tab keeps it: it outlives a swap of panels)
+    ask: Callable[..., None] | None = None  # a lesson step's question as a class's round (a lecturer's tab only)
 
 
 def notes_text(name: str = "ch3") -> str:
@@ -284,7 +285,7 @@ class Panel:
         """The Lessons tab, the chapter's teaching notes below the lessons."""
         with self.tabs.add_tab("Lessons"):
             self.lessons = LessonsPanel(self.gui, self.set_up_lesson, self.notify, self.services.lessons,
-                                        measure=LessonRun(self.session))
+                                        measure=LessonRun(self.session), ask=self.services.ask)
             with self.gui.add_folder("Notes on this chapter", expand_by_default=False):
                 self.notes = self.gui.add_markdown(notes_text(notes))
             with self.gui.add_folder("Where this scene's values come from", expand_by_default=False):
