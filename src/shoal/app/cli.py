@@ -1,4 +1,4 @@
-"""The ``shoal`` command: serve, run, reproduce, sweep, export-replay, warmup, presets."""
+"""The ``shoal`` command: serve, hall, run, reproduce, sweep, export-replay, warmup, presets."""
 
 from __future__ import annotations
 
@@ -81,6 +81,25 @@ def _cmd_serve(args: argparse.Namespace) -> int:
                   allow_origins=origins, scheduler=args.scheduler, experiment_workers=args.experiment_workers)
     except OSError as e:
         return _err(str(e))
+    return 0
+
+
+def _cmd_hall(args: argparse.Namespace) -> int:
+    from shoal.presets.io import PresetError, load
+
+    try:
+        load(args.preset)
+    except PresetError as e:
+        return _err("bad preset:\n  " + "\n  ".join(e.messages))
+    from shoal.app.hall.supervisor import serve_hall
+    from shoal.app.origin_guard import check_origin_url
+
+    try:
+        origins = tuple(check_origin_url(url) for url in args.allow_origin or ())
+    except ValueError as e:
+        return _err(str(e))
+    serve_hall(args.preset, workers=args.workers, host=args.host, port=args.port, max_sessions=args.max_sessions,
+               max_watchers=args.max_watchers, allow_origins=origins)
     return 0
 
 
@@ -322,6 +341,23 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--max-watchers", type=whole(1), default=DEFAULT_MAX_WATCHERS, metavar="N",
                    help=f"with --lecture: class tabs at once (default {DEFAULT_MAX_WATCHERS})")
     s.set_defaults(func=_cmd_serve)
+
+    h = sub.add_parser("hall", help="teach a class across processes: the lecture, N workers for the private "
+                                    "sessions, and nginx in front, started and stopped together")
+    h.add_argument("--workers", type=whole(1), default=2, metavar="N",
+                   help="worker processes for private sessions (take-overs, /solo); default 2")
+    h.add_argument("--host", default="127.0.0.1", help="nginx's bind address (default loopback; 0.0.0.0: the class's "
+                                                       "machines)")
+    h.add_argument("--port", type=whole(1, MAX_PORT), default=8080, help="nginx's port (default 8080)")
+    h.add_argument("--preset", default="default", help="the lecture's preset name or TOML/JSON file")
+    h.add_argument("--max-sessions", type=whole(1), default=DEFAULT_MAX_SESSIONS, metavar="N",
+                   help=f"private sessions a worker runs at once (default {DEFAULT_MAX_SESSIONS})")
+    h.add_argument("--max-watchers", type=whole(1), default=DEFAULT_MAX_WATCHERS, metavar="N",
+                   help=f"class tabs at once (default {DEFAULT_MAX_WATCHERS})")
+    h.add_argument("--allow-origin", action="append", metavar="URL",
+                   help="also accept pages of this origin (a name the class reaches the hall by, e.g. "
+                        "http://lecturehall.example:8080)")
+    h.set_defaults(func=_cmd_hall)
 
     r = sub.add_parser("run", help="headless seeded runs")
     r.add_argument("preset", help="preset name or TOML/JSON file")

@@ -18,7 +18,7 @@ import threading
 import time
 from collections import OrderedDict
 from dataclasses import dataclass
-from typing import Hashable
+from typing import Callable, Hashable
 
 from . import routes
 
@@ -59,6 +59,7 @@ class Desk:
         self._records: OrderedDict[str, Record] = OrderedDict()
         self._lock = threading.Lock()
         self._clock = time.monotonic
+        self.alive: Callable[[Hashable], bool] = lambda owner: True  # is the process ``owner`` still there?
 
     def __len__(self) -> int:
         return len(self._records)
@@ -85,7 +86,7 @@ class Desk:
             if record is None:
                 raise Refused("this private session is not known here (the lecture may have started again, "
                               "or the address is an old one): take over again from the class page")
-            if record.holder is not None and record.holder != holder:
+            if record.holder is not None and record.holder != holder and self._live(record.holder):
                 raise Refused("this private session is open in another tab")
             record.holder = holder
             record.claims += 1
@@ -108,6 +109,10 @@ class Desk:
             for r in held:
                 r.holder, r.idle_since = None, self._clock()
             return len(held)
+
+    def _live(self, holder: Hashable) -> bool:
+        """Is the process of ``holder`` (``(owner, tab)``) still there (a stopped one's ids are free)?"""
+        return not isinstance(holder, tuple) or not holder or self.alive(holder[0])
 
     def holders(self) -> dict[str, Hashable]:
         with self._lock:

@@ -23,7 +23,7 @@ import contextlib
 import sys
 import threading
 import traceback
-from typing import Any, Hashable
+from typing import Any
 
 import viser
 
@@ -34,7 +34,7 @@ from ..kinds.registry import app_presets, session_for
 from ..lessons.panel import LessonProgress
 from ..panel.view_row import Display
 from ..preset_menu import PresetMenu
-from ..server import DEFAULT_MAX_SESSIONS, ShoalServer
+from ..server import DEFAULT_MAX_SESSIONS
 from ..session.session import Session
 from ..tab import TabApp
 from ..view.camera import home_camera
@@ -42,14 +42,15 @@ from ..view.page import install_page, run_script
 from . import fanout, routes, takeover
 from .broadcast import ORDER_OWN, Broadcast
 from .class_panel import ClassPanel, lesson_question
-from .desk import PLAIN, TAKEOVER, Claim, Desk, Refused
+from .desk import TAKEOVER, Refused
+from .desk import Desk as LocalDesk
+from .private import Desk, PrivateServer, configure_client
 from .rounds import Question, Round, Rounds
 from .rounds import Refused as RoundRefused
 from .watcher import Watcher, notify
 
 DEFAULT_MAX_WATCHERS = 500
 HERE = "lecture"  # this process, as a holder of private sessions on the desk
-BACK = "Back to the lecture"
 LECTURER_ONLY = ("**This is the lecturer's page.** It opens with the key that `shoal serve --lecture` printed "
                  "(the whole address, `…/lecturer#key=…`). The class watches at the server's own address.")
 NOWHERE = "**No such page.** The class watches at this server's address (`/`)."
@@ -86,18 +87,7 @@ class Lecture:
             self.lecturer, self.lecturer_client = None, None
 
 
-def configure_client(client: Any) -> None:
-    """A private tab's page set up as the server's own is for the class (theme, panel, lights):
-    a private connection gets none of the server's broadcast (:mod:`.fanout`)."""
-    gui = client.gui
-    gui.configure_theme(control_width="large", show_share_button=False, brand_color=(40, 90, 200))
-    gui.main_panel.dock_right()
-    gui.set_panel_label("Shoal · PSO for robot swarms")
-    client.scene.set_up_direction("+z")
-    client.scene.configure_default_lights(enabled=True, cast_shadow=False)
-
-
-class LectureServer(ShoalServer):
+class LectureServer(PrivateServer):
     """A lecture (see the module doc): ``key`` is the lecturer's (made here if not given),
     ``desk`` hands out and takes back the private sessions (this process's own by default)."""
 
@@ -106,21 +96,17 @@ class LectureServer(ShoalServer):
                  allow_origins: tuple[str, ...] = (), experiments: ExperimentService | None = None,
                  proxy_key: str | None = None, desk: Desk | None = None) -> None:
         self.key = key or routes.new_key()
-        self.desk = desk if desk is not None else Desk()
         self.lecture = Lecture(scenario)
         self.rounds = Rounds()
         self.class_panel: ClassPanel | None = None  # on the lecturer's tab
         self.max_watchers = max_watchers
         self.watchers: dict[int, Watcher] = {}
-        self.held: dict[int, str] = {}  # client id → the private id its tab holds
-        self._claims: dict[int, Claim] = {}  # client id → its claim, while its session is built
         self._said: set[str] = set()
-        super().__init__(scenario, host, port, max_sessions, allow_origins, experiments, proxy_key)
+        super().__init__(scenario, host, port, desk=desk if desk is not None else LocalDesk(), owner=HERE,
+                         max_sessions=max_sessions, allow_origins=allow_origins, experiments=experiments,
+                         proxy_key=proxy_key)
 
     # ------------------------------------------------------------------ set-up
-    def route(self) -> Any:
-        return routes.page_router(self.desk.issue_plain)
-
     def _configure(self) -> None:
         super()._configure()
         self.frames = fanout.share(self.viser, routes.is_private)
@@ -144,9 +130,6 @@ class LectureServer(ShoalServer):
             self._open_private(client, path)
         else:
             client.gui.add_markdown(NOWHERE)
-
-    def _gone(self, cid: int) -> bool:
-        return cid not in self.viser.get_clients()
 
     def _open_watcher(self, client: viser.ClientHandle) -> None:
         cid = client.client_id
@@ -208,69 +191,6 @@ class LectureServer(ShoalServer):
                 client.gui.reset()
                 client.gui.add_markdown(DISMISSED)
 
-    def _open_private(self, client: viser.ClientHandle, path: str) -> None:
-        """A ``/p/<id>`` page: its id claimed on the desk, then a session within ``--max-sessions``."""
-        cid, pid = client.client_id, routes.private_id(path)
-        try:
-            if pid is None:
-                raise Refused("this is no private session's address")
-            claim = self.desk.claim(pid, (HERE, cid))
-        except Refused as err:
-            configure_client(client)
-            client.gui.add_markdown(f"**No private session here.** {err}")
-            self._back_button(client)
-            return
-        with self._lock:
-            self.held[cid] = pid
-            self._claims[cid] = claim
-        configure_client(client)
-        self._back_button(client)
-        try:
-            super()._connect(client)  # (→ _open_client, unless the server is full)
-        except takeover.CannotTakeOver as err:
-            client.gui.add_markdown(f"**This take-over cannot start.** {err}")
-        finally:
-            with self._lock:
-                self._claims.pop(cid, None)
-                opened = cid in self.tabs
-            if not opened:
-                self._release(cid)
-
-    def _open_client(self, client: viser.ClientHandle, session: Session | None = None, *, play: bool = True,
-                     **keep: Any) -> TabApp:
-        with self._lock:
-            claim = self._claims.get(client.client_id)
-        if session is not None or claim is None:  # the lecturer's tab (or a plain one)
-            return super()._open_client(client, session, play=play, **keep)
-        session, playing, keep = self._session_of(claim)
-        tab = super()._open_client(client, session, play=playing, **keep)
-        if claim.again:
-            tab.notify("Started again", "This tab's connection was lost (or the server that ran it stopped): "
-                       + ("it starts again from where you took over." if claim.kind == TAKEOVER
-                          else "this is a new session."), "yellow")
-        return tab
-
-    def _release(self, cid: int) -> None:
-        with self._lock:
-            pid = self.held.pop(cid, None)
-        if pid is not None:
-            self.desk.release(pid, (HERE, cid))
-
-    def _session_of(self, claim: Claim) -> tuple[Session, bool, dict[str, Any]]:
-        """The session a claimed id opens, whether it plays, and the tab's state it starts with."""
-        if claim.kind == PLAIN:
-            return session_for(self.scenario), True, {}
-        session, playing = takeover.restore(claim.state)
-        lessons = takeover.lesson_of(claim.state)
-        return session, playing, ({"lesson_progress": lessons} if lessons is not None else {})
-
-    def _back_button(self, client: viser.ClientHandle) -> None:
-        button = client.gui.add_button(BACK, hint="watch the lecture again (this private session ends)")
-
-        @button.on_click
-        def _(event: Any) -> None:
-            run_script(client.gui, routes.go_script(routes.CLASS_PATH))
-
     def _disconnect(self, client: viser.ClientHandle) -> None:
         cid = client.client_id
         with self._lock:
@@ -281,7 +201,6 @@ class LectureServer(ShoalServer):
         if tab is not None:
             self.lecture.drop(tab)
         self.rounds.forget(cid)
-        self._release(cid)
         super()._disconnect(client)
 
     # ------------------------------------------------------------------ take over
@@ -366,6 +285,3 @@ class LectureServer(ShoalServer):
         where = traceback.extract_tb(err.__traceback__)[-3:]
         at = " < ".join(f"{f.filename.rsplit('/', 1)[-1]}:{f.lineno} {f.name}" for f in reversed(where))
         print(f"shoal: the class's screen failed to update: {err!r} at {at}", file=sys.stderr)
-
-    def holders(self) -> dict[str, Hashable]:
-        return self.desk.holders()
