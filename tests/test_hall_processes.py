@@ -26,7 +26,7 @@ import pytest
 from viser import _messages
 from websockets.exceptions import InvalidStatus
 
-from shoal.app.hall import nginx, routes
+from shoal.app.hall import routes
 from shoal.app.hall.channel import RemoteDesk
 from shoal.app.hall.private import BACK
 from shoal.app.hall.supervisor import Hall
@@ -35,8 +35,6 @@ from shoal.app.hall.watcher import TAKE_OVER
 from browser.browser_helpers import wait_until
 from hall_helpers import press, status_of
 from viser_wire import WireClient
-
-pytestmark = pytest.mark.skipif(nginx.find() is None, reason="nginx is not installed (.ci/run installs it)")
 
 
 def free_port() -> int:
