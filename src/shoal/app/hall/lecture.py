@@ -157,12 +157,11 @@ class LectureServer(PrivateServer):
 
     def _open_lecturer(self, client: viser.ClientHandle, headers: Any) -> None:
         if not routes.holds_key(headers, self.key):
+            configure_client(client)
             client.gui.add_markdown(LECTURER_ONLY)
-            run_script(client.gui, routes.key_script())  # a key in the address: into the cookie, and again
             return
         cid = client.client_id
         configure_client(client)
-        run_script(client.gui, routes.clean_address_script())
         with self._lock:
             before = self.lecture.lecturer_client
         if before is not None:

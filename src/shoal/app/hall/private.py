@@ -23,6 +23,7 @@ from ..kinds.registry import session_for
 from ..server import DEFAULT_MAX_SESSIONS, ShoalServer
 from ..session.session import Session
 from ..tab import TabApp
+from ..view.camera import CAMERA_FOV, CAMERA_HEIGHT
 from ..view.page import run_script
 from . import routes, takeover
 from .desk import PLAIN, TAKEOVER, Claim, Refused
@@ -54,6 +55,8 @@ def configure_client(client: Any) -> None:
     gui.set_panel_label("Shoal · PSO for robot swarms")
     client.scene.set_up_direction("+z")
     client.scene.configure_default_lights(enabled=True, cast_shadow=False)
+    camera = client.camera  # (the server's initial camera is part of its broadcast: this tab's own)
+    camera.fov, camera.near, camera.far = CAMERA_FOV, 1.0, 4.0 * CAMERA_HEIGHT
 
 
 class PrivateServer(ShoalServer):

@@ -4,12 +4,13 @@ A viser page opens its websocket at its own path (viser's client drops the query
 path says which page it is:
 
 - ``/``: the **class** page. A watcher: it sees the broadcast, it drives nothing.
-- ``/lecturer``: the lecturer's page. It drives the lecture once its websocket carries the
-  lecturer's key in the ``shoal_lecturer`` cookie (:data:`KEY_COOKIE`). The key reaches the page
-  in the address' fragment (``/lecturer#key=…``), which a browser never sends to a server; the
-  page's script (:func:`key_script`) moves it into the cookie and out of the address bar, and
-  loads the page again. So the key is in no request line a server or proxy could log, and not in
-  the address bar of a projected screen.
+- ``/lecturer/``: the lecturer's page. It drives the lecture once its websocket carries the
+  lecturer's key in the ``shoal_lecturer`` cookie (:data:`KEY_COOKIE`). The key reaches the
+  browser in the address' fragment (``/lecturer#key=…``), which a browser never sends to a
+  server: ``/lecturer`` answers with a small page (:data:`KEY_PAGE`) whose script moves the key
+  into the cookie and opens ``/lecturer/``, viser's page, with no fragment (viser's page would
+  put one into its websocket's address, which browsers refuse). So the key is in no request
+  line a server or proxy could log, and not in the address bar of a projected screen.
 - ``/p/<id>``: a **private session** by its id (a take-over, or a plain session): the id names a
   record the lecture issued (:mod:`.desk`), never a file or anything a client made up.
 - ``/solo``: a plain private session; the request is answered with a redirect to a fresh
@@ -102,24 +103,19 @@ def holds_key(headers: Any, key: str) -> bool:
     return given is not None and hmac.compare_digest(given.encode(), key.encode())
 
 
-def key_script() -> str:
-    """The lecturer page's script when its websocket came without the key: a key in the address'
-    fragment goes into the cookie (for the lecturer's page only), out of the address bar, and the
-    page loads again, now with it."""
-    return """
+KEY_PAGE = """<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><title>Shoal: the lecturer's page</title></head>
+<body style="font-family: sans-serif; font-size: 18px; color: #1b1b1b">
+<noscript>The lecturer's page needs JavaScript.</noscript>
+<script>
 (() => {
   const m = location.hash.match(/^#key=([A-Za-z0-9_-]{16,128})$/);
-  if (!m) return;
-  document.cookie = %(cookie)s + "=" + m[1] + "; path=%(path)s; SameSite=Strict";
-  history.replaceState(null, "", location.pathname);
-  location.reload();
+  if (m) document.cookie = %(cookie)s + "=" + m[1] + "; path=%(path)s; SameSite=Strict";
+  location.replace(%(page)s);
 })();
-""" % {"cookie": json.dumps(KEY_COOKIE), "path": LECTURER_PATH}
-
-
-def clean_address_script() -> str:
-    """The lecturer page's script once it holds the key: a key left in the address bar goes."""
-    return 'if (location.hash.startsWith("#key=")) history.replaceState(null, "", location.pathname);'
+</script>
+</body></html>
+""" % {"cookie": json.dumps(KEY_COOKIE), "path": LECTURER_PATH, "page": json.dumps(LECTURER_PATH + "/")}
 
 
 def go_script(path: str) -> str:
@@ -139,6 +135,12 @@ def page_router(issue: Callable[[], str] | None) -> Route:
         if request.headers.get("Upgrade", "").lower() == "websocket":
             return None  # (the websocket keeps its path: it says who the connection is)
         which = role(request.path)
+        if request.path.split("?", 1)[0] == LECTURER_PATH:  # the key into its cookie, then the page
+            response = connection.respond(http.HTTPStatus.OK, KEY_PAGE)
+            del response.headers["Content-Type"]  # (websockets' Headers add a value on assignment)
+            response.headers["Content-Type"] = "text/html; charset=utf-8"
+            response.headers["Cache-Control"] = "no-store"
+            return response
         if which == SOLO:
             if issue is None:
                 return connection.respond(http.HTTPStatus.NOT_FOUND, "No plain sessions on this server\n")
