@@ -19,7 +19,7 @@ from viser import _messages
 import shoal
 from shoal.app.hall import routes, takeover
 from shoal.app.hall.command import start_lecture
-from shoal.app.hall.lecture import BACK
+from shoal.app.hall.private import BACK
 from shoal.app.hall.watcher import TAKE_OVER
 from shoal.app.kinds.fleet_world import EditRefused
 from shoal.app.kinds.registry import session_for
