@@ -51,6 +51,7 @@ def run_clients(port: int, key: str, n: int, decode_every: int, ready: Any, go: 
     from websockets.asyncio.client import connect
 
     from shoal.app.hall import routes
+
     from viser_wire import WireClient, decode_frame
 
     boss = WireClient(port, decode=True, path=routes.LECTURER_PATH,

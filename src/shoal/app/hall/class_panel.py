@@ -1,9 +1,10 @@
 """The lecturer's part of a lecture, at the top of the lecturer's panel: the class and its rounds.
 
 - a line that says how many tabs watch, and the round's state;
-- while there is a round: its question, the count and the distribution as answers come (the
-  class sees only the count until it is revealed), *Close round* and *Reveal and play*, and
-  *Download answers (CSV)* (a download in this tab; nothing is written on the server);
+- while there is a round, the folder *This round*: its question, the count and the
+  distribution as answers come (the class sees only the count until it is revealed), *Close
+  round* and *Reveal and play*, and *Download answers (CSV)* (a download in this tab; nothing is
+  written on the server);
 - the folder *A question of your own*: one, multiple choice (the choices separated
   by ``|``) or a number with a unit, with its answer if there is one. A lesson step's question
   is asked with one click from the Lessons tab (*Ask the class*).
@@ -43,10 +44,11 @@ class ClassPanel:
                  send_file: Callable[[str, bytes], None]) -> None:
         self.gui, self.hall, self.notify, self.send_file = gui, hall, notify, send_file
         self.summary = gui.add_markdown("")
-        self.live = gui.add_html("", visible=False)
-        self.buttons = gui.add_button_group("round", ROUND_BUTTONS, visible=False)
-        self.export = gui.add_button("Download answers (CSV)", visible=False,
-                                     hint="round, question, answer, time of every answer so far (no names)")
+        with gui.add_folder("This round", visible=False) as self.round_folder:  # (a lecturer may fold it away)
+            self.live = gui.add_html("")
+            self.buttons = gui.add_button_group("round", ROUND_BUTTONS, visible=False)
+            self.export = gui.add_button("Download answers (CSV)", visible=False,
+                                         hint="round, question, answer, time of every answer so far (no names)")
         with gui.add_folder("A question of your own", expand_by_default=False) as self.folder:
             self.question = gui.add_text("question", "", hint="what the class predicts")
             self.kind = gui.add_dropdown("answer with", KINDS)
@@ -118,12 +120,12 @@ class ClassPanel:
             return
         self._shown = key
         self.live.content = lecturer_html(r)
-        self.live.visible = r is not None
+        self.round_folder.visible = r is not None
         self.buttons.visible = r is not None and r.state != REVEALED
         self.export.visible = rounds.answered() > 0
 
     def remove(self) -> None:
-        for h in (self.summary, self.live, self.buttons, self.export, self.folder):
+        for h in (self.summary, self.round_folder, self.folder):
             h.remove()
 
 

@@ -15,7 +15,7 @@ import re
 from .rounds import CHOICE, CLOSED, OPEN, REVEALED, Round
 
 TEXT, BAR, RIGHT, MUTED = "#1b1b1b", "#1f4fa0", "#0b6b2f", "#4a4a4a"  # 15.9, 8.4, 6.9 and 8.9 : 1 on white
-BOX = f'<div style="font-size:17px;line-height:1.4;color:{TEXT};margin:4px 0 8px 0">{{}}</div>'
+BOX = f'<div style="font-size:17px;line-height:1.4;color:{TEXT};margin:4px 12px 8px 12px">{{}}</div>'
 
 
 def inline(text: str) -> str:
