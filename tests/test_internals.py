@@ -30,6 +30,8 @@ INTERNALS = {
         ("GuiApi._current_file_upload_states", "app/upload_guard.py (an upload dropped while it arrives)"),
         ("GuiApi._gui_input_handle_from_uuid, GuiApi._handle_gui_updates", "app/input_guard.py"),
         ("ViserServer starts websockets.asyncio.server.serve(process_request=...)", "app/origin_guard.py"),
+        ("GuiApi._websock_interface.get_message_buffer().sanctioned_dead_writes()",
+         "app/server.py:closed_tab_quiet (a tab closed mid-update)"),
     ],
     "pymunk": [
         ("Chipmunk's point and swept-disc query arithmetic", "engine/robots/queries.py repeats it to the bit "
@@ -94,6 +96,9 @@ def test_viser_client_gui_internals():
         assert isinstance(getattr(gui, "_gui_input_handle_from_uuid", None), dict), (
             f"viser {viser.__version__} moved GuiApi._gui_input_handle_from_uuid (app/input_guard.py)")
         assert guard_inputs(gui, lambda *_: None), f"viser {viser.__version__} moved GuiApi._handle_gui_updates"
+        buffer = interface.get_message_buffer()
+        assert callable(getattr(buffer, "sanctioned_dead_writes", None)), (
+            f"viser {viser.__version__} moved AsyncMessageBuffer.sanctioned_dead_writes (app/server.py)")
         assert guard_uploads(gui, 10, 20, lambda *_: None)
     finally:
         if tab is not None:

@@ -276,6 +276,16 @@ def test_bad_snapshot_bytes_are_refused(case, message):
         shoal.make(snapshot=bad)
 
 
+def test_a_snapshot_too_big_to_unpack_is_refused_from_the_zip_headers():
+    blob = good_bytes()
+    with pytest.raises(SnapshotError, match="more than the 1000 allowed"):
+        Snapshot.from_bytes(blob, max_bytes=1000)
+    nested = b'{"format":"shoal-snapshot","version":1,"header":{},"data":' + b"[" * 100_000 + b"]" * 100_000 + b"}"
+    deep = rezip(blob, lambda n, d: nested if n == codec.HEADER else d)
+    with pytest.raises(SnapshotError, match="nested too deep|not a whole"):
+        Snapshot.from_bytes(deep)
+
+
 def test_a_snapshot_is_bytes():
     with pytest.raises(SnapshotError, match="a snapshot is bytes, got str"):
         Snapshot.from_bytes("a snapshot")  # type: ignore[arg-type]

@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Mapping, NamedTuple, Sequence
 
 from shoal.presets.models import Scenario
 from shoal.studies.sweep.run import plan_sweep, sweep_rows
@@ -13,13 +13,23 @@ from .scene import Scene, scenario_of
 from .tables import as_table
 
 
+class Tables(NamedTuple):
+    """What :func:`run` returns with ``trajectories=True``: both of ``shoal run``'s tables."""
+
+    metrics: Any
+    trajectories: Any
+
+
 def run(preset: str | Path | Mapping[str, Any] | Scenario = "default", overrides: Sequence[str] = (), *,
-        pandas: bool | None = None, **sections: Any) -> Any:
+        pandas: bool | None = None, trajectories: bool = False, **sections: Any) -> Any:
     """Run ``preset`` (with overrides, as :func:`~shoal.api.scene.make` takes them) for its
     ``sim.steps`` and return every step's metrics: the rows ``shoal run`` writes to
-    ``metrics.csv``, as a table."""
-    scene = Scene(scenario_of(preset, overrides, **sections))
+    ``metrics.csv``, as a table. With ``trajectories=True``, :class:`Tables` of the metrics and
+    of every robot at every step (``trajectories.csv``'s rows)."""
+    scene = Scene(scenario_of(preset, overrides, **sections), trajectories=trajectories)
     scene.run()
+    if trajectories:
+        return Tables(scene.metrics(pandas=pandas), scene.trajectories(pandas=pandas))
     return scene.metrics(pandas=pandas)
 
 

@@ -19,13 +19,13 @@ import numpy as np
 
 from shoal.engine.core.contract import Engine, Info, State
 from shoal.engine.core.objectives import OBJECTIVES, ObjectiveFunction
-from shoal.engine.core.recorder import metric_table
+from shoal.engine.core.recorder import TRAJECTORY_COLUMNS, TRAJECTORY_SCHEMA, metric_table, trajectory_rows
 from shoal.engine.core.schema import Schema
-from shoal.presets.io import PresetError, apply_overrides, read_raw, set_dotted, validate
-from shoal.presets.kinds import SceneKind, kind_for
+from shoal.presets.io import PresetError, apply_overrides, read_raw, set_dotted, to_toml, validate
+from shoal.presets.kinds import KINDS, SceneKind, kind_for
 from shoal.presets.models import Scenario
 
-from .snapshot import Snapshot, SnapshotError, snapshot_of
+from .snapshot import Snapshot, SnapshotError, snapshot_of, write_atomically
 from .tables import as_table
 
 SIM_KEYWORDS = ("runs", "seed", "steps", "robots", "d")  # make(..., runs=4) sets sim.runs
@@ -96,7 +96,7 @@ def _origin(f: Any) -> tuple[str, str]:
 
 
 def make(preset: str | Path | Mapping[str, Any] | Scenario = "default", overrides: Sequence[str] = (), *,
-         snapshot: Snapshot | bytes | str | Path | None = None, **sections: Any) -> Scene:
+         snapshot: Snapshot | bytes | str | Path | None = None, trajectories: bool = False, **sections: Any) -> Scene:
     """A :class:`Scene` of ``preset`` with overrides (see :func:`scenario_of`), at step 0; or, with
     ``snapshot`` (a :class:`~shoal.api.snapshot.Snapshot`, its bytes or a saved file's path), the
     scene it was taken of, at its step, going on with the same bits.
@@ -109,8 +109,8 @@ def make(preset: str | Path | Mapping[str, Any] | Scenario = "default", override
         if preset != "default" or overrides or sections:
             raise ValueError("make: give a snapshot or a preset with overrides, not both (a snapshot holds its "
                              "scenario; retune the scene it gives)")
-        return Scene.from_snapshot(snapshot)
-    return Scene(scenario_of(preset, overrides, **sections))
+        return Scene.from_snapshot(snapshot, trajectories=trajectories or None)
+    return Scene(scenario_of(preset, overrides, **sections), trajectories=trajectories)
 
 
 class Scene:
@@ -120,12 +120,14 @@ class Scene:
     gives them as a table. ``record=False`` keeps none (for long runs where only the end matters).
     """
 
-    def __init__(self, scenario: Scenario, *, record: bool = True) -> None:
+    def __init__(self, scenario: Scenario, *, record: bool = True, trajectories: bool = False) -> None:
         self.scenario = scenario
         self.kind: SceneKind = kind_for(scenario)
         self.engine: Engine = self.kind.build(scenario)
         self.record = record
+        self.keep_trajectories = trajectories
         self._rows: list[dict[str, np.ndarray]] = []
+        self._paths: list[np.ndarray] = []  # trajectory rows of each step, (runs × robots, columns)
         self._detached: set[str] = set()  # engine keywords retuned that the scenario does not hold
         self._note(self.engine.info())
 
@@ -142,16 +144,21 @@ class Scene:
             raise SnapshotError(f"snapshot: {', '.join(sorted(self._detached))} were retuned as engine keywords, which "
                                 "the scenario does not hold; retune them as preset sections "
                                 "(e.g. controller={...}) to keep this scene")
-        rows = None
+        rows = paths = None
         if metrics and self.record and self._rows:
             rows = {n: np.stack([np.asarray(r[n]) for r in self._rows]) for n in self._rows[-1]}
-        return Snapshot(self.scenario, self.kind.name, self.k, take(), rows)
+        if metrics and self.keep_trajectories and self._paths:
+            paths = np.stack(self._paths)
+        return Snapshot(self.scenario, self.kind.name, self.k, take(), rows, trajectories=paths)
 
     @classmethod
-    def from_snapshot(cls, snapshot: Snapshot | bytes | str | Path, *, record: bool = True) -> Scene:
-        """The scene ``snapshot`` was taken of, at its step (see :meth:`snapshot`)."""
+    def from_snapshot(cls, snapshot: Snapshot | bytes | str | Path, *, record: bool = True,
+                      trajectories: bool | None = None) -> Scene:
+        """The scene ``snapshot`` was taken of, at its step (see :meth:`snapshot`); it keeps
+        trajectories if the snapshot holds some (or as ``trajectories`` says)."""
         snap = snapshot_of(snapshot)
-        scene = cls(snap.scenario, record=record)
+        keep = snap.trajectories is not None if trajectories is None else trajectories
+        scene = cls(snap.scenario, record=record, trajectories=keep)
         if scene.kind.name != snap.kind:
             raise SnapshotError(f"snapshot: of a {snap.kind!r} scene, but its scenario builds a "
                                 f"{scene.kind.name!r} one")
@@ -166,8 +173,11 @@ class Scene:
             names = list(snap.rows)
             steps = snap.rows[names[0]].shape[0] if names else 0
             scene._rows = [{n: snap.rows[n][i].copy() for n in names} for i in range(steps)]
-        if record and not scene._rows:
-            scene._note(scene.engine.info())
+        scene._paths = list(snap.trajectories) if keep and snap.trajectories is not None else []
+        if record and not scene._rows:  # a snapshot taken without its history: this step's rows
+            scene._rows = [{k: np.array(v, copy=True) for k, v in scene.row().items()}]
+        if keep and not scene._paths:
+            scene._paths = [trajectory_rows(scene.engine.state, scene.engine.t)]
         return scene
 
     # ------------------------------------------------------------------ reading
@@ -228,13 +238,51 @@ class Scene:
     def reset(self, seed: int | None = None) -> None:
         """Back to step 0 (with ``seed``, or the current one); the recorded metrics start again."""
         self.engine.reset(seed)
-        self._rows = []
+        self._rows, self._paths = [], []
         self._note(self.engine.info())
 
     def _note(self, info: Info) -> None:
         if self.record:
             self._rows.append({k: np.array(v, copy=True) for k, v in
                                metric_table(self.engine.state, info, self.engine.t).items()})
+        if self.keep_trajectories:
+            self._paths.append(trajectory_rows(self.engine.state, self.engine.t))
+
+    def trajectories(self, *, pandas: bool | None = None) -> Any:
+        """Every robot at every recorded step, one row per run, step and robot (step 0 first): the
+        columns ``shoal run`` writes to ``trajectories.csv`` (``run, step, t, robot, x, y, heading,
+        vx, vy, status``, and ``z, vz`` in three or more dimensions), as a table. The scene keeps
+        them when made with ``trajectories=True`` (``shoal.make(..., trajectories=True)``)."""
+        if not self.keep_trajectories:
+            raise ValueError("trajectories: this scene keeps none; make it with shoal.make(..., trajectories=True)")
+        rows = np.concatenate(self._paths or [trajectory_rows(self.engine.state, self.engine.t)])
+        names = [*TRAJECTORY_COLUMNS, *(("z", "vz") if rows.shape[1] > len(TRAJECTORY_COLUMNS) else ())]
+        whole = {c.name for c in TRAJECTORY_SCHEMA if c.dtype == "int"}
+        return as_table({n: rows[:, i].astype(np.int64) if n in whole else rows[:, i] for i, n in enumerate(names)},
+                        pandas=pandas)
+
+    # ------------------------------------------------------------------ pickle
+    def __getstate__(self) -> dict[str, Any]:
+        """A scene pickles with its kind by name (the registry entry stays in the registry)."""
+        state = dict(self.__dict__)
+        state["kind"] = self.kind.name
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        name = state["kind"]
+        if name not in KINDS:
+            raise ValueError(f"scene kind {name!r} is not registered here (install or register its plug-in)")
+        self.__dict__.update(state, kind=KINDS[name])
+
+    def save_preset(self, path: str | Path, *, overwrite: bool = False) -> Path:
+        """Write :attr:`scenario` as a TOML preset that loads back to an equal scenario
+        (``shoal.make(path)``), completely or not at all; an existing file is kept unless
+        ``overwrite``. Engine-keyword retunes are not in the scenario (see :meth:`snapshot`)."""
+        path = Path(path)
+        if path.exists() and not overwrite:
+            raise FileExistsError(f"{path}: exists already (pass overwrite=True to replace it)")
+        write_atomically(path, to_toml(self.scenario).encode("utf-8"))
+        return path
 
     # ------------------------------------------------------------------ changing
     def retune(self, **changes: Any) -> list[str]:

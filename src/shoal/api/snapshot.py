@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from shoal import __version__
-from shoal.engine.core.snapshot import SnapshotError, from_bytes, to_bytes
+from shoal.engine.core.snapshot import MAX_BYTES, SnapshotError, from_bytes, to_bytes
 from shoal.presets.io import PresetError, validate
 from shoal.presets.models import Scenario
 
@@ -29,7 +29,8 @@ __all__ = ["Snapshot", "SnapshotError", "snapshot_of"]
 @dataclass(frozen=True, eq=False)
 class Snapshot:
     """One scene at step :attr:`k`: its :attr:`scenario`, its engine's state (:attr:`engine`, plain
-    data) and its recorded metric rows (:attr:`rows`: column → (steps, runs) array, or None)."""
+    data), its recorded metric rows (:attr:`rows`: column → (steps, runs) array, or None) and
+    trajectory rows (:attr:`trajectories`, or None)."""
 
     scenario: Scenario
     kind: str
@@ -37,18 +38,21 @@ class Snapshot:
     engine: dict[str, Any] = field(repr=False)
     rows: dict[str, np.ndarray] | None = field(default=None, repr=False)
     shoal: str = __version__
+    trajectories: np.ndarray | None = field(default=None, repr=False)  # (steps, runs × robots, columns), or None
 
     def to_bytes(self) -> bytes:
         """The snapshot as an ``.npz`` archive: arrays as ``.npy`` members, the rest (the scenario
         included) as JSON. No pickle."""
         header = {"shoal": self.shoal, "kind": self.kind, "k": self.k,
                   "scenario": self.scenario.model_dump(mode="json")}
-        return to_bytes(header, {"engine": self.engine, "rows": self.rows})
+        return to_bytes(header, {"engine": self.engine, "rows": self.rows, "trajectories": self.trajectories})
 
     @classmethod
-    def from_bytes(cls, blob: bytes) -> Snapshot:
-        """The snapshot :meth:`to_bytes` wrote; :class:`SnapshotError` for anything else."""
-        header, data = from_bytes(blob)
+    def from_bytes(cls, blob: bytes, *, max_bytes: int = MAX_BYTES) -> Snapshot:
+        """The snapshot :meth:`to_bytes` wrote; :class:`SnapshotError` for anything else, or for
+        one that would unpack to more than ``max_bytes``. Nothing is built: a server can price
+        :attr:`scenario` before it makes the scene."""
+        header, data = from_bytes(blob, max_bytes)
         raw = header.get("scenario")
         if not isinstance(raw, dict):
             raise SnapshotError("snapshot: its header holds no scenario")
@@ -65,7 +69,10 @@ class Snapshot:
         if rows is not None and not (isinstance(rows, dict) and all(isinstance(v, np.ndarray) for v in rows.values())
                                      and len({v.shape for v in rows.values()}) <= 1):
             raise SnapshotError("snapshot: its metric rows are not columns of one shape")
-        return cls(scenario, kind, k, data["engine"], rows, str(header.get("shoal", "")))
+        paths = data.get("trajectories")
+        if paths is not None and not (isinstance(paths, np.ndarray) and paths.ndim == 3 and paths.dtype == float):
+            raise SnapshotError("snapshot: its trajectories are not one (steps, rows, columns) array")
+        return cls(scenario, kind, k, data["engine"], rows, str(header.get("shoal", "")), paths)
 
     def save(self, path: str | Path, *, overwrite: bool = False) -> Path:
         """Write :meth:`to_bytes` to ``path`` completely or not at all; an existing file is kept

@@ -43,7 +43,9 @@ def _xyz(v: tuple[float, float], d: int = 3) -> np.ndarray:
 
 
 def objective_for(o: ObjectiveModel, d: int = 3) -> Objective:
-    return Objective(name=o.kind, source=_xyz(o.source, d), scale=o.scale)
+    return Objective(name=o.kind, source=_xyz(o.source, d), scale=o.scale,
+                     bounds=None if o.bounds is None else (float(o.bounds[0]), float(o.bounds[1])),
+                     boundary=o.boundary or "periodic")
 
 
 def build_simulation(

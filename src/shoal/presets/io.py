@@ -5,16 +5,19 @@ from __future__ import annotations
 import copy
 import functools
 import json
+import re
 import reprlib
 import tomllib
+import typing
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import tomli_w
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 
 from shoal.engine.core.plugins import load_plugins
+from shoal.engine.core.suggest import did_you_mean
 
 from .models import Scenario
 from .toml_bounds import check_toml
@@ -45,15 +48,69 @@ def _short_name(part: object) -> str:
 
 
 def format_errors(err: ValidationError) -> list[str]:
-    """One line per error: ``dotted.field: message (got value)``, the value and names shortened."""
+    """One line per error: ``dotted.field: message (got value)``, the value and names shortened,
+    and for a mistyped field, section or name the closest ones it could have been."""
     lines = []
     for e in err.errors(include_url=False):
         loc = ".".join(_short_name(p) for p in e["loc"])
         msg = e["msg"].removeprefix("Value error, ")
         quiet = e["type"] in ("missing",) or isinstance(e.get("input"), dict)
         got = "" if quiet else f" (got {_SHORT.repr(e.get('input'))})"
-        lines.append(f"{loc}: {msg}{got}" if loc else f"{msg}{got}")
+        line = f"{loc}: {msg}{got}" if loc else f"{msg}{got}"
+        lines.append(line + _suggestion(e, msg))
     return lines
+
+
+def _suggestion(e: Any, msg: str) -> str:
+    """" (did you mean …?)" for an unknown field or section (the model's fields at its place) or a
+    value outside its choices (the names the message lists)."""
+    loc = tuple(e["loc"])
+    if e["type"] == "extra_forbidden" and loc and isinstance(loc[-1], str):
+        return did_you_mean(loc[-1], _fields_at(loc[:-1]))
+    section = re.search(r"no scene kind has a \[([^\]]+)\] section", msg)
+    if section:
+        return did_you_mean(section.group(1), _fields_at(()))
+    if msg.startswith("Input should be") and isinstance(e.get("input"), str):
+        return did_you_mean(e["input"], re.findall(r"'([^']*)'", msg))
+    return ""
+
+
+def _fields_at(loc: tuple[Any, ...]) -> list[str]:
+    """The field names of the model at ``loc`` inside a scenario (the sections, at the top: the
+    plug-in kinds' too)."""
+    model: Any = Scenario
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        field = model.model_fields.get(part) if isinstance(model, type) and issubclass(model, BaseModel) else None
+        if field is None:
+            from .kinds import plugin_sections  # (the kinds' registry reads this module)
+
+            sub = plugin_sections().get(part) if model is Scenario else None
+            if sub is None:
+                return []
+            model = sub
+            continue
+        model = _model_in(field.annotation)
+        if model is None:
+            return []
+    names = list(model.model_fields)
+    if model is Scenario:
+        from .kinds import plugin_sections
+
+        names += list(plugin_sections())
+    return names
+
+
+def _model_in(annotation: Any) -> Any:
+    """The pydantic model an annotation holds (``Model``, ``Model | None``, ``list[Model]``), or None."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in typing.get_args(annotation):
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
 
 
 def validate(data: dict[str, Any]) -> Scenario:
@@ -174,7 +231,8 @@ def read_raw(name_or_path: str | Path) -> dict[str, Any]:
     if str(name_or_path) in shipped_names():
         return read_shipped(str(name_or_path))
     names = ", ".join(shipped_names())
-    raise PresetError([f"no preset or file named {short(str(name_or_path))} (shipped presets: {names})"])
+    hint = did_you_mean(str(name_or_path), shipped_names())
+    raise PresetError([f"no preset or file named {short(str(name_or_path))}{hint} (shipped presets: {names})"])
 
 
 def parse_value(text: str) -> Any:

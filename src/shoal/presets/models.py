@@ -154,7 +154,7 @@ class Controller(_Model):
         if robot_law:
             return self
         law = LAWS[self.law]
-        why = law.check_omega(self.omega) if self.mode == "raw" else None
+        why = law.check(self.omega, (self.c1, self.c2)) if self.mode == "raw" else None
         if why:
             raise ValueError(why)
         if self.mode == "physical":
@@ -224,10 +224,26 @@ class Bests(_Model):
 class ObjectiveModel(_Model):
     """What the swarm optimises: the distance to a source, f = x1, or a benchmark."""
 
+    omit_unset = ("bounds", "boundary")
+
     kind: ObjectiveKind = "source-distance"
     source: tuple[float, float] = (15.0, 5.0)
     # (below 1e-6 m per unit the benchmark functions overflow over the arena: best_fitness = NaN)
     scale: Annotated[float, Field(ge=1e-6, le=1e4, description="benchmark length scale [m per unit]")] = 1.0
+    bounds: Annotated[tuple[Coordinate, Coordinate] | None, Field(
+        description="search space [lo, hi] of every component, in the objective's units ((x − source)/scale for a "
+                    "benchmark); unset = unbounded, as in the theses")] = None
+    boundary: Annotated[Literal["clip", "reflect", "absorb", "periodic"] | None, Field(
+        description="how the swarm keeps to the bounds: periodic (the default, as pyswarms), clip, reflect or "
+                    "absorb (docs/readings.md, \"Search-space bounds\")")] = None
+
+    @model_validator(mode="after")
+    def _bounds(self) -> ObjectiveModel:
+        if self.bounds is not None and not self.bounds[0] < self.bounds[1]:
+            raise ValueError(f"bounds: need lo < hi, got {list(self.bounds)}")
+        if self.boundary is not None and self.bounds is None:
+            raise ValueError("boundary: applies to bounds; set objective.bounds = [lo, hi] too")
+        return self
 
 
 class Acoustics(_Model):

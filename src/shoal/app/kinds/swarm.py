@@ -18,6 +18,7 @@ from shoal.engine.core.objectives import OBJECTIVES, Objective
 from shoal.engine.kinds.swarm import Simulation
 from shoal.engine.pso import tuning
 from shoal.engine.pso.laws import LAWS
+from shoal.engine.pso.stability import diverged
 from shoal.presets.build import build_simulation, kind_of, objective_for, slo_unit, swarm_keywords
 from shoal.presets.io import PresetError
 from shoal.presets.models import Scenario
@@ -118,7 +119,7 @@ class SwarmDriver(BaseDriver):
             "omega": omega, "c_hat": c_hat, "beta": (1.0 - omega) if bounded else math.nan,
             "U": U_j * math.sqrt(d), "U_j": U_j, "A_plus": A_plus, "A_minus": 2 * A_plus,
             "t": self.session.clock(), "k": float(self.sim.state.k), "best": float(self.sim.state.best_fitness[0]),
-            "outside": float(self.outside_arena()),
+            "outside": float(self.outside_arena()), "diverged": float(diverged(self.sim.state.u[:1])[0]),
         }
 
     def outside_arena(self) -> int:
@@ -241,6 +242,9 @@ def _readout(s: Session) -> str:
     physical mode: β, ω, ĉ, U_j, A−; in raw mode U and A+ too)."""
     r, c = s.readout(), s.scenario.controller
     law = LAWS[c.law]
+    if r["diverged"]:
+        return (_table([("ω", fmt(r["omega"])), ("ĉ = c1 + c2", fmt(r["c_hat"]))])
+                + f"\n\n*The swarm {DIVERGED_WORDS}; Reset starts it again.*")
     if not law.adapted:
         return (_table([("ω", fmt(r["omega"])), ("ĉ = c1 + c2", fmt(r["c_hat"]))])
                 + f"\n\n*{escape(law.label)}: ĉ has no unit and nothing bounds the speed.*")
@@ -282,8 +286,12 @@ def _set_coefficient(name: str) -> Any:
 
 def _status(s: Session, r: dict[str, float], state: str) -> str:
     sc = s.scenario
-    return (f"**{escape(sc.name)}** · {state} · t = {r['t']:.1f} s · {s.progress()} · "
-            f"best f = {r['best']:.4g}" + (f" · {int(r['outside'])} outside the arena" if r["outside"] else ""))
+    best = DIVERGED_WORDS if r["diverged"] else f"best f = {r['best']:.4g}"
+    return (f"**{escape(sc.name)}** · {state} · t = {r['t']:.1f} s · {s.progress()} · {best}"
+            + (f" · {int(r['outside'])} outside the arena" if r["outside"] else ""))
+
+
+DIVERGED_WORDS = "**diverged** (robots faster than 10⁹ m/s: these coefficients are outside the law's stable region)"
 
 
 def _compare(s: Session) -> dict[str, dict[str, Any]]:

@@ -107,13 +107,28 @@ class Objective:
     name: str = "source-distance"
     source: np.ndarray = field(default_factory=lambda: np.zeros(2))
     scale: float = 1.0
+    bounds: tuple[float, float] | None = None  # every component of f's argument in [lo, hi]; None: unbounded
+    boundary: str = "periodic"  # how a swarm keeps to the bounds (engine/pso/bounds.py)
 
     def __post_init__(self) -> None:
         OBJECTIVES.pick(self.name)
+        if self.bounds is not None and not self.bounds[0] < self.bounds[1]:
+            raise ValueError(f"bounds: need lo < hi, got {self.bounds}")
 
     def __eq__(self, other: object) -> bool:
         return (isinstance(other, Objective) and (self.name, self.scale) == (other.name, other.scale)
-                and np.array_equal(self.source, other.source))
+                and np.array_equal(self.source, other.source)
+                and (self.bounds, self.boundary) == (other.bounds, other.boundary))
+
+    def box(self, d: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """The bounds as positions, (d,) each: where f's argument is ``bounds`` in every component."""
+        if self.bounds is None:
+            return None
+        frame = OBJECTIVES[self.name].frame
+        origin = np.zeros(d) if frame == "x" else self._source(d)
+        size = self.scale if frame == "scaled" else 1.0
+        lo, hi = self.bounds
+        return origin + size * lo, origin + size * hi
 
     @property
     def maximise(self) -> bool:

@@ -15,6 +15,7 @@ from collections.abc import Iterator, Mapping
 from typing import Generic, Protocol, TypeVar
 
 from .plugins import load_plugins
+from .suggest import did_you_mean
 
 
 class Variant(Protocol):
@@ -75,7 +76,8 @@ class Registry(Mapping[str, V], Generic[V]):
         try:
             return self[name]
         except (KeyError, TypeError):
-            raise ValueError(f"{self.what}: unknown {name!r}, choose from {sorted(self)}") from None
+            raise ValueError(f"{self.what}: unknown {name!r}{did_you_mean(name, self)}, choose from "
+                             f"{sorted(self)}") from None
 
     def register(self, entry: V, *, replace: bool = False) -> V:
         """Add ``entry`` under its name (a ``ValueError`` if the name is taken, unless ``replace``);

@@ -27,6 +27,7 @@ FORMAT = "shoal-snapshot"
 VERSION = 1
 HEADER = "snapshot.json"
 MAX_ARRAYS = 100_000
+MAX_BYTES = 1 << 30  # what from_bytes unpacks at most by default (its members' sizes as the zip declares them)
 
 T = TypeVar("T")
 
@@ -207,9 +208,10 @@ def to_bytes(header: Mapping[str, Any], data: Any) -> bytes:
     return buf.getvalue()
 
 
-def from_bytes(blob: bytes) -> tuple[dict[str, Any], Any]:
+def from_bytes(blob: bytes, max_bytes: int = MAX_BYTES) -> tuple[dict[str, Any], Any]:
     """The header and the plain-data tree of :func:`to_bytes`'s bytes; :class:`SnapshotError` if they are
-    not a whole Shoal snapshot."""
+    not a whole Shoal snapshot, or would unpack to more than ``max_bytes`` (checked from the zip's
+    headers before anything is unpacked)."""
     if not isinstance(blob, (bytes, bytearray, memoryview)):
         raise SnapshotError(f"a snapshot is bytes, got {type(blob).__name__}")
     try:
@@ -217,8 +219,11 @@ def from_bytes(blob: bytes) -> tuple[dict[str, Any], Any]:
             names = z.namelist()
             if HEADER not in names:
                 raise SnapshotError(f"not a Shoal snapshot: no {HEADER}")
-            if len(names) > MAX_ARRAYS:
+            if len(names) > MAX_ARRAYS or len(set(names)) != len(names):
                 raise SnapshotError(f"not a Shoal snapshot: {len(names)} members")
+            size = sum(i.file_size for i in z.infolist())
+            if size > max_bytes:
+                raise SnapshotError(f"snapshot: unpacks to {size} bytes, more than the {max_bytes} allowed")
             doc = json.loads(z.read(HEADER).decode("utf-8"), parse_constant=_no_constant)
             if not isinstance(doc, dict) or doc.get("format") != FORMAT:
                 raise SnapshotError("not a Shoal snapshot (its format is not named)")
@@ -235,12 +240,16 @@ def from_bytes(blob: bytes) -> tuple[dict[str, Any], Any]:
     except SnapshotError:
         raise
     except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, OSError, UnicodeDecodeError, json.JSONDecodeError,
-            ValueError, KeyError) as e:
-        raise SnapshotError(f"not a whole Shoal snapshot ({type(e).__name__}: {e})") from None
-    header = _unpack(doc.get("header"), {}, "header")
+            ValueError, KeyError, RecursionError, MemoryError) as e:
+        raise SnapshotError(f"not a whole Shoal snapshot ({type(e).__name__}: {str(e)[:200]})") from None
+    try:
+        header = _unpack(doc.get("header"), {}, "header")
+        data = _unpack(doc.get("data"), found, "snapshot")
+    except RecursionError:
+        raise SnapshotError("snapshot: nested too deep") from None
     if not isinstance(header, dict):
         raise SnapshotError("snapshot: its header is not a table")
-    return header, _unpack(doc.get("data"), found, "snapshot")
+    return header, data
 
 
 def _no_constant(name: str) -> Any:

@@ -587,13 +587,33 @@ class Fleet:
         self.world, self._world_arrays, self._spaces, self._stale = world, None, None, False
         self._tick_params = (None, None)
         if bodies is not None:
-            self._build_spaces()  # bodies at the robots, disabled ones kinematic
-            for sp, b in zip(self.spaces, bodies):
-                for body, (bx, by, angle) in zip(sp.robot_bodies, b[:, :3].tolist()):
-                    body.position, body.angle = (bx, by), angle
-                    sp.space.reindex_shapes_for_body(body)
-                sp.bodies()
-                sp.set_velocities(b[:, 3:5], b[:, 5])
+            self._place_bodies(bodies)
+
+    def _place_bodies(self, bodies: np.ndarray) -> None:
+        """Physics mode: new pymunk spaces round the robots (disabled ones kinematic), every body
+        at its pose and velocity of ``bodies`` (R, N, 6)."""
+        self._build_spaces()
+        for sp, b in zip(self.spaces, bodies):
+            for body, (bx, by, angle) in zip(sp.robot_bodies, b[:, :3].tolist()):
+                body.position, body.angle = (bx, by), angle
+                sp.space.reindex_shapes_for_body(body)
+            sp.bodies()
+            sp.set_velocities(b[:, 3:5], b[:, 5])
+
+    def __getstate__(self) -> dict[str, Any]:
+        """A fleet pickles without its pymunk spaces (built again on unpickling, as on :meth:`restore`)."""
+        state = dict(self.__dict__)
+        physics = self.params.motion == "physics"
+        state["_bodies"] = np.stack([sp.bodies() for sp in self.spaces]) if physics else None
+        state.update(_spaces=None, _stale=False, motion=None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        bodies = state.pop("_bodies", None)
+        self.__dict__.update(state)
+        self.motion = self._motion()
+        if bodies is not None:
+            self._place_bodies(bodies)
 
     def info(self) -> FleetInfo:
         s = self.state

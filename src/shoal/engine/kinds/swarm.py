@@ -20,8 +20,9 @@ from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, integer, part, rng_states, set_rng_states
 from ..pso import kernels
 from ..pso.bests import best_index, global_best, update_personal, warn_unfound
-from ..pso.coeffs import CoefficientPolicy
-from ..pso.laws import Law
+from ..pso.bounds import confine
+from ..pso.coeffs import CoefficientPolicy, Constant
+from ..pso.laws import LAWS, Law
 from ..pso.laws import motion_heading as _heading
 from ..slo.positions import Oracle, PositionSource
 
@@ -142,6 +143,15 @@ class RunSeries:
     tracked: np.ndarray  # (steps, R, d): velocity of the tracked robot
 
 
+def check_coefficients(law: Law, policy: CoefficientPolicy) -> None:
+    """The law's coefficient rule (:meth:`~shoal.engine.pso.laws.VelocityLaw.check`) for raw
+    coefficients; a ``ValueError`` naming them. Physical tuning gives coefficients inside it."""
+    if isinstance(policy, Constant):
+        why = LAWS[law.name].check(policy.omega, policy.c)
+        if why:
+            raise ValueError(f"policy: {why}")
+
+
 def _per_run(value: np.ndarray | float, R: int) -> np.ndarray:
     """A scalar or per-robot ``(R, N)`` coefficient as one value per run (mean over robots)."""
     v = np.asarray(value, dtype=float)
@@ -192,6 +202,7 @@ class Simulation:
             raise ValueError(f"dt must be > 0, got {dt}")
         self.d, self.dt, self.runs, self.seed, self.first_run = d, float(dt), runs, seed, first_run
         self.law = law or Law()
+        check_coefficients(self.law, policy)
         self.policy = policy
         self.objective = objective or Objective()
         self.attractors: Attractors = attractors
@@ -249,7 +260,8 @@ class Simulation:
         shape = (n, self.d)
         x = np.stack([self.init_center + self.init_spread * (g.random(shape) - 0.5) for g in self.rngs])
         u = np.stack([self.init_speed * (2.0 * g.random(shape) - 1.0) for g in self.rngs])
-        return x, u
+        box = self.objective.box(self.d)
+        return (x, u) if box is None else (np.clip(x, box[0], box[1]), u)  # bounded: the start inside
 
     def _fresh_state(self, x: np.ndarray, u: np.ndarray) -> SwarmState:
         f = self.objective(x)
@@ -301,6 +313,8 @@ class Simulation:
         for name, kind in (("attractors", Attractors), ("pbest_order", PbestOrder)):
             if name in changes and changes[name] not in get_args(kind):
                 raise ValueError(f"{name}: unknown {changes[name]!r}, choose from {get_args(kind)}")
+        if "policy" in changes or "law" in changes:
+            check_coefficients(changes.get("law", self.law), changes.get("policy", self.policy))
         slo = changes.pop("slo", None)
         now = {"policy": self.policy, "law": self.law, "dt": self.dt, "robots": self.robots,
                "attractors": self.attractors, "pbest_order": self.pbest_order, "objective": self.objective}
@@ -370,8 +384,12 @@ class Simulation:
         u_new = self.law.velocity(s.u, g, c, omega, self._draw(g.shape[0]))
         if self.pbest_order == "after_velocity":  # the velocity saw last tick's bests
             self._update_bests()
+        x_new = self.law.position(s.x, u_new, self.dt)
+        box = self.objective.box(self.d)
+        if box is not None:  # the search-space bounds (pso/bounds.py)
+            x_new, u_new = confine(x_new, u_new, box[0], box[1], self.objective.boundary)  # type: ignore[arg-type]
         s.a = (u_new - s.u) / self.dt  # [3.22]
-        s.x = self.law.position(s.x, u_new, self.dt)
+        s.x = x_new
         s.u = u_new
         s.heading = _heading(u_new, s.heading)
         s.k += 1
@@ -384,6 +402,7 @@ class Simulation:
         made with ``compiled=False``."""
         s = self.state
         return (self.compiled and self.law.name in ("standard", "adapted-sgn") and self.d <= kernels.MAX_TERMS
+                and self.objective.bounds is None
                 and isinstance(self.positions, Oracle) and s.x.dtype == s.u.dtype == s.y.dtype == np.float64)
 
     # U(0,1) draws a block holds at most (R × ticks × 2N d), and its ticks at most

@@ -8,6 +8,7 @@ random draws are ``(n, runs, robots, d)`` and coefficients ``c`` are ``(n,)`` or
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any, Callable, Literal
 
@@ -104,6 +105,23 @@ class VelocityLaw:
         lo, hi = self.omega_range
         return None if lo <= omega < hi else f"omega = {omega:g}: {self.label} needs {self.rule}"
 
+    def check(self, omega: float | np.ndarray, c: Any) -> str | None:
+        """The law's coefficient rule, the one place it is applied (the preset model, the engine's
+        constructor and retune, so ``make``, ``Scene.retune`` and the app): why raw ``omega`` and
+        the coefficients ``c`` do not suit this law, or None. Every c_n must be a finite number
+        ≥ 0, and ω within the law's range (``omega_range``, e.g. 0 ≤ ω < 1 [3.14])."""
+        cs = np.asarray(c, dtype=float)
+        if not np.isfinite(cs).all() or (cs < 0).any():
+            return f"c = {np.round(cs.ravel(), 6).tolist()}: {self.label} needs finite coefficients c_n >= 0"
+        w = np.asarray(omega, dtype=float)
+        if not np.isfinite(w).all():
+            return f"omega = {omega}: not a number"
+        for value in np.unique(w):
+            why = self.check_omega(float(value))
+            if why:
+                return why
+        return None
+
     def stable(self, omega: float, c_hat: float) -> bool:
         """Is (ω, ĉ) inside this law's stability region?"""
         if self.region == "adapted":
@@ -121,12 +139,14 @@ def _standard(u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | f
     return standard_velocity(u, g, c, omega, r)
 
 
-def _adapted(kind: Squash) -> Velocity:
-    def velocity(u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | float, r: np.ndarray,
-                 width: float) -> np.ndarray:
-        return adapted_velocity(u, g, c, omega, r, kind, width)
+def _adapted_law(u: np.ndarray, g: np.ndarray, c: np.ndarray, omega: np.ndarray | float, r: np.ndarray,
+                 width: float, *, kind: Squash) -> np.ndarray:
+    return adapted_velocity(u, g, c, omega, r, kind, width)
 
-    return velocity
+
+def _adapted(kind: Squash) -> Velocity:
+    """[3.11] with the squash ``kind``: a partial of a module function, so a law pickles."""
+    return functools.partial(_adapted_law, kind=kind)
 
 
 _ADAPTED_RULE: dict[str, Any] = dict(omega_range=(0.0, 1.0), region="adapted", rule="0 <= omega < 1 [3.14]")

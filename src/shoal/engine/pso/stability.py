@@ -7,6 +7,15 @@ from __future__ import annotations
 
 import numpy as np
 
+DIVERGED = 1e9  # m/s: a robot faster than this (or not a finite number) belongs to a swarm that diverged
+
+
+def diverged(u: np.ndarray) -> np.ndarray:
+    """Per run, has the swarm of velocities ``u`` (R, N, d) diverged: some speed beyond
+    :data:`DIVERGED` or not a finite number (an unstable (ω, ĉ) grows without bound)?"""
+    speed = np.abs(np.asarray(u, dtype=float))
+    return ~np.isfinite(speed).all(axis=(1, 2)) | (speed.max(axis=(1, 2), initial=0.0) > DIVERGED)
+
 
 def order1_boundary(omega: np.ndarray | float) -> np.ndarray:
     """Upper ĉ of the standard-PSO order-1 region: ĉ < 4(ω + 1) [3.7]."""
