@@ -12,19 +12,25 @@ server-wide control would take a watcher's value and show it to everyone). What 
 do (take over, answer a round) is on its own ``client.gui``: :mod:`.watcher`.
 
 The status line and the plots are the lecturer's: the status line's text as the lecturer's panel
-shows it, and each of the lecturer's time plots drawn by that panel's own code
-(``Panel._frame`` and ``push_uplot``), so the class sees what the lecturer sees, at the same
-step. Without a lecturer's tab the run does not advance, and the class is told.
+shows it, and each of the lecturer's time plots as that panel frames it (``Panel._frame``), so
+the class sees what the lecturer sees, at the same step. A plot's frame goes to the class whole
+(a page that joins late needs the whole of it), at most :data:`MAX_ROWS` rows of it (every
+k-th row and the last: the curve as a plot a few hundred pixels wide draws it) and at most
+:data:`PLOT_HZ` times a second, so what a watcher receives does not grow with the run's age.
+Without a lecturer's tab the run does not advance, and the class is told.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 from typing import Any, Protocol
+
+import numpy as np
 
 from ..kinds.registry import app_kind
 from ..markdown import escape
-from ..panel.plots import Chart, PlotSpec
+from ..panel.plots import Chart, Frame, PlotSpec
 from ..panel.view_row import LIGHT_NOTE, legend_html
 from ..session.session import Session
 from ..tab import TabApp
@@ -42,12 +48,24 @@ class Shown(Protocol):
     @property
     def lecturer(self) -> TabApp | None: ...
 
+
 # Where the broadcast's parts sit in a watcher's panel; a watcher's own controls go between them
 # (viser orders the elements of a panel by ``order``, across the server's GUI and the client's).
 ORDER_TITLE, ORDER_STATUS, ORDER_OWN, ORDER_ROUND, ORDER_ANSWER, ORDER_LEGEND, ORDER_PLOTS = (
     1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0)
 AWAY = "the lecturer's tab is not connected: the run waits for it"
+MAX_ROWS = 400  # of a plot sent to the class
+PLOT_HZ = 2.0  # the class's status line, round and plots
 TITLE = "### Watching the lecture"
+
+
+def bounded(f: Frame, rows: int = MAX_ROWS) -> Frame:
+    """``f`` with at most ``rows`` rows: every k-th one, and the last."""
+    n = len(f.data[0]) if f.data else 0
+    if n <= rows:
+        return f
+    keep = np.unique(np.append(np.arange(0, n, int(np.ceil(n / (rows - 1)))), n - 1))
+    return dataclasses.replace(f, data=tuple(np.asarray(column)[keep] for column in f.data))
 
 
 def status_text(tab: TabApp) -> str:
@@ -62,7 +80,7 @@ class Broadcast:
     the server's thread with the tabs (:meth:`tick`)."""
 
     SCENE_HZ = TabApp.SCENE_HZ
-    PLOT_HZ = TabApp.PLOT_HZ
+    PLOT_HZ = PLOT_HZ
 
     def __init__(self, server: Any, lecture: Shown, rounds: Rounds | None = None) -> None:
         self.server, self.lecture, self.rounds = server, lecture, rounds
@@ -77,6 +95,7 @@ class Broadcast:
         self.arena: View | None = None
         self._panel: Any = None  # the lecturer's Panel whose plots are mirrored
         self._plots: list[tuple[Any, Any]] = []  # (spec, the broadcast's uplot handle)
+        self._sent: dict[int, tuple[Any, Any, Any]] = {}  # (series, axes, padding) last sent, by handle
         self._next_scene = self._next_plot = 0.0
         self._plot_key: tuple | None = None
         self._legend: str | None = None
@@ -155,7 +174,21 @@ class Broadcast:
                 if not shown:
                     continue
                 with contextlib.suppress(Exception):  # a panel swapped out meanwhile: the next refresh mirrors the new
-                    panel.push_uplot(handle, panel._frame(spec))
+                    self._push(handle, bounded(panel._frame(spec)))
+
+    def _push(self, handle: Any, f: Frame) -> None:
+        """One plot's frame to the class: series, axes and padding only when they change (the page
+        rebuilds the chart for those), data and scales every time."""
+        sent = self._sent.get(id(handle))
+        if sent is None or sent[0] != f.series:
+            handle.series = f.series
+        if sent is None or sent[1] != f.axes:
+            handle.axes = f.axes
+        if sent is None or sent[2] != f.padding:
+            handle.padding = f.padding
+        self._sent[id(handle)] = (f.series, f.axes, f.padding)
+        handle.data = f.data
+        handle.scales = f.scales
 
     def _mirror(self, panel: Any) -> None:
         """Plots for the time plots of the lecturer's ``panel`` (None: keep the last ones shown)."""
@@ -170,11 +203,12 @@ class Broadcast:
                 for spec, _ in panel._controls:
                     if not isinstance(spec, (PlotSpec, Chart)):
                         continue
-                    f = panel._frame(spec)
+                    f = bounded(panel._frame(spec))
                     handle = self.server.gui.add_uplot(
                         data=f.data, series=f.series, scales=f.scales, axes=f.axes, title=spec.title,
                         aspect=spec.aspect, legend=spec.legend, padding=f.padding)
                     self._plots.append((spec, handle))
+                    self._sent[id(handle)] = (f.series, f.axes, f.padding)
         self._plot_key = None
 
     def clear(self) -> None:
