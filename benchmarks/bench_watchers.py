@@ -117,7 +117,12 @@ def measure(preset: str, sets: list[str], n: int, seconds: float, warmup: float,
     server = start_lecture(fh.name, port=0, max_watchers=n + 10)
     os.unlink(fh.name)
     if not share:  # every watcher's frame serialised for it alone, as viser's own producer does
-        fanout.Frames.bytes_for = lambda self, window: fanout.encode(window)  # type: ignore[method-assign]
+        def each(self: fanout.Frames, window: Any) -> bytes:
+            data = fanout.encode(window)
+            self.encoded, self.sent, self.bytes_sent = self.encoded + 1, self.sent + 1, self.bytes_sent + len(data)
+            return data
+
+        fanout.Frames.bytes_for = each  # type: ignore[method-assign]
     ctx = mp.get_context("spawn")
     ready, go, stop, out = ctx.Event(), ctx.Event(), ctx.Event(), ctx.Queue()
     child = ctx.Process(target=run_clients, args=(server.port, server.key, n, decode_every, ready, go, stop, out))
