@@ -32,7 +32,7 @@ def watcher(srv) -> WireClient:
 
 def press(c: WireClient, button: str) -> None:
     """A playback button (Play, Pause, Step, Reset) of a tab with the full panel."""
-    c.send(_messages.GuiUpdateMessage(c.uuid_of("playback"), {"value": button}))
+    c.send(_messages.GuiUpdateMessage(newest(c, "playback"), {"value": button}))
 
 
 def status_of(c: WireClient) -> str:
@@ -43,3 +43,10 @@ def status_of(c: WireClient) -> str:
 def robots_of(c: WireClient) -> np.ndarray | None:
     """The robots' points (scene units) a tab was last sent."""
     return next((p for name, p in c.points.items() if name.endswith("/robots")), None)
+
+
+def newest(c: WireClient, label: str) -> str:
+    """The id of the newest element labelled ``label`` (a panel rebuilt for another kind of scene has new ones)."""
+    ids = [m["uuid"] for m in c.gui if (m.get("props") or {}).get("label") == label]
+    assert ids, f"no element labelled {label!r} arrived"
+    return ids[-1]

@@ -30,7 +30,7 @@ from shoal.app.hall.command import start_lecture
 from shoal.app.hall.watcher import TAKE_OVER
 
 from browser.browser_helpers import wait_until
-from hall_helpers import lecturer, press, robots_of, status_of, watcher
+from hall_helpers import lecturer, newest, press, robots_of, status_of, watcher
 from viser_wire import WireClient
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -90,6 +90,30 @@ def _everything_a_page_may_send(c: WireClient, uuids: list[str]) -> list[object]
     for kind in ("click", "rect-select"):
         out.append(_messages.ScenePointerMessage(kind, (0.0, 0.0, 5.0), (0.0, 0.0, -1.0), ((0.5, 0.5),), None))
     return out
+
+
+def test_the_class_follows_the_lecturer_to_another_kind_of_scene_and_to_compare(lecture):
+    """A preset of another kind (a fleet) and Compare's swarm B, chosen in the lecturer's tab,
+    reach the class's arena; the lecture's run is the lecturer's tab's."""
+    boss, w = lecturer(lecture), watcher(lecture)
+    try:
+        boss.set_value("preset", "course-dvc")
+        wait_until(lambda: lecture.lecture.session.kind.name == "fleet", what="the lecture on a fleet")
+        assert lecture.lecture.session is lecture.lecture.lecturer.session
+        wait_until(lambda: lecture.broadcast.arena is not None and lecture.broadcast.arena.name == "fleet"
+                   and w.saw("course-dvc"), what="the class on the fleet")
+        wait_until(lambda: any(n.startswith("/fleet") and n.endswith("/robots") for n in w.points),
+                   what="the fleet's robots on the class's page")
+        boss.send(_messages.GuiUpdateMessage(newest(boss, "compare with swarm B"), {"value": True}))
+        wait_until(lambda: lecture.lecture.session.twin is not None, what="swarm B on")
+        press(boss, "Step")
+        wait_until(lambda: any(n.startswith("/fleet") and "twin" in n for n in w.points),
+                   what="swarm B on the class's page")
+    finally:
+        boss.send(_messages.GuiUpdateMessage(newest(boss, "preset"), {"value": "default"}))
+        wait_until(lambda: lecture.lecture.session.kind.name != "fleet", what="back to the default scene")
+        boss.close()
+        w.close()
 
 
 def test_a_class_tab_cannot_drive_the_lecture_whatever_it_sends(lecture):
