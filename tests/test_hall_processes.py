@@ -7,7 +7,8 @@ nginx (Debian's package), over viser's raw websocket through nginx.
   lecture goes on; the hall starts the worker again.
 - The proxy's origin check: a foreign page or Host is refused through nginx; a request straight
   to a process that names the proxy without its key is refused.
-- SIGTERM to ``shoal hall`` leaves no process and no file behind.
+- SIGTERM to ``shoal hall`` leaves no process and no file behind; the lecturer's key is in the
+  first line of its output and nowhere else.
 """
 
 from __future__ import annotations
@@ -177,6 +178,7 @@ def test_sigterm_stops_the_whole_hall_and_leaves_nothing(tmp_path):
         assert proc.stdout is not None
         lines = [proc.stdout.readline() for _ in range(3)]
         assert lines[0].startswith("lecturer: ") and lines[1].startswith("class:"), lines
+        key = lines[0].split("#key=", 1)[1].split()[0]
         kids = _descendants(proc.pid)
         assert any("nginx" in k.name() for k in kids) and len(kids) >= 4, kids
         made = {p.name for p in Path(os.environ.get("TMPDIR", "/tmp")).glob("shoal-hall-*")} - before
@@ -189,3 +191,4 @@ def test_sigterm_stops_the_whole_hall_and_leaves_nothing(tmp_path):
     assert {p.name for p in Path(os.environ.get("TMPDIR", "/tmp")).glob("shoal-hall-*")} == before
     assert list(tmp_path.iterdir()) == []
     assert "Traceback" not in out, out
+    assert (("".join(lines) + out).count(key), lines[0].count(key)) == (1, 1)  # the key in the first line only
