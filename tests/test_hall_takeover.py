@@ -11,6 +11,7 @@ stepped 100 times beside the lecture's own run and a headless scene.
 from __future__ import annotations
 
 import re
+import time
 
 import numpy as np
 import pytest
@@ -133,4 +134,25 @@ def test_take_over_on_the_wire_and_back_to_the_lecture():
         back.close()
     finally:
         boss.close()
+        srv.stop()
+
+
+def test_a_class_tab_that_presses_take_over_again_and_again_keeps_one_state():
+    """Each take-over holds the run's state in memory until its tab opens it: a tab that presses
+    *Take over* fifty times is refused while one is on its way, and keeps at most its last one."""
+    srv = start_lecture("default", port=0)
+    w = watcher(srv)
+    try:
+        before = len(srv.desk)
+        for _ in range(50):
+            w.send(_messages.GuiUpdateMessage(w.uuid_of(TAKE_OVER), {"value": True}))
+        wait_until(lambda: any("on its way" in body for _, body, _ in w.notifications()), what="a refusal")
+        time.sleep(2.5)
+        w.send(_messages.GuiUpdateMessage(w.uuid_of(TAKE_OVER), {"value": True}))
+        wait_until(lambda: sum("/p/" in m.get("source", "") for m in [w.last.get("RunJavascriptMessage", {})]),
+                   what="a take-over")
+        time.sleep(0.5)
+        assert len(srv.desk) - before == 1
+    finally:
+        w.close()
         srv.stop()

@@ -93,6 +93,15 @@ class Desk:
             self._records.move_to_end(pid)
             return Claim(pid, record.kind, record.state, record.step, again=record.claims > 1)
 
+    def drop(self, pid: str) -> bool:
+        """Forget ``pid`` unless a tab holds it (a watcher's earlier take-over it never opened)."""
+        with self._lock:
+            record = self._records.get(pid)
+            if record is None or record.holder is not None:
+                return False
+            del self._records[pid]
+            return True
+
     def release(self, pid: str, holder: Hashable) -> None:
         """``holder``'s tab of ``pid`` closed (the id may be claimed again)."""
         with self._lock:

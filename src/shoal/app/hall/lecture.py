@@ -22,6 +22,7 @@ from __future__ import annotations
 import contextlib
 import sys
 import threading
+import time
 import traceback
 from typing import Any
 
@@ -50,6 +51,7 @@ from .rounds import Refused as RoundRefused
 from .watcher import Watcher, notify
 
 DEFAULT_MAX_WATCHERS = 500
+TAKE_OVER_SECONDS = 2.0  # between two take-overs of one class tab
 HERE = "lecture"  # this process, as a holder of private sessions on the desk
 LECTURER_ONLY = ("**This is the lecturer's page.** It opens with the key that `shoal serve --lecture` printed "
                  "(the whole address, `…/lecturer#key=…`). The class watches at the server's own address.")
@@ -206,6 +208,10 @@ class LectureServer(PrivateServer):
     def take_over(self, watcher: Watcher) -> str | None:
         """``watcher``'s *Take over*: the lecture's state now, under a new id its page then opens.
         Returns the id (None: refused, and the watcher told why)."""
+        now = time.monotonic()
+        if now - watcher.taken_at < TAKE_OVER_SECONDS:
+            watcher.refuse("Cannot take over", "a take-over is on its way to this tab; wait a moment")
+            return None
         s = self.lecture.session
         try:
             with s.lock:
@@ -214,6 +220,9 @@ class LectureServer(PrivateServer):
         except (Refused, takeover.CannotTakeOver) as err:
             watcher.refuse("Cannot take over", str(err))
             return None
+        if watcher.taken is not None and isinstance(self.desk, LocalDesk):
+            self.desk.drop(watcher.taken)  # (one unopened take-over a tab at most: its state is memory)
+        watcher.taken, watcher.taken_at = pid, now
         run_script(watcher.client.gui, routes.go_script(routes.private_path(pid)))
         return pid
 

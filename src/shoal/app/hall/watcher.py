@@ -40,6 +40,8 @@ class Watcher:
         self._shown: tuple[int, str] | None = None  # (round, state) the controls show
         self._controls: list[Any] = []
         self.mine: Any = None  # the markdown that says this tab's answer
+        self.taken: str | None = None  # the id of this tab's last take-over
+        self.taken_at = -1e9  # (time.monotonic) when
         guard_inputs(client.gui, self.refuse)
         self.take_over_button = client.gui.add_button(TAKE_OVER, color="green", hint=TAKE_OVER_HINT,
                                                       order=ORDER_OWN)
