@@ -200,3 +200,23 @@ def test_a_round_on_the_wire_from_the_lesson_to_the_reveal(tmp_path):
     finally:
         srv.stop()
         os.chdir(cwd)
+
+
+@pytest.mark.parametrize("hostile", ['<img src=x onerror=alert(1)>', "<script>alert(1)</script>",
+                                     '"><iframe srcdoc="<script>parent.x=1</script>">', "</div><div onclick=x>"])
+def test_a_hostile_question_shows_as_text_in_every_view_of_a_round(hostile):
+    """A question, its choices and its unit are the lecturer's typing (or a lesson's): on every
+    screen they are text, never markup."""
+    rounds = Rounds()
+    rounds.open(Question.choice(hostile, [hostile, "b" + hostile], hostile))
+    rounds.answer("a", "A")
+    views = [round_view.class_html(rounds.current), round_view.lecturer_html(rounds.current)]
+    rounds.close()
+    rounds.reveal()
+    views += [round_view.class_html(rounds.current), round_view.lecturer_html(rounds.current)]
+    rounds.open(Question.number(hostile, hostile[:24], 3.0))
+    rounds.answer("a", 2.0)
+    rounds.reveal()
+    views += [round_view.class_html(rounds.current), round_view.lecturer_html(rounds.current)]
+    for v in views:
+        assert hostile not in v and "<script" not in v and "<img" not in v and "<iframe" not in v, v

@@ -109,10 +109,13 @@ class ClassPanel:
         rounds = self.hall.rounds
         r = rounds.current
         n = self.hall.watching()
-        state = "" if r is None else {OPEN: f" · round {r.number} open: {len(r.answers)} answers",
-                                      CLOSED: f" · round {r.number} closed: {len(r.answers)} answers",
-                                      REVEALED: f" · round {r.number} revealed"}[r.state]
-        text = f"**Class:** {n} tab{'' if n == 1 else 's'} watching{state}"
+        text = f"**Class:** {n:d} tab{'' if n == 1 else 's'} watching"
+        if r is not None and r.state == OPEN:
+            text += f" · round {r.number:d} open: {len(r.answers):d} answers"
+        elif r is not None and r.state == CLOSED:
+            text += f" · round {r.number:d} closed: {len(r.answers):d} answers"
+        elif r is not None:
+            text += f" · round {r.number:d} revealed"
         if self.summary.content != text:
             self.summary.content = text
         key = (rounds.revision, r.number if r is not None else 0)

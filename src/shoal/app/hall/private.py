@@ -20,6 +20,7 @@ from shoal.presets.models import Scenario
 
 from ..experiment import ExperimentService
 from ..kinds.registry import session_for
+from ..markdown import escape
 from ..server import DEFAULT_MAX_SESSIONS, ShoalServer
 from ..session.session import Session
 from ..tab import TabApp
@@ -99,7 +100,7 @@ class PrivateServer(ShoalServer):
             claim = self.desk.claim(pid, (self.owner, cid))
         except Refused as err:
             configure_client(client)
-            client.gui.add_markdown(f"**No private session here.** {err}")
+            client.gui.add_markdown(f"**No private session here.** {escape(str(err))}")
             self._back_button(client)
             return
         with self._lock:
@@ -110,7 +111,7 @@ class PrivateServer(ShoalServer):
         try:
             super()._connect(client)  # (→ _open_client, unless the server is full)
         except takeover.CannotTakeOver as err:
-            client.gui.add_markdown(f"**This take-over cannot start.** {err}")
+            client.gui.add_markdown(f"**This take-over cannot start.** {escape(str(err))}")
         finally:
             with self._lock:
                 self._claims.pop(cid, None)
