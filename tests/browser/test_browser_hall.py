@@ -89,10 +89,10 @@ def _walk(browser, hall: Hall) -> None:
     wait_until(lambda: boss.get_by_text("2 answers", exact=False).count() > 0, what="the lecturer's live count")
     k = step_of(a) or 0
     button(boss, "Reveal and play").click()
-    for w in (a, b):
-        w.get_by_text("Answer: Inside", exact=False).first.wait_for(state="visible", timeout=30000)
-        text = w.locator("body").inner_text()
-        assert "2 answers" in text and "(50 %)" in text, repr(text[text.find("Round"):][:600])
+    for w in (a, b):  # (the page's text, case and all: "Your answer: Inside" is not the answer revealed)
+        wait_until(lambda w=w: all(t in w.locator("body").inner_text() for t in ("Answer: Inside", "2 answers:",
+                                                                               "(50 %)")),
+                   what="the distribution and the answer on every class tab", timeout=30)
     wait_until(lambda: (step_of(a) or 0) > k + 5, what="the run playing out on the class's screens", timeout=60)
 
     # take over: the class tab opens a private session on a worker, then goes back to watching
