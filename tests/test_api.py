@@ -164,3 +164,32 @@ def test_a_name_in_a_preset_is_only_looked_up_never_imported():
         with pytest.raises(PresetError, match=f"^{key}: Input should be"):
             load(preset, [f"{key}={value}"])
     assert "json.tool" not in sys.modules and "shoal_evil_plugin" not in sys.modules
+
+
+def test_retune_of_a_host_swarms_slo_section_moves_the_scenario_with_the_engine():
+    """``retune(slo={...})`` goes through the kind's live rule like any section: the running
+    swarm's position source takes it and ``scene.scenario`` says so (it stayed stale before)."""
+    scene = shoal.make("slo-adapted", runs=2, seed=4)
+    scene.step(3)
+    assert scene.retune(slo={"errors": "high", "selection": "rts"}) == ["slo"]
+    assert (scene.scenario.slo.errors, scene.scenario.slo.selection) == ("high", "rts")
+    assert scene.engine.positions.params["selection"] == "rts"
+    twin = shoal.make(scene.scenario)  # the same scenario, built afresh: the settings the scene now runs with
+    assert twin.engine.positions.params["selection"] == "rts"
+    with pytest.raises(ValueError, match="slo: this change needs a new engine"):
+        scene.retune(slo={"positions": "oracle"})  # the switch to true positions: a new scene
+    assert scene.scenario.slo.positions == "slo"
+
+
+def test_retune_follows_the_one_live_rule_the_app_follows():
+    """What ``Scene.retune`` takes live is what the app's sessions take (the kind's ``live_keywords``)."""
+    from shoal.presets.kinds import kind_for
+
+    scene = shoal.make("course-dvc")
+    new = shoal.scenario_of(scene.scenario, controller={"beta": 0.5})
+    assert kind_for(scene.scenario).live_keywords(scene.scenario, new) is not None
+    assert "beta" in scene.retune(controller={"beta": 0.5}) and scene.scenario.controller.beta == 0.5
+    with pytest.raises(ValueError, match="robot: this change needs a new engine"):
+        scene.retune(robot={"radius": 0.4})  # the robot's body: a new fleet
+    assert kind_for(scene.scenario).live_keywords(scene.scenario, shoal.scenario_of(
+        scene.scenario, robot={"radius": 0.4})) is None

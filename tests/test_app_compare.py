@@ -18,10 +18,11 @@ from shoal.app.session.timeline import verify_replay
 from shoal.app.session.twin import parse_overrides, twin_scenario
 from shoal.presets import io as presets_io
 from shoal.presets.io import PresetError
+from shoal.testing import example_presets
 
 from app_helpers import shown
 
-KINDS = ("default", "course-dvc", "sonar-xb-pso", "slo-walk")
+KINDS = tuple(example_presets().values())  # one preset of every registered kind (shoal.testing)
 
 
 def session(name: str = "default", **overrides):
@@ -290,7 +291,7 @@ def test_a_bad_replay_is_refused_and_nothing_changes(tab):
     assert s.kind.name == "swarm"
 
 
-@pytest.mark.parametrize("name", KINDS[1:])
+@pytest.mark.parametrize("name", KINDS)
 def test_every_kind_draws_b_and_a_scrubbed_frame(tab, name):
     s = tab.replace(presets_io.load(name))
     choice = next(iter(tab.panels.compare_choices().values()))

@@ -5,9 +5,10 @@ import pytest
 
 from shoal.app.kinds.registry import kind_for
 from shoal.presets import io as presets_io
+from shoal.testing import example_presets
 
 
-@pytest.mark.parametrize("preset", ["default", "course-dvc", "sonar-xb-pso", "slo-walk"])
+@pytest.mark.parametrize("preset", list(example_presets().values()))  # every registered kind
 def test_history_and_metrics_stay_capped_while_playing(preset):
     scenario = presets_io.load(preset, ["sim.steps=100000"])
     s = kind_for(scenario).session(scenario)

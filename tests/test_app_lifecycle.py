@@ -14,15 +14,12 @@ import pytest
 from shoal.app.kinds.registry import session_for
 from shoal.app.session.lifecycle import LOOP, RUN_ON, STOP, Lifecycle, at_end_choice, at_end_label
 from shoal.presets import io as presets_io
+from shoal.presets.kinds import kind_for
+from shoal.testing import live_change, variant_presets
 
-# one preset of every scene kind, with a live change it takes without a rebuild
-KINDS = {
-    "default": {"controller.U": 7.0},
-    "course-dvc": {"controller.beta": 0.4},
-    "sonar-xb-pso": {"acoustics.a": 0.5},
-    "slo-walk": {"slo.prediction_weight": 0.3},
-    "slo-adapted": {"controller.U": 4.0},
-}
+# one preset of every kind of scene a tab tells apart (each robot cap of each registered kind), with
+# a change of a live field it takes without a rebuild (shoal.testing)
+KINDS = {name: live_change(kind_for(sc), sc) for name, sc in ((p, presets_io.load(p)) for p in variant_presets())}
 OPENED_PAUSED = ("standard-pso", "course-nonomni", "course-physics", "slo-pso-sphere")
 
 

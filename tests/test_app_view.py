@@ -11,8 +11,9 @@ from shoal.app.kinds import fleet
 from shoal.app.kinds.registry import kind_for
 from shoal.app.view.camera import VIEW_HALF
 from shoal.presets import io as presets_io
+from shoal.testing import example_presets
 
-KINDS = ("default", "course-dvc", "sonar-xb-pso", "slo-walk")
+KINDS = tuple(example_presets().values())  # one preset of every registered kind (shoal.testing)
 
 
 class Part:

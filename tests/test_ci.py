@@ -38,7 +38,8 @@ def test_readme_has_two_commands_and_ci_runs_the_second():
 def test_every_requirement_is_pinned_within_its_bounds():
     project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
     pins = _pins()
-    for spec in project["dependencies"] + project["optional-dependencies"]["test"]:
+    extras = project["optional-dependencies"]
+    for spec in project["dependencies"] + extras["test"] + extras["rl"]:
         req = Requirement(spec)
         name = canonicalize_name(req.name)
         assert name in pins, f"{req.name} is not in .ci/constraints.txt: run .ci/lock"
@@ -50,3 +51,10 @@ def test_pins_are_exact_versions():
     assert len(_pins()) > 20
     for name, version in _pins().items():
         assert re.fullmatch(r"[0-9][0-9A-Za-z.+!-]*", version), f"{name}: {version!r} is not one version"
+
+
+def test_ci_installs_the_rl_extra_and_locks_it():
+    """CI runs the Gymnasium and PettingZoo checks of shoal.rl, so it installs the extra, and the lock
+    resolves it."""
+    assert "'.[rl,test]'" in _bash_blocks()[1]
+    assert "--extra rl" in (ROOT / ".ci" / "lock").read_text(encoding="utf-8")

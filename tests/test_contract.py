@@ -1,94 +1,29 @@
-"""The engine contract (``shoal.engine.core.contract``): every scene kind is driven the same way —
-``reset``/``step``/``info``, ``Info.columns()`` for the metric table and ``retune`` with the
-class's ``LIVE`` keywords, refusing anything else without changing the engine."""
+"""The engine contract (``shoal.engine.core.contract``) as each built-in kind keeps it: ``retune``
+with the class's ``LIVE`` keywords, refusing anything else without changing the engine. The
+rules every kind keeps are ``shoal.testing``'s checks (tests/test_kinds.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from shoal.engine.core.contract import Engine, Info, State
-from shoal.engine.core.recorder import metric_table
 from shoal.engine.pso.coeffs import Constant
 from shoal.presets.build import build
-from shoal.presets.io import list_presets, load
-from shoal.presets.kinds import KINDS as SCENE_KINDS
-from shoal.presets.kinds import kind_for
+from shoal.presets.io import load
+from shoal.presets.kinds import KINDS
+from shoal.testing import example_of
 
-
-def one_preset_per_kind() -> dict[tuple[str, bool], str]:
-    """The first shipped preset of each registered scene kind, on true and on SLO positions."""
-    out: dict[tuple[str, bool], str] = {}
-    for name in list_presets():
-        sc = load(name)
-        out.setdefault((kind_for(sc).name, sc.slo is not None), name)
-    return out
-
-
-BY_KIND = one_preset_per_kind()
-KINDS = tuple(BY_KIND.values())
-COMMON = ("run", "step", "t", "best_fitness", "max_speed", "mean_speed")
-
-
-def test_every_registered_kind_has_a_shipped_preset():
-    assert {kind for kind, _ in BY_KIND} == set(SCENE_KINDS)
+# The rules every kind keeps (the contract, its columns, seeding, reset, retune refusing what is
+# not LIVE, the live rule, the snapshot) are shoal.testing's checks, run on every registered kind
+# by tests/test_kinds.py; here, what each built-in kind's retune does.
+HOSTS = [example_of(k) for k in KINDS.values() if k.live is not None and k.live.slo]  # kinds on SLO positions too
 
 
 def engine(preset: str, runs: int = 2):
     return build(load(preset), runs=runs, seed=3)
 
 
-@pytest.mark.parametrize("preset", KINDS)
-def test_every_kind_implements_the_contract(preset):
-    sim = engine(preset)
-    assert isinstance(sim, Engine) and isinstance(sim.state, State)
-    assert isinstance(sim.LIVE, frozenset) and sim.LIVE
-    assert (sim.runs, sim.seed, sim.first_run, sim.state.k, sim.t) == (2, 3, 0, 0, 0.0)
-    assert sim.robots == sim.state.x.shape[1] and sim.dt > 0
-    first = sim.info()
-    assert isinstance(first, Info) and first.t == 0.0
-    info = sim.step()
-    assert isinstance(info, Info) and info.t == sim.t == sim.dt and sim.state.k == 1
-    assert list(info.columns()) == list(first.columns()) == list(sim.info().columns())
-    for name, col in info.columns().items():
-        assert np.shape(col) == (2,), name
-    assert sim.state.best_fitness.shape == (2,)
-
-
-@pytest.mark.parametrize("preset", KINDS)
-def test_the_metric_table_is_the_common_columns_then_the_kinds(preset):
-    sim = engine(preset)
-    info = sim.step()
-    table = metric_table(sim.state, info, sim.t)
-    assert list(table) == [*COMMON, *info.columns()]
-    np.testing.assert_array_equal(table["best_fitness"], sim.state.best_fitness)
-
-
-@pytest.mark.parametrize("preset", KINDS)
-def test_the_kinds_schema_is_its_metric_table(preset):
-    """The registry entry's columns are the table's, in order; a kind optimises something exactly
-    when its state has a best fitness."""
-    kind = kind_for(load(preset))
-    sim = engine(preset)
-    assert type(sim) is kind.engine
-    table = metric_table(sim.state, sim.step(), sim.t)
-    assert [c.name for c in kind.columns] == list(table)
-    assert hasattr(sim.state, "best_fitness") == kind.optimises
-    assert all(c.unit is not None and c.description and c.dtype in ("int", "float") for c in kind.columns)
-
-
-@pytest.mark.parametrize("preset", KINDS)
-def test_retune_refuses_a_fixed_keyword_and_changes_nothing(preset):
-    sim, twin = engine(preset), engine(preset)
-    live = sorted(sim.LIVE)[0]
-    with pytest.raises(ValueError, match="^runs: cannot change mid-run"):
-        sim.retune(**{live: getattr(sim, live, None)}, runs=5)
-    for _ in range(3):
-        sim.step(), twin.step()
-    np.testing.assert_array_equal(sim.state.x, twin.state.x)
-
-
-@pytest.mark.parametrize("preset", ("default", "course-dvc", "sonar-xb-pso"))
+@pytest.mark.parametrize("preset", HOSTS)
 def test_slo_settings_need_slo_positions(preset):
     with pytest.raises(ValueError, match="^slo: .* true positions"):
         engine(preset).retune(slo={"errors": "high"})

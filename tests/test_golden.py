@@ -30,9 +30,12 @@ import sys
 from pathlib import Path
 
 import pytest
+from pydantic import BaseModel, ConfigDict, create_model
 
 from shoal.app.cli import main
-from shoal.presets.io import list_presets
+from shoal.presets.io import list_presets, load
+from shoal.presets.kinds import KINDS, SceneKind
+from shoal.presets.models import Scenario
 
 GOLDEN = Path(__file__).parent / "golden" / "run_hashes.json"
 ENVIRONMENT = GOLDEN.with_name("environment.json")
@@ -148,3 +151,37 @@ def test_golden_on_other_cpus(cpu):
     assert not moved, (f"as on an {cpu} CPU (OpenBLAS {kernel}, numpy without {' '.join(disable) or 'nothing'}) "
                        f"these presets give other outputs: {', '.join(moved)}; a step of theirs depends on the "
                        "CPU (see engine/core/portable.py)")
+
+
+class ThrowawaySection(BaseModel):
+    """The section of a kind that exists only in the test below."""
+
+    model_config = ConfigDict(extra="forbid")
+    speed: float = 1.0
+
+
+@pytest.mark.parametrize("preset", ["default", "course-dvc"])
+def test_a_new_kind_changes_no_golden(preset, tmp_path, capsys):
+    """A scene kind added (here registered, with a section of its own) leaves every other kind's
+    outputs byte for byte as they were: run.json leaves unset sections out, so it does not grow a
+    ``"throwaway": null``."""
+    kind = SceneKind("throwaway", "throwaway kind", "shoal.engine.kinds.swarm:Simulation",
+                     "shoal.presets.builders.swarm:build_simulation", "throwaway", model=ThrowawaySection)
+    KINDS.register(kind)
+    try:
+        got = _run(preset, tmp_path / preset)
+    finally:
+        KINDS.unregister("throwaway")
+    capsys.readouterr()
+    assert got == _stored()[preset]
+    assert "throwaway" not in json.loads((tmp_path / preset / "run.json").read_text())["preset"]
+
+
+def test_a_new_built_in_section_is_left_out_while_unset():
+    """A kind built in as a new optional ``Scenario`` field: a scenario without it dumps as before."""
+    wider = create_model("WiderScenario", __base__=Scenario, throwaway=(ThrowawaySection | None, None))
+    for preset in ("default", "course-dvc", "sonar-xb-pso", "slo-walk"):
+        sc = load(preset)
+        assert wider.model_validate(sc.model_dump()).model_dump(mode="json") == sc.model_dump(mode="json")
+    unset = [n for n, f in Scenario.model_fields.items() if f.default is None]
+    assert unset and not set(unset) & set(load("default").model_dump())  # world, acoustics, slo: left out

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import sys
 
 import numpy as np
@@ -20,7 +21,7 @@ from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.presets.io import PresetError, load
 from shoal.presets.kinds import KINDS
 
-from plugin_env import python, shoal
+from plugin_env import EXAMPLE, python, shoal
 
 
 def test_a_law_registered_from_python_is_a_preset_choice_with_its_rule():
@@ -241,3 +242,13 @@ def test_a_strategy_a_selection_and_a_robot_law_register_from_python_too():
     finally:
         for registry, entry in zip((STRATEGIES, SELECTIONS, ROBOT_LAWS), added):
             registry.unregister(entry.name)
+
+
+def test_the_example_plugins_own_tests_pass_the_conformance_kit(example_plugin):
+    """examples/plugin/tests runs shoal.testing's checks on the gather kind, as a plug-in author
+    would in their package, with the plug-in installed."""
+    tests = EXAMPLE / "tests"
+    done = python(example_plugin, f"import sys, pytest; sys.exit(pytest.main(['-q', '-p', 'no:cacheprovider', "
+                                  f"{str(tests)!r}]))")
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-2000:]
+    assert re.search(r"\b(1[0-9]|[2-9][0-9]) passed\b", done.stdout), done.stdout[-500:]  # the kit's checks and its own

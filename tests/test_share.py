@@ -30,10 +30,10 @@ from shoal.app.share.page import SOFTWARE_JS
 from shoal.presets import io as presets_io
 from shoal.presets.build import build_simulation
 from shoal.presets.io import PresetError
+from shoal.testing import example_presets, variant_presets
 
 CLIENT_BYTES = 900_000  # viser's client (about 0.82 MB) and the page around it
-KINDS = [("default", "free-space swarm"), ("course-dvc", "fleet"), ("sonar-gt-pso", "acoustic swarm"),
-         ("slo-walk", "SLO swarm")]
+KINDS = [(p, label) for p, label in variant_presets().items() if p in example_presets().values()]  # every kind
 
 
 def node(rec, suffix: str) -> str:

@@ -89,3 +89,14 @@ def test_shoal_run_slo_walk_writes_the_contract_files(tmp_path):
         metrics = list(csv.DictReader(fh))
     assert [int(m["step"]) for m in metrics] == list(range(6))
     assert {"e_abs_mean", "e_rel_median", "distance_median", "generation_best"} <= set(metrics[0])
+
+
+def test_the_presets_entry_policies_are_the_localisers():
+    """``slo.entry_policy`` lists the localiser's policies (models.py keeps its own copy, so that
+    validating a preset loads no SLO code)."""
+    from typing import get_args
+
+    from shoal.engine.slo.beliefs import EntryPolicy
+    from shoal.presets import models
+
+    assert get_args(models.EntryPolicy) == get_args(EntryPolicy)

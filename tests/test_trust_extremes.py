@@ -9,7 +9,7 @@ velocities and no exception. The app's own limits (``app/limits.py``) are among 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, get_origin
 
 import annotated_types as at
 import numpy as np
@@ -20,13 +20,14 @@ from pydantic import BaseModel
 
 from shoal.app.kinds.registry import session_for
 from shoal.app.limits import MAX_ROBOTS, check_app_limits, scene_kind
-from shoal.presets.io import PresetError, load, read_raw, set_dotted, validate
+from shoal.presets.io import PresetError, list_presets, load, read_raw, set_dotted, validate
 from shoal.presets.kinds import sections
 from shoal.presets.models import Scenario
+from shoal.testing import variant_presets
 
-# One shipped preset for each kind of scene and motion the app runs.
-KINDS = ("default", "rastrigin", "course-dvc", "course-physics", "open-nonomni", "forest-dvc",
-         "sonar-xb-pso", "escort-moving", "slo-walk", "slo-adapted")
+# One shipped preset for each kind of scene a tab tells apart (each robot cap of each registered
+# kind: a fleet in physics, a swarm on SLO positions, …); the sampled cases draw from every preset.
+KINDS = tuple(variant_presets())
 STEPS = 3
 
 
@@ -34,6 +35,8 @@ def bounds(model: type[BaseModel], prefix: str = "") -> dict[str, tuple[float, .
     """Dotted path → the extreme values a numeric field allows (open bounds: the nearest value inside)."""
     out: dict[str, tuple[float, ...]] = {}
     for name, field in model.model_fields.items():
+        if get_origin(field.annotation) is list:
+            continue  # (list items, e.g. controller.schedule, have no dotted path of their own)
         args = getattr(field.annotation, "__args__", (field.annotation,))
         sub = next((a for a in args if isinstance(a, type) and issubclass(a, BaseModel)), None)
         if sub is not None:
@@ -69,7 +72,7 @@ def fields_of(preset: str) -> list[str]:
 
 @st.composite
 def extreme_case(draw: st.DrawFn) -> tuple[str, dict[str, Any]]:
-    preset = draw(st.sampled_from(KINDS))
+    preset = draw(st.sampled_from(sorted(list_presets())))
     paths = draw(st.lists(st.sampled_from(fields_of(preset)), min_size=1, max_size=4, unique=True))
     changes = {p: draw(st.sampled_from(BOUNDS[p])) for p in paths}
     if "sim.robots" in changes and draw(st.booleans()):  # the app's own cap is an edge too

@@ -27,7 +27,7 @@ def test_the_wheel_holds_every_module_and_data_file(tmp_path):
     tree = tmp_path / "tree"  # a copy, so the build writes nothing into the checkout
     tree.mkdir()
     shutil.copytree(PACKAGE, tree / "src" / "shoal", ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
-    for name in ("pyproject.toml", "README.md"):
+    for name in ("pyproject.toml", "README.md", "LICENSE"):
         shutil.copy(ROOT / name, tree / name)
     res = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
                           "-w", str(tmp_path / "dist"), str(tree)], capture_output=True, text=True, timeout=600)
@@ -38,3 +38,4 @@ def test_the_wheel_holds_every_module_and_data_file(tmp_path):
     assert len(want) > 200 and {"shoal/studies/sweep/run.py", "shoal/py.typed"} <= want
     missing = sorted(want - names)
     assert not missing, f"{len(missing)} file(s) of src/shoal are not in the wheel: {missing[:20]}"
+    assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names), "the wheel ships no LICENSE"

@@ -19,7 +19,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"  # the one place it is written: pyproject.toml, CITATION.cff and every output read it
 
 API = ("Scene", "Snapshot", "SnapshotError", "as_table", "make", "plugins", "register", "register_objective",
        "registry_for", "run", "scenario_of", "sweep")

@@ -17,7 +17,8 @@ from pydantic import BaseModel, ConfigDict, Field
 from shoal.engine.core.contract import check_live
 from shoal.engine.core.rng import run_generators
 from shoal.engine.core.schema import Column, Schema
-from shoal.presets.kinds import Cap, SceneKind
+from shoal.engine.core.steering import Steering
+from shoal.presets.kinds import Cap, Live, SceneKind
 
 
 class GatherSection(BaseModel):
@@ -62,6 +63,7 @@ class Gather:
     """``runs`` seeded runs of ``robots`` robots gathering (run i draws from child i of the seed)."""
 
     LIVE: ClassVar[frozenset[str]] = frozenset({"speed", "noise"})
+    steering: Steering | None = None  # a velocity from outside the law for the next tick (shoal.rl's actions)
     COLUMNS: ClassVar[Schema] = (
         Column("spread", "m", "float", "root mean square distance of the robots to their centroid"),
         Column("radius", "m", "float", "largest distance of a robot to the centroid"),
@@ -88,6 +90,7 @@ class Gather:
         if seed is not None:
             self.seed = int(seed)
         self._rngs = run_generators(self.seed, self.first_run, self.runs)
+        self.steering = None
         a = self.params.area
         x = np.stack([a * (g.random((self._robots, 2)) - 0.5) for g in self._rngs])
         R, N = x.shape[:2]
@@ -99,6 +102,11 @@ class Gather:
         dist = np.linalg.norm(to_centre, axis=-1, keepdims=True)
         speed = np.minimum(p.speed, dist / p.dt)  # no overshoot
         u = np.divide(to_centre, dist, out=np.zeros_like(to_centre), where=dist > 0) * speed
+        steering, self.steering = self.steering, None
+        if steering is not None and steering.velocity is not None:  # walks as told, no faster than the law
+            given = np.asarray(steering.velocity, dtype=float)
+            norm = np.linalg.norm(given, axis=-1, keepdims=True)
+            u = given * np.minimum(1.0, np.divide(p.speed, norm, out=np.ones_like(norm), where=norm > 0))
         u = u + p.noise * np.stack([g.standard_normal(s.x.shape[1:]) for g in self._rngs])
         s.x = s.x + p.dt * u
         s.u = u
@@ -131,17 +139,13 @@ def build_gather(scenario: Any, *, runs: int | None = None, seed: int | None = N
                   seed=scenario.sim.seed if seed is None else seed, first_run=first_run)
 
 
-def live(old: Any, new: Any) -> dict[str, Any] | None:
-    """Speed and noise change a running scene; anything else needs a new one."""
-    a, b = old.model_dump(), new.model_dump()
-    for d in (a, b):
-        d.pop("view"), d.pop("name"), d.pop("description"), d["sim"].pop("steps")
-        d["gather"].pop("speed"), d["gather"].pop("noise")
-    if a != b:
-        return None
+def retune_keywords(old: Any, new: Any) -> dict[str, Any]:
+    """The ``Gather.retune`` keywords of ``new`` (the engine keeps what did not change)."""
     p = params_for(new)
     return {"speed": p.speed, "noise": p.noise}
 
 
 KIND = SceneKind("gather", "gathering swarm (example plug-in)", Gather, build_gather, "gather", model=GatherSection,
-                 optimises=False, caps=(Cap("gathering swarm", 500),), app="shoal_example.gather_app", live=live)
+                 optimises=False, headline=("spread",), labels={"spread": ("spread at the end", "m")},
+                 live=Live(("gather.speed", "gather.noise"), retune_keywords),  # anything else: a new engine
+                 caps=(Cap("gathering swarm", 500),), app="shoal_example.gather_app", example="gather-demo")

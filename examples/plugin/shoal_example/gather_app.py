@@ -15,20 +15,14 @@ from shoal.app.view.layers import Ground, Headings, Layer, Robots, Trails, Twin
 from shoal.app.view.view import KeepSwarmInView
 from shoal.presets.io import PresetError
 
-from .gather import Gather, build_gather, live
+from .gather import Gather, build_gather
 
 
 class GatherDriver(BaseDriver):
-    """The gather kind's side of a session."""
+    """The gather kind's side of a session (which changes retune it: the kind's ``live`` rule)."""
 
     def build(self, scenario: Any) -> Gather:
         return build_gather(scenario, runs=1)
-
-    def rebuilds(self, old: Any, new: Any) -> bool:
-        return live(old, new) is None
-
-    def live(self, old: Any, new: Any) -> dict[str, Any]:
-        return live(old, new) or {}
 
     def snapshot(self, selected: int) -> dict[str, Any]:
         return {}

@@ -7,7 +7,6 @@ from pathlib import Path
 from typing import Any, Mapping, NamedTuple, Sequence
 
 from shoal.presets.models import Scenario
-from shoal.studies.sweep.run import plan_sweep, sweep_rows
 
 from .scene import Scene, scenario_of
 from .tables import as_table
@@ -43,6 +42,8 @@ def sweep(preset: str | Path | Mapping[str, Any] | Scenario = "default",
 
     >>> table = sweep("course-dvc", {"controller.alpha": [0.5, 0.9]}, runs=4, steps=50)
     """
+    from shoal.studies.sweep.run import plan_sweep, sweep_rows  # (every kind's outcomes: loaded by a sweep only)
+
     raw = preset.model_dump(mode="json") if isinstance(preset, Scenario) else \
         dict(preset) if isinstance(preset, Mapping) else preset
     plan = plan_sweep(raw, grid, runs=runs, seed=seed, steps=steps, sets=overrides)

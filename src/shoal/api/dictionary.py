@@ -57,7 +57,8 @@ def data_dictionary() -> str:
         "| key | meaning |",
         "|---|---|",
         "| `shoal_version` | the version that wrote it |",
-        "| `preset` | the whole validated preset, every field |",
+        "| `preset` | the whole validated preset, every field (a section it does not set, such as `[world]` in a "
+        "Chapter 3 scene, is left out) |",
         "| `seed`, `runs`, `steps` | as run |",
         "",
         "## `shoal sweep`: `results.csv` and `cells/cell-NNNNN.csv`",

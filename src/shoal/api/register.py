@@ -10,28 +10,30 @@ from typing import Any, Callable
 
 import numpy as np
 
-from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.engine.core.objectives import OBJECTIVES, ObjectiveFunction
 from shoal.engine.core.plugins import Plugin, load_plugins
 from shoal.engine.core.registry import Registry
 from shoal.engine.pso.laws import LAWS, VelocityLaw
-from shoal.engine.robots.laws import ROBOT_LAWS, RobotLaw
-from shoal.engine.slo.selection import SELECTIONS, SelectionRule
 from shoal.presets.kinds import KINDS, SceneKind
 
 
 def registry_for(entry: Any) -> Registry[Any]:
-    """The registry an entry of this type belongs in (``TypeError`` for anything else)."""
+    """The registry an entry of this type belongs in (``TypeError`` for anything else). The later
+    chapters' registries are imported only for an entry that is not of an earlier type."""
     if isinstance(entry, ObjectiveFunction):
         return OBJECTIVES
     if isinstance(entry, VelocityLaw):
         return LAWS
+    if isinstance(entry, SceneKind):
+        return KINDS
+    from shoal.engine.acoustics.strategies import STRATEGIES
+    from shoal.engine.robots.laws import ROBOT_LAWS, RobotLaw
+    from shoal.engine.slo.selection import SELECTIONS, SelectionRule
+
     if isinstance(entry, RobotLaw):
         return ROBOT_LAWS
     if isinstance(entry, SelectionRule):
         return SELECTIONS
-    if isinstance(entry, SceneKind):
-        return KINDS
     if isinstance(entry, type) and callable(getattr(entry, "update", None)) and hasattr(entry, "min_robots"):
         return STRATEGIES  # a Strategy class (its class attributes name it)
     raise TypeError(f"not a registry entry: {entry!r} (an ObjectiveFunction, VelocityLaw, RobotLaw, Strategy "

@@ -22,7 +22,7 @@ from shoal.engine.core.objectives import OBJECTIVES, ObjectiveFunction
 from shoal.engine.core.recorder import TRAJECTORY_COLUMNS, TRAJECTORY_SCHEMA, metric_table, trajectory_rows
 from shoal.engine.core.schema import Schema
 from shoal.presets.io import PresetError, apply_overrides, read_raw, set_dotted, to_toml, validate
-from shoal.presets.kinds import KINDS, SceneKind, kind_for
+from shoal.presets.kinds import KINDS, SceneKind, kind_for, plugin_sections
 from shoal.presets.models import Scenario
 
 from .snapshot import Snapshot, SnapshotError, snapshot_of, write_atomically
@@ -288,12 +288,16 @@ class Scene:
     def retune(self, **changes: Any) -> list[str]:
         """Change the running scene from the next tick on; the names that changed.
 
-        Sections as dicts of preset fields (``controller={"alpha": 0.5}``; validated like a
-        preset, the scene's :attr:`scenario` follows), or the engine's own keywords (its ``LIVE``
-        set, e.g. ``alpha=0.5`` for a fleet). A change the running engine cannot take (another
-        world, a dimension, …) is refused with a ``ValueError`` and nothing changes: make a new
-        scene for it."""
-        sections = {k: v for k, v in changes.items() if isinstance(v, Mapping) and k not in self.engine.LIVE}
+        Preset sections as dicts of their fields (``controller={"alpha": 0.5}``, ``slo={"errors":
+        "high"}``): validated like a preset, taken by the running engine where the kind's live
+        rule allows it (:meth:`~shoal.presets.kinds.SceneKind.live_keywords`, the rule the app
+        follows), and :attr:`scenario` follows. Or the engine's own keywords (its ``LIVE`` set,
+        e.g. ``alpha=0.5`` for a fleet), passed as they are: :attr:`scenario` then still says
+        what the scene was made from. A change the running engine cannot take (another world, a
+        dimension, …) or an unknown keyword is refused with a ``ValueError`` and nothing changes:
+        make a new scene for it."""
+        section_names = {*type(self.scenario).model_fields, *plugin_sections()}
+        sections = {k: v for k, v in changes.items() if isinstance(v, Mapping) and k in section_names}
         engine_keywords = {k: v for k, v in changes.items() if k not in sections}
         if sections and engine_keywords:
             raise ValueError("retune: give preset sections or engine keywords, not both in one call")
@@ -302,8 +306,8 @@ class Scene:
             self._detached.update(changed)
             return changed
         new = scenario_of(self.scenario, (), **sections)
-        live = self.kind.live(self.scenario, new) if self.kind.live is not None else None
-        if kind_for(new) is not self.kind or live is None:
+        live = self.kind.live_keywords(self.scenario, new) if kind_for(new) is self.kind else None
+        if live is None:
             raise ValueError(f"{', '.join(sections)}: this change needs a new engine (cannot change mid-run); "
                              "make a new scene with shoal.make")
         changed = self.engine.retune(**live)

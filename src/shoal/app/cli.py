@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
+import time
 from pathlib import Path
 from typing import Any, Callable, NoReturn
 
@@ -103,9 +105,25 @@ def _cmd_hall(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_run(args: argparse.Namespace) -> int:
+WARM_AFTER = 1.0  # s: a run still going after this long has its kernels compiled beside it (a shorter one never waits)
+BAR_FROM = 200  # steps: a shorter run shows no progress bar (and never imports tqdm)
+
+
+class _NoBar:
+    def update(self) -> None:
+        pass
+
+
+def _progress(steps: int, desc: str) -> Any:
+    """A progress bar over ``steps`` (tqdm's, shown on a terminal) or one that shows nothing."""
+    if steps < BAR_FROM:
+        return contextlib.nullcontext(_NoBar())
     from tqdm import tqdm
 
+    return tqdm(total=steps, desc=desc, unit="step", disable=None)
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
     from shoal.app.warmup import NUMPY_TICK, WARMUP, group_of
     from shoal.engine.core.atomic import OutputDirError, check_output_dir
     from shoal.engine.core.runs import RUN_FILES, run_to_dir
@@ -135,16 +153,24 @@ def _cmd_run(args: argparse.Namespace) -> int:
         "steps": scenario.sim.steps,
     }
     steps = scenario.sim.steps
-    if group_of(scenario) in NUMPY_TICK:  # numpy ticks while the kernels compile beside, then compiled: same numbers
-        WARMUP.start(scenario, only=True)
-        WARMUP.use(sim, scenario)
+    # A kind with a numpy tick starts on it (the compiled tick's numbers, bit for bit), so a short run
+    # never loads numba; one that runs longer than WARM_AFTER has its kernels compiled beside it and
+    # changes over once they are ready.
+    numpy_first = group_of(scenario) in NUMPY_TICK and hasattr(sim, "compiled")
+    if numpy_first:
+        sim.compiled = False  # type: ignore[attr-defined]  # (the kinds with a numpy tick have it)
+    started = time.monotonic()
 
     def ticked(_k: int) -> None:
         bar.update()
-        WARMUP.use(sim, scenario)
+        if numpy_first:
+            if not WARMUP.active and time.monotonic() - started > WARM_AFTER:
+                WARMUP.start(scenario, only=True)
+            if WARMUP.active:
+                WARMUP.use(sim, scenario)
 
     try:
-        with tqdm(total=steps, desc=f"run {scenario.name}", unit="step", disable=steps < 200 or None) as bar:
+        with _progress(steps, f"run {scenario.name}") as bar:
             run_to_dir(sim, steps, out, meta, on_step=ticked)
     except OutputDirError as e:  # (a file appeared in --out meanwhile)
         return _err(str(e))

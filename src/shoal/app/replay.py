@@ -16,11 +16,13 @@ and, from version 2, what else the arena drew at each frame:
 
 * ``b_n`` (F,) swarm B's robots in each frame (0: none), ``b_x`` (R_B, d_B), ``b_status`` (R_B,)
   (B may move in another dimension than A: ``sim.d`` is one of the fields B may override);
-* for each part of the scene in :data:`SCENE_PARTS` that can change while a run goes on (a
-  fleet's ``obstacles`` [x, y, r], a sonar's ``source`` [x, y]), its changes only:
-  ``<part>_i`` (W,) the frame from which each version holds (increasing, the first 0),
-  ``<part>_n`` (W,) its rows and ``<part>_v`` (Σ n, columns) the rows one version after another.
-  A kind without such a part writes none (W = 0). Version-1 files have none of these arrays.
+* for each part of the scene that can change while a run goes on (each registered kind declares
+  its own, ``SceneKind.scene_parts``: a fleet's ``obstacles`` [x, y, r], a sonar's ``source``
+  [x, y]; :func:`scene_parts`), its changes only: ``<part>_i`` (W,) the frame from which each
+  version holds (increasing, the first 0), ``<part>_n`` (W,) its rows and ``<part>_v`` (Σ n,
+  columns) the rows one version after another. Every registered part is written (W = 0 for a
+  kind without it); a reader takes those it knows, and a part a file lacks has no changes.
+  Version-1 files have none of these arrays.
 
 Pure functions of bytes and arrays, no engine: :func:`to_bytes` and :func:`from_bytes`,
 which checks size, format, version and every shape and raises :class:`ReplayError` naming
@@ -37,6 +39,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from shoal.presets import kinds
+
 FORMAT = "shoal-replay"
 VERSION = 2  # what this shoal writes
 READS = (1, 2)  # what it reads
@@ -50,9 +54,7 @@ MAX_FRAMES = 20_000  # frames (a session keeps 5,000; each frame shown becomes o
 MAX_ROWS = 400_000  # robot rows (frames × robots) of swarm A, and of swarm B: what a session's history keeps
 ROBOTS = ("k", "t", "n", "x", "heading", "status", "metrics")
 TWIN = ("b_n", "b_x", "b_status")
-SCENE_PARTS = {"obstacles": 3, "source": 2}  # part → columns of a row
-SCENE = tuple(f"{part}_{a}" for part in SCENE_PARTS for a in "inv")
-ARRAYS = {1: ROBOTS, 2: ROBOTS + TWIN + SCENE}  # by format version
+ARRAYS = {1: ROBOTS, 2: ROBOTS + TWIN}  # by format version (and, from 2, the scene parts' arrays)
 META_KEYS = {"format": str, "version": int, "shoal": str, "preset": dict, "name": str, "seed": int,
              "kind": str, "metrics": list, "live_edits": int}
 
@@ -133,7 +135,7 @@ class Recording:
     b_n: np.ndarray | None = None  # (F,) int64, 0 where B has no frame (None: no B)
     b_x: np.ndarray | None = None  # (R_B, d) float64
     b_status: np.ndarray | None = None  # (R_B,) int8
-    scene: Mapping[str, Changes] = field(default_factory=dict)  # part (``SCENE_PARTS``) → its changes
+    scene: Mapping[str, Changes] = field(default_factory=dict)  # part (:func:`scene_parts`) → its changes
     offsets: np.ndarray = field(init=False, repr=False)  # (F + 1,) first row of each frame
     b_offsets: np.ndarray = field(init=False, repr=False)
 
@@ -203,12 +205,17 @@ def make_meta(*, shoal: str, preset: dict[str, Any], name: str, seed: int, kind:
             "twin": None if twin is None else {"overrides": dict(twin)}}
 
 
+def scene_parts() -> dict[str, int]:
+    """The parts of a scene a replay stores, name → numbers in a row: every registered kind's."""
+    return kinds.scene_parts()
+
+
 def from_frames(meta: dict[str, Any], k: list[int], t: list[float], xs: list[np.ndarray], headings: list[np.ndarray],
                 statuses: list[np.ndarray], metrics: np.ndarray,
                 twins: Sequence[tuple[np.ndarray, np.ndarray] | None] | None = None,
                 scenes: Sequence[Mapping[str, np.ndarray]] | None = None) -> Recording:
     """A recording from per-frame arrays (``xs[i]`` is (n_i, d)); ``twins[i]``: swarm B's (x, status)
-    at frame i or None; ``scenes[i]``: the parts of the scene (``SCENE_PARTS``) at frame i."""
+    at frame i or None; ``scenes[i]``: the parts of the scene (:func:`scene_parts`) at frame i."""
     d = xs[0].shape[1] if xs else 2
     twin: dict[str, Any] = {}
     if twins is not None and any(b is not None for b in twins):
@@ -217,7 +224,7 @@ def from_frames(meta: dict[str, Any], k: list[int], t: list[float], xs: list[np.
                 "b_x": np.concatenate([b[0] for b in kept]).astype(np.float64),
                 "b_status": np.concatenate([b[1] for b in kept]).astype(np.int8)}
     scene = {}
-    for part, columns in SCENE_PARTS.items():
+    for part, columns in scene_parts().items():
         values = [s[part] for s in scenes or () if part in s]
         if values and len(values) == len(xs):
             scene[part] = Changes.of(values, columns)
@@ -236,7 +243,7 @@ def to_bytes(rec: Recording) -> bytes:
     buf = io.BytesIO()
     meta = np.frombuffer(json.dumps(rec.meta, separators=(",", ":")).encode("utf-8"), dtype=np.uint8)
     scene = {}
-    for part, columns in SCENE_PARTS.items():
+    for part, columns in scene_parts().items():
         c = rec.scene.get(part) or Changes(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, columns)))
         scene.update({f"{part}_i": c.i, f"{part}_n": c.n, f"{part}_v": c.v})
     b_n, b_x, b_status = rec.twin_rows
@@ -327,8 +334,10 @@ def _check_shapes(shapes: dict[str, tuple[int, ...]], n_metrics: int, version: i
         errors.append(f"metrics: shape {m}, expected (steps, {n_metrics}) for the {n_metrics} names in meta")
     if version >= 2:
         errors += _ragged(shapes, "b_n", "b_x", f, ("b_status",))
-        for part, columns in SCENE_PARTS.items():
+        for part, columns in scene_parts().items():
             i, n, v = (f"{part}_{a}" for a in "inv")
+            if not any(a in shapes for a in (i, n, v)):
+                continue  # (a part this file does not store: no changes)
             w = shapes[i][0] if len(shapes[i]) == 1 else -1
             if w < 0 or w > max(f, 0):
                 errors.append(f"{i}: shape {shapes[i]}, expected (W,) with at most one change a frame")
@@ -409,7 +418,11 @@ def from_bytes(content: bytes, filename: str = "replay") -> Recording:
                 raise ReplayError([f"{where}: k: {frames:,} frames, more than the {MAX_FRAMES:,} a replay may hold"])
             with np.load(io.BytesIO(content), allow_pickle=False) as npz:
                 meta = _meta(npz["meta"], where)
-                names = ARRAYS[meta["version"]]
+                names = list(ARRAYS[meta["version"]])
+                if meta["version"] >= 2:  # each part it stores: its three arrays (a part it lacks: no changes)
+                    for part in scene_parts():
+                        group = [f"{part}_{a}" for a in "inv"]
+                        names += group if any(a in headers for a in group) else []
                 missing = [a for a in names if a not in headers]
                 if missing:
                     raise ReplayError([f"{where}: missing {', '.join(missing)} (a version-{meta['version']} "
@@ -428,7 +441,9 @@ def from_bytes(content: bytes, filename: str = "replay") -> Recording:
     if meta["version"] >= 2:
         twin = {"b_n": arrays["b_n"].astype(np.int64), "b_x": arrays["b_x"].astype(np.float64),
                 "b_status": arrays["b_status"].astype(np.int8)}
-        for part in SCENE_PARTS:
+        for part in scene_parts():
+            if f"{part}_i" not in arrays:
+                continue
             scene[part] = Changes(i=arrays[f"{part}_i"].astype(np.int64), n=arrays[f"{part}_n"].astype(np.int64),
                                   v=arrays[f"{part}_v"].astype(np.float64))
     rec = Recording(

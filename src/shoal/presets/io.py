@@ -1,116 +1,42 @@
-"""Reading, writing, listing and overriding presets."""
+"""Reading, writing, listing and overriding presets (:class:`PresetError`, :func:`short` and
+:func:`format_errors` come from :mod:`.errors`; they are offered here too)."""
 
 from __future__ import annotations
 
 import copy
 import functools
 import json
-import re
-import reprlib
 import tomllib
-import typing
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import tomli_w
-from pydantic import BaseModel, ValidationError
+from pydantic import ValidationError
 
 from shoal.engine.core.plugins import load_plugins
 from shoal.engine.core.suggest import did_you_mean
 
+from . import errors
+from .errors import PresetError, fields_in, short
+from .kinds import plugin_sections
 from .models import Scenario
 from .toml_bounds import check_toml
 
 
-class PresetError(ValueError):
-    """A preset could not be read or validated; ``messages`` name each bad field."""
-
-    def __init__(self, messages: list[str]) -> None:
-        self.messages = messages
-        super().__init__("\n".join(messages))
-
-
-_SHORT = reprlib.Repr()  # a bad value is shown short: a few items, a few levels
-_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxtuple, _SHORT.maxdict = 2, 4, 4, 4
-_SHORT.maxstring = _SHORT.maxother = _SHORT.maxlong = 40
-MAX_NAME = 60  # characters of a field name shown in a message
-
-
-def short(value: Any) -> str:
-    """A value as a message shows it: a few characters, a few items, a few levels."""
-    return _SHORT.repr(value)
-
-
-def _short_name(part: object) -> str:
-    text = str(part)
-    return text if len(text) <= MAX_NAME else text[: MAX_NAME - 3] + "..."
-
-
 def format_errors(err: ValidationError) -> list[str]:
-    """One line per error: ``dotted.field: message (got value)``, the value and names shortened,
-    and for a mistyped field, section or name the closest ones it could have been."""
-    lines = []
-    for e in err.errors(include_url=False):
-        loc = ".".join(_short_name(p) for p in e["loc"])
-        msg = e["msg"].removeprefix("Value error, ")
-        quiet = e["type"] in ("missing",) or isinstance(e.get("input"), dict)
-        got = "" if quiet else f" (got {_SHORT.repr(e.get('input'))})"
-        line = f"{loc}: {msg}{got}" if loc else f"{msg}{got}"
-        lines.append(line + _suggestion(e, msg))
-    return lines
-
-
-def _suggestion(e: Any, msg: str) -> str:
-    """" (did you mean …?)" for an unknown field or section (the model's fields at its place) or a
-    value outside its choices (the names the message lists)."""
-    loc = tuple(e["loc"])
-    if e["type"] == "extra_forbidden" and loc and isinstance(loc[-1], str):
-        return did_you_mean(loc[-1], _fields_at(loc[:-1]))
-    section = re.search(r"no scene kind has a \[([^\]]+)\] section", msg)
-    if section:
-        return did_you_mean(section.group(1), _fields_at(()))
-    if msg.startswith("Input should be") and isinstance(e.get("input"), str):
-        return did_you_mean(e["input"], re.findall(r"'([^']*)'", msg))
-    return ""
+    """One line per error of a scenario's validation (:func:`.errors.format_errors`), a mistyped
+    field or section with the closest names it could have been."""
+    return errors.format_errors(err, _fields_at)
 
 
 def _fields_at(loc: tuple[Any, ...]) -> list[str]:
-    """The field names of the model at ``loc`` inside a scenario (the sections, at the top: the
-    plug-in kinds' too)."""
-    model: Any = Scenario
-    for part in loc:
-        if isinstance(part, int):
-            continue
-        field = model.model_fields.get(part) if isinstance(model, type) and issubclass(model, BaseModel) else None
-        if field is None:
-            from .kinds import plugin_sections  # (the kinds' registry reads this module)
-
-            sub = plugin_sections().get(part) if model is Scenario else None
-            if sub is None:
-                return []
-            model = sub
-            continue
-        model = _model_in(field.annotation)
-        if model is None:
-            return []
-    names = list(model.model_fields)
-    if model is Scenario:
-        from .kinds import plugin_sections
-
-        names += list(plugin_sections())
-    return names
-
-
-def _model_in(annotation: Any) -> Any:
-    """The pydantic model an annotation holds (``Model``, ``Model | None``, ``list[Model]``), or None."""
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    for arg in typing.get_args(annotation):
-        found = _model_in(arg)
-        if found is not None:
-            return found
-    return None
+    """The field names at ``loc`` inside a scenario: at the top its sections, the plug-in kinds'
+    too; inside a plug-in kind's section, its model's."""
+    sections = plugin_sections()
+    if loc and loc[0] in sections and loc[0] not in Scenario.model_fields:
+        return fields_in(sections[loc[0]], loc[1:])
+    return fields_in(Scenario, loc) + (list(sections) if not loc else [])
 
 
 def validate(data: dict[str, Any]) -> Scenario:
@@ -282,7 +208,7 @@ def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any
     for item in overrides:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
-            raise PresetError([f"--set {_SHORT.repr(item)}: expected dotted.key=value"])
+            raise PresetError([f"--set {short(item)}: expected dotted.key=value"])
         set_dotted(out, key.strip(), parse_value(value.strip()))
     return out
 

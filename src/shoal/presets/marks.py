@@ -22,6 +22,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable, Literal
 
+from .kinds import kind_for
+
 Kind = Literal["stated", "read", "fitted", "ours"]
 KINDS: tuple[Kind, ...] = ("stated", "read", "fitted", "ours")
 ANY = object()  # a rule for every value of its field
@@ -236,6 +238,9 @@ RULES: tuple[Rule, ...] = (
     stated("slo.walk_speed", 5.0, "Mai §4.5: |v| = U(0, 5)", _is("slo.motion", "random_walk")),
     read("slo.radial", "uniform_radius", "The point in the hypersphere (SPSO 2011)", _is("slo.motion", "pso")),
     read("slo.quality_threshold", None, "Quality thresholds"),
+    read("slo.ranging", None, "Estimates of robots outside the neighbourhood (SLO)"),  # unset: every pair
+    read("slo.ranging", "all", "Estimates of robots outside the neighbourhood (SLO)"),
+    ours("slo.ranging", "neighbours", "Ranging only the neighbours (ours)"),
     ours("slo.neighbourhood", "full", "a host scene of ours: every robot localises every robot",
          lambda d: not _mai(d)),
     ours("slo.neighbourhood_param", None, "not used by the full neighbourhood", _is("slo.neighbourhood", "full")),
@@ -269,7 +274,7 @@ FIELDS: dict[str, tuple[str, ...]] = {
               "acoustics.source_bearing_deg", "acoustics.start"),
     "slo": ("sim.robots", "sim.steps", "slo.motion", "slo.selection", "slo.errors", "slo.prediction_weight",
             "slo.delta_cos", "slo.delta_v", "slo.literal_eq_3_1", "slo.entry_policy", "slo.neighbourhood",
-            "slo.neighbourhood_param", "slo.quality_threshold"),
+            "slo.neighbourhood_param", "slo.quality_threshold", "slo.ranging"),
 }
 EXTRA: dict[str, Callable[[dict[str, Any]], tuple[str, ...]]] = {
     "fleet": lambda d: (
@@ -308,8 +313,6 @@ def _equal(a: Any, b: Any) -> bool:
 def provenance(scenario: Any) -> dict[str, Mark | None]:
     """Every field that shapes a run of this scenario's kind, with its mark (None: no rule
     covers its value). ``scenario`` is a :class:`~shoal.presets.models.Scenario`."""
-    from .kinds import kind_for
-
     d = scenario.model_dump(mode="json")
     kind = {"slo_swarm": "slo"}.get(kind_for(scenario).name, kind_for(scenario).name)
     if kind not in FIELDS:  # a plug-in kind: no thesis values

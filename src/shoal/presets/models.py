@@ -21,40 +21,52 @@ from pydantic import (
     model_validator,
 )
 
-from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.engine.core.objectives import OBJECTIVES
 from shoal.engine.core.registry import Registry
 from shoal.engine.pso.laws import LAWS
-from shoal.engine.robots.laws import ROBOT_LAWS
-from shoal.engine.slo.beliefs import EntryPolicy
-from shoal.engine.slo.selection import SELECTIONS
+
+from .kinds import check_plugin_sections, check_scene, resolve
+from .marks import provenance
+
+# The registries of the later chapters' variants, by name: imported when a preset names one of
+# their entries (a Chapter 3 scene loads no fleet, sonar or SLO code to be validated).
+ROBOT_LAWS_REF = "shoal.engine.robots.laws:ROBOT_LAWS"
+STRATEGIES_REF = "shoal.engine.acoustics.strategies:STRATEGIES"
+SELECTIONS_REF = "shoal.engine.slo.selection:SELECTIONS"
+
+
+def robot_laws() -> Registry[Any]:
+    """The fleet's robot laws (``shoal.engine.robots.laws.ROBOT_LAWS``)."""
+    return resolve(ROBOT_LAWS_REF)
 
 
 def dvc_laws() -> tuple[str, ...]:
     """The robot laws with a DVC form."""
-    return tuple(name for name, law in ROBOT_LAWS.items() if law.dvc is not None)
+    return tuple(name for name, law in robot_laws().items() if law.dvc is not None)
 
 
 @dataclass(frozen=True)
 class Registered:
-    """The mark of a field whose value names an entry of ``registries`` (its choices)."""
+    """The mark of a field whose value names an entry of ``registries`` (its choices; each a
+    registry or the ``"module:NAME"`` of one)."""
 
-    registries: tuple[Registry[Any], ...]
+    registries: tuple[Registry[Any] | str, ...]
 
     def names(self) -> tuple[str, ...]:
-        return tuple(n for r in self.registries for n in r)
+        return tuple(n for r in self.registries for n in resolve(r))
 
 
-def registered(*registries: Registry[Any]) -> Any:
+def registered(*registries: Registry[Any] | str) -> Any:
     """A string field whose value must be a name of one of ``registries`` (looked up when a preset
-    is validated, so plug-ins' names count; a name is only ever looked up, never imported)."""
+    is validated, so plug-ins' names count; a name is only ever looked up, never imported). The
+    registries are asked in order: one that holds the value spares loading the next."""
 
     def check(value: str) -> str:
-        names = [n for r in registries for n in r]
-        if value not in names:
-            raise ValueError(f"Input should be {', '.join(map(repr, names[:-1]))} or {names[-1]!r}"
-                             if len(names) > 1 else f"Input should be {names[0]!r}")
-        return value
+        if any(value in resolve(r) for r in registries):
+            return value
+        names = [n for r in registries for n in resolve(r)]
+        raise ValueError(f"Input should be {', '.join(map(repr, names[:-1]))} or {names[-1]!r}"
+                         if len(names) > 1 else f"Input should be {names[0]!r}")
 
     return Annotated[str, Field(max_length=100), Registered(registries), AfterValidator(check)]
 
@@ -65,10 +77,14 @@ if TYPE_CHECKING:  # (a type checker sees plain strings; pydantic the registries
     StrategyName: TypeAlias = str
     SelectionName: TypeAlias = str
 else:
-    LawName = registered(LAWS, ROBOT_LAWS)
+    LawName = registered(LAWS, ROBOT_LAWS_REF)
     ObjectiveKind = registered(OBJECTIVES)
-    StrategyName = registered(STRATEGIES)
-    SelectionName = registered(SELECTIONS)
+    StrategyName = registered(STRATEGIES_REF)
+    SelectionName = registered(SELECTIONS_REF)
+
+# Where a robot arriving in a neighbourhood starts (shoal.engine.slo.beliefs.EntryPolicy, the same
+# names; tests/test_slo_presets.py checks they agree).
+EntryPolicy = Literal["geometric_nearest", "stale", "geometric_random", "dead_reckoning"]
 
 Coefficient = Annotated[float, Field(ge=0.0, le=100.0)]
 Coordinate = Annotated[float, Field(ge=-1e5, le=1e5)]  # m, a place on a scene
@@ -79,11 +95,15 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)  # no NaN/inf anywhere
     # fields a dump leaves out while unset (hand edits: a preset without them dumps as before)
     omit_unset: ClassVar[tuple[str, ...]] = ()
+    omit_unset_optional: ClassVar[bool] = False  # also every field whose default is None, while it is None
 
     @model_serializer(mode="wrap")
     def _omit_unset(self, handler: SerializerFunctionWrapHandler) -> Any:
         data = handler(self)
-        for name in self.omit_unset:
+        names = list(self.omit_unset)
+        if self.omit_unset_optional:
+            names += [n for n, f in type(self).model_fields.items() if f.default is None]
+        for name in names:
             if data.get(name, 0) is None:
                 del data[name]
         return data
@@ -146,7 +166,7 @@ class Controller(_Model):
 
     @model_validator(mode="after")
     def _consistent(self) -> "Controller":
-        robot_law = self.law in ROBOT_LAWS
+        robot_law = self.law not in LAWS  # (a registered name: a robot law if it is not a Chapter 3 law)
         if robot_law and self.mode == "physical":
             raise ValueError(f"law {self.law!r} takes mode 'raw' (constant c1..c3, omega) or 'dvc'")
         if self.mode == "dvc" and self.law not in dvc_laws():
@@ -357,6 +377,8 @@ class SLO(_Model):
     (docs/readings.md, "Thesis units on a scene (ours)").
     """
 
+    omit_unset = ("ranging",)  # added later: a scene that leaves it unset dumps as before
+
     swarm: Literal["slo", "host"] = Field(
         "slo",
         description="Mai's SLO swarm, or the scene's own swarm (Ch. 3, [world] fleet, [acoustics]) on SLO positions")
@@ -394,6 +416,11 @@ class SLO(_Model):
     quality_threshold: Annotated[float | None, Field(
         ge=-1e12, le=1e12,
         description="fitness T of 'first generation with best <= T'; unset = the benchmark's")] = None
+    ranging: Literal["all", "neighbours"] | None = Field(
+        None, description="SLO swarm: every robot ranges and localises every other ('all', the thesis, O(N²); "
+        "unset means 'all'), or only "
+        "the robots of its neighbourhood (ours, O(N·k): knn, radius or ring, CSS; a robot remembers the last few that "
+        "left, frozen, and starts any other arriving neighbour from its initial estimate)")
 
     @field_validator("swarm", mode="before")
     @classmethod
@@ -410,6 +437,15 @@ class SLO(_Model):
                 raise ValueError(f"neighbourhood_param = {p:g}: {self.neighbourhood} takes a whole number >= 1")
         if self.positions == "oracle" and self.swarm != "host":
             raise ValueError("positions = 'oracle' needs swarm = 'host' (the SLO swarm always localises)")
+        if self.ranging == "neighbours":
+            if self.swarm != "slo":
+                raise ValueError("ranging = 'neighbours' is the SLO swarm's (swarm = 'slo'); a host swarm ranges all")
+            from shoal.engine.slo.ranging_modes import refusal  # (plain Python: no SLO kernels to check a preset)
+
+            why = refusal(selection=self.selection, entry_policy=self.entry_policy, neighbourhood=self.neighbourhood,
+                          motion=self.motion, ar_gain=0.0)
+            if why:
+                raise ValueError(f"ranging = 'neighbours': {why}")
         return self
 
 
@@ -432,6 +468,10 @@ class Scenario(_Model):
     kind's model; any other name is refused."""
 
     model_config = ConfigDict(extra="allow")
+    # An unset section (world, acoustics, slo, a new kind's) is left out of a dump, so that a
+    # scenario written down (run.json, a replay, a preset file) reads the same whichever kinds
+    # Shoal has: adding a kind changes no file of another kind's run.
+    omit_unset_optional = True
 
     schema_version: Literal[1] = 1
     name: Annotated[str, Field(min_length=1, max_length=80)] = "custom"
@@ -452,26 +492,22 @@ class Scenario(_Model):
     def marks(self) -> dict[str, Any]:
         """Where each value that shapes this scene's runs comes from: stated, read, fitted or
         ours, with its source (:func:`shoal.presets.marks.provenance`; None: unmarked)."""
-        from .marks import provenance
-
         return provenance(self)
 
     @model_validator(mode="after")
     def _across_sections(self) -> "Scenario":
-        from .kinds import check_plugin_sections, check_scene  # (the kinds' registry builds on these models)
-
         if self.model_extra:
             self.__pydantic_extra__ = check_plugin_sections(self.model_extra)
         check_scene(self)  # one kind, its dimensions, a law of the registry it reads
         if self.world is not None and 2.0 * self.robot.radius >= self.world.start_size:
             raise ValueError(f"robot.radius = {self.robot.radius:g}: a robot must fit the start square "
                              f"(world.start_size = {self.world.start_size:g})")
-        law = ROBOT_LAWS.get(self.controller.law)
+        law = None if self.controller.law in LAWS else robot_laws().get(self.controller.law)
         if law is not None and law.body_frame and self.robot.drive != "differential":
             raise ValueError(f"controller.law {self.controller.law!r} needs robot.drive = 'differential'")
         if self.acoustics is not None:
             a = self.acoustics
-            need = STRATEGIES[a.algorithm].min_robots
+            need = resolve(STRATEGIES_REF)[a.algorithm].min_robots
             if self.sim.robots < need:
                 raise ValueError(f"sim.robots = {self.sim.robots}: acoustics.algorithm {a.algorithm!r} "
                                  f"needs at least {need}")
@@ -487,6 +523,13 @@ class Scenario(_Model):
         if name in type(self).model_fields:
             return getattr(self, name)
         return (self.model_extra or {}).get(name)
+
+
+def on_slo_positions(scenario: Scenario) -> bool:
+    """Does the scene's own swarm act on SLO-estimated positions (``[slo] swarm = "host"``,
+    ``positions = "slo"``)?"""
+    slo = scenario.slo
+    return slo is not None and slo.swarm == "host" and slo.positions == "slo"
 
 
 _Section = TypeVar("_Section")

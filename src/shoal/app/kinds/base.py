@@ -6,6 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from shoal.presets.errors import PresetError
+from shoal.presets.kinds import kind_for
 from shoal.presets.models import Scenario
 
 from ..panel.spec import KindPanel, PanelAPI
@@ -54,9 +56,16 @@ class AppKind:
 
 
 class BaseDriver:
-    """Defaults of a :class:`Driver`; a kind's driver fills in the rest."""
+    """Defaults of a :class:`Driver`; a kind's driver fills in the rest.
+
+    Which changes a running engine takes is its kind's one rule
+    (:meth:`shoal.presets.kinds.SceneKind.live_keywords`, as ``Scene.retune`` follows it). The
+    session owns two fields the rule would call a rebuild: ``sim.runs`` (a tab runs one) and
+    ``sim.seed`` (the session restarts the running engine with a new seed), unless
+    ``seed_rebuilds``."""
 
     scene_sections: tuple[str, ...] = ()
+    seed_rebuilds = False  # a new seed builds a new engine (else the session restarts the running one)
 
     def __init__(self, session: Session) -> None:
         self.session = session
@@ -67,6 +76,19 @@ class BaseDriver:
 
     def loaded(self) -> None:
         pass
+
+    def rebuilds(self, old: Scenario, new: Scenario) -> bool:
+        return self._keywords(old, new) is None
+
+    def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
+        keywords = self._keywords(old, new)
+        if keywords is None:
+            raise PresetError([f"{kind_for(old).label}: this change needs a new engine"])
+        return keywords
+
+    def _keywords(self, old: Scenario, new: Scenario) -> dict[str, Any] | None:
+        owned = {"runs": old.sim.runs, **({} if self.seed_rebuilds else {"seed": old.sim.seed})}
+        return kind_for(old).live_keywords(old, new.model_copy(update={"sim": new.sim.model_copy(update=owned)}))
 
     def cleared(self) -> None:
         pass

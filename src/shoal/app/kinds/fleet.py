@@ -1,6 +1,6 @@
 """Chapter 4–5 robots with bodies in an obstacle world (a :class:`Fleet`).
 
-* changes: controller and sensing fields are :class:`FleetParams` fields and apply at the
+* changes (the kind's live rule, presets/kinds.py): controller and sensing fields apply at the
   next step; the world, the robot model, the robot count and the oracle/SLO positions switch
   rebuild the fleet (robots back in the start box, world edits dropped); the SLO error set
   and localisation settings retune the running fleet;
@@ -17,13 +17,15 @@ from typing import Any, Callable
 
 import numpy as np
 
-from shoal.engine.kinds.fleet import STALL_STEPS, Fleet, FleetParams
+from shoal.engine.kinds.fleet import STALL_STEPS, Fleet
 from shoal.engine.kinds.fleet_probe import RobotView, robot_view
 from shoal.engine.robots.dvc import TABLE_4_1
 from shoal.engine.robots.laws import ROBOT_LAWS
 from shoal.engine.robots.world import WorldSpec
-from shoal.presets.build import build_fleet, check_world, fleet_keywords, fleet_params_for, kind_of, world_for
+from shoal.presets.builders.fleet import build_fleet
+from shoal.presets.builders.world import check_world, world_for
 from shoal.presets.io import PresetError, kept_fields
+from shoal.presets.kinds import kind_of
 from shoal.presets.models import Scenario, required
 
 from ..markdown import escape
@@ -46,7 +48,6 @@ from ..panel.spec import (
     round_sig,
 )
 from ..session.history import Frame
-from ..session.positions import slo_retune
 from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..view import shapes
@@ -97,19 +98,6 @@ class FleetDriver(BaseDriver):
     def loaded(self) -> None:
         self.world_revision += 1
         self.dropped, self.edits = self.edits, 0
-
-    # ------------------------------------------------------------------ changes
-    def rebuilds(self, old: Scenario, new: Scenario) -> bool:
-        """A new fleet for another size, world or positions, or a robot model the fleet cannot
-        change running (a :class:`FleetParams` field outside ``Fleet.LIVE``)."""
-        a, b = fleet_params_for(old), fleet_params_for(new)
-        fixed = {f.name for f in dataclasses.fields(FleetParams)} - Fleet.LIVE
-        return (new.sim.robots != old.sim.robots or new.world != old.world or slo_retune(old, new) is None
-                or any(getattr(a, f) != getattr(b, f) for f in fixed))
-
-    def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
-        slo = slo_retune(old, new)  # slo: the running fleet keeps its beliefs
-        return {**fleet_keywords(new), **({"slo": slo} if slo else {})}
 
     # ------------------------------------------------------------------ world edits
     def _world_changed(self) -> None:

@@ -26,8 +26,9 @@ from shoal.engine.kinds.slo_swarm import SLOSwarm
 from shoal.engine.slo.objectives import slo_objective
 from shoal.engine.slo.selection import SELECTIONS
 from shoal.engine.slo.sensors import error_model
-from shoal.presets.build import build_slo, kind_of, slo_live_changes
+from shoal.presets.build import build_slo
 from shoal.presets.io import PresetError
+from shoal.presets.kinds import kind_of
 from shoal.presets.models import SLO, Scenario, SLOErrorValues, required
 
 from ..markdown import escape
@@ -74,8 +75,10 @@ class PairView:
 
 
 class MaiDriver(BaseDriver):
-    """Mai's swarm's side of a session: beliefs kept one step back for the pair inspector."""
+    """Mai's swarm's side of a session: beliefs kept one step back for the pair inspector.
+    Errors, selection, w, δ, neighbourhood, objective… retune the running swarm (the kind's live rule)."""
 
+    seed_rebuilds = True  # a new seed builds a new swarm
     sim: SLOSwarm
 
     def __init__(self, session: Session) -> None:
@@ -96,14 +99,6 @@ class MaiDriver(BaseDriver):
 
     def before_step(self) -> None:
         self._prev_est = self.sim.state.beliefs.est[0].copy()
-
-    # ------------------------------------------------------------------ changes
-    def rebuilds(self, old: Scenario, new: Scenario) -> bool:
-        return not _same_run(old, new) and slo_live_changes(old, new) is None
-
-    def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
-        """Errors, selection, w, δ, neighbourhood, objective…: the swarm keeps running."""
-        return {} if _same_run(old, new) else slo_live_changes(old, new) or {}
 
     # ------------------------------------------------------------------ views
     def _pair(self, i: int, b: Any, x: np.ndarray) -> PairView | None:
@@ -470,11 +465,6 @@ def panel(api: PanelAPI) -> KindPanel:
             Tab("Plots", (ERROR_PLOT, DISTANCE_PLOT, FITNESS_PLOT)),
         ),
         status=_status, compare=_compare, rebuilt=_rebuilt, click=_click, export_note=EXPORT_NOTE)
-
-
-def _same_run(old: Scenario, new: Scenario) -> bool:
-    """Do ``old`` and ``new`` differ only in the view?"""
-    return {**old.model_dump(), "view": None} == {**new.model_dump(), "view": None}
 
 
 def accepts(scenario: Scenario) -> bool:

@@ -23,8 +23,9 @@ from shoal.engine.acoustics.propagation import snr_db
 from shoal.engine.acoustics.receiver import lag_samples
 from shoal.engine.acoustics.strategies import STRATEGIES
 from shoal.engine.kinds.sonar import AcousticSwarm, SonarParams
-from shoal.presets.build import build_sonar, kind_of, sonar_keywords, sonar_params_for
+from shoal.presets.builders.sonar import build_sonar, sonar_params_for
 from shoal.presets.io import PresetError, kept_fields
+from shoal.presets.kinds import kind_of
 from shoal.presets.models import Acoustics, Scenario, required
 
 from ..markdown import escape
@@ -34,7 +35,6 @@ from ..panel.positions import positions_choices, positions_folder
 from ..panel.selection import robot_number
 from ..panel.spec import Dropdown, Folder, KindPanel, PanelAPI, Slider, Tab, Text, fmt
 from ..session.history import Frame
-from ..session.positions import slo_retune
 from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..view import shapes
@@ -86,6 +86,7 @@ def true_ray_index(x: np.ndarray, rays: np.ndarray, source: np.ndarray) -> np.nd
 class SonarDriver(BaseDriver):
     """An acoustic swarm's side of a session, and the source moved by hand."""
 
+    seed_rebuilds = True  # a new seed builds a new swarm
     scene_sections = ("arena",)
     sim: AcousticSwarm
 
@@ -104,17 +105,15 @@ class SonarDriver(BaseDriver):
 
     # ------------------------------------------------------------------ changes
     def rebuilds(self, old: Scenario, new: Scenario) -> bool:
-        """A new swarm for another size, seed or positions, or a :class:`SonarParams` field outside
-        ``AcousticSwarm.LIVE`` (the algorithm, the controller, SNR_0, the deployment, …)."""
-        a, b = _params(old), _params(new)
-        fixed = {f.name for f in dataclasses.fields(SonarParams)} - AcousticSwarm.LIVE
-        return (new.sim.robots != old.sim.robots or new.sim.seed != old.sim.seed or slo_retune(old, new) is None
-                or any(getattr(a, f) != getattr(b, f) for f in fixed))
+        """The kind's rule (a new swarm for another size or positions, or an ``[acoustics]`` field
+        outside its live ones: the algorithm, the controller, SNR_0, the deployment, …), and a new
+        seed; a combination the engine refuses is a :class:`PresetError` by field."""
+        _params(new)
+        return super().rebuilds(old, new)
 
     def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
         _params(new)  # (a combination the engine refuses: PresetError by field)
-        slo = slo_retune(old, new)  # slo: the running swarm keeps its beliefs
-        return {**sonar_keywords(new), **({"slo": slo} if slo else {})}
+        return super().live(old, new)  # slo: the running swarm keeps its beliefs
 
     def _refresh_snr(self) -> None:
         s, p = self.sim.state, self.sim.params

@@ -19,8 +19,9 @@ from shoal.engine.kinds.swarm import Simulation
 from shoal.engine.pso import tuning
 from shoal.engine.pso.laws import LAWS
 from shoal.engine.pso.stability import diverged
-from shoal.presets.build import build_simulation, kind_of, objective_for, slo_unit, swarm_keywords
+from shoal.presets.builders.swarm import build_simulation, objective_for
 from shoal.presets.io import PresetError
+from shoal.presets.kinds import kind_of
 from shoal.presets.models import Scenario
 
 from ..markdown import escape
@@ -31,7 +32,6 @@ from ..panel.positions import positions_choices, positions_folder
 from ..panel.selection import robot_number
 from ..panel.spec import Dropdown, Figure, Folder, KindPanel, PanelAPI, Slider, Tab, Text, fmt, round_sig
 from ..session.history import Frame, frame_of
-from ..session.positions import positions_of, slo_retune
 from ..session.session import Session
 from ..session.snapshot import Snapshot
 from ..view.canvas import Canvas
@@ -77,14 +77,6 @@ class SwarmDriver(BaseDriver):
 
     def build(self, scenario: Scenario) -> Simulation:
         return build_simulation(scenario, runs=1)
-
-    def rebuilds(self, old: Scenario, new: Scenario) -> bool:
-        return (new.sim.d != old.sim.d or new.init != old.init or slo_retune(old, new) is None
-                or (positions_of(new) == "slo" and slo_unit(new) != slo_unit(old)))
-
-    def live(self, old: Scenario, new: Scenario) -> dict[str, Any]:
-        slo = slo_retune(old, new)  # errors, selection, neighbourhood…: the running SLO source keeps its beliefs
-        return {**swarm_keywords(new), **({"slo": slo} if slo else {})}
 
     def frame(self, t: float) -> Frame:
         return frame_of(self.sim.state, t, accelerations=True)

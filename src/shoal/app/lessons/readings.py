@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from shoal.studies.sweep.catalogue import LABELS
+from shoal.studies.sweep.catalogue import labels
 
 from .model import AGGREGATES, Check, Lesson
 
@@ -67,7 +67,7 @@ class Reading:
     @property
     def label(self) -> str:
         """What the metric is, with its unit (the sweep's outcome labels, without their "at the end")."""
-        name, unit = OWN_LABELS.get(self.metric) or LABELS.get(self.metric) or (self.metric.replace("_", " "), "")
+        name, unit = OWN_LABELS.get(self.metric) or labels().get(self.metric) or (self.metric.replace("_", " "), "")
         name = name.replace(" at the end", "")
         counted = unit in name.split()  # "collided robots", not "collided robots [robots]"
         return f"{name} [{unit}]" if unit and self.metric not in SHARES and not counted else name

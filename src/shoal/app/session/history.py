@@ -21,7 +21,7 @@ TRAIL_LIMITS = (80, 40)  # at most this many trails of this many points
 class Frame:
     """The robots (run 0) after step ``k``: what trails and export need (``a`` only for Ch. 3), and
     the parts of the scene that may change while the run goes on (``scene``: a fleet's obstacles,
-    a sonar's source; see ``replay.SCENE_PARTS``), as the arena drew them then. An unchanged part
+    a sonar's source; see ``replay.scene_parts``), as the arena drew them then. An unchanged part
     is the same array from frame to frame: never written to, it costs nothing per frame."""
 
     k: int

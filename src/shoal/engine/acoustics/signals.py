@@ -52,8 +52,13 @@ def hydrophone_positions(x: np.ndarray, heading: np.ndarray, D: float | None = N
 def _draw(rngs: Sequence[np.random.Generator], n_src: int, n_noise: int, K: int) -> tuple[np.ndarray, np.ndarray]:
     """Unit-power complex Gaussian spectra: source (R, n_src, K) and noise (R, n_noise, K)."""
     z = np.empty((len(rngs), n_src + n_noise, K, 2))
-    for g, out in zip(rngs, z):
-        g.standard_normal(out=out)
+    if all(type(g.bit_generator) is np.random.PCG64 for g in rngs):  # compiled, the same numbers, every core
+        from ..core.compiled_draws import CompiledDraws  # (numba: at first use)
+
+        CompiledDraws(rngs).fill(z, normal=(True,))
+    else:
+        for g, out in zip(rngs, z):
+            g.standard_normal(out=out)
     c = z.view(np.complex128)[..., 0]  # (real, imag) pairs read as complex, no copy
     c *= np.sqrt(0.5 / K)
     return c[:, :n_src], c[:, n_src:]

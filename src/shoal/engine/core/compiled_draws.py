@@ -9,18 +9,26 @@ generator's C function for the next output through its ``ctypes`` interface (num
 stream, its state stepped in place) and repeats both conversions compiled; the ziggurat tables
 are numba's copy of numpy's. ``tests/test_compiled_draws.py`` compares the draws and the
 generators' states with numpy's own calls. What a run saves is a Python call a draw: one call
-fills every run's arrays.
+fills every run's arrays, blocks of runs in parallel threads (:mod:`.parallel`) when there are
+enough draws to share.
 """
 
 from __future__ import annotations
 
+import ctypes
 import math
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
+from llvmlite import ir
+from numba import types
+from numba.extending import intrinsic
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
+from . import parallel
 from .compiled import kernel
+
+BLOCK_DRAWS = 1 << 15  # draws a thread is given at least
 
 TO_DOUBLE = 1.0 / 9007199254740992.0  # 2⁻⁵³
 FF, ONE, MANTISSA = np.uint64(0xFF), np.uint64(1), np.uint64(0x000FFFFFFFFFFFFF)
@@ -28,9 +36,32 @@ S11, S8 = np.uint64(11), np.uint64(8)
 
 
 @kernel
-def _double(next_u64, state: int) -> float:  # next_u64: a C function pointer
+def next_double(next_u64, state: int) -> float:  # next_u64: a C function pointer
     """numpy's next_double: the top 53 bits of the next output."""
     return float(next_u64(state) >> S11) * TO_DOUBLE
+
+
+@intrinsic
+def _next_u64_at(typingctx: Any, fn: Any, state: Any) -> Any:
+    """The next 64-bit output of the bit generator whose C function for it is at address ``fn``
+    (numpy's ``uint64_t next_uint64(void *state)``), on the state at address ``state``. Both are
+    plain integers, so a kernel takes them as cheaply as any number (a ctypes function object
+    costs a Python call to type every time the kernel is called)."""
+    if not (isinstance(fn, types.Integer) and isinstance(state, types.Integer)):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        void_p = ir.IntType(8).as_pointer()
+        f = builder.inttoptr(args[0], ir.FunctionType(ir.IntType(64), [void_p]).as_pointer())
+        return builder.call(f, [builder.inttoptr(args[1], void_p)])
+
+    return types.uint64(fn, state), codegen
+
+
+@kernel
+def double_at(fn: int, state: int) -> float:
+    """:func:`next_double` with the generator's C function given by its address (:attr:`CompiledDraws.address`)."""
+    return float(_next_u64_at(fn, state) >> S11) * TO_DOUBLE  # type: ignore[call-arg]  # (the typing context is numba's)
 
 
 @kernel
@@ -48,12 +79,14 @@ def _normal(next_u64, state: int) -> float:
             return x
         if idx == 0:  # the tail
             while True:
-                xx = -ziggurat_nor_inv_r * math.log1p(-_double(next_u64, state))
-                yy = -math.log1p(-_double(next_u64, state))
+                xx = -ziggurat_nor_inv_r * math.log1p(-next_double(next_u64, state))
+                yy = -math.log1p(-next_double(next_u64, state))
                 if yy + yy > xx * xx:
                     return -(ziggurat_nor_r + xx) if (rabs >> S8) & ONE else ziggurat_nor_r + xx
-        elif (fi_double[idx - 1] - fi_double[idx]) * _double(next_u64, state) + fi_double[idx] < math.exp(-0.5 * x * x):
-            return x
+        else:
+            u01 = next_double(next_u64, state)
+            if (fi_double[idx - 1] - fi_double[idx]) * u01 + fi_double[idx] < math.exp(-0.5 * x * x):
+                return x
 
 
 @kernel
@@ -69,7 +102,7 @@ def _fill(next_u64, states: np.ndarray, parts: tuple, normal: np.ndarray) -> Non
                     a[r, q] = _normal(next_u64, state)
             else:
                 for q in range(a.shape[1]):
-                    a[r, q] = _double(next_u64, state)
+                    a[r, q] = next_double(next_u64, state)
 
 
 class CompiledDraws:
@@ -89,6 +122,22 @@ class CompiledDraws:
         interfaces = [g.bit_generator.ctypes for g in self.rngs]
         self._next = interfaces[0].next_uint64 if interfaces else None  # PCG64's one C function
         self._states = np.array([c.state_address for c in interfaces], dtype=np.uintp)
+        self._address = ctypes.cast(self._next, ctypes.c_void_p).value or 0 if self._next is not None else 0
+
+    @property
+    def address(self) -> int:
+        """The address of PCG64's C function for the next output, for a kernel's :func:`double_at` (0: no runs)."""
+        return self._address
+
+    @property
+    def next_u64(self) -> object:
+        """PCG64's C function for the next output, for a kernel's :func:`next_double` (None: no runs)."""
+        return self._next
+
+    @property
+    def states(self) -> np.ndarray:
+        """The address of each run's generator state, (R,) ``uintp``, for a kernel's :func:`next_double`."""
+        return self._states
 
     def fill(self, *arrays: np.ndarray, normal: Sequence[bool]) -> None:
         """Each run r draws ``arrays[0][r]``, ``arrays[1][r]``, … in turn, N(0,1) where ``normal``
@@ -98,4 +147,10 @@ class CompiledDraws:
             raise ValueError("CompiledDraws.fill: the arrays are filled in place and must be C-contiguous float64")
         if self.rngs:
             R = len(self.rngs)
-            _fill(self._next, self._states, tuple(a.reshape(R, -1) for a in arrays), np.array(normal, dtype=bool))
+            parts, kinds = tuple(a.reshape(R, -1) for a in arrays), np.array(normal, dtype=bool)
+            per_run = sum(a.shape[1] for a in parts)
+
+            def block(lo: int, hi: int) -> None:  # a run's draws touch its own generator and rows only
+                _fill(self._next, self._states[lo:hi], tuple(a[lo:hi] for a in parts), kinds)
+
+            parallel.each_block(block, R, min_block=max(1, BLOCK_DRAWS // max(1, per_run)))

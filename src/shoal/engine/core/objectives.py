@@ -67,7 +67,11 @@ class ObjectiveFunction:
     """One objective of :data:`OBJECTIVES`: a vectorised ``f`` of positions (..., d) → (...)
     (a numpy function, or a numba-compiled one), whether it is maximised, and the frame it sees.
     A plug-in's objective sees ``(x − source)/scale`` as the benchmarks do, so a preset's
-    ``objective.source`` and ``objective.scale`` place and size it on the scene."""
+    ``objective.source`` and ``objective.scale`` place and size it on the scene.
+
+    ``name`` is the preset's ``objective.kind``, ``label`` what a panel shows; ``maximise``: the
+    best is the largest value; ``frame``: what ``f`` sees, ``"scaled"`` (x − source)/scale,
+    ``"offset"`` x − source or ``"x"`` the position itself."""
 
     name: str
     label: str

@@ -39,6 +39,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from . import parallel
 from .compiled import config, f64, kernel
 
 _acos = np.frompyfunc(math.acos, 1, 1)
@@ -47,6 +48,7 @@ _exp = np.frompyfunc(math.exp, 1, 1)
 # numba calls the C library's atan2 and exp, one element at a time, unless Intel's SVML is installed:
 # then LLVM vectorises such loops with SVML's functions (their own last bits, chosen by CPU)
 LIBM_KERNELS = not getattr(config, "USING_SVML", False)
+ROW_WORK = 1 << 17  # multiply-adds of ordered_matmul a thread is given at least
 
 
 def ordered_matmul(a: np.ndarray, b: np.ndarray, compiled: bool = True) -> np.ndarray:
@@ -60,7 +62,13 @@ def ordered_matmul(a: np.ndarray, b: np.ndarray, compiled: bool = True) -> np.nd
     rows = a.reshape(-1, K)
     if compiled:
         out = np.empty((rows.shape[0], L))
-        _ordered_rows(f64(rows), f64(b), out)
+        rows, b = f64(rows), f64(b)
+
+        def block(lo: int, hi: int) -> None:
+            _ordered_rows(rows[lo:hi], b, out[lo:hi])
+
+        # rows are independent: blocks of them on every core (the same bits), a block worth a thread
+        parallel.each_block(block, rows.shape[0], min_block=max(1, ROW_WORK // max(1, K * L)))
         return out.reshape(a.shape[:-1] + (L,))
     out, term = np.zeros((rows.shape[0], L)), np.empty((rows.shape[0], L))
     for k in range(K):

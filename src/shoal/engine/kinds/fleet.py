@@ -14,24 +14,28 @@ from typing import Any, ClassVar, Literal, cast
 
 import numpy as np
 
+from ..core import parallel
+from ..core.compiled_draws import CompiledDraws
 from ..core.contract import check_live
+from ..core.positions import Oracle, PositionSource
 from ..core.rng import run_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, fields_of, from_fields, integer, part, rng_states, set_rng_states
+from ..core.steering import SLACK, Steering, given_coefficients
 from ..pso.bests import best_of, improves
-from ..robots import kernels
+from ..robots import kernels, tick_kernels
 from ..robots.dvc import approach_guard, dvc_nonomni, dvc_omni, forward_guard, w_max
-from ..robots.laws import ROBOT_LAWS, Inertia, Limits, rotational_energy_factor
+from ..robots.laws import ROBOT_LAWS, Inertia, Limits, rotational_energy_factor, steered_command
 from ..robots.motion import Drive, Kinematic, Physics
 from ..robots.sensing import S_FLOOR, SECTORS, SectorReading, sense, virtual_force
 from ..robots.world import RunSpace, WorldSpec
-from ..slo.positions import Oracle, PositionSource
 
 ACTIVE, COLLIDED = 0, 1
 # A stall (ours, a metric only): an operational robot slower than STALL_SPEED m/s for at
 # least STALL_STEPS ticks in a row, e.g. squeezed between bodies it may not approach.
 STALL_SPEED = 0.01
 STALL_STEPS = 10
+STATE_DTYPES = (float, float, float, float, np.int8, np.int64, float, float)  # of tick_kernels.STATE
 
 
 @dataclass
@@ -119,6 +123,7 @@ class FleetState:
     omega: np.ndarray | None = None  # (R, N)
     c: np.ndarray | None = None  # (n, R, N) coefficients in force this tick
     a: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    commanded: np.ndarray | None = None  # (R, N, 2) each robot's command this tick (before a collision zeroed it)
 
 
 COLUMNS: Schema = (
@@ -194,6 +199,7 @@ class Fleet:
         {"law", "dvc", "dt", "omega", "c", "alpha", "beta", "gamma", "c1_share", "sensing_range", "r_min", "s_min",
          "rotational_energy", "update", "guard", "slo"})
     COLUMNS: ClassVar[Schema] = COLUMNS
+    steering: Steering | None = None  # the next tick's command from outside the law (core/steering.py)
 
     def __init__(self, *, world: WorldSpec, robots: int, params: FleetParams | None = None,
                  runs: int = 1, seed: int = 0, first_run: int = 0, positions: PositionSource | None = None,
@@ -229,6 +235,8 @@ class Fleet:
         if seed is not None:
             self.seed = int(seed)
         self.rngs = run_generators(self.seed, self.first_run, self.runs)
+        self.steering = None
+        self._steered: tuple[bool, tuple[np.ndarray, np.ndarray] | None] = (False, None)
         p = self.params
         x = np.stack([spawn_positions(g, self.world.start_box, self._robots, p.robot_radius, p.spawn_gap)
                       for g in self.rngs])
@@ -329,6 +337,13 @@ class Fleet:
         self.positions.keep(s.f_y != before)  # a new best is where the robot stands
 
     def _coefficients(self, gap: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        omega, c = self._own_coefficients(gap)
+        given = self._steered[1]
+        if given is None:
+            return omega, c
+        return np.where(np.isnan(given[0]), omega, given[0]), np.where(np.isnan(given[1]), c, given[1])
+
+    def _own_coefficients(self, gap: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         p, shape = self.params, gap.shape[:2]
         law = ROBOT_LAWS[p.law]
         if p.dvc and law.dvc == "nonomni":
@@ -362,6 +377,8 @@ class Fleet:
 
     def _velocity(self, omega: np.ndarray, c: np.ndarray, force: np.ndarray, r: np.ndarray) -> np.ndarray:
         p, s = self.params, self.state
+        if self._steered[0]:  # the command in s.cmd, from outside the law
+            return steered_command(s.cmd, ROBOT_LAWS[p.law], p.limits, SLACK)
         g_p, g_g = self._attractors()
         return ROBOT_LAWS[p.law].command(s.cmd, g_p, g_g, force, s.heading, c, omega, r, p.limits)
 
@@ -404,6 +421,26 @@ class Fleet:
                                      reading.centre, reading.hit)
                 return reading
         return sense(self.spaces, s.x, s.heading, sensing_range=p.sensing_range, robot_frame=p.body_frame, active=m)
+
+    def sense_now(self) -> SectorReading:
+        """The six-sector reading of every robot where it stands now, as if all sensed before any
+        moved (what a controller outside the law observes; nothing changes). Compiled queries in a
+        world of circles and walls, pymunk's otherwise: the same gaps."""
+        p, s = self.params, self.state
+        R, N = s.status.shape
+        everyone = np.ones((R, N), bool)
+        if self.world.polygons or p.law not in kernels.LAWS or p.drive not in kernels.DRIVES:
+            return sense(self.spaces, s.x, s.heading, sensing_range=p.sensing_range, robot_frame=p.body_frame,
+                         active=everyone)
+        reading = SectorReading(gap=np.full((R, N, SECTORS), float(p.sensing_range)),
+                                point=np.full((R, N, SECTORS, 2), np.nan), centre=np.full((R, N, SECTORS, 2), np.nan),
+                                hit=np.zeros((R, N, SECTORS), bool))
+        turn = np.array(s.heading, dtype=float) if p.body_frame else np.zeros((R, N))
+        x = self._body_positions() if p.motion == "physics" else np.ascontiguousarray(s.x, dtype=float)
+        world, grid = self._kernel_world()
+        kernels.sense_bodies(x, turn, everyone, self._kernel_params(), world, grid, reading.gap, reading.point,
+                             reading.centre, reading.hit)
+        return reading
 
     def _compiled_queries(self) -> bool:
         """Physics mode senses and checks contacts through :func:`kernels.sense_bodies` and
@@ -458,7 +495,11 @@ class Fleet:
         return [active & (colour == k) for k in range(int(colour.max()) + 1)]
 
     def step(self) -> FleetInfo:
+        """Advance every run by one control tick (steered by :attr:`steering`, if set)."""
+        if self.steering is None and self._fused_tick():
+            return self._fused_step()
         p, s = self.params, self.state
+        steering, self.steering = self.steering, None
         self._update_bests()  # phase A, all robots
         r = self._draws()
         R, N = s.status.shape
@@ -466,7 +507,19 @@ class Fleet:
             omega=np.full((R, N), np.nan), c=np.zeros((r.shape[0], R, N)), force=np.zeros_like(s.x),
             gap=np.full((R, N, SECTORS), p.sensing_range), point=np.full((R, N, SECTORS, 2), np.nan),
             centre=np.full((R, N, SECTORS, 2), np.nan), hit=np.zeros((R, N, SECTORS), bool))
-        sensed = self._compiled_phase_b(r, out) if self._compiled_tick() else self._phase_b(r, out)
+        given = given_coefficients(steering, r.shape[0], (R, N))
+        if given is not None:  # the kernel reads them from out
+            out.omega[:], out.c[:] = given
+        steered = steering is not None and steering.velocity is not None
+        if steering is not None and steering.velocity is not None:
+            given_cmd = np.broadcast_to(np.asarray(steering.velocity, dtype=float), s.x.shape)
+            s.cmd = np.where((s.status == ACTIVE)[..., None], given_cmd, s.cmd)  # a disabled robot has none
+        self._steered = (steered, given)
+        try:
+            sensed = self._compiled_phase_b(r, out) if self._compiled_tick() else self._phase_b(r, out)
+        finally:
+            self._steered = (False, None)
+        s.commanded = s.cmd.copy()
         s.cmd[s.status != ACTIVE] = 0.0
         s.u[s.status != ACTIVE] = 0.0
         slow = (s.status == ACTIVE) & (np.linalg.norm(s.u, axis=-1) < STALL_SPEED)
@@ -483,9 +536,13 @@ class Fleet:
         robot sensed."""
         p, s = self.params, self.state
         sensed = False
+        blind = self._steered[0] and not (p.dvc and p.guard)  # a given command needs no sensing
         for group in self._groups(s.status == ACTIVE):
             m = group & (s.status == ACTIVE)
             if not m.any():
+                continue
+            if blind:
+                self._move(m, np.where(m[..., None], steered_command(s.cmd, ROBOT_LAWS[p.law], p.limits, SLACK), 0.0))
                 continue
             sensed = True
             reading = self._sense(m)
@@ -497,18 +554,22 @@ class Fleet:
             cmd = self._velocity(omega, c, force, r)
             if p.dvc and p.guard:
                 cmd = self._guard(cmd, reading, gap)
-            cmd = np.where(m[..., None], cmd, 0.0)
-            moved = self.motion.move(self.spaces, s.x, s.heading, cmd, m, p.dt)
-            s.x = np.where(m[..., None], moved.x, s.x)
-            s.heading = np.where(m, moved.heading, s.heading)
-            s.u = np.where(m[..., None], moved.velocity, s.u)
-            s.cmd = np.where(m[..., None], cmd, s.cmd)
-            struck = moved.hit if moved.struck is None else moved.hit | moved.struck
-            s.status = np.where(struck | self._touching(m), COLLIDED, s.status).astype(np.int8)
+            self._move(m, np.where(m[..., None], cmd, 0.0))
             out.omega[m], out.c[:, m], out.force[m] = omega[m], c[:, m], force[m]
             out.gap[m], out.point[m], out.centre[m], out.hit[m] = (
                 reading.gap[m], reading.point[m], reading.centre[m], reading.hit[m])
         return sensed
+
+    def _move(self, m: np.ndarray, cmd: np.ndarray) -> None:
+        """Move the robots ``m`` by their commands ``cmd`` (zero for the others); a contact disables."""
+        p, s = self.params, self.state
+        moved = self.motion.move(self.spaces, s.x, s.heading, cmd, m, p.dt)
+        s.x = np.where(m[..., None], moved.x, s.x)
+        s.heading = np.where(m, moved.heading, s.heading)
+        s.u = np.where(m[..., None], moved.velocity, s.u)
+        s.cmd = np.where(m[..., None], cmd, s.cmd)
+        struck = moved.hit if moved.struck is None else moved.hit | moved.struck
+        s.status = np.where(struck | self._touching(m), COLLIDED, s.status).astype(np.int8)
 
     def _compiled_tick(self) -> bool:
         """Kinematic motion through :func:`kernels.phase_b` (unless the fleet was made with
@@ -525,14 +586,84 @@ class Fleet:
         draws = np.ascontiguousarray(r if r.ndim == 4 else r[..., None])
         s.x, s.heading, s.u, s.cmd = (np.array(a, dtype=float) for a in (s.x, s.heading, s.u, s.cmd))
         s.status = np.array(s.status, dtype=np.int8)
-        sensed = kernels.phase_b(s.x, s.heading, s.u, s.cmd, s.status, g_p, g_g, draws, self._kernel_params(), world,
-                                 grid, out)
+        params = self._kernel_params()
+        if self._steered[0] or self._steered[1] is not None:
+            params = params._replace(steered=self._steered[0], given=self._steered[1] is not None)
+        sensed = kernels.phase_b(s.x, s.heading, s.u, s.cmd, s.status, g_p, g_g, draws, params, world, grid, out)
         self._stale = True
         return bool(sensed)
 
+    def _fused_tick(self) -> bool:
+        """The whole tick by :func:`tick_kernels.fleet_runs`: the compiled kinematic tick on true
+        positions, float64 states and a point source."""
+        s = self.state
+        return (self._compiled_tick() and type(self.positions) is Oracle and len(self.world.source) == 2
+                and s.x.dtype == s.y.dtype == s.u.dtype == s.cmd.dtype == np.float64)
+
+    def _fused_step(self) -> FleetInfo:
+        """:meth:`step` in one compiled call per block of runs (the blocks on every core): the
+        same numbers, the generators left as the numpy tick leaves them."""
+        s = self.state
+        R, N = s.status.shape
+        terms, per_component = self._draw_layout()
+        gen = self._compiled_draws()
+        old: tuple[np.ndarray, ...] = (s.x, s.heading, s.u, s.cmd, s.status, s.slow, s.y, s.f_y)  # tick_kernels.STATE
+        if not all(a.flags.c_contiguous for a in old) or s.status.dtype != np.int8 or s.slow.dtype != np.int64:
+            old = tuple(np.ascontiguousarray(a, dtype=t) for a, t in zip(old, STATE_DTYPES))
+        new = (np.empty((R, N, 2)), np.empty((R, N)), np.empty((R, N, 2)), np.empty((R, N, 2)),
+               np.empty((R, N), np.int8), np.empty((R, N), np.int64), np.empty((R, N, 2)), np.empty((R, N)),
+               np.empty((R, N, 2)))  # ..., commanded
+        f, yg, best, com, max_speed = np.empty((R, N)), np.empty((R, 2)), np.empty(R), np.empty(R), np.empty(R)
+        counts = np.empty((4, R), np.int64)
+        out = (np.empty((R, N)), np.empty((terms, R, N)), np.empty((R, N, 2)), np.empty((R, N, SECTORS)),
+               np.empty((R, N, SECTORS, 2)), np.empty((R, N, SECTORS, 2)), np.empty((R, N, SECTORS), bool))  # Outputs
+        source, layers, params, world, grid = self._kernel_constants()
+        sensed = False
+
+        def block(lo: int, hi: int) -> None:
+            nonlocal sensed
+            if tick_kernels.fleet_runs(lo, hi, old, new, f, yg, best, source, gen.address, gen.states, terms,
+                                       per_component, params, world, grid, out, layers, STALL_SPEED, STALL_STEPS,
+                                       com, max_speed, counts):
+                sensed = True
+
+        parallel.each_block(block, R)
+        s.x, s.heading, s.u, s.cmd, s.status, s.slow, s.y, s.f_y, s.commanded = new
+        s.f, s.yg, s.best_fitness = f, yg, best
+        omega, c, force, gap, point, centre, hit = out
+        s.reading = SectorReading(gap, point, centre, hit) if sensed else None
+        s.force, s.omega, s.c = force, omega, c
+        s.k += 1
+        self._stale = True
+        return FleetInfo(s.k * self.params.dt, com, counts[0], counts[1], counts[2], counts[3], best.copy(), max_speed)
+
+    def _draw_layout(self) -> tuple[int, bool]:
+        """The law's U(0,1) draws a robot takes a tick: how many terms, and two (one a component) or one each."""
+        law = ROBOT_LAWS[self.params.law]
+        return law.terms, law.draws != "robot"
+
+    def _compiled_draws(self) -> CompiledDraws:
+        """The runs' generators as a kernel draws from them (rebuilt when they are replaced)."""
+        kept = self.__dict__.get("_gen")
+        if kept is None or kept[0] is not self.rngs:
+            kept = self._gen = (self.rngs, CompiledDraws(self.rngs))
+        return kept[1]
+
+    def _kernel_constants(self) -> tuple[np.ndarray, np.ndarray, tuple, tuple, tuple]:
+        """The source and the obstacle layers' x as float64 arrays, and the tick's parameters,
+        world and grid as the plain tuples :func:`tick_kernels.fleet_runs` takes."""
+        params = self._kernel_params()
+        kept = self.__dict__.get("_constants")
+        if kept is None or kept[0] is not self.world or kept[1] is not params:  # a world spec is frozen
+            world, grid = self._kernel_world()
+            kept = self._constants = (self.world, params, np.array(self.world.source, dtype=float),
+                                      np.array(self.world.layer_x, dtype=float).reshape(-1), tuple(params),
+                                      tuple(world), tuple(grid))
+        return kept[2:]
+
     # ------------------------------------------------------------------ snapshot
     STATE = ("x", "heading", "u", "cmd", "y", "f_y", "yg", "best_fitness", "f", "status", "slow", "a")
-    OPTIONAL = ("force", "omega", "c")  # the last tick's decisions (None before the first)
+    OPTIONAL = ("force", "omega", "c", "commanded")  # the last tick's decisions (None before the first)
 
     def snapshot(self) -> dict[str, Any]:
         """Everything the runs depend on beyond the settings they were built with, as plain data

@@ -24,10 +24,11 @@ from ..core.portable import arctan2
 from ..core.rng import component_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, integer, part
+from ..core.steering import Steering
 from ..pso.bests import admissible
 from ..pso.spso2011 import C_SPSO, OMEGA_SPSO, SPSO2011, Radial, draw
 from ..pso.spso_kernels import local_velocity
-from ..slo import metrics
+from ..slo import metrics, ranging
 from ..slo.beliefs import (
     Beliefs,
     EntryPolicy,
@@ -46,6 +47,7 @@ from ..slo.formation import AttractionRepulsion
 from ..slo.kernels import local_best
 from ..slo.neighbourhoods import Neighbourhood, NeighbourhoodKind
 from ..slo.objectives import QUALITY_THRESHOLDS, Fitness, slo_objective
+from ..slo.ranging import Ranging, SlotBeliefs, SlotLocaliser
 from ..slo.selection import RTSTriangle
 from ..slo.sensors import ErrorModel, error_model
 
@@ -106,6 +108,8 @@ class SLOConfig:
     ar_c: float = 25.0  # a squared length: scaled by unit²
     ar_v_max: float = np.inf
     unit: float = 1.0
+    ranging: Ranging = "all"  # every pair; "neighbours": docs/readings.md, "Ranging only the neighbours (ours)"
+    memory: int | None = None  # neighbours: robots that left a robot's neighbourhood it remembers; None = 4 × its size
 
     def __post_init__(self) -> None:
         if self.particles < 2:
@@ -124,6 +128,13 @@ class SLOConfig:
             raise ValueError(f"fitness_noise: must be >= 0, got {self.fitness_noise}")
         error_model(self.errors)
         slo_objective(self.objective)
+        if self.ranging not in ranging.RANGINGS:
+            raise ValueError(f"ranging: unknown {self.ranging!r}, choose from {ranging.RANGINGS}")
+        if self.ranging == "neighbours":
+            why = ranging.refusal(selection=self.selection, entry_policy=self.entry_policy,
+                                  neighbourhood=self.neighbourhood, motion=self.motion, ar_gain=self.ar_gain)
+            if why:
+                raise ValueError(f"ranging = 'neighbours': {why}")
 
     def localiser_params(self) -> LocaliserParams:
         return LocaliserParams(
@@ -172,7 +183,7 @@ class SLOState:
     f: np.ndarray  # (R, N) true fitness at x
     heading: np.ndarray  # (R, N) direction of the last command
     status: np.ndarray  # (R, N) int8, 0 = active (recorder convention)
-    beliefs: Beliefs
+    beliefs: Beliefs | SlotBeliefs  # every pair, or each robot's neighbours (ranging = "neighbours")
     best_fitness: np.ndarray  # (R,) best true fitness of the run so far
     k: int = 0
 
@@ -239,7 +250,7 @@ class SLOInfo:
     best_so_far: np.ndarray
     quality_met_at: np.ndarray  # first generation with best ≤ T, inf if not yet
     x: np.ndarray = field(repr=False)  # (R, N, 2)
-    beliefs: Beliefs = field(repr=False)
+    beliefs: Beliefs | SlotBeliefs = field(repr=False)
     _pairs: dict[str, np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)  # pair values
     _done: dict[tuple[str, str], np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
 
@@ -250,7 +261,9 @@ class SLOInfo:
     def _values(self, name: str) -> np.ndarray:
         if name not in self._pairs:
             b = self.beliefs
-            if name in ("e_abs", "e_rel"):
+            if isinstance(b, SlotBeliefs) and name != "distance":  # the neighbour pairs' slots
+                self._pairs.update(ranging.pair_errors(self.x, b))
+            elif name in ("e_abs", "e_rel"):
                 self._pairs["e_abs"], self._pairs["e_rel"] = metrics.distance_errors(self.x, b.est, b.valid)
             elif name == "e_ang":
                 self._pairs[name] = metrics.angular_errors(self.x, b.est, b.valid)
@@ -286,7 +299,10 @@ class SLOInfo:
     @cached_property
     def dead_reckoning(self) -> np.ndarray:
         """Share of x3 estimates."""
-        return metrics.dead_reckoning_share(self.beliefs.kind, self.beliefs.valid)
+        b = self.beliefs
+        if isinstance(b, SlotBeliefs):
+            return metrics.dead_reckoning_share(b.slot_kind, b.slot_valid)
+        return metrics.dead_reckoning_share(b.kind, b.valid)
 
     @cached_property
     def round_trip(self) -> np.ndarray:
@@ -326,6 +342,7 @@ class SLOSwarm:
         {"selection", "prediction_weight", "delta_cos", "delta_v", "literal_eq_3_1", "entry_policy", "neighbourhood",
          "neighbourhood_param", "errors", "objective", "walk_speed", "quality_threshold"})
     COLUMNS: ClassVar[Schema] = COLUMNS
+    steering: Steering | None = None  # the next generation's command from outside the law (core/steering.py)
 
     def __init__(self, *, runs: int = 1, seed: int = 0, first_run: int = 0, **params) -> None:
         if runs < 1:
@@ -388,15 +405,25 @@ class SLOSwarm:
             self.seed = int(seed)
         cfg, n = self.config, self.config.particles
         self.streams = component_generators(self.seed, self.first_run, self.runs)
+        self.steering = None
         lo, hi = cfg.area()
         init = self.streams["init"]
         x = np.stack([g.uniform(lo, hi, (n, 2)) for g in init])
         u = np.stack([g.uniform(lo, hi, (n, 2)) - g.uniform(lo, hi, (n, 2)) for g in init])  # RandomMovement()
-        est = random_estimates(init, n, lo, hi) if cfg.initial_estimates == "random" else relative_truth(x)
-        self.localiser = Localiser(cfg.localiser_params(), self.errors, self.streams, n)
         self._pso_draws = CompiledDraws(self.streams["pso"])  # compiled, the same numbers
-        adjacency = self.rule.adjacency(x, self.streams["topology"])
-        beliefs = self.localiser.start(x, adjacency, est)
+        beliefs: Beliefs | SlotBeliefs
+        self.localiser: Localiser | SlotLocaliser
+        if cfg.ranging == "neighbours":  # no N × N array: the pairs' initial estimates are drawn as used
+            truth, keys = cfg.initial_estimates == "truth", ranging.initial_keys(self.streams)
+            start = ranging.Start(truth, x.copy(), keys, lo, hi)
+            nb = ranging.neighbour_slots(self.rule, x)
+            memory = 4 * nb.shape[2] if cfg.memory is None else cfg.memory
+            self.localiser = SlotLocaliser(cfg.localiser_params(), self.errors, self.streams, n, start, memory)
+            beliefs = self.localiser.start(x, nb)
+        else:
+            est = random_estimates(init, n, lo, hi) if cfg.initial_estimates == "random" else relative_truth(x)
+            self.localiser = Localiser(cfg.localiser_params(), self.errors, self.streams, n)
+            beliefs = self.localiser.start(x, self.rule.adjacency(x, self.streams["topology"]), est)
         shape = (self.runs, n)
         self.state = SLOState(
             x=x, u=u, P=np.zeros_like(x), fP=np.full(shape, np.inf), f=self.fitness(x),
@@ -414,7 +441,8 @@ class SLOSwarm:
         (:mod:`~shoal.engine.core.snapshot`): truth, PSO memory, beliefs, calibration, every stream."""
         s = self.state
         return {"k": s.k, "seed": self.seed, "state": {n: np.array(getattr(s, n)) for n in self.STATE},
-                "beliefs": beliefs_data(s.beliefs), "met": self._met.copy(), "localiser": self.localiser.snapshot(),
+                "beliefs": ranging.slot_beliefs_data(s.beliefs) if isinstance(s.beliefs, SlotBeliefs)
+                else beliefs_data(s.beliefs), "met": self._met.copy(), "localiser": self.localiser.snapshot(),
                 "streams": streams_data(self.streams)}
 
     def restore(self, data: dict[str, Any]) -> None:
@@ -427,14 +455,21 @@ class SLOSwarm:
             if got[n].shape != want:
                 raise SnapshotError(f"state.{n}: expected shape {want}, got {got[n].shape}")
         got["status"] = got["status"].astype(np.int8)
-        beliefs = beliefs_from(part(data, "beliefs"))
-        if beliefs.est.shape != (R, N, N, 2):
-            raise SnapshotError(f"beliefs.est: expected shape {(R, N, N, 2)}, got {beliefs.est.shape}")
+        beliefs: Beliefs | SlotBeliefs
+        if isinstance(self.localiser, SlotLocaliser):
+            beliefs = ranging.slot_beliefs_from(part(data, "beliefs"), R, N)
+        else:
+            beliefs = beliefs_from(part(data, "beliefs"))
+            if beliefs.est.shape != (R, N, N, 2):
+                raise SnapshotError(f"beliefs.est: expected shape {(R, N, N, 2)}, got {beliefs.est.shape}")
         met = arrays(part(data, "met"), "met", dtype=np.floating)
         if met.shape != (R,):
             raise SnapshotError(f"met: expected shape {(R,)}, got {met.shape}")
         k, seed = integer(part(data, "k"), "k"), integer(part(data, "seed"), "seed")
         self.localiser.restore(part(data, "localiser"))
+        if isinstance(self.localiser, SlotLocaliser):
+            assert isinstance(beliefs, SlotBeliefs)
+            self.localiser.adopt(beliefs)
         restore_streams(self.streams, part(data, "streams"))
         self.seed, self._met = seed, met
         self.state = SLOState(**got, beliefs=beliefs, k=k)
@@ -458,14 +493,25 @@ class SLOSwarm:
             f = f + self.config.fitness_noise * z
         return f
 
-    def _pso_command(self) -> np.ndarray:
-        """The PSO part of Alg. 1 (Mai §3.6, p. 32) for every particle: pbest update, local best, [3.10]–[3.11]."""
+    def _pso_command(self, steering: Steering | None = None) -> np.ndarray:
+        """The PSO part of Alg. 1 (Mai §3.6, p. 32) for every particle: pbest update, local best, [3.10]–[3.11]
+        (with the inertia ω and c1, c2 of ``steering`` where it gives them: the numpy update, the same bits)."""
         s, cfg = self.state, self.config
         f = self._sensed_fitness()
         # steps 2–4, compiled: pbest update, best informant, local best (see SLOConfig.local_best)
-        s.P, s.fP, self_best, L = local_best(f, s.fP, s.P, s.adjacency, s.est, cfg.local_best == "pbest")
+        if isinstance(s.beliefs, SlotBeliefs):
+            s.P, s.fP, self_best, L = ranging.local_best(f, s.fP, s.P, s.beliefs, cfg.local_best == "pbest")
+        else:
+            s.P, s.fP, self_best, L = local_best(f, s.fP, s.P, s.adjacency, s.est, cfg.local_best == "pbest")
         n = f.shape[1]
-        return local_velocity(self.spso, s.u, s.P, L, draw(self._pso_draws, n), self_best)  # steps 5–7, compiled
+        draws = draw(self._pso_draws, n)
+        if steering is not None and (steering.omega is not None or steering.c is not None):
+            law = self.spso
+            omega, c = steering.coefficients(law.inertia, np.array([law.c1, law.c2]), f.shape)
+            per = np.asarray(omega, dtype=float)[..., None]
+            law = replace(law, inertia=per, c1=c[0][..., None], c2=c[1][..., None])  # type: ignore[arg-type]
+            return law.local_velocity(s.u, s.P, L, draws, self_best)
+        return local_velocity(self.spso, s.u, s.P, L, draws, self_best)  # steps 5–7, compiled
 
     def _walk_command(self) -> np.ndarray:
         """Random walk (Mai §4.5, p. 41): speed ~ U(0, walk_speed), direction ~ U(0, 2π)."""
@@ -477,16 +523,20 @@ class SLOSwarm:
 
     # ------------------------------------------------------------------ tick
     def step(self) -> SLOInfo:
-        """Advance every run by one generation and return its metrics."""
+        """Advance every run by one generation and return its metrics (steered by :attr:`steering`:
+        its velocity is the whole displacement of the generation)."""
         s, cfg = self.state, self.config
+        steering, self.steering = self.steering, None
         if cfg.motion == "pso":
-            v_new = self._pso_command()
+            v_new = self._pso_command(steering)
         elif cfg.motion == "random_walk":
             v_new = self._walk_command()
         else:
             v_new = self.formation.velocity(s.est, s.valid)
         if cfg.motion != "formation" and cfg.ar_gain > 0:  # collision-avoidance term (Mai §2.1.2, p. 9)
             v_new = v_new + self.formation.velocity(s.est, s.valid)
+        if steering is not None and steering.velocity is not None:  # the law's draws are made all the same
+            v_new = np.array(np.broadcast_to(steering.velocity, s.x.shape), dtype=float)
         x_prev = s.x
         s.x = s.x + v_new  # [3.12], perfect movement (Mai §3.1, p. 21)
         s.u = v_new
@@ -494,8 +544,13 @@ class SLOSwarm:
         s.heading = np.where(moving, arctan2(v_new[..., 1], v_new[..., 0]), s.heading)
         if cfg.pbest_shift == "commanded":
             s.P = s.P - v_new  # [3.13]
-        adjacency = self.rule.adjacency(s.x, self.streams["topology"])
-        s.beliefs = self.localiser.update(s.beliefs, x_prev, s.x, adjacency)
+        if isinstance(self.localiser, SlotLocaliser):
+            assert isinstance(s.beliefs, SlotBeliefs)
+            s.beliefs = self.localiser.update(s.beliefs, x_prev, s.x, ranging.neighbour_slots(self.rule, s.x), s.k + 1)
+        else:
+            assert isinstance(s.beliefs, Beliefs)
+            adjacency = self.rule.adjacency(s.x, self.streams["topology"])
+            s.beliefs = self.localiser.update(s.beliefs, x_prev, s.x, adjacency)
         if cfg.pbest_shift == "measured":
             s.P = s.P - s.beliefs.odometry  # "Shifting the personal best [3.13]", physical mode
         s.f = self.fitness(s.x)

@@ -56,16 +56,17 @@ from ..acoustics.strategies import LocInfo, Sensed, Strategy, initial_memory, ma
 from ..acoustics.surrogate import surrogate
 from ..acoustics.triangulation import Triangles
 from ..core.contract import check_live
+from ..core.positions import Oracle, PositionSource
 from ..core.rng import run_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, fields_of, from_fields, integer, part, rng_states, set_rng_states
-from ..pso.laws import adapted_velocity, motion_heading
+from ..core.steering import SLACK, Steering
+from ..pso.laws import adapted_velocity, motion_heading, reachable
 from ..pso.tuning import from_beta, split
 from ..robots.dvc import dvc_nonomni, forward_guard, w_max
 from ..robots.laws import arc_pose_update, energy_limit, nonomni_velocity, to_body
 from ..robots.sensing import SectorReading
 from ..robots.swarm_sensing import contacts, pairwise, sense_robots
-from ..slo.positions import Oracle, PositionSource
 
 ControllerName = Literal["adapted", "nonomni"]
 AcousticMode = Literal["waveform", "surrogate"]
@@ -248,6 +249,7 @@ class AcousticSwarm:
     LIVE: ClassVar[frozenset[str]] = frozenset({f.name for f in fields(SonarParams)} - _FIXED | {"slo"})
     COLUMNS: ClassVar[Schema] = COLUMNS
     state: SonarState
+    steering: Steering | None = None  # the next tick's command from outside the law (core/steering.py)
 
     def __init__(self, params: SonarParams | None = None, *, robots: int = 10, runs: int = 1, seed: int = 0,
                  first_run: int = 0, positions: PositionSource | None = None, compiled: bool = True) -> None:
@@ -323,6 +325,7 @@ class AcousticSwarm:
             self.seed = int(seed or 0)
         p, N = self.params, self._robots
         self.rngs = run_generators(self.seed, self.first_run, self.runs)
+        self.steering = None
         x = np.empty((self.runs, N, 2))
         heading = np.empty((self.runs, N))
         bearing0 = np.empty(self.runs)
@@ -426,18 +429,24 @@ class AcousticSwarm:
         """(R, N, 2) where each robot believes the global best is."""
         return self.state.x + self._to_global(self.state.f_hat)
 
-    def _adapted(self, idx: np.ndarray, x: np.ndarray, g: np.ndarray, rngs: list):
+    def _adapted(self, idx: np.ndarray, x: np.ndarray, g: np.ndarray, rngs: list, steering: Steering | None = None):
         """Adapted PSO [3.11], [3.10] towards the attractor vectors ``g`` (2, R', N, 2);
-        heading = direction of u (docs/readings.md, "Heading of an omnidirectional robot")."""
+        heading = direction of u (docs/readings.md, "Heading of an omnidirectional robot").
+        Steered: ω, c or the velocity given (within the law's reachable set)."""
         s, N = self.state, self._robots
         r = np.stack([gen.random((2, N, 2)) for gen in rngs], axis=1)  # r1, r2 per component
-        u = adapted_velocity(s.cmd[idx], g, self.c, self.omega, r)  # [3.11]
+        omega, c = (self.omega, self.c) if steering is None else steering.coefficients(self.omega, self.c, x.shape[:2])
+        u = adapted_velocity(s.cmd[idx], g, c, omega, r)  # [3.11]
+        if steering is not None and steering.velocity is not None:
+            u = reachable(np.asarray(steering.velocity, dtype=float), s.cmd[idx], c, omega)
         x_new = x + self.dt * u  # [3.10]
         return x_new, motion_heading(u, s.heading[idx]), u, u, None
 
-    def _nonomni(self, idx: np.ndarray, x: np.ndarray, g: np.ndarray, ring: np.ndarray, rngs: list, pair):
+    def _nonomni(self, idx: np.ndarray, x: np.ndarray, g: np.ndarray, ring: np.ndarray, rngs: list, pair,
+                 steering: Steering | None = None):
         """Non-omni controller [8.7] = [5.13] with DVC [5.14]–[5.16], ring obstacle round
-        ``ring`` (y_g), energy limit; attractor vectors ``g`` (2, R', N, 2)."""
+        ``ring`` (y_g), energy limit; attractor vectors ``g`` (2, R', N, 2). Steered: ω, c or the
+        command [v, w] given (forward only, within the energy limit)."""
         p, s, N = self.params, self.state, self._robots
         o = s.heading[idx]
         reading = sense_robots(x, o, robot_radius=p.robot_radius, sensing_range=p.sensing_range, pair=pair)
@@ -445,9 +454,14 @@ class AcousticSwarm:
             reading = with_escort(reading, x, o, ring, p.r_trap, sensing_range=p.sensing_range)
         omega, c = dvc_nonomni(reading.gap, alpha=p.alpha_dvc, beta=p.beta, dt=p.dt, sensing_range=p.sensing_range,
                                w_max=self.w_max, c1_share=p.c1_share, v_max=p.U)
+        if steering is not None:
+            omega, c = steering.coefficients(omega, c, x.shape[:2])  # type: ignore[assignment]
         r = np.stack([gen.random((5, N)) for gen in rngs], axis=1)  # r1..r5
         vw = nonomni_velocity(s.cmd[idx], to_body(g[0], o), to_body(g[1], o), c, omega, r)  # [5.13]
         v, w = energy_limit(vw[..., 0], vw[..., 1], p.U)  # [5.11], [5.12]
+        if steering is not None and steering.velocity is not None:  # the law's draws are made all the same
+            given = np.asarray(steering.velocity, dtype=float)
+            v, w = energy_limit(np.maximum(given[..., 0], 0.0), given[..., 1], p.U, slack=SLACK)
         if p.guard:
             v = forward_guard(v, reading.gap, alpha=p.alpha_dvc, dt=p.dt)
         x_new, o_new = arc_pose_update(x, o, v, w, p.dt)  # [5.5]–[5.10]
@@ -470,26 +484,27 @@ class AcousticSwarm:
 
     # ------------------------------------------------------------------ tick
     def step(self) -> SonarInfo:
-        """Advance every running run by one tick Δt."""
+        """Advance every running run by one tick Δt (steered by :attr:`steering`, if set)."""
         s = self.state
+        steering, self.steering = self.steering, None
         idx = np.flatnonzero(s.running)
         s.k += 1
         if idx.size:
-            self._advance(idx)
+            self._advance(idx, None if steering is None else steering.runs(idx))
         self.positions.observe(s.x, s.k)  # where the moves ended: current beliefs for drawing
         return self.info()
 
-    def _advance(self, idx: np.ndarray) -> None:
-        """The tick of the running runs ``idx``."""
+    def _advance(self, idx: np.ndarray, steering: Steering | None = None) -> None:
+        """The tick of the running runs ``idx`` (``steering``: theirs)."""
         p, s = self.params, self.state
         rngs = [self.rngs[i] for i in idx]
         x, src = s.x[idx], s.source[idx]
         sensed, power, b = self._listen(x, s.heading[idx], src, rngs)  # 1 listen
         d = self._bests(idx, x, sensed, rngs)  # 2 bests
         if p.controller == "adapted":  # 3 velocity, 4 move
-            x_new, o_new, u, cmd, reading = self._adapted(idx, x, d.g, rngs)
+            x_new, o_new, u, cmd, reading = self._adapted(idx, x, d.g, rngs, steering)
         else:
-            x_new, o_new, u, cmd, reading = self._nonomni(idx, x, d.g, d.ring, rngs, pairwise(x))
+            x_new, o_new, u, cmd, reading = self._nonomni(idx, x, d.g, d.ring, rngs, pairwise(x), steering)
         s.x[idx], s.heading[idx], s.u[idx], s.cmd[idx] = x_new, o_new, u, cmd
         s.y[idx], s.f_hat[idx], s.y_g[idx] = d.y, d.f_hat, d.y_g
         s.steps[idx] += 1

@@ -9,22 +9,39 @@ from __future__ import annotations
 
 import operator
 from dataclasses import dataclass, fields
-from typing import Any, ClassVar, Literal, get_args
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, get_args
 
 import numpy as np
 
+from ..core import parallel
 from ..core.contract import check_live
 from ..core.objectives import Objective
+from ..core.positions import Oracle, PositionSource
 from ..core.rng import BlockDraws, run_generators
 from ..core.schema import Column, Schema
 from ..core.snapshot import SnapshotError, arrays, integer, part, rng_states, set_rng_states
-from ..pso import kernels
+from ..core.steering import Steering
 from ..pso.bests import best_index, global_best, update_personal, warn_unfound
 from ..pso.bounds import confine
 from ..pso.coeffs import CoefficientPolicy, Constant
-from ..pso.laws import LAWS, Law
+from ..pso.laws import LAWS, Law, reachable
 from ..pso.laws import motion_heading as _heading
-from ..slo.positions import Oracle, PositionSource
+
+if TYPE_CHECKING:
+    from ..core.compiled_draws import CompiledDraws
+    from ..pso import kernels
+else:
+    class _Kernels:
+        """The compiled Chapter 3 kernels (numba), imported at their first use: a swarm on its numpy
+        tick never loads numba. That first use puts the module itself under this name."""
+
+        def __getattr__(self, name: str) -> Any:
+            global kernels
+            from ..pso import kernels
+
+            return getattr(kernels, name)
+
+    kernels = _Kernels()
 
 Attractors = Literal["literal", "ahead"]
 PbestOrder = Literal["before_velocity", "after_velocity"]
@@ -173,6 +190,7 @@ class Simulation:
     LIVE: ClassVar[frozenset[str]] = frozenset(
         {"policy", "law", "dt", "slo", "robots", "attractors", "pbest_order", "objective"})
     COLUMNS: ClassVar[Schema] = COLUMNS
+    steering: Steering | None = None  # the next tick's command from outside the law (core/steering.py)
 
     def __init__(
         self,
@@ -232,6 +250,7 @@ class Simulation:
         if seed is not None:
             self.seed = int(seed)
         self._rngs = run_generators(self.seed, self.first_run, self.runs)
+        self.steering = None
         self._block: BlockDraws | None = None
         self._setup: tuple | None = None
         x, u = self._spawn(self._robots)
@@ -367,21 +386,28 @@ class Simulation:
         return np.stack([g.random(shape) for g in self.rngs], axis=1)
 
     def step(self) -> StepInfo:
-        """Advance every run by one control tick Δt."""
-        info = self._compiled_step() if self._compiled_tick() else self._numpy_step()
+        """Advance every run by one control tick Δt (steered by :attr:`steering`, if set)."""
+        steering, self.steering = self.steering, None
+        if self._compiled_tick() and (steering is None or steering.velocity is None):
+            info = self._compiled_step(steering)
+        else:
+            info = self._numpy_step(steering)
         if not self._warned:
             self._honest()
         return info
 
-    def _numpy_step(self) -> StepInfo:
+    def _numpy_step(self, steering: Steering | None = None) -> StepInfo:
         """The tick of :meth:`step` in numpy (the reference of the compiled one)."""
         s = self.state
         if self.pbest_order == "before_velocity":  # Algorithm 1 phase A first
             self._update_bests()
-        omega, c = self.policy.coefficients(self.t, self.dt, self.d)
+        omega, c = self._tick_coefficients(steering)
         self._coefficients = (omega, np.asarray(c))
         g = self._directions()
         u_new = self.law.velocity(s.u, g, c, omega, self._draw(g.shape[0]))
+        if steering is not None and steering.velocity is not None:  # the law's draws are made all the same
+            command = np.asarray(steering.velocity, dtype=float)
+            u_new = reachable(command, s.u, c, omega) if self.law.adapted else command
         if self.pbest_order == "after_velocity":  # the velocity saw last tick's bests
             self._update_bests()
         x_new = self.law.position(s.x, u_new, self.dt)
@@ -395,6 +421,13 @@ class Simulation:
         s.k += 1
         self.positions.observe(s.x, s.k)  # where the moves ended: current beliefs for drawing
         return self.info()
+
+    def _tick_coefficients(self, steering: Steering | None) -> tuple[np.ndarray | float, np.ndarray]:
+        """ω and c of this tick: the policy's, or those of ``steering`` where it gives them."""
+        omega, c = self.policy.coefficients(self.t, self.dt, self.d)
+        if steering is None:
+            return omega, c
+        return steering.coefficients(omega, c, self.state.x.shape[:2])
 
     def _compiled_tick(self) -> bool:
         """:func:`kernels.swarm_step` does the tick: the laws it knows (standard, Adapted with
@@ -440,11 +473,11 @@ class Simulation:
         self._setup = (key, setup) if np.shares_memory(source, obj.source) else None
         return setup
 
-    def _compiled_step(self) -> StepInfo:
+    def _compiled_step(self, steering: Steering | None = None) -> StepInfo:
         """The tick of :meth:`step` in one compiled call; the same numbers."""
         s, d = self.state, self.d
         R, N = s.x.shape[:2]
-        omega, c = self.policy.coefficients(self.t, self.dt, d)
+        omega, c = self._tick_coefficients(steering)
         c = np.asarray(c, dtype=float)
         self._coefficients = (omega, c)
         block = self._draws((2, N, d))
@@ -475,8 +508,9 @@ class Simulation:
     def run(self, steps: int, track: int = 0) -> RunSeries:
         """Advance ``steps`` ticks without a caller between them (headless use): the same
         numbers as ``steps`` calls of :meth:`step`. Where the compiled tick applies and the
-        coefficients are the same for every robot, whole blocks of ticks run in one compiled
-        call (:func:`kernels.swarm_run`); other ticks go through :meth:`step`."""
+        coefficients are the same for every robot, all the ticks of a block of runs go in one
+        compiled call (:func:`kernels.swarm_runs`), the blocks on every core; other ticks go
+        through :meth:`step` (a steered tick too)."""
         if steps < 0 or not 0 <= track < self.robots:
             raise ValueError(f"need steps >= 0 and 0 <= track < {self.robots}, got {steps}, {track}")
         R, d = self.runs, self.d
@@ -495,16 +529,22 @@ class Simulation:
         out.c.append(info.c)
         return 1
 
+    # ticks one compiled call of :meth:`run` takes at most (bounds the coefficient lists)
+    RUN_TICKS = 1 << 14
+
     def _run_compiled(self, k: int, steps: int, track: int, out: RunSeries) -> int:
-        """Ticks k … of :meth:`run` in one compiled call, as many as the block of draws holds
-        and while the coefficients are the same for every robot; 0 if none."""
-        if not self._compiled_tick():
+        """Ticks k … of :meth:`run` in compiled calls while the coefficients are the same for
+        every robot (and no steering is set), each block of runs in its own thread
+        (:mod:`~shoal.engine.core.parallel`), drawing from the runs' own generators; 0 if none."""
+        if not self._compiled_tick() or self.steering is not None:
+            return 0
+        ahead, literal, adapted, before, maximise, code, source, scale = self._kernel_setup()
+        if code == kernels.GIVEN:
             return 0
         s, d, dt = self.state, self.d, self.dt
         R, N = s.x.shape[:2]
-        block = self._draws((2, N, d))
         omegas, cs = [], []
-        for j in range(min(steps - k, block.ticks - block.used)):
+        for j in range(min(steps - k, self.RUN_TICKS)):
             omega, c = self.policy.coefficients((s.k + j) * dt, dt, d)  # self.t at that tick
             c = np.asarray(c, dtype=float)
             if not isinstance(omega, float) or c.shape != (2,):
@@ -514,21 +554,22 @@ class Simulation:
         n = len(omegas)
         if not n:
             return 0
-        ahead, literal, adapted, before, maximise, code, source, scale = self._kernel_setup()
-        if code == kernels.GIVEN:
-            return 0
+        gen = self._compiled_draws()  # settles a block of draws of the single-tick path first
         new, f = np.empty((2, 3) + s.x.shape), np.empty((R, N))
         y, f_y, yg, best = s.y.copy(), s.f_y.copy(), s.yg.copy(), s.best_fitness.copy()
         turns = s.turns()
-        first = block.used
-        block.used += n
-        last = kernels.swarm_run(s.x, s.u, y, f_y, f, block.draws, first, np.array(omegas), np.array(cs), ahead,
-                                 literal, adapted, dt, before, maximise, code, source, scale, new, yg, best,
-                                 turns.turn, turns.turned, out.speeds[k:k + n], out.best_fitness[k:k + n], track,
-                                 out.tracked[k:k + n])
+        w, c_all = np.array(omegas), np.array(cs)
+        speeds, bests, tracked = out.speeds[k:k + n], out.best_fitness[k:k + n], out.tracked[k:k + n]
+
+        def block(lo: int, hi: int) -> int:
+            return kernels.swarm_runs(lo, hi, s.x, s.u, y, f_y, f, gen.address, gen.states, w, c_all, ahead,
+                                      literal, adapted, dt, before, maximise, code, source, scale, new, yg, best,
+                                      turns.turn, turns.turned, speeds, bests, track, tracked)
+
+        parallel.each_block(block, R)
         turns.pending = True
         s.f, s.y, s.f_y, s.yg, s.best_fitness = f, y, f_y, yg, best
-        s.x, s.u, s.a = new[last]
+        s.x, s.u, s.a = new[(n - 1) % 2]
         out.t[k:k + n] = [(s.k + j + 1) * dt for j in range(n)]
         out.omega += omegas
         out.c += cs
@@ -537,6 +578,16 @@ class Simulation:
         if not self._warned:
             self._honest()
         return n
+
+    def _compiled_draws(self) -> "CompiledDraws":
+        """The runs' generators as a kernel draws from them (where one call a tick leaves them)."""
+        from ..core.compiled_draws import CompiledDraws  # (numba: imported with the kernels, at first use)
+
+        rngs = self.rngs
+        kept = self.__dict__.get("_gen")
+        if kept is None or kept[0] is not rngs:
+            kept = self._gen = (rngs, CompiledDraws(rngs))
+        return kept[1]
 
     # ------------------------------------------------------------------ snapshot
     STATE = ("x", "u", "a", "y", "f_y", "yg", "best_fitness", "f", "heading", "status")
@@ -565,7 +616,7 @@ class Simulation:
                 raise SnapshotError(f"state.{n}: expected shape {shape}, got {got[n].shape}")
         omega = part(data, "omega")
         omega = arrays(omega, "omega") if isinstance(omega, np.ndarray) else omega
-        if not isinstance(omega, float):
+        if not isinstance(omega, (float, np.ndarray)):  # an array: ω per robot (a steered tick)
             raise SnapshotError("omega: expected a float or an array")
         k, seed, dt = integer(part(data, "k"), "k"), integer(part(data, "seed"), "seed"), part(data, "dt")
         if not isinstance(dt, float) or not dt > 0:

@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from ..core.compiled import kernel
+from ..core.compiled_draws import double_at
 from ..core.sums import BLOCK, block_sum
 
 # objectives evaluated in the kernel, by their Objective names; a code is the index
@@ -156,62 +157,88 @@ def swarm_step(x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: 
     ω, c_1 and c_2 are ``omega`` and ``c`` (2,) for every robot, or ``omega_robots`` (R, N) and
     ``c_robots`` (2, R, N) where those are not empty; ``ahead`` (d,) is both attractors'
     direction unless ``literal``."""
-    R, N, d = x.shape
-    buf = np.empty(d)
-    per_robot = omega_robots.shape[0] > 0
-    for r in range(R):
-        if code != GIVEN:
-            objective(code, x, r, source, scale, buf, f)
-        if before:  # Algorithm 1 phase A first
-            _bests(r, x, f, y, f_y, yg, best, maximise)
-        top = big = -np.inf
-        for i in range(N):
-            w, c1, c2 = (omega_robots[r, i], c_robots[0, r, i], c_robots[1, r, i]) if per_robot else (omega, c[0], c[1])
-            move = False
-            for k in range(d):
-                if literal:  # the directions g_1, g_2
-                    g1, g2 = y[r, i, k] - x[r, i, k], yg[r, k] - x[r, i, k]
-                else:
-                    g1 = g2 = ahead[k]
-                if adapted:
-                    g1, g2 = _sgn(g1), _sgn(g2)
-                uk = u[r, i, k]
-                v = w * uk + (0.0 + (c1 * draws[r, tick, 0, i, k]) * g1 + (c2 * draws[r, tick, 1, i, k]) * g2)
-                new[1, r, i, k] = v  # [2.1] / [3.11]
-                new[2, r, i, k] = (v - uk) / dt if dt != 1.0 else v - uk  # [3.22] (/1: no bit)
-                new[0, r, i, k] = x[r, i, k] + (dt * v if adapted else v)  # [3.10] / [2.2]
-                buf[k] = v * v
-                move |= v != 0.0
-                big = _maximum(big, abs(v))
-            if move:
-                turned[r, i] = True
-                for k in range(turn.shape[2]):
-                    turn[r, i, k] = new[1, r, i, k]
-            top = _maximum(top, math.sqrt(0.0 + block_sum(buf, 0, d)))
-        speeds[0, r], speeds[1, r] = top, big
-        if not before:  # the velocity saw last tick's bests
-            _bests(r, x, f, y, f_y, yg, best, maximise)
+    buf = np.empty(x.shape[2])
+    for r in range(x.shape[0]):
+        run_tick(r, x, u, y, f_y, f, draws[r, tick], omega, omega_robots, c, c_robots, ahead, literal, adapted, dt,
+                 before, maximise, code, source, scale, new, yg, best, turn, turned, speeds, buf)
 
 
 @kernel
-def swarm_run(x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: np.ndarray, draws: np.ndarray,
-              first: int, omegas: np.ndarray, cs: np.ndarray, ahead: np.ndarray, literal: bool, adapted: bool,
-              dt: float, before: bool, maximise: bool, code: int, source: np.ndarray, scale: float, new: np.ndarray,
-              yg: np.ndarray, best: np.ndarray, turn: np.ndarray, turned: np.ndarray, speeds: np.ndarray,
-              bests: np.ndarray, track: int, tracked: np.ndarray) -> int:
-    """``len(omegas)`` ticks of :func:`swarm_step` in one call, with the coefficients ``omegas[j]``
-    and ``cs[j]`` (the same for every robot) and the draws ``draws[:, first + j]`` at tick j. The
-    states alternate between ``new[0]`` and ``new[1]`` (each (3, R, N, d)); returns the index of
-    the last. Per tick j: ``speeds[j]`` as in :func:`swarm_step`, ``bests[j]`` the runs' best
-    fitness, ``tracked[j]`` the velocity of robot ``track`` of every run."""
+def run_tick(r: int, x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: np.ndarray, draws: np.ndarray,
+             omega: float, omega_robots: np.ndarray, c: np.ndarray, c_robots: np.ndarray, ahead: np.ndarray,
+             literal: bool, adapted: bool, dt: float, before: bool, maximise: bool, code: int, source: np.ndarray,
+             scale: float, new: np.ndarray, yg: np.ndarray, best: np.ndarray, turn: np.ndarray, turned: np.ndarray,
+             speeds: np.ndarray, buf: np.ndarray) -> None:
+    """Run r's part of :func:`swarm_step`, its draws ``draws`` (2, N, d); ``buf``: scratch of length d.
+    It reads and writes row r of every array only."""
+    N, d = x.shape[1], x.shape[2]
+    per_robot = omega_robots.shape[0] > 0
+    if code != GIVEN:
+        objective(code, x, r, source, scale, buf, f)
+    if before:  # Algorithm 1 phase A first
+        _bests(r, x, f, y, f_y, yg, best, maximise)
+    top = big = -np.inf
+    for i in range(N):
+        w, c1, c2 = (omega_robots[r, i], c_robots[0, r, i], c_robots[1, r, i]) if per_robot else (omega, c[0], c[1])
+        move = False
+        for k in range(d):
+            if literal:  # the directions g_1, g_2
+                g1, g2 = y[r, i, k] - x[r, i, k], yg[r, k] - x[r, i, k]
+            else:
+                g1 = g2 = ahead[k]
+            if adapted:
+                g1, g2 = _sgn(g1), _sgn(g2)
+            uk = u[r, i, k]
+            v = w * uk + (0.0 + (c1 * draws[0, i, k]) * g1 + (c2 * draws[1, i, k]) * g2)
+            new[1, r, i, k] = v  # [2.1] / [3.11]
+            new[2, r, i, k] = (v - uk) / dt if dt != 1.0 else v - uk  # [3.22] (/1: no bit)
+            new[0, r, i, k] = x[r, i, k] + (dt * v if adapted else v)  # [3.10] / [2.2]
+            buf[k] = v * v
+            move |= v != 0.0
+            big = _maximum(big, abs(v))
+        if move:
+            turned[r, i] = True
+            for k in range(turn.shape[2]):
+                turn[r, i, k] = new[1, r, i, k]
+        top = _maximum(top, math.sqrt(0.0 + block_sum(buf, 0, d)))
+    speeds[0, r], speeds[1, r] = top, big
+    if not before:  # the velocity saw last tick's bests
+        _bests(r, x, f, y, f_y, yg, best, maximise)
+
+
+@kernel
+def swarm_runs(lo: int, hi: int, x: np.ndarray, u: np.ndarray, y: np.ndarray, f_y: np.ndarray, f: np.ndarray,
+               fn: int, states: np.ndarray, omegas: np.ndarray, cs: np.ndarray, ahead: np.ndarray, literal: bool,
+               adapted: bool, dt: float, before: bool, maximise: bool, code: int, source: np.ndarray, scale: float,
+               new: np.ndarray, yg: np.ndarray, best: np.ndarray, turn: np.ndarray, turned: np.ndarray,
+               speeds: np.ndarray, bests: np.ndarray, track: int, tracked: np.ndarray) -> int:
+    """``len(omegas)`` ticks of :func:`swarm_step` for runs ``lo … hi − 1`` in one call (for
+    :meth:`Simulation.run`), with the coefficients ``omegas[j]`` and ``cs[j]`` (the same for
+    every robot) at tick j, each run through all its ticks before the next, drawing its U(0,1)
+    numbers itself from its own generator (PCG64's C
+    function at address ``fn`` on the state at ``states[r]``) as one ``random((2, N, d))`` call a tick
+    would: the same numbers, and the generator left where those calls leave it. Blocks of runs
+    touch disjoint rows, so they may run in parallel threads (the kernel releases the GIL).
+    The states alternate between ``new[0]`` and ``new[1]`` (each (3, R, N, d)); returns the
+    index of the last. Per tick j: ``speeds[j]`` as in :func:`swarm_step`, ``bests[j]`` the
+    runs' best fitness, ``tracked[j]`` the velocity of robot ``track`` of every run."""
+    N, d = x.shape[1], x.shape[2]
+    ticks = omegas.shape[0]
+    draws, buf = np.empty((2, N, d)), np.empty(d)
     none2, none3 = np.empty((0, 0)), np.empty((0, 0, 0))
-    last = 0
-    for j in range(omegas.shape[0]):
-        last = j % 2
-        out = new[last]
-        swarm_step(x, u, y, f_y, f, draws, first + j, omegas[j], none2, cs[j], none3, ahead, literal, adapted, dt,
-                   before, maximise, code, source, scale, out, yg, best, turn, turned, speeds[j])
-        bests[j] = best
-        tracked[j] = out[1, :, track]
-        x, u = out[0], out[1]
-    return last
+    for r in range(lo, hi):
+        state = states[r]
+        for j in range(ticks):
+            for t in range(2):
+                for i in range(N):
+                    for k in range(d):
+                        draws[t, i, k] = double_at(fn, state)
+            xj = x if j == 0 else new[(j - 1) % 2, 0]
+            uj = u if j == 0 else new[(j - 1) % 2, 1]
+            out = new[j % 2]
+            run_tick(r, xj, uj, y, f_y, f, draws, omegas[j], none2, cs[j], none3, ahead, literal, adapted, dt,
+                     before, maximise, code, source, scale, out, yg, best, turn, turned, speeds[j], buf)
+            bests[j, r] = best[r]
+            for k in range(d):
+                tracked[j, r, k] = out[1, r, track, k]
+    return (ticks - 1) % 2

@@ -13,7 +13,6 @@ from dataclasses import dataclass
 from typing import Any, Callable, Literal
 
 import numpy as np
-from scipy.special import expit
 
 from ..core.registry import Registry
 from . import stability
@@ -36,6 +35,8 @@ def squash(z: np.ndarray, kind: Squash = "sgn", width: float = 1.0) -> np.ndarra
         if kind == "tanh":
             return np.tanh(z / width)
         if kind == "logistic":
+            from scipy.special import expit  # (scipy.special takes a fifth of a second to import: only here)
+
             return 2.0 * expit(z / width) - 1.0
     raise ValueError(f"unknown squash {kind!r}")
 
@@ -77,6 +78,16 @@ def adapted_velocity(
     return _omega(omega) * u + terms.sum(axis=0)
 
 
+def reachable(command: np.ndarray, u: np.ndarray, c: np.ndarray, omega: np.ndarray | float) -> np.ndarray:
+    """``command`` clipped, component by component, to what an Adapted law [3.36] can reach from
+    ``u`` in one tick: ω u ± Σ |c_n| (each term adds at most c_n). So |u_j| ≤ ĉ/(1 − ω) = U_j holds
+    once it holds [3.26], and the acceleration stays within A+ and A− [3.27]–[3.28]. Rounding is
+    monotone, so the law's own next velocity lies inside and passes unchanged."""
+    wu = _omega(omega) * u
+    reach = np.abs(_coeffs(c, u.ndim + 1)).sum(axis=0)
+    return np.minimum(np.maximum(command, wu - reach), wu + reach)
+
+
 # (u, g, c, omega, r, smooth width) → u[k+1]
 Velocity = Callable[[np.ndarray, np.ndarray, np.ndarray, "np.ndarray | float", np.ndarray, float], np.ndarray]
 
@@ -87,7 +98,14 @@ Region = Literal["adapted", "order-2"]  # the (ω, ĉ) regions the panel draws: 
 @dataclass(frozen=True)
 class VelocityLaw:
     """One Chapter 3 velocity law and what the rest of Shoal needs to know about it: how it
-    moves, its coefficient rule and its stability region."""
+    moves, its coefficient rule and its stability region.
+
+    ``name`` is the preset's ``controller.law``, ``label`` what a panel shows; ``adapted``: bounded
+    per-component terms with the position update x + Δt u (the physical tuning U, A+, Δt and the
+    speed bounds need it); ``velocity(u, g, c, omega, r, width)``: the next velocities (see
+    :func:`standard_velocity`); ``omega_range`` (lo, hi): the raw ω it needs, lo ≤ ω < hi, with
+    ``rule`` the rule in words that a refusal names; ``region``: its stability region in the
+    (ω, ĉ) plane, ``"adapted"`` [3.13]–[3.14] or ``"order-2"`` [3.9], which the panel draws."""
 
     name: str
     label: str

@@ -29,6 +29,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..core.compiled import kernel
+from ..core.steering import SLACK
 from .queries import bb_overlap, circle_point, circle_sweep, segment_box, segment_normal, segment_point, segment_sweep
 
 # the variants the kernel knows, by their FleetParams names; a code is the index
@@ -72,6 +73,9 @@ class TickParams(NamedTuple):
     tolerance: float  # contact tolerance
     s_floor: float  # smallest gap in [4.4]
     reach: float  # R_s + 2r + 2 v_max Δt: robots farther apart cannot interact within a tick
+    steered: bool = False  # the command is the one in ``cmd`` (core/steering.py), limited as the law limits its own;
+    # the robots then sense nothing in the tick (nothing reads it), unless the DVC guard needs the gaps
+    given: bool = False  # ω and c are read from ``out`` where they are not NaN (core/steering.py)
 
 
 class Grid(NamedTuple):
@@ -391,9 +395,37 @@ def _limited(v: float, w: float, p: TickParams) -> tuple[float, float]:
 
 
 @kernel
+def _steered(prev: np.ndarray, p: TickParams) -> tuple[float, float]:
+    """A command from outside the law within the law's limits (laws.steered_command): a speed at
+    most v_max, or [v, w] forward only (non-omni), within the energy limit and the turning radius;
+    each limit where the command exceeds it by more than SLACK."""
+    if not p.body_frame:
+        ux, uy = prev[0], prev[1]
+        speed = math.sqrt(ux * ux + uy * uy)
+        if speed > p.v_max * (1.0 + SLACK):
+            f = p.v_max / speed
+            ux, uy = ux * f, uy * f
+        return ux, uy
+    v, w = prev[0], prev[1]
+    if p.law == NONOMNI:
+        v = _maximum(v, 0.0)
+    e_t = 0.5 * (v * v) + p.rot_factor * (w * w)
+    e_max = 0.5 * (p.v_max * p.v_max)
+    if e_t > e_max * (1.0 + SLACK):
+        lam = math.sqrt(e_max / e_t)
+        v, w = v * lam, w * lam
+    if p.r_min != 0.0:
+        w = _sgn(w) * _minimum(abs(w), abs(v) / p.r_min)
+    return v, w
+
+
+@kernel
 def _command(prev: np.ndarray, gp: np.ndarray, gg: np.ndarray, fx: float, fy: float, heading: float, c: np.ndarray,
              omega: float, r: np.ndarray, p: TickParams) -> tuple[float, float]:
-    """The velocity law of robot_laws.ROBOT_LAWS: [4.2] clipped, [4.5], [5.4] and [5.13]."""
+    """The velocity law of robot_laws.ROBOT_LAWS: [4.2] clipped, [4.5], [5.4] and [5.13] (or, steered,
+    the command in ``prev`` within the law's limits)."""
+    if p.steered:
+        return _steered(prev, p)
     if p.law == RPSO or p.law == ADAPTED_RPSO:
         out = np.empty(2)
         for d in range(2):
@@ -622,98 +654,123 @@ def phase_b(x: np.ndarray, heading: np.ndarray, u: np.ndarray, cmd: np.ndarray, 
     ``draws`` (n, R, N, k) its U(0,1) draws (k = 2 per component, 1 per robot). Returns whether
     any robot sensed (False when every robot of every run has collided)."""
     R, N = status.shape
-    head, nxt, prv, cell, ostamp = _grid_scratch(N, g, w)
-    colour = np.zeros(N, np.int64)
-    stamp = np.full(N + 1, -1, np.int64)
-    order = np.empty(N, np.int64)
-    start = np.empty(N + 2, np.int64)
-    members = np.empty(N, np.int64)
-    new_cmd = np.empty((N, 2))
-    touched = np.zeros(N, np.bool_)
-    hit = np.zeros(N, np.bool_)
-    c = np.zeros(5)
-    adj = np.empty(SECTORS)
+    scratch = _scratch(N, g, w)
     sensed = False
     for r in range(R):
-        xr = x[r]
-        head[:] = -1
-        for i in range(N):
-            _grid_insert(i, _grid_cell(xr[i, 0], xr[i, 1], g), head, nxt, prv, cell)
-        if p.sequential:
-            groups = _colour(xr, p.reach, g, head, nxt, colour, stamp)
-        else:
-            colour[:] = 0
-            groups = 1
-        start[:] = 0  # the active robots of each colour, in index order
-        for i in range(N):
-            if status[r, i] == ACTIVE:
-                start[colour[i] + 2] += 1
-        for k in range(groups):
-            start[k + 2] += start[k + 1]
-        for i in range(N):
-            if status[r, i] == ACTIVE:
-                order[start[colour[i] + 1]] = i
-                start[colour[i] + 1] += 1
-        for k in range(groups):
-            m = 0
-            for s in range(start[k], start[k + 1]):
-                i = order[s]
-                if status[r, i] == ACTIVE:  # a robot hit earlier in this tick sits out
-                    members[m] = i
-                    m += 1
-            if m == 0:
+        sensed |= _phase_b_run(r, x, heading, u, cmd, status, g_p[r], g_g[r], draws[:, r], p, w, g, out, scratch)
+    return sensed
+
+
+Scratch = tuple  # what one run's phase B works in (:func:`_scratch`)
+
+
+@kernel
+def _scratch(N: int, g: Grid, w: WorldArrays) -> tuple:
+    """Scratch of :func:`_phase_b_run` for N robots: the robot grid, the colouring, the groups,
+    each group's commands and contacts."""
+    head, nxt, prv, cell, ostamp = _grid_scratch(N, g, w)
+    return (head, nxt, prv, cell, ostamp, np.zeros(N, np.int64), np.full(N + 1, -1, np.int64), np.empty(N, np.int64),
+            np.empty(N + 2, np.int64), np.empty(N, np.int64), np.empty((N, 2)), np.zeros(N, np.bool_),
+            np.zeros(N, np.bool_), np.zeros(5), np.empty(SECTORS))
+
+
+@kernel
+def _phase_b_run(r: int, x: np.ndarray, heading: np.ndarray, u: np.ndarray, cmd: np.ndarray, status: np.ndarray,
+                 g_p: np.ndarray, g_g: np.ndarray, draws: np.ndarray, p: TickParams, w: WorldArrays, g: Grid,
+                 out: Outputs, scratch: tuple) -> bool:
+    """Phase B of run r (:func:`phase_b`); ``g_p``, ``g_g`` (N, 2) and ``draws`` (n, N, k) are
+    the run's own. Reads and writes row r of the arrays only. Whether a robot sensed."""
+    N = status.shape[1]
+    head, nxt, prv, cell, ostamp, colour, stamp, order, start, members, new_cmd, touched, hit, c, adj = scratch
+    sensed = False
+    xr = x[r]
+    head[:] = -1
+    for i in range(N):
+        _grid_insert(i, _grid_cell(xr[i, 0], xr[i, 1], g), head, nxt, prv, cell)
+    if p.sequential:
+        groups = _colour(xr, p.reach, g, head, nxt, colour, stamp)
+    else:
+        colour[:] = 0
+        groups = 1
+    start[:] = 0  # the active robots of each colour, in index order
+    for i in range(N):
+        if status[r, i] == ACTIVE:
+            start[colour[i] + 2] += 1
+    for k in range(groups):
+        start[k + 2] += start[k + 1]
+    for i in range(N):
+        if status[r, i] == ACTIVE:
+            order[start[colour[i] + 1]] = i
+            start[colour[i] + 1] += 1
+    for k in range(groups):
+        m = 0
+        for s in range(start[k], start[k + 1]):
+            i = order[s]
+            if status[r, i] == ACTIVE:  # a robot hit earlier in this tick sits out
+                members[m] = i
+                m += 1
+        if m == 0:
+            continue
+        blind = p.steered and not (p.guard and p.coefficients != CONSTANT)  # a given command needs no sensing
+        sensed = sensed or not blind
+        for s in range(m):  # everyone in the group senses and decides ...
+            i = members[s]
+            if blind:
+                new_cmd[i, 0], new_cmd[i, 1] = _steered(cmd[r, i], p)
                 continue
-            sensed = True
-            for s in range(m):  # everyone in the group senses and decides ...
-                i = members[s]
-                turn = heading[r, i] if p.body_frame else 0.0
-                gap, point, centre, seen = out.gap[r, i], out.point[r, i], out.centre[r, i], out.hit[r, i]
-                _sense(i, xr, turn, p, w, g, head, nxt, ostamp, gap, point, centre, seen)
-                for q in range(SECTORS):
-                    adj[q] = _maximum(gap[q] - p.s_min, 0.0) if p.s_min > 0 else gap[q]
-                omega = _coefficients(adj, p, c)
-                fx = fy = 0.0
-                if not p.body_frame:
-                    fx, fy = _virtual_force(xr[i, 0], xr[i, 1], gap, centre, seen, p)
-                cx, cy = _command(cmd[r, i], g_p[r, i], g_g[r, i], fx, fy, heading[r, i], c, omega,
-                                  draws[:, r, i, :], p)
-                if p.guard and p.coefficients != CONSTANT:
-                    cx, cy = _guard(cx, cy, xr[i, 0], xr[i, 1], point, adj, p)
-                new_cmd[i, 0], new_cmd[i, 1] = cx, cy
-                out.omega[r, i] = omega
+            turn = heading[r, i] if p.body_frame else 0.0
+            gap, point, centre, seen = out.gap[r, i], out.point[r, i], out.centre[r, i], out.hit[r, i]
+            _sense(i, xr, turn, p, w, g, head, nxt, ostamp, gap, point, centre, seen)
+            for q in range(SECTORS):
+                adj[q] = _maximum(gap[q] - p.s_min, 0.0) if p.s_min > 0 else gap[q]
+            omega = _coefficients(adj, p, c)
+            if p.given:  # ω, c given from outside where not NaN
+                if out.omega[r, i] == out.omega[r, i]:
+                    omega = out.omega[r, i]
                 for n in range(p.terms):
-                    out.c[n, r, i] = c[n]
-                out.force[r, i, 0], out.force[r, i, 1] = fx, fy
-            touched[:] = False  # robots a mover collides with, then whoever overlaps a body
-            for s in range(m):  # ... then they move one after another ...
-                i = members[s]
-                sx, sy = xr[i, 0], xr[i, 1]
-                ex, ey, new_heading = _target(sx, sy, heading[r, i], new_cmd[i, 0], new_cmd[i, 1], p)
-                nx_, ny_ = ex, ey
-                hit[i] = False
-                if sx != ex or sy != ey:
-                    t, kind, idx = _first_contact(i, sx, sy, ex, ey, p.radius, xr, p, w, g, head, nxt, ostamp)
-                    if t >= 0.0:  # stop where the swept disc first touches
-                        f = max(t - STOP_SHORT, 0.0)
-                        nx_, ny_ = sx + f * (ex - sx), sy + f * (ey - sy)
-                        hit[i] = p.tolerance <= 0 or _sweep_body(kind, idx, sx, sy, ex, ey, p.radius - p.tolerance,
-                                                                 xr, p, w) >= 0.0
-                        if hit[i] and kind == ROBOT_BODY:  # both robots of a collision are disabled
-                            touched[idx] = True
-                    _grid_remove(i, head, nxt, prv, cell)
-                    xr[i, 0], xr[i, 1] = nx_, ny_
-                    _grid_insert(i, _grid_cell(nx_, ny_, g), head, nxt, prv, cell)
-                heading[r, i] = new_heading
-                u[r, i, 0], u[r, i, 1] = (nx_ - sx) / p.dt, (ny_ - sy) / p.dt
-                cmd[r, i, 0], cmd[r, i, 1] = new_cmd[i, 0], new_cmd[i, 1]
-            for s in range(m):  # ... and whoever overlaps a body beyond the tolerance has collided
-                _touching(members[s], xr, p, w, g, head, nxt, ostamp, touched)
-            for s in range(m):
-                if hit[members[s]]:
-                    status[r, members[s]] = COLLIDED
-            for j in range(N):
-                if touched[j]:
-                    status[r, j] = COLLIDED
+                    if out.c[n, r, i] == out.c[n, r, i]:
+                        c[n] = out.c[n, r, i]
+            fx = fy = 0.0
+            if not p.body_frame:
+                fx, fy = _virtual_force(xr[i, 0], xr[i, 1], gap, centre, seen, p)
+            cx, cy = _command(cmd[r, i], g_p[i], g_g[i], fx, fy, heading[r, i], c, omega, draws[:, i, :], p)
+            if p.guard and p.coefficients != CONSTANT:
+                cx, cy = _guard(cx, cy, xr[i, 0], xr[i, 1], point, adj, p)
+            new_cmd[i, 0], new_cmd[i, 1] = cx, cy
+            out.omega[r, i] = omega
+            for n in range(p.terms):
+                out.c[n, r, i] = c[n]
+            out.force[r, i, 0], out.force[r, i, 1] = fx, fy
+        touched[:] = False  # robots a mover collides with, then whoever overlaps a body
+        for s in range(m):  # ... then they move one after another ...
+            i = members[s]
+            sx, sy = xr[i, 0], xr[i, 1]
+            ex, ey, new_heading = _target(sx, sy, heading[r, i], new_cmd[i, 0], new_cmd[i, 1], p)
+            nx_, ny_ = ex, ey
+            hit[i] = False
+            if sx != ex or sy != ey:
+                t, kind, idx = _first_contact(i, sx, sy, ex, ey, p.radius, xr, p, w, g, head, nxt, ostamp)
+                if t >= 0.0:  # stop where the swept disc first touches
+                    f = max(t - STOP_SHORT, 0.0)
+                    nx_, ny_ = sx + f * (ex - sx), sy + f * (ey - sy)
+                    hit[i] = p.tolerance <= 0 or _sweep_body(kind, idx, sx, sy, ex, ey, p.radius - p.tolerance,
+                                                             xr, p, w) >= 0.0
+                    if hit[i] and kind == ROBOT_BODY:  # both robots of a collision are disabled
+                        touched[idx] = True
+                _grid_remove(i, head, nxt, prv, cell)
+                xr[i, 0], xr[i, 1] = nx_, ny_
+                _grid_insert(i, _grid_cell(nx_, ny_, g), head, nxt, prv, cell)
+            heading[r, i] = new_heading
+            u[r, i, 0], u[r, i, 1] = (nx_ - sx) / p.dt, (ny_ - sy) / p.dt
+            cmd[r, i, 0], cmd[r, i, 1] = new_cmd[i, 0], new_cmd[i, 1]
+        for s in range(m):  # ... and whoever overlaps a body beyond the tolerance has collided
+            _touching(members[s], xr, p, w, g, head, nxt, ostamp, touched)
+        for s in range(m):
+            if hit[members[s]]:
+                status[r, members[s]] = COLLIDED
+        for j in range(N):
+            if touched[j]:
+                status[r, j] = COLLIDED
     return sensed
 
 

@@ -28,12 +28,15 @@ def _shrink(size: np.ndarray, limit: float | np.ndarray) -> np.ndarray:
     return np.divide(limit, size, out=np.ones_like(size), where=size > limit)
 
 
-def clip_speed(u: np.ndarray, v_max: float | np.ndarray) -> np.ndarray:
-    """Scale each vector of ``u`` (..., d) down to length ``v_max``, keeping its direction."""
+def clip_speed(u: np.ndarray, v_max: float | np.ndarray, slack: float = 0.0) -> np.ndarray:
+    """Scale each vector of ``u`` (..., d) down to length ``v_max``, keeping its direction (only
+    those longer than ``v_max·(1 + slack)``)."""
     speed = np.linalg.norm(u, axis=-1, keepdims=True)
     v_max = np.asarray(v_max, dtype=float)
     if v_max.ndim:
         v_max = v_max[..., None]
+    if slack:
+        return u * np.divide(v_max, speed, out=np.ones_like(speed), where=speed > v_max * (1.0 + slack))
     return u * _shrink(speed, v_max)
 
 
@@ -165,16 +168,17 @@ def energy_limit(
     v_max: float | np.ndarray,
     inertia: Inertia = "pi",
     body_radius: float | None = None,
+    slack: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Shrink (v, w) by one factor λ = √(e_max/e_t) where e_t > e_max (docs/readings.md,
-    "Scaling v and w to the energy budget").
+    "Scaling v and w to the energy budget"; with ``slack``, only where e_t > e_max·(1 + slack)).
 
     e_l = v²/2 [5.11], e_r = k w² [5.12], e_max = v_max²/2; the turning radius v/w is kept.
     """
     v, w = np.asarray(v, dtype=float), np.asarray(w, dtype=float)
     e_t = 0.5 * v**2 + rotational_energy_factor(inertia, body_radius) * w**2
     e_max = 0.5 * np.asarray(v_max, dtype=float) ** 2
-    over = e_t > e_max
+    over = e_t > (e_max * (1.0 + slack) if slack else e_max)
     lam = np.where(over, np.sqrt(e_max / np.where(over, e_t, 1.0)), 1.0)
     return v * lam, w * lam
 
@@ -278,6 +282,7 @@ class RobotLaw:
     body_frame: bool  # the command is [v, w] in the robot frame (a differential drive)
     dvc: Literal["omni", "nonomni"] | None  # the DVC form that tunes it ([4.14]–[4.16], [5.14]–[5.16]), if any
     command: Command
+    forward: bool = False  # a body-frame law that only drives forward (v ≥ 0, [5.13])
 
 
 def _rpso(cmd: np.ndarray, g_p: np.ndarray, g_g: np.ndarray, force: np.ndarray, heading: np.ndarray, c: np.ndarray,
@@ -315,5 +320,17 @@ ROBOT_LAWS: Registry[RobotLaw] = Registry(
     RobotLaw("rpso", "Original RPSO", 3, "component", False, None, _rpso),  # [4.2]
     RobotLaw("adapted-rpso", "Adapted RPSO", 3, "component", False, "omni", _adapted_rpso),  # [4.5]
     RobotLaw("robot-centred", "Robot-centred", 2, "component", True, None, _robot_centred),  # [5.4]
-    RobotLaw("nonomni", "Non-omni", 5, "robot", True, "nonomni", _nonomni),  # [5.13]
+    RobotLaw("nonomni", "Non-omni", 5, "robot", True, "nonomni", _nonomni, forward=True),  # [5.13]
 )
+
+
+def steered_command(command: np.ndarray, law: RobotLaw, lim: Limits, slack: float) -> np.ndarray:
+    """A command from outside the law (:mod:`shoal.engine.core.steering`) within the limits the
+    law's own commands keep: a world-frame velocity at most v_max (as [4.2]'s clip); [v, w] within
+    the energy limit [5.11]–[5.12] and the minimum turning radius [5.6], forward only for a law
+    that drives forward. Each limit acts where the command exceeds it by more than ``slack``."""
+    if not law.body_frame:
+        return clip_speed(command, lim.v_max, slack)
+    v = np.maximum(command[..., 0], 0.0) if law.forward else command[..., 0]
+    v, w = energy_limit(v, command[..., 1], lim.v_max, lim.inertia, lim.radius, slack)
+    return np.stack([v, min_turning_radius(v, w, lim.r_min)], axis=-1)

@@ -19,6 +19,69 @@ from ..core.compiled import f64, kernel
 from .candidates import Candidates, Flag
 from .selection import Kind
 
+# Kind and Flag as plain ints, as a compiled function returns them
+X1, X2, X3 = int(Kind.X1), int(Kind.X2), int(Kind.X3)
+GEOMETRIC, FALLBACK, MITIGATED_V, MITIGATED_COS = (int(Flag.GEOMETRIC), int(Flag.FALLBACK), int(Flag.MITIGATED_V),
+                                                   int(Flag.MITIGATED_COS))
+
+
+@kernel
+def css_pair(vx: float, vy: float, a: float, b: float, px: float, py: float, delta_cos: float, delta_v: float,
+             literal: bool, w: float, new: bool, use_coin: bool, coin: bool) -> tuple:
+    """Candidates [3.1]–[3.6] and the CSS choice [3.7] of one ordered pair from its relative
+    displacement (vx, vy) = v*_j − v*_i, its ranges ``a`` = d*(t−1) and ``b`` = d*(t) and its
+    previous estimate (px, py); ``new``: a neighbour arriving under a geometric entry policy
+    (its candidate unblended; by ``coin`` with ``use_coin``). Returns the candidates
+    (x1x, x1y, x2x, x2y, x3x, x3y), ok, geometric, cos α, the thinness, the estimate (ex, ey),
+    its Kind and the set's Flag."""
+    x3x, x3y = px + vx, py + vy  # [3.4]
+    speed = math.sqrt(vx * vx + vy * vy)
+    ok = (a > 0.0 and b > 0.0 and speed > 0.0 and math.isfinite(a) and math.isfinite(b)
+          and math.isfinite(speed) and math.isfinite(x3x) and math.isfinite(x3y))
+    s0, s1, sv = (a, b, speed) if ok else (1.0, 1.0, 1.0)
+    t0, t1 = sv / s0, sv / s1
+    thin = t0 if (t0 <= t1 or t0 != t0) else t1
+    thin_ok = not thin <= delta_v  # [3.6]
+    c = (s1 * s1 + sv * sv - s0 * s0) / (2.0 * sv * (s0 if literal else s1))  # [3.1]
+    if not math.isfinite(c):
+        c = 2.0
+    cos_ok = not 1.0 - abs(c) <= delta_cos  # [3.5]
+    geometric = ok and thin_ok and cos_ok
+    if geometric:  # [3.2], [3.3]
+        cc = min(max(c, -1.0), 1.0)
+        sn = math.sqrt(1.0 - cc * cc)
+        ux, uy = vx / sv, vy / sv
+        ax, ay = (s1 * cc) * ux, (s1 * cc) * uy
+        bx, by = (s1 * sn) * uy, (s1 * sn) * -ux
+        x1x, x1y, x2x, x2y = ax + bx, ay + by, ax - bx, ay - by
+    else:
+        x1x, x1y, x2x, x2y = x3x, x3y, x3x, x3y
+    if not ok:
+        flag = FALLBACK
+    elif not thin_ok:
+        flag = MITIGATED_V
+    elif geometric:
+        flag = GEOMETRIC
+    else:
+        flag = MITIGATED_COS
+    if not geometric:
+        ex, ey, kind = x3x, x3y, X3
+    else:
+        # [3.7]: the geometric candidate closest to x3, blended with it by w; ‖e1‖ ≤ ‖e2‖ compared
+        # as numpy's square roots (a root is monotone: they are needed only when e1² > e2²)
+        e1x, e1y, e2x, e2y = x1x - x3x, x1y - x3y, x2x - x3x, x2y - x3y
+        q1, q2 = e1x * e1x + e1y * e1y, e2x * e2x + e2y * e2y
+        pick1 = q1 <= q2 or math.sqrt(q1) <= math.sqrt(q2)
+        if new and use_coin:
+            pick1 = coin
+        xcx, xcy = (x1x, x1y) if pick1 else (x2x, x2y)
+        if new:
+            ex, ey = xcx, xcy
+        else:
+            ex, ey = w * x3x + (1.0 - w) * xcx, w * x3y + (1.0 - w) * xcy
+        kind = X1 if pick1 else X2
+    return x1x, x1y, x2x, x2y, x3x, x3y, ok, geometric, c, thin, ex, ey, kind, flag
+
 
 @kernel
 def _pairs(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, delta_cos: float, delta_v: float,
@@ -30,29 +93,10 @@ def _pairs(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, delt
         for i in range(n):
             for j in range(n):
                 vx, vy = v[r, j, 0] - v[r, i, 0], v[r, j, 1] - v[r, i, 1]  # v*_j − v*_i
-                a, b = d0[r, i, j], d1[r, i, j]
-                x3x, x3y = prev[r, i, j, 0] + vx, prev[r, i, j, 1] + vy  # [3.4]
-                speed = math.sqrt(vx * vx + vy * vy)
-                ok = (a > 0.0 and b > 0.0 and speed > 0.0 and math.isfinite(a) and math.isfinite(b)
-                      and math.isfinite(speed) and math.isfinite(x3x) and math.isfinite(x3y))
-                s0, s1, sv = (a, b, speed) if ok else (1.0, 1.0, 1.0)
-                t0, t1 = sv / s0, sv / s1
-                thin = t0 if (t0 <= t1 or t0 != t0) else t1
-                thin_ok = not thin <= delta_v  # [3.6]
-                c = (s1 * s1 + sv * sv - s0 * s0) / (2.0 * sv * (s0 if literal else s1))  # [3.1]
-                if not math.isfinite(c):
-                    c = 2.0
-                cos_ok = not 1.0 - abs(c) <= delta_cos  # [3.5]
-                geometric = ok and thin_ok and cos_ok
-                if geometric:  # [3.2], [3.3]
-                    cc = min(max(c, -1.0), 1.0)
-                    sn = math.sqrt(1.0 - cc * cc)
-                    ux, uy = vx / sv, vy / sv
-                    ax, ay = (s1 * cc) * ux, (s1 * cc) * uy
-                    bx, by = (s1 * sn) * uy, (s1 * sn) * -ux
-                    x1x, x1y, x2x, x2y = ax + bx, ay + by, ax - bx, ay - by
-                else:
-                    x1x, x1y, x2x, x2y = x3x, x3y, x3x, x3y
+                new = use_entry and entry[r, i, j]
+                x1x, x1y, x2x, x2y, x3x, x3y, ok, geometric, c, thin, ex, ey, k, f = css_pair(
+                    vx, vy, d0[r, i, j], d1[r, i, j], prev[r, i, j, 0], prev[r, i, j, 1], delta_cos, delta_v, literal,
+                    w, new, use_coin, coin[r, i, j] if new and use_coin else False)
                 if full:
                     p = points[r, i, j]
                     p[0, 0], p[0, 1], p[1, 0], p[1, 1], p[2, 0], p[2, 1] = x1x, x1y, x2x, x2y, x3x, x3y
@@ -60,31 +104,8 @@ def _pairs(d0: np.ndarray, d1: np.ndarray, v: np.ndarray, prev: np.ndarray, delt
                     mask[r, i, j, 2] = True
                     cos_alpha[r, i, j] = c if ok else np.nan
                     thinness[r, i, j] = thin if ok else np.nan
-                if not ok:
-                    flag[r, i, j] = Flag.FALLBACK
-                elif not thin_ok:
-                    flag[r, i, j] = Flag.MITIGATED_V
-                elif geometric:
-                    flag[r, i, j] = Flag.GEOMETRIC
-                else:
-                    flag[r, i, j] = Flag.MITIGATED_COS
-                if not geometric:
-                    est[r, i, j, 0], est[r, i, j, 1], kind[r, i, j] = x3x, x3y, Kind.X3
-                    continue
-                # [3.7]: the geometric candidate closest to x3, blended with it by w; ‖e1‖ ≤ ‖e2‖ compared
-                # as numpy's square roots (a root is monotone: they are needed only when e1² > e2²)
-                e1x, e1y, e2x, e2y = x1x - x3x, x1y - x3y, x2x - x3x, x2y - x3y
-                q1, q2 = e1x * e1x + e1y * e1y, e2x * e2x + e2y * e2y
-                pick1 = q1 <= q2 or math.sqrt(q1) <= math.sqrt(q2)
-                new = use_entry and entry[r, i, j]
-                if new and use_coin:
-                    pick1 = coin[r, i, j]
-                xcx, xcy = (x1x, x1y) if pick1 else (x2x, x2y)
-                if new:
-                    est[r, i, j, 0], est[r, i, j, 1] = xcx, xcy
-                else:
-                    est[r, i, j, 0], est[r, i, j, 1] = w * x3x + (1.0 - w) * xcx, w * x3y + (1.0 - w) * xcy
-                kind[r, i, j] = Kind.X1 if pick1 else Kind.X2
+                flag[r, i, j] = f
+                est[r, i, j, 0], est[r, i, j, 1], kind[r, i, j] = ex, ey, k
 
 
 class Localised(NamedTuple):

@@ -16,6 +16,22 @@ from ..core.compiled import kernel
 
 
 @kernel
+def reading(dd: float, fail: float, z_m: float, z_a: float, sigma_m: float, sigma_a: float, perm_m: float,
+            perm_a: float, p_fail: float, max_range: float) -> float:
+    """One range d* [4.1]–[4.3] from the true distance ``dd``, the failure draw ``fail`` and the
+    normals ``z_m``, ``z_a``, with the observer's permanent ``perm_m``, ``perm_a``: 0 for a
+    failure, beyond ``max_range`` or a non-finite distance; a negative reading clamped to 0."""
+    finite = math.isfinite(dd) and dd <= max_range
+    d = dd if finite else 0.0
+    e_m = 1.0 + sigma_m * z_m + perm_m  # [4.2]
+    e_a = sigma_a * z_a + perm_a  # [4.3]
+    value = d * e_m + e_a  # [4.1]; docs/readings.md, "Negative ranges"
+    if not (value >= 0.0 or value != value):  # numpy's maximum(reading, 0)
+        value = 0.0
+    return 0.0 if fail < p_fail or not finite else value
+
+
+@kernel
 def ranges(dist: np.ndarray, fail: np.ndarray, z: np.ndarray, sigma_m: float, sigma_a: float, perm_m: np.ndarray,
            perm_a: np.ndarray, p_fail: float, max_range: float) -> np.ndarray:
     """d*_ij (R, N, N) from the true distances, the U(0,1) failure draws ``fail`` (R, N, N), the
@@ -26,16 +42,9 @@ def ranges(dist: np.ndarray, fail: np.ndarray, z: np.ndarray, sigma_m: float, si
     for r in range(R):
         for i in range(n):
             for j in range(n):
-                dd = dist[r, i, j]
-                finite = math.isfinite(dd) and dd <= max_range
-                d = dd if finite else 0.0
-                e_m = 1.0 + sigma_m * z[r, 0, i, j] + perm_m[r, i]  # [4.2]
-                e_a = sigma_a * z[r, 1, i, j] + perm_a[r, i]  # [4.3]
-                reading = d * e_m + e_a  # [4.1]; docs/readings.md, "Negative ranges"
-                if not (reading >= 0.0 or reading != reading):  # numpy's maximum(reading, 0)
-                    reading = 0.0
-                failed = fail[r, i, j] < p_fail or not finite
-                out[r, i, j] = 0.0 if failed or i == j else reading
+                value = reading(dist[r, i, j], fail[r, i, j], z[r, 0, i, j], z[r, 1, i, j], sigma_m, sigma_a,
+                                perm_m[r, i], perm_a[r, i], p_fail, max_range)
+                out[r, i, j] = 0.0 if i == j else value
     return out
 
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from shoal.engine.kinds.fleet import STALL_SPEED, STALL_STEPS
 from shoal.engine.robots.dvc import TABLE_4_1
-from shoal.presets.build import build_fleet
+from shoal.presets.builders.fleet import build_fleet
 from shoal.presets.io import load
 from shoal.presets.models import Robot, Scenario
 

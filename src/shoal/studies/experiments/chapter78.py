@@ -23,7 +23,7 @@ from typing import Any, Literal, Sequence
 import numpy as np
 
 from shoal.engine.acoustics.strategies import STRATEGIES
-from shoal.presets.build import build_sonar
+from shoal.presets.builders.sonar import build_sonar
 from shoal.presets.io import load
 from shoal.presets.models import Scenario
 

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from shoal.presets.build import world_for
+from shoal.presets.builders.world import world_for
 
 from . import chapter45 as ch
 from . import verdict as vd

@@ -28,7 +28,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from shoal.presets.build import sonar_params_for
+from shoal.presets.builders.sonar import sonar_params_for
 from shoal.presets.models import required
 
 from . import chapter78 as ch

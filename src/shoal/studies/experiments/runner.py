@@ -16,7 +16,7 @@ from typing import Any, Callable, Hashable, Iterator, Protocol, Sequence, TypeVa
 import numpy as np
 
 from shoal.engine.kinds.swarm import Simulation, StepInfo
-from shoal.presets.build import build_simulation
+from shoal.presets.builders.swarm import build_simulation
 from shoal.presets.io import load
 from shoal.presets.models import Scenario
 

@@ -33,6 +33,8 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from typing import Any, Callable, Iterator, Protocol, Sequence
 
+from shoal.engine.core import parallel
+
 Item = Any
 Results = Iterator[tuple[int, Any]]
 CHECK_PERIOD = 0.1  # s between two looks at the interrupt flag in a running item
@@ -54,9 +56,13 @@ _PROCESS_FLAG: Any = None  # a local pool's worker process: the pool's shared ev
 _thread = threading.local()  # ``flag`` of the item running in this thread (in process, or a Dask worker's thread)
 
 
-def _install_flag(flag: Any) -> None:
+def _install_flag(flag: Any, threads: int | None = None) -> None:
+    """A worker process's set-up: the interrupt flag, and its share of the cores for a batch's
+    runs (workers × threads ≤ cores: a batch's bytes do not depend on it)."""
     global _PROCESS_FLAG
     _PROCESS_FLAG = flag
+    if threads is not None:
+        parallel.set_threads(threads)
 
 
 def check_interrupt() -> None:
@@ -175,8 +181,9 @@ class LocalPool:
                 raise SchedulerError(f"the local process pool broke {attempt} times in one batch; giving up")
             if attempt > 0:
                 self.broken += 1
+            share = max(1, parallel.threads() // self.workers)
             pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=self.context, initializer=_install_flag,
-                                       initargs=(flag,))
+                                       initargs=(flag, share))
             with self._lock:
                 self._pool = pool
             try:

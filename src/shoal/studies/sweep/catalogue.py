@@ -29,7 +29,7 @@ import annotated_types as at
 from pydantic import BaseModel
 
 from shoal.presets.io import PresetError, set_dotted, validate
-from shoal.presets.kinds import kind_for, metric_columns, plugin_sections
+from shoal.presets.kinds import KINDS, kind_for, metric_columns, plugin_sections
 from shoal.presets.models import Registered, Scenario
 
 from .grid import label
@@ -263,58 +263,44 @@ class Outcome:
         return f"{self.label} [{self.unit}]" if self.unit else self.label
 
 
-LABELS: dict[str, tuple[str, str]] = {
-    # every kind
+COMMON_LABELS: dict[str, tuple[str, str]] = {  # the columns of every kind; each kind labels its own (its entry)
     "t": ("time the run ended", "s"),
     "peak_speed": ("highest robot speed over the run", "m/s"),
     "best_fitness": ("final best f", ""),
     "max_speed": ("highest robot speed at the end", "m/s"),
     "mean_speed": ("mean robot speed at the end", "m/s"),
-    # Chapter 3 swarm
-    "max_component": ("largest velocity component at the end", "m/s"),
-    "omega": ("inertia weight ω at the end", ""),
-    "c_hat": ("ĉ = c1 + c2 at the end", ""),
-    # fleet (Ch. 4–5)
-    "com_fitness": ("CoM fitness (mean x1) at the end", "m"),
-    "collided": ("collided robots", "robots"),
-    "stalled": ("stalled robots", "robots"),
-    "operational": ("operational robots", "robots"),
-    "layers_passed": ("obstacle layers passed", "layers"),
-    # acoustic swarm (Ch. 7–8)
-    "com_dist": ("CoM distance to the source at the end", "m"),
-    "converged": ("converged (1) or not (0)", ""),
-    "steps_to_converge": ("steps to converge", "steps"),
     "time_to_converge_s": ("time to converge", "s"),
-    "frac_inside_ring": ("share of robots inside the escort ring", ""),
-    "mean_dist_to_source": ("mean robot–source distance", "m"),
-    "contacts": ("robot contacts", "contacts"),
-    # Mai's SLO swarm (lengths in thesis units of a 100-wide area)
-    "generation_best": ("best f of the last generation", ""),
-    "quality_met_at": ("first generation with best f ≤ T", "generations"),
-    "e_abs_mean": ("absolute localisation error, mean over pairs", "units"),
-    "e_abs_median": ("absolute localisation error, median over pairs", "units"),
-    "e_rel_mean": ("relative localisation error, mean over pairs", ""),
-    "e_rel_median": ("relative localisation error, median over pairs", ""),
-    "e_ang_mean": ("angular localisation error, mean over pairs", "rad"),
-    "e_ang_median": ("angular localisation error, median over pairs", "rad"),
-    "distance_mean": ("distance between particles, mean over pairs", "units"),
-    "distance_median": ("distance between particles, median over pairs", "units"),
-    "dead_reckoning": ("share of estimates by dead reckoning", ""),
-    "round_trip": ("round-trip error", "units"),
 }
-# Not offered: where the run ended (step), positions, the SLO swarm's copy of best_fitness,
-# and the per-run spread and pair counts behind the SLO error statistics.
-HIDDEN = frozenset({"step", "com_x", "com_y", "source_x", "source_y", "best_so_far"})
-HIDDEN_SUFFIXES = ("_std", "_sem", "_count")
+HIDDEN_SUFFIXES = ("_std", "_sem", "_count")  # the per-run spread and pair counts behind the SLO error statistics
 
 
-# The outcome shown first: the first of these a scene records (its kind's headline measure).
-FIRST = ("com_dist", "com_fitness", "e_abs_mean", "best_fitness")
+def labels() -> dict[str, tuple[str, str]]:
+    """Column → (label, unit) of every outcome a sweep may offer: the common ones and each
+    registered kind's (``SceneKind.labels``)."""
+    out = dict(COMMON_LABELS)
+    for kind in KINDS.values():
+        out.update(kind.labels)
+    return out
+
+
+def hidden() -> frozenset[str]:
+    """Columns never offered as outcomes: where the run ended (step) and each kind's own
+    (``SceneKind.hidden``: positions, the SLO swarm's copy of best_fitness)."""
+    return frozenset({"step", *(c for kind in KINDS.values() for c in kind.hidden)})
+
+
+def first_columns() -> tuple[str, ...]:
+    """The outcomes shown first, in this order of preference: each kind's first headline column
+    (``SceneKind.headline``), the columns every kind has (best_fitness) last."""
+    firsts = [kind.headlines[0] for kind in KINDS.values() if kind.headlines]
+    common = set(COMMON_LABELS)
+    return tuple(dict.fromkeys([c for c in firsts if c not in common] + [c for c in firsts if c in common]))
 
 
 def first_outcome(outcomes: list[Outcome]) -> Outcome:
+    """The outcome shown first: its kind's headline measure (:func:`first_columns`)."""
     names = [o.name for o in outcomes]
-    return outcomes[next((names.index(n) for n in FIRST if n in names), 0)]
+    return outcomes[next((names.index(n) for n in first_columns() if n in names), 0)]
 
 
 def outcomes(scenario: Scenario) -> list[Outcome]:
@@ -325,6 +311,7 @@ def outcomes(scenario: Scenario) -> list[Outcome]:
 @functools.lru_cache(maxsize=16)
 def _outcomes(scenario_json: str) -> tuple[Outcome, ...]:
     columns = simulate_cell(CellJob(0, scenario_json, 0, 1, 0), 0, 1).columns  # built, not stepped
-    names = [n for n in columns if n not in HIDDEN and not n.endswith(HIDDEN_SUFFIXES)]
+    names = [n for n in columns if n not in hidden() and not n.endswith(HIDDEN_SUFFIXES)]
     schema = {c.name: (c.description, "" if c.unit in ("", "objective") else c.unit) for c in metric_columns()}
-    return tuple(Outcome(n, *LABELS.get(n) or schema.get(n) or (n.replace("_", " "), "")) for n in names)
+    named = labels()
+    return tuple(Outcome(n, *named.get(n) or schema.get(n) or (n.replace("_", " "), "")) for n in names)

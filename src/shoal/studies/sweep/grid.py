@@ -14,7 +14,7 @@ import tomllib
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
-from shoal.presets.build import check_world
+from shoal.presets.builders.world import check_world
 from shoal.presets.io import PresetError, parse_value, set_dotted, validate
 from shoal.presets.models import Scenario
 from shoal.presets.toml_bounds import check_toml
