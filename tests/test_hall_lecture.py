@@ -98,20 +98,20 @@ def test_the_class_follows_the_lecturer_to_another_kind_of_scene_and_to_compare(
     boss, w = lecturer(lecture), watcher(lecture)
     try:
         boss.set_value("preset", "course-dvc")
-        wait_until(lambda: lecture.lecture.session.kind.name == "fleet", what="the lecture on a fleet")
+        wait_until(lambda: lecture.lecture.session.kind.name == "fleet", what="the lecture on a fleet", timeout=120)
         assert lecture.lecture.session is lecture.lecture.lecturer.session
         wait_until(lambda: lecture.broadcast.arena is not None and lecture.broadcast.arena.name == "fleet"
-                   and w.saw("course-dvc"), what="the class on the fleet")
+                   and w.saw("course-dvc"), what="the class on the fleet", timeout=120)
         wait_until(lambda: any(n.startswith("/fleet") and n.endswith("/robots") for n in w.points),
-                   what="the fleet's robots on the class's page")
+                   what="the fleet's robots on the class's page", timeout=120)
         boss.send(_messages.GuiUpdateMessage(newest(boss, "compare with swarm B"), {"value": True}))
-        wait_until(lambda: lecture.lecture.session.twin is not None, what="swarm B on")
+        wait_until(lambda: lecture.lecture.session.twin is not None, what="swarm B on", timeout=120)
         press(boss, "Step")
         wait_until(lambda: any(n.startswith("/fleet") and "twin" in n for n in w.points),
-                   what="swarm B on the class's page")
+                   what="swarm B on the class's page", timeout=120)
     finally:
         boss.send(_messages.GuiUpdateMessage(newest(boss, "preset"), {"value": "default"}))
-        wait_until(lambda: lecture.lecture.session.kind.name != "fleet", what="back to the default scene")
+        wait_until(lambda: lecture.lecture.session.kind.name != "fleet", what="back to the default scene", timeout=120)
         boss.close()
         w.close()
 
