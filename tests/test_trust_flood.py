@@ -140,3 +140,24 @@ def test_a_99_kib_hostile_preset_on_the_wire_is_refused_at_once(served, name, da
         wait_until(lambda: c.saw(words), timeout=30, what="the refusal")
     finally:
         c.close()
+
+
+@pytest.mark.parametrize("message", ["ShareUrlRequest", "ShareUrlDisconnect"])
+def test_a_client_cannot_make_the_server_share_itself(served, capfd, monkeypatch, message):
+    """viser answers a ShareUrlRequest from any client by opening a public tunnel to the server
+    through its share service: the guard drops it, and viser's share calls are never made."""
+    calls: list[str] = []
+    monkeypatch.setattr(served.viser, "request_share_url", lambda *a, **k: calls.append("request"))
+    monkeypatch.setattr(served.viser, "disconnect_share_url", lambda *a, **k: calls.append("disconnect"))
+    c = _tab(served)
+    try:
+        frames = c.counts()[0]
+        c.ws.send(msgspec.msgpack.encode({"type": message}))
+        wait_until(lambda: c.counts()[0] > frames + 3, what="updates after the share request")
+        time.sleep(0.3)
+        assert not c.closed.is_set()
+    finally:
+        c.close()
+    assert calls == []
+    err = capfd.readouterr().err
+    assert f"{message}: this server is not shared" in err, err[-2000:]

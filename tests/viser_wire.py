@@ -105,6 +105,11 @@ class PagePlots:
             self.appends += 1
 
 
+def decode_arrays(payload: bytes) -> list[dict[str, Any]]:
+    """The messages of one viser frame with their binary buffers as 1-D numpy arrays."""
+    return decode_frame(payload, arrays=True)
+
+
 def _texts(value: Any) -> list[str]:
     if isinstance(value, str):
         return [value]
@@ -122,10 +127,13 @@ class WireClient:
 
     ``origin`` sends an ``Origin`` header as a browser page would; ``host`` connects to
     127.0.0.1 all the same but names ``host`` in the ``Host`` header (a DNS name pointed at
-    this machine). A refused upgrade raises ``websockets.exceptions.InvalidStatus``."""
+    this machine). ``path`` is the page's path (a lecture's ``/lecturer``, ``/p/<id>``) and
+    ``headers`` more request headers (a cookie). A refused upgrade raises
+    ``websockets.exceptions.InvalidStatus``."""
 
     def __init__(self, port: int, *, decode: bool = False, width: int = 1280, height: int = 800,
-                 origin: str | None = None, host: str | None = None, plots: bool = False) -> None:
+                 origin: str | None = None, host: str | None = None, plots: bool = False, path: str = "",
+                 headers: dict[str, str] | None = None) -> None:
         self.decode = decode or plots
         self.track_plots = plots  # keep the uPlot data the page would hold (``plots``)
         self.frames = 0
@@ -136,11 +144,13 @@ class WireClient:
         self.gui: list[dict[str, Any]] = []  # (decode=True) every GUI message received
         self.downloads: list[str] = []  # (decode=True) names of the files the server sent
         self.last: dict[str, dict[str, Any]] = {}  # (decode=True) the last message of each type
+        self.points: dict[str, Any] = {}  # (decode=True) node name → the last points it was sent ((N, 3) float32)
         self.closed = threading.Event()
         self._lock = threading.Lock()
         sock = socket.create_connection(("127.0.0.1", port)) if host else None
-        self.ws = connect(f"ws://{host or f'127.0.0.1:{port}'}", subprotocols=[f"viser-v{viser.__version__}"],
-                          max_size=None, open_timeout=30, origin=origin, sock=sock)  # type: ignore[arg-type]
+        self.ws = connect(f"ws://{host or f'127.0.0.1:{port}'}{path}", subprotocols=[f"viser-v{viser.__version__}"],
+                          max_size=None, open_timeout=30, origin=origin, sock=sock,  # type: ignore[arg-type]
+                          additional_headers=headers)
         camera = _messages.ViewerCameraMessage(
             wxyz=(1.0, 0.0, 0.0, 0.0), position=(0.0, 0.0, 40.0), fov=0.6, near=0.01, far=1000.0,
             image_height=height, image_width=width, look_at=(0.0, 0.0, 0.0), up_direction=(0.0, 1.0, 0.0))
@@ -158,13 +168,18 @@ class WireClient:
                 files: list[str] = []
                 robots = 0
                 last: dict[str, dict[str, Any]] = {}
+                points: dict[str, Any] = {}
                 if self.decode:
-                    for m in decode_frame(payload, arrays=self.track_plots):
+                    for m in decode_frame(payload, arrays=True):
+                        updates = m.get("updates") if m.get("type") == "SceneNodeUpdateMessage" else (
+                            m.get("props") if str(m.get("type", "")).endswith("PointCloudMessage") else None)
+                        if isinstance(updates, dict) and isinstance(updates.get("points"), np.ndarray):
+                            points[str(m.get("name", ""))] = updates["points"].reshape(-1, 3)
                         kind = m.get("type", "")
                         if self.track_plots:
                             with self._lock:
                                 self.plots.take(m)
-                            m = _without_arrays(m)
+                        m = _without_arrays(m)
                         last[kind] = m
                         if kind.startswith(("Gui", "Notification")):
                             texts += _texts(m)
@@ -182,6 +197,7 @@ class WireClient:
                     self.downloads += files
                     self.robot_updates += robots
                     self.last.update(last)
+                    self.points.update(points)
         except ConnectionClosed:
             pass
         finally:

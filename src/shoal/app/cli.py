@@ -1,4 +1,4 @@
-"""The ``shoal`` command: serve, run, reproduce, sweep, export-replay, warmup, presets."""
+"""The ``shoal`` command: serve, hall, run, reproduce, sweep, export-replay, warmup, presets."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from shoal import __version__
 EXIT_FAILED = 1
 EXIT_USAGE = 2
 DEFAULT_MAX_SESSIONS = 24  # as shoal.app.server.DEFAULT_MAX_SESSIONS (not imported: viser loads slowly)
+DEFAULT_MAX_WATCHERS = 500  # as shoal.app.hall.lecture.DEFAULT_MAX_WATCHERS
 MAX_PORT = 65535
 
 
@@ -71,11 +72,37 @@ def _cmd_serve(args: argparse.Namespace) -> int:
     except ValueError as e:
         return _err(str(e))
     try:
-        serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions,
-              allow_origins=origins, scheduler=args.scheduler, experiment_workers=args.experiment_workers,
-              projector=args.projector)
+        if args.lecture:
+            from shoal.app.hall.command import serve_lecture
+
+            serve_lecture(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions,
+                          max_watchers=args.max_watchers, allow_origins=origins, scheduler=args.scheduler,
+                          experiment_workers=args.experiment_workers, projector=args.projector)
+        else:
+            serve(preset=args.preset, host=args.host, port=args.port, max_sessions=args.max_sessions,
+                  allow_origins=origins, scheduler=args.scheduler, experiment_workers=args.experiment_workers,
+                  projector=args.projector)
     except OSError as e:
         return _err(str(e))
+    return 0
+
+
+def _cmd_hall(args: argparse.Namespace) -> int:
+    from shoal.presets.io import PresetError, load
+
+    try:
+        load(args.preset)
+    except PresetError as e:
+        return _err("bad preset:\n  " + "\n  ".join(e.messages))
+    from shoal.app.hall.supervisor import serve_hall
+    from shoal.app.origin_guard import check_origin_url
+
+    try:
+        origins = tuple(check_origin_url(url) for url in args.allow_origin or ())
+    except ValueError as e:
+        return _err(str(e))
+    serve_hall(args.preset, workers=args.workers, host=args.host, port=args.port, max_sessions=args.max_sessions,
+               max_watchers=args.max_watchers, allow_origins=origins)
     return 0
 
 
@@ -340,7 +367,29 @@ def build_parser() -> argparse.ArgumentParser:
                    help="without --scheduler: local worker processes for the Sweep tab (default 1)")
     s.add_argument("--projector", action="store_true",
                    help="every tab opens in projector mode (text twice its size; a browser's own choice wins)")
+    s.add_argument("--lecture", action="store_true",
+                   help="teach a class: prints the lecturer's address (with a secret key: it drives one run) and "
+                        "the class's (every tab there watches that run, and may take it over or answer a round)")
+    s.add_argument("--max-watchers", type=whole(1), default=DEFAULT_MAX_WATCHERS, metavar="N",
+                   help=f"with --lecture: class tabs at once (default {DEFAULT_MAX_WATCHERS})")
     s.set_defaults(func=_cmd_serve)
+
+    h = sub.add_parser("hall", help="teach a class across processes: the lecture, N workers for the private "
+                                    "sessions, and nginx in front, started and stopped together")
+    h.add_argument("--workers", type=whole(1), default=2, metavar="N",
+                   help="worker processes for private sessions (take-overs, /solo); default 2")
+    h.add_argument("--host", default="127.0.0.1", help="nginx's bind address (default loopback; 0.0.0.0: the class's "
+                                                       "machines)")
+    h.add_argument("--port", type=whole(1, MAX_PORT), default=8080, help="nginx's port (default 8080)")
+    h.add_argument("--preset", default="default", help="the lecture's preset name or TOML/JSON file")
+    h.add_argument("--max-sessions", type=whole(1), default=DEFAULT_MAX_SESSIONS, metavar="N",
+                   help=f"private sessions a worker runs at once (default {DEFAULT_MAX_SESSIONS})")
+    h.add_argument("--max-watchers", type=whole(1), default=DEFAULT_MAX_WATCHERS, metavar="N",
+                   help=f"class tabs at once (default {DEFAULT_MAX_WATCHERS})")
+    h.add_argument("--allow-origin", action="append", metavar="URL",
+                   help="also accept pages of this origin (a name the class reaches the hall by, e.g. "
+                        "http://lecturehall.example:8080)")
+    h.set_defaults(func=_cmd_hall)
 
     r = sub.add_parser("run", help="headless seeded runs")
     r.add_argument("preset", help="preset name or TOML/JSON file")

@@ -18,7 +18,11 @@ connection of every viser server of the process:
   report finite numbers and a canvas of some size. Anything else
   is dropped and said on stderr in one line (then at most once every :data:`QUIET_SECONDS`
   per connection, with a count); after :data:`MAX_MALFORMED` of them the connection is closed
-  (1008, policy violation): a page never sends one.
+  (1008, policy violation): a page never sends one;
+- a **refusal** of the messages that ask viser to share the server (:data:`REFUSED`): viser
+  answers one by opening a public tunnel to this server through viser's share service, for any
+  client that asks. The app offers no share button (its Share page is a file), so these are
+  dropped as malformed.
 
 :func:`quiet_handler_errors` makes an exception that still escapes a handler task one line
 on stderr too. Both read viser 1.x internals; if a viser version keeps them elsewhere they
@@ -42,6 +46,8 @@ BYTE_BURST = 48 * 2**20  # (a 20 MiB replay uploads at once)
 MAX_MALFORMED = 100  # then the connection is closed
 QUIET_SECONDS = 10.0  # between two lines on stderr about one connection's malformed messages
 POLICY_VIOLATION = 1008
+REFUSED = {"ShareUrlRequest": "this server is not shared through viser's share service",
+           "ShareUrlDisconnect": "this server is not shared through viser's share service"}
 
 
 class Budget:
@@ -87,6 +93,8 @@ def problem(raw: Any, message_class: Any) -> str | None:
     if not isinstance(mapping, dict):
         return "not a message (a map with a type)"
     kind = mapping.pop("type", None)
+    if isinstance(kind, str) and kind in REFUSED:
+        return f"{kind}: {REFUSED[kind]}"
     cls = message_class._subclass_from_type_string().get(kind) if isinstance(kind, str) else None
     if cls is None:
         return f"no message type {str(kind)[:60]!r}"

@@ -14,6 +14,13 @@ So every HTTP request and websocket upgrade is refused (403) unless
 
 Clients that are not browsers send no ``Origin``; they are held to the ``Host`` check only.
 
+Behind the reverse proxy of ``shoal hall`` every request arrives from the proxy on a loopback
+port, so the address and port a request arrived on are the proxy's: the proxy says them in
+``X-Shoal-Arrived`` and proves it is the hall's own with ``X-Shoal-Proxy`` (a secret the hall
+gives it and its processes, :class:`OriginPolicy` ``proxy_key``). With the key, the checks above
+use the address the browser reached; a request that names the proxy without the key is
+refused. The browser's ``Host`` and ``Origin`` pass through the proxy unchanged.
+
 A connection that closes or speaks no HTTP before its request (a port check, a health
 probe) is said in one line on stderr, not as websockets' three-part traceback
 (:class:`HandshakeNoise`).
@@ -28,6 +35,7 @@ offers no hook of its own, so :func:`guarded_viser` wraps that handler with the 
 from __future__ import annotations
 
 import contextlib
+import hmac
 import http
 import ipaddress
 import logging
@@ -83,14 +91,34 @@ def _address(host: str) -> str:
         return host.strip("[]").lower()
 
 
-class OriginPolicy:
-    """Which ``Host`` and ``Origin`` headers a server bound to ``host`` accepts."""
+PROXY_HEADER, ARRIVED_HEADER = "X-Shoal-Proxy", "X-Shoal-Arrived"
 
-    def __init__(self, host: str, allow_origins: Sequence[str] = ()) -> None:
+
+class OriginPolicy:
+    """Which ``Host`` and ``Origin`` headers a server bound to ``host`` accepts (``proxy_key``: the
+    secret of the hall's proxy, whose requests are judged by where the browser reached it)."""
+
+    def __init__(self, host: str, allow_origins: Sequence[str] = (), proxy_key: str | None = None) -> None:
         self.bound = "" if host in WILDCARDS else _address(host)
         self.allowed = {o for o in (_origin(url) for url in allow_origins) if o is not None}
+        self.proxy_key = proxy_key
         self._reported: set[str] = set()
         self._lock = threading.Lock()
+
+    def arrival(self, headers: Any, local: tuple[str, int]) -> tuple[tuple[str, int] | None, str | None]:
+        """(where the request arrived, why it is refused): ``local`` for a direct request; the
+        proxy's ``X-Shoal-Arrived`` for a request that carries the proxy's key."""
+        (key, twice), (arrived, twice_too) = _one(headers, PROXY_HEADER), _one(headers, ARRIVED_HEADER)
+        if twice or twice_too:
+            return None, twice or twice_too
+        if key is None and arrived is None:
+            return local, None
+        if self.proxy_key is None or key is None or not hmac.compare_digest(key.encode(), self.proxy_key.encode()):
+            return None, "the request names the hall's proxy without its key"
+        where = _origin(f"http://{arrived}") if arrived else None
+        if where is None:
+            return None, f"the proxy said it arrived at {arrived!r}, not an address and port"
+        return (where[1], where[2]), None
 
     def _own_host(self, name: str, local: str) -> bool:
         name = _address(name)
@@ -124,6 +152,9 @@ class Closed:
     """The policy of a server nobody is meant to reach (the private one that records a Share
     page or ``shoal export-replay``'s scene): every request is refused, quietly."""
 
+    def arrival(self, headers: Any, local: tuple[str, int]) -> tuple[tuple[str, int] | None, str | None]:
+        return local, None
+
     def refusal(self, host_header: str | None, origin_header: str | None, local: tuple[str, int]) -> str | None:
         return "this server records a page and takes no connections"
 
@@ -143,14 +174,23 @@ def _one(headers: Any, name: str) -> tuple[str | None, str | None]:
     return (values[0] if values else None), None
 
 
-def _guard(policy: Policy, inner: ProcessRequest | None) -> ProcessRequest:
+def _guard(policy: Policy, inner: ProcessRequest | None, route: ProcessRequest | None = None) -> ProcessRequest:
+    """The checks, then ``route`` (a Response to send, or the request to hand on), then ``inner``."""
     def process_request(connection: Any, request: Any) -> Any:
         address, port = (connection.local_address or ("", 0))[:2]
         (host, twice), (origin, twice_too) = _one(request.headers, "Host"), _one(request.headers, "Origin")
-        why = twice or twice_too or policy.refusal(host, origin, (str(address), int(port)))
+        local, why = policy.arrival(request.headers, (str(address), int(port)))
+        why = twice or twice_too or why
+        if why is None and local is not None:
+            why = policy.refusal(host, origin, local)
         if why is not None:
             policy.report(why)
             return connection.respond(http.HTTPStatus.FORBIDDEN, f"Forbidden: {why}\n")
+        if route is not None:
+            routed = route(connection, request)
+            if routed is None or not hasattr(routed, "path"):  # a response (None: a websocket, as it is)
+                return routed if routed is not None else (inner(connection, request) if inner is not None else None)
+            request = routed
         return inner(connection, request) if inner is not None else None
 
     return process_request
@@ -160,14 +200,14 @@ _building = threading.Lock()  # one guarded server built at a time: the wrapper 
 
 
 @contextlib.contextmanager
-def _guarding(policy: Policy) -> Iterator[threading.Event]:
+def _guarding(policy: Policy, route: ProcessRequest | None = None) -> Iterator[threading.Event]:
     """While active, a websockets server started (by viser) checks ``policy`` first; the
     event yielded is set once one did."""
     real, installed = ws_server.serve, threading.Event()
 
     class GuardedServe(real):  # type: ignore[misc, valid-type]  # (websockets' serve class, read at run time)
         def __init__(self, *args: Any, process_request: ProcessRequest | None = None, **kwargs: Any) -> None:
-            super().__init__(*args, process_request=_guard(policy, process_request), **kwargs)
+            super().__init__(*args, process_request=_guard(policy, process_request, route), **kwargs)
             installed.set()
 
     with _building:
@@ -213,10 +253,11 @@ _NOISE = HandshakeNoise()
 logging.getLogger("websockets.server").addFilter(_NOISE)  # once per process, whatever servers it runs
 
 
-def guarded_viser(host: str, port: int, policy: Policy) -> viser.ViserServer:
-    """A started ``viser.ViserServer`` whose every request passes ``policy`` first. Raises
-    RuntimeError (and serves nothing) if this viser starts its server some other way."""
-    with _guarding(policy) as installed:
+def guarded_viser(host: str, port: int, policy: Policy, route: ProcessRequest | None = None) -> viser.ViserServer:
+    """A started ``viser.ViserServer`` whose every request passes ``policy`` first (then ``route``,
+    which may answer it or hand on another request: a lecture's pages). Raises RuntimeError (and
+    serves nothing) if this viser starts its server some other way."""
+    with _guarding(policy, route) as installed:
         server = viser.ViserServer(host=host, port=port, verbose=False)  # listening when it returns
     if not installed.is_set():
         server.stop()

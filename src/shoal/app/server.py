@@ -16,7 +16,7 @@ import threading
 import time
 import traceback
 import weakref
-from typing import Any
+from typing import Any, Callable
 
 import viser
 
@@ -109,7 +109,8 @@ class ShoalServer:
 
     def __init__(self, scenario: Scenario, host: str = "127.0.0.1", port: int = 8080,
                  max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
-                 experiments: ExperimentService | None = None, projector: bool = False) -> None:
+                 experiments: ExperimentService | None = None, proxy_key: str | None = None,
+                 projector: bool = False) -> None:
         if max_sessions < 1:
             raise ValueError(f"max_sessions must be >= 1 (got {max_sessions})")
         self.scenario = scenario
@@ -122,9 +123,9 @@ class ShoalServer:
         self._opening: set[int] = set()  # client ids whose session is being built
         self._errors: weakref.WeakKeyDictionary[TabApp, str] = weakref.WeakKeyDictionary()  # last error per tab
         keep_large_blocks_returnable()  # tabs that come and go give their memory back
-        self.policy = OriginPolicy(host, allow_origins)
+        self.policy = OriginPolicy(host, allow_origins, proxy_key)
         install_message_guard()  # every connection's messages: a budget, and checked before viser's handlers
-        self.viser = guarded_viser(host, port, self.policy)
+        self.viser = guarded_viser(host, port, self.policy, self.route())
         quiet_handler_errors(self.viser)
         self.port = self.viser.get_port()
         self.tabs: dict[int, TabApp] = {}
@@ -147,6 +148,11 @@ class ShoalServer:
         host = "127.0.0.1" if self.host in ("0.0.0.0", "::", "") else self.host
         return f"http://{host}:{self.port}/"
 
+    def route(self) -> Any:
+        """A step between the origin check and viser's page (``origin_guard.guarded_viser``'s
+        ``route``; None here: every request goes to viser as it came)."""
+        return None
+
     def _configure(self) -> None:
         gui = self.viser.gui
         gui.configure_theme(control_width="large", show_share_button=False, brand_color=BRAND)
@@ -156,15 +162,17 @@ class ShoalServer:
 
     # ------------------------------------------------------------------ tabs
     def open_tab(
-        self, key: int, gui: Any, scene: Any, client: viser.ClientHandle | None = None, *, auto_tick: bool = True
+        self, key: int, gui: Any, scene: Any, client: viser.ClientHandle | None = None, *, auto_tick: bool = True,
+        session: Session | None = None, **keep: Any
     ) -> TabApp:
-        """Build a session with its panels and arena on ``gui``/``scene`` and start ticking it.
+        """Build a session (or take ``session``) with its panels and arena on ``gui``/``scene`` and
+        start ticking it (``keep``: the tab's state kept elsewhere, see :class:`TabApp`).
 
         Browser tabs come here from ``on_client_connect``; tests may pass ``server.gui``
         and ``server.scene`` with ``client=None`` to drive the panels without a browser, and
         ``auto_tick=False`` to advance it only by calling ``tab.tick(now)`` themselves.
         """
-        session = session_for(self.scenario)
+        session = session_for(self.scenario) if session is None else session
         kwargs: dict[str, Any] = {}
         if client is not None:
             kwargs = dict(
@@ -176,7 +184,8 @@ class ShoalServer:
                 script=lambda source: run_script(client.gui, source),
                 backlog=lambda: waiting(client),
             )
-        tab = TabApp(session, gui, scene, experiments=self.experiments, owner=key, projector=self.projector, **kwargs)
+        tab = TabApp(session, gui, scene, experiments=self.experiments, owner=key, projector=self.projector, **kwargs,
+                     **keep)
         tab.auto_tick = auto_tick
         with self._lock:
             self.tabs[key] = tab
@@ -231,7 +240,10 @@ class ShoalServer:
         with client.gui.add_modal(FULL_TITLE):
             client.gui.add_markdown(text)
 
-    def _open_client(self, client: viser.ClientHandle) -> None:
+    def _open_client(self, client: viser.ClientHandle, session: Session | None = None, *, play: bool = True,
+                     **keep: Any) -> TabApp:
+        """A browser tab's session (a new one, or ``session``), panels and arena, with the page's
+        guards, keys and script; playing unless ``play`` is False."""
         home_camera(client.camera)
         fitted = threading.Event()
 
@@ -250,9 +262,11 @@ class ShoalServer:
         guard_uploads(client.gui, MAX_TRANSFER_BYTES, MAX_PENDING_BYTES,
                       lambda name, why: refuse(f"Refused: uploaded {name}", why))
         install_page(client.gui)  # the top view held, light drawing without a GPU, projector mode, names, labels
-        tab = self.open_tab(client.client_id, client.gui, client.scene, client)
+        tab = self.open_tab(client.client_id, client.gui, client.scene, client, session=session, **keep)
         install_keys(client.gui)  # space, →, r
-        tab.play_when_drawn(FIRST_FRAME_SECONDS)  # the first view starts at step 0
+        if play:
+            tab.play_when_drawn(FIRST_FRAME_SECONDS)  # the first view starts at step 0
+        return tab
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
@@ -324,8 +338,10 @@ def closed_tab_quiet(gui: Any) -> contextlib.AbstractContextManager[Any]:
 def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
                  max_sessions: int = DEFAULT_MAX_SESSIONS, allow_origins: tuple[str, ...] = (),
                  scheduler: str | None = None, experiment_workers: int = 1,
-                 limits: Limits | None = None, warm_up: bool = False, projector: bool = False) -> ShoalServer:
-    """Start the app without blocking. ``port=0`` picks a free port (see ``.port``). With
+                 limits: Limits | None = None, warm_up: bool = False, projector: bool = False,
+                 factory: Callable[..., ShoalServer] | None = None) -> ShoalServer:
+    """Start the app without blocking (a ``factory`` of another kind of :class:`ShoalServer`, such as
+    a lecture's, takes the same arguments). ``port=0`` picks a free port (see ``.port``). With
     ``warm_up`` (``shoal serve``) the kernels compile in the background once it listens
     (:mod:`.warmup`) and scenes run on numpy meanwhile; else they compile on first use.
 
@@ -346,8 +362,10 @@ def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8
     if experiment_workers < 1:
         raise ValueError(f"experiment_workers must be >= 1 (got {experiment_workers})")
     pool = DaskCluster(scheduler) if scheduler is not None else experiment_pool(experiment_workers)
-    server = ShoalServer(scenario, host=host, port=port, max_sessions=max_sessions, allow_origins=allow_origins,
-                         experiments=ExperimentService(pool, limits, owns_scheduler=True), projector=projector)
+    server = (factory or ShoalServer)(scenario, host=host, port=port, max_sessions=max_sessions,
+                                      allow_origins=allow_origins,
+                                      experiments=ExperimentService(pool, limits, owns_scheduler=True),
+                                      projector=projector)
     if port and server.port != port:  # viser moved to the next free port: refuse instead
         server.stop()
         raise PortInUseError(f"port {port} on {host} is already in use; choose another with --port")

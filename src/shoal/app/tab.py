@@ -78,6 +78,10 @@ class TabApp:
         script: Callable[[str], None] | None = None,
         backlog: Callable[[], int] | None = None,
         projector: bool = False,
+        lesson_progress: LessonProgress | None = None,
+        menu: PresetMenu | None = None,
+        display: Display | None = None,
+        ask: Callable[..., None] | None = None,
     ) -> None:
         self.session = session
         self.experiments, self.owner = experiments, owner  # the server's experiments; this tab's key there
@@ -96,9 +100,11 @@ class TabApp:
         self._retired: deque[tuple[float, Panel]] = deque()  # (when to remove, panel) of swapped-out kinds
         self.auto_tick = True  # False: only explicit tick() calls advance it (tests)
         self.control_hold = self.CONTROL_HOLD
-        self.lesson_progress = LessonProgress()  # the Lessons tab's place, kept when the panels are rebuilt
-        self.menu = PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included, across swaps
-        self.display = Display(projector=projector)  # how the arena is drawn, across swaps
+        # kept when the panels are rebuilt (and, given, by whoever outlives the tab: a lecture)
+        self.lesson_progress = lesson_progress or LessonProgress()  # the Lessons tab's place
+        self.menu = menu or PresetMenu(tuple(app_presets()))  # the preset dropdown's choices, uploads included
+        self.display = display or Display(projector=projector)  # how the arena is drawn
+        self.ask = ask  # a lesson's question asked of a class (a lecturer's tab)
         self.board = _board(gui)  # the main plot and the legend beside the arena, across swaps
         self._page = Display()  # what the page was last told (flat camera, text scale)
         self._aspect: float | None = None  # the arena's width / height at the camera's last report
@@ -119,7 +125,7 @@ class TabApp:
                             replace=self.replace, share=share_page, lessons=self.lesson_progress,
                             experiments=self.experiments, owner=self.owner, view=self.view_action,
                             display=self.display, script=self.script, backlog=self.backlog, veil=self._veil,
-                            board=self.board)
+                            board=self.board, ask=self.ask)
         self.panels = Panel(self.gui, self.session, kind, services)
         self.arena = kind.view(self.scene, self.panels.part, labels=self._labels())
         self._show_display()

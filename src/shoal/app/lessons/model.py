@@ -11,6 +11,7 @@ did in between. An optional ``check`` states what a headless run of that scene m
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Any, Union
 
 from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictFloat, StrictInt, StrictStr, model_validator
@@ -72,6 +73,31 @@ class Setup(_Model):
     check: Check | None = None
 
 
+class RoundSpec(_Model):
+    """How a step's question is asked of a class (``shoal serve --lecture``): multiple ``choices``
+    or a number in ``unit``, and the right ``answer`` if there is one; ``question`` words it for
+    a round when the step's own question is long or asks two things."""
+
+    question: Annotated[str, Field(min_length=1, max_length=600)] | None = None
+    choices: Annotated[list[Annotated[str, Field(min_length=1, max_length=120)]], Field(min_length=2,
+                                                                                       max_length=6)] | None = None
+    unit: Annotated[str, Field(max_length=24)] | None = None
+    answer: StrictStr | StrictInt | StrictFloat | None = None
+
+    @model_validator(mode="after")
+    def _one_kind(self) -> "RoundSpec":
+        if (self.choices is None) == (self.unit is None):
+            raise ValueError("give choices (multiple choice) or a unit (a number), not both")
+        if self.choices is not None:
+            if len(set(self.choices)) != len(self.choices):
+                raise ValueError("two choices are the same")
+            if self.answer is not None and self.answer not in self.choices:
+                raise ValueError(f"answer {self.answer!r} is not one of the choices")
+        elif self.answer is not None and (isinstance(self.answer, str) or not math.isfinite(self.answer)):
+            raise ValueError(f"answer {self.answer!r}: a number round's answer is a finite number")
+        return self
+
+
 class Step(_Model):
     title: Annotated[str, Field(min_length=1, max_length=80)]
     text: Annotated[str, Field(min_length=1, max_length=1500)]
@@ -79,6 +105,7 @@ class Step(_Model):
     instruction: Annotated[str, Field(min_length=1, max_length=600)]
     question: Annotated[str, Field(min_length=1, max_length=600)]
     answer: Annotated[str, Field(min_length=1, max_length=1500)]
+    round: RoundSpec | None = None  # the question as a class's round (a ```round block)
 
 
 class Lesson(_Model):

@@ -33,6 +33,7 @@ from .readings import Measure
 from .scenes import describe
 
 SetUp = Callable[[str, dict[str, Any]], list[str]]
+Ask = Callable[[Lesson, int], None]  # ask a class step ``index``'s question (a lecture's round)
 Notify = Callable[[str, str, str], None]
 NAV = ("◀ Back", "Next ▶")
 CHOOSER_NAV = ("◀ Back", "Start over")
@@ -56,8 +57,8 @@ class LessonsPanel:
 
     def __init__(self, gui: Any, set_up: SetUp, notify: Notify, progress: LessonProgress | None = None,
                  lessons: dict[str, Lesson] | None = None, tree: Tree | None = None,
-                 measure: Measure | None = None) -> None:
-        self.gui, self._set_up, self.notify, self._measure = gui, set_up, notify, measure
+                 measure: Measure | None = None, ask: Ask | None = None) -> None:
+        self.gui, self._set_up, self.notify, self._measure, self._ask = gui, set_up, notify, measure, ask
         self.progress = progress if progress is not None else LessonProgress()
         problems: tuple[str, ...] = ()
         if lessons is None:
@@ -94,6 +95,9 @@ class LessonsPanel:
         self.setup_text = gui.add_markdown("")
         self.instruction = gui.add_markdown("")
         self.question = gui.add_markdown("")
+        self.ask_button = gui.add_button("Ask the class", color="violet", visible=False,
+                                         hint="open this question as a round: every class tab answers, "
+                                              "then you reveal") if self._ask is not None else None
         self.readings = gui.add_markdown("", visible=False)
         self.answer_button = gui.add_button("Show answer", hint="predict first, then check")
         self.answer = gui.add_markdown("", visible=False)
@@ -122,6 +126,11 @@ class LessonsPanel:
         @self.answer_button.on_click
         def _(event: Any) -> None:
             self._handle(self._toggle_answer)
+
+        if self.ask_button is not None:
+            @self.ask_button.on_click
+            def _(event: Any) -> None:
+                self._handle(self._ask_class)
 
         for i, button in enumerate(self.choice_buttons):
             button.on_click(lambda event, i=i: self._handle(self._choose, i))
@@ -168,6 +177,11 @@ class LessonsPanel:
         self.progress.revealed = not self.progress.revealed
         self._show_answer()
 
+    def _ask_class(self) -> None:
+        lesson = self.lesson
+        if self._ask is not None and lesson is not None and self.progress.step < len(lesson.steps):
+            self._ask(lesson, self.progress.step)
+
     def _set_up_step(self) -> None:
         lesson = self.lesson
         if lesson is None or self.progress.step >= len(lesson.steps):
@@ -203,8 +217,9 @@ class LessonsPanel:
             self.step_text.content = ("#### Try it yourself\n\n"
                                       + "\n".join(f"- {idea}" for idea in lesson.try_it))
             for h in (self.setup_button, self.setup_text, self.instruction, self.question, self.answer_button,
-                      self.answer, self.readings):
-                h.visible = False
+                      self.answer, self.readings, self.ask_button):
+                if h is not None:
+                    h.visible = False
             return
         step = lesson.steps[p.step]
         self.step_text.content = f"#### Step {p.step + 1} of {n}: {step.title}\n\n{step.text}"
@@ -217,6 +232,8 @@ class LessonsPanel:
         self.answer.content = f"**Answer:** {step.answer}"
         for h in (self.instruction, self.question, self.answer_button):
             h.visible = True
+        if self.ask_button is not None:
+            self.ask_button.visible = step.round is not None
         self._show_answer()
         self._show_readings()
 

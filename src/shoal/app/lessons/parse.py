@@ -29,6 +29,11 @@
 
     **Answer:** ...
 
+    ```round
+    choices = ["inside", "outside"]   # or: unit = "s" (a number); asked of a class in a lecture
+    answer = "inside"                 # optional; question = "..." words it for the round
+    ```
+
     ## Try it yourself
 
     - one idea per item
@@ -50,6 +55,7 @@ FENCE = "+++"
 TRY_IT = "try it yourself"
 MARKERS = {"**do:**": "instruction", "**question:**": "question", "**answer:**": "answer"}
 _SETUP = re.compile(r"^```setup[ \t]*\n(.*?)^```[ \t]*$", re.S | re.M)
+_ROUND = re.compile(r"^```round[ \t]*\n(.*?)^```[ \t]*$", re.S | re.M)
 _HEADING = re.compile(r"^## +(.+?)\s*$", re.M)
 _ITEM = re.compile(r"^\s*[-*] +", re.M)
 MAX_CHARS = 40_000  # a lesson is short; this bounds what a bad file can cost
@@ -108,6 +114,12 @@ def _step(title: str, body: str, where: str) -> dict[str, Any]:
         setup["values"] = flatten(table)
         step["setup"] = setup
         body = _SETUP.sub("", body)
+    rounds = _ROUND.findall(body)
+    if len(rounds) > 1:
+        raise LessonError([f"{where}: has {len(rounds)} round blocks; a step asks one question"])
+    if rounds:
+        step["round"] = _toml(rounds[0], f"{where}: round")
+        body = _ROUND.sub("", body)
     field = "text"
     parts: dict[str, list[str]] = {"text": [], "instruction": [], "question": [], "answer": []}
     for para in re.split(r"\n\s*\n", body.strip()):

@@ -102,6 +102,7 @@ class Services:
     script: Script | None = None  # runs JavaScript in the tab's page (None: no page; plots always sent whole)
     backlog: Backlog | None = None  # messages still on their way to the page
     board: Board | None = None  # the panel beside the arena (the tab keeps it; None: the panel makes its own)
+    ask: Callable[..., None] | None = None  # a lesson step's question as a class's round (a lecturer's tab only)
 
 
 def notes_text(name: str = "ch3") -> str:
@@ -360,7 +361,7 @@ class Panel:
         """The Lessons tab, the chapter's teaching notes below the lessons."""
         with self.tabs.add_tab("Lessons"):
             self.lessons = LessonsPanel(self.gui, self.set_up_lesson, self.notify, self.services.lessons,
-                                        measure=LessonRun(self.session))
+                                        measure=LessonRun(self.session), ask=self.services.ask)
             with self.gui.add_folder("Notes on this chapter", expand_by_default=False):
                 self.notes = self.gui.add_markdown(notes_text(notes))
             with self.gui.add_folder("Where this scene's values come from", expand_by_default=False):

@@ -155,8 +155,8 @@ class Session:
         self._clear_history()
         self.scene_revision += 1
 
-    def _clear_history(self) -> None:
-        self._t0, self._k0 = 0.0, self.k  # session clock origin (see ``clock``)
+    def _clear_history(self, t0: float = 0.0) -> None:
+        self._t0, self._k0 = float(t0), self.k  # session clock origin (see ``clock``)
         self.history.clear()
         self.history.names = tuple(self._metrics(self.sim.info()))
         self.timeline.clear()
@@ -327,6 +327,15 @@ class Session:
                 self.restart(self.scenario.sim.seed)
                 self.revision += 1
             self.playing = play
+
+    def resume(self, engine: dict[str, Any], t: float) -> None:
+        """Go on from an engine state taken elsewhere (``sim.snapshot()`` of an engine built from this
+        scenario: a take-over), at session time ``t``: the engine restored, the history starting
+        at its step. Raises ``SnapshotError`` (nothing recorded) when the state does not fit."""
+        with self.lock:
+            self.sim.restore(engine)
+            self._clear_history(t)
+            self.revision += 1
 
     def restart(self, seed: int) -> None:
         """The engine back to step 0 with ``seed``, the history cleared, swarm B too (the lock held)."""
