@@ -35,7 +35,7 @@ def test_rgb_array_is_an_image_of_the_arena_in_the_apps_colours(preset, monkeypa
     assert frame.mean() > 100 and frame.std() > 5, "never black, never blank"
     palette = PALETTES[env.unwrapped.scene.kind.name]
     assert _has(frame, palette.robot) > 20, "robots in the app's red"
-    assert _has(frame, palette.trail) > 20, "trails in the app's trail blue"
+    assert _has(frame, palette.trail) > 20, "trails in the app's trail colour"
     env.close()
 
 

@@ -34,7 +34,6 @@ import threading
 import time
 from typing import Any, Callable
 
-from shoal.engine.core import compiled
 from shoal.presets.build import build, kind_of
 from shoal.presets.io import list_presets, load
 from shoal.presets.models import Scenario
@@ -190,6 +189,8 @@ class Warmup:
             group = group_of(first) if only and first is not None else None
             self.started = time.monotonic()
             self.scheduled = {group} & set(ORDER) if group is not None else set(ORDER)
+            from shoal.engine.core import compiled  # (numba: only once a warm-up starts)
+
             compiled.defer(True)  # meanwhile what is not compiled yet runs as Python elsewhere
             self._thread = threading.Thread(target=self.run, name="shoal-warmup", daemon=True,
                                             kwargs={"only": group, "elsewhere": elsewhere})
@@ -198,6 +199,8 @@ class Warmup:
     def _compile_elsewhere(self, names: list[str]) -> bool:
         """Compile ``names``' kernels in a child process into the disk cache this process reads
         (its progress counted as it goes); False where it cannot (no cache to share, or it failed)."""
+        from shoal.engine.core import compiled
+
         if compiled.uncached:  # (kernels compiled in memory: a child's work would not reach this process)
             return False
         env = {**os.environ, "NUMBA_CACHE_DIR": str(compiled.cache_dir())}
@@ -226,6 +229,8 @@ class Warmup:
     def run(self, only: str | None = None, say: Callable[[str], None] | None = None, elsewhere: bool = False) -> float:
         """Compile every group (or ``only`` one) here and now (``elsewhere``: in a child process,
         then load it here); returns the seconds it took."""
+        from shoal.engine.core import compiled
+
         compiled.compile_here()
         self.started = self.started or time.monotonic()
         todo = groups()

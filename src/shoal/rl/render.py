@@ -40,19 +40,19 @@ class Palette:
 
 
 PALETTES: dict[str, Palette] = {
-    "swarm": Palette(robot=(220, 50, 50), heading=(120, 20, 20), trail=(80, 120, 255), pbest=(110, 110, 110),
+    "swarm": Palette(robot=(220, 50, 50), heading=(120, 20, 20), trail=(160, 40, 40), pbest=(110, 110, 110),
                      gbest=(240, 170, 0), source=(20, 150, 60), border=(40, 40, 40)),
-    "fleet": Palette(robot=(220, 50, 50), heading=(90, 15, 15), trail=(110, 150, 255), pbest=(120, 120, 120),
+    "fleet": Palette(robot=(220, 50, 50), heading=(90, 15, 15), trail=(160, 40, 40), pbest=(120, 120, 120),
                      gbest=(240, 170, 0), source=(20, 150, 60), border=(60, 60, 60), collided=(150, 150, 150),
                      extra=(("obstacle", (70, 78, 95)), ("obstacle_edge", (60, 68, 82)), ("start", (70, 120, 230)),
                             ("layer", (150, 150, 150)), ("wall", (60, 60, 60)))),
-    "sonar": Palette(robot=(220, 50, 50), heading=(90, 15, 15), trail=(110, 150, 255), pbest=(110, 110, 110),
+    "sonar": Palette(robot=(220, 50, 50), heading=(90, 15, 15), trail=(160, 40, 40), pbest=(110, 110, 110),
                      gbest=(240, 170, 0), source=(20, 150, 60), border=(60, 60, 60),
                      extra=(("d_c", (20, 150, 60)), ("escort", (240, 170, 0)))),
-    "slo_swarm": Palette(robot=(220, 50, 50), heading=(120, 20, 20), trail=(150, 175, 255), border=(40, 40, 40),
+    "slo_swarm": Palette(robot=(220, 50, 50), heading=(120, 20, 20), trail=(160, 40, 40), border=(40, 40, 40),
                          extra=(("neighbours", (175, 175, 175)),)),
 }
-DEFAULT = Palette(robot=(220, 50, 50), heading=(120, 20, 20), trail=(80, 120, 255))
+DEFAULT = Palette(robot=(220, 50, 50), heading=(120, 20, 20), trail=(160, 40, 40))
 
 
 def rgb(c: Colour) -> tuple[float, float, float]:
