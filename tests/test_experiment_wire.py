@@ -20,6 +20,8 @@ MALFORMED = [
     ("field 1", "name"), ("field 1", "view.trail_seconds"), ("field 1", {"$gt": ""}), ("field 2", "../x"),
     ("values 1 as", "cubes"), ("outcome", "../../etc/passwd"), ("runs per cell", float("inf")),
     ("runs per cell", "lots"), ("from 1", float("nan")), ("values 1", ["6", "9"]),
+    # (the boxes carry their ranges, so these too are refused by name as they arrive)
+    ("runs per cell", -5), ("runs per cell", 10**12), ("runs per cell", 0), ("from 1", -1e300),
 ]
 # Values the controls can hold that the experiment service refuses (then Run), with its message.
 HOSTILE = [
@@ -27,11 +29,9 @@ HOSTILE = [
     ([("values 1", "6, " + "9" * 5000)], "longer than 1000 characters"),
     ([("values 1", "[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[")], "controller.U"),
     ([("values 1", ", ".join(str(6 + i) for i in range(40)))], "40 values; this server takes at most 12"),
-    ([("runs per cell", -5)], "runs per cell: -5 is outside 1..100"),
-    ([("runs per cell", 10**12)], "runs per cell: 1000000000000 is outside 1..100"),
     ([("steps per run", 2.5)], "steps per run: 2.5 is not a whole number"),
     ([("values 1 as", "range and count"), ("count 1", 10**9)], "count: 1000000000 is outside 2..12"),
-    ([("values 1 as", "range and count"), ("from 1", -1e300)], "controller.U: -1e+300 is outside 0 < U ≤ 1000"),
+    ([("values 1 as", "range and count"), ("from 1", -1e6)], "controller.U: -1e+06 is outside 0 < U ≤ 1000"),
     ([("field 2", "controller.U")], "controller.U: chosen twice"),
 ]
 
@@ -96,9 +96,12 @@ def test_after_refusals_the_same_tab_runs_an_experiment(served):
     try:
         _set(c, "values 1", "6, 9")
         _set(c, "steps per run", 5)
-        _set(c, "runs per cell", 0)
+        _set(c, "runs per cell", 0)  # (refused by the box's range)
+        wait_until(lambda: c.saw("runs per cell: less than its least value 1 (got 0)"), what="a refusal")
+        _set(c, "values 1", "6, 1e400")  # (refused by the experiment service)
         _set(c, "Run experiment", True)
-        wait_until(lambda: c.saw("runs per cell: 0 is outside 1..100"), what="a refusal")
+        wait_until(lambda: c.saw("controller.U: inf is not a finite number"), what="a refusal")
+        _set(c, "values 1", "6, 9")
         _set(c, "runs per cell", 2)
         _set(c, "Run experiment", True)
         wait_until(lambda: c.saw("finished: 2 cells × 2 runs"), timeout=120, what="the experiment finished")

@@ -187,13 +187,15 @@ def test_a_round_on_the_wire_from_the_lesson_to_the_reveal(tmp_path):
         hostile.set_value("your answer [s]", 1e300)
         time.sleep(0.2)
         _answer(hostile, "Answer", True)
-        wait_until(lambda: any("beyond" in body for _, body, _ in hostile.notifications()), what="a huge number")
-        wait_until(lambda: len(srv.rounds.current.answers) == 1, what="the number answer")
+        wait_until(lambda: any("more than its largest value" in body for _, body, _ in hostile.notifications()),
+                   what="a huge number refused by the box's range")
+        # (the box kept the value in force, 0, and Answer sends what it shows)
+        wait_until(lambda: len(srv.rounds.current.answers) == 2, what="the number answers")
         boss.send(_messages.GuiUpdateMessage(boss.uuid_of("Download answers (CSV)"), {"value": True}))
         wait_until(lambda: any(n.startswith("shoal-rounds-") and n.endswith(".csv") for n in boss.downloads),
                    what="the CSV download")
         rows = list(csv.reader(io.StringIO(srv.rounds.csv().decode())))
-        assert [row[2] for row in rows[1:]] == ["Inside", "Inside", "11 s"], rows
+        assert [row[2] for row in rows[1:]] == ["Inside", "Inside", "11 s", "0 s"], rows
         assert os.listdir(tmp_path) == []
         for c in (boss, a, b, hostile, solo):
             c.close()

@@ -36,6 +36,9 @@ def _tab(srv) -> WireClient:
     before = set(srv.tabs)
     c = WireClient(srv.port, decode=True)
     wait_until(lambda: set(srv.tabs) - before and c.uuid_of("robots"), what="a tab")
+    c.report_camera()  # (the page has drawn: the tab plays)
+    (key,) = set(srv.tabs) - before
+    wait_until(lambda: srv.tabs[key].session.playing, what="the tab playing")
     return c
 
 

@@ -54,7 +54,7 @@ HOSTILE = [
     ("compare with swarm B", "yes", "true or false"),
     ("Export CSV", 1, "true or false"),
     ("light drawing", "yes", "true or false"),  # the Display boxes (hidden until the view row shows them)
-    ("large text", None, "true or false"),
+    ("projector mode", None, "true or false"),  # (the header's box, once "large text")
     ("3-D view", [True], "true or false"),
 ]
 

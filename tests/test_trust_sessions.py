@@ -111,6 +111,8 @@ def test_sessions_of_concurrent_tabs_are_independent():
         sessions = srv.sessions
         assert len({id(s.sim) for s in sessions.values()}) == 5
         one, *rest = sorted(sessions)
+        # (a tab plays at its page's first drawn frame, or FIRST_FRAME_SECONDS later: a raw client draws none)
+        wait_until(lambda: all(s.sim.state.k > 0 for s in sessions.values()), what="all five playing")
         sessions[one].apply({"sim.robots": 7, "controller.U": 9.0})
         before = {cid: sessions[cid].sim.state.k for cid in sessions}
         wait_until(lambda: all(sessions[c].sim.state.k > before[c] + 5 for c in sessions), what="all five advancing")

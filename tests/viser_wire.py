@@ -151,10 +151,10 @@ class WireClient:
         self.ws = connect(f"ws://{host or f'127.0.0.1:{port}'}{path}", subprotocols=[f"viser-v{viser.__version__}"],
                           max_size=None, open_timeout=30, origin=origin, sock=sock,  # type: ignore[arg-type]
                           additional_headers=headers)
-        camera = _messages.ViewerCameraMessage(
+        self._camera = _messages.ViewerCameraMessage(
             wxyz=(1.0, 0.0, 0.0, 0.0), position=(0.0, 0.0, 40.0), fov=0.6, near=0.01, far=1000.0,
             image_height=height, image_width=width, look_at=(0.0, 0.0, 0.0), up_direction=(0.0, 1.0, 0.0))
-        self.ws.send(msgspec.msgpack.encode(camera.as_serializable_dict()))
+        self.report_camera()
         self._reader = threading.Thread(target=self._read, name="wire-client", daemon=True)
         self._reader.start()
 
@@ -202,6 +202,11 @@ class WireClient:
             pass
         finally:
             self.closed.set()
+
+    def report_camera(self) -> None:
+        """Send the camera, as a page does once it has drawn a frame (a new tab plays at its first
+        report after the tab is built, else some seconds later: server.FIRST_FRAME_SECONDS)."""
+        self.ws.send(msgspec.msgpack.encode(self._camera.as_serializable_dict()))
 
     def counts(self) -> tuple[int, int, int]:
         """(frames, bytes, robot point-cloud updates) received so far."""
