@@ -56,7 +56,7 @@ def _tab(srv, with_tab=False):
 
 
 def _set(c, label, value):
-    c.send(m.GuiUpdateMessage(c.uuid_of(label), {"value": value}))
+    c.send(m.GuiUpdateMessage(c.wait_uuid(label), {"value": value}))
 
 
 @pytest.mark.parametrize("label, value", MALFORMED)

@@ -74,7 +74,7 @@ def desk_of(h: Hall) -> RemoteDesk:
 
 
 def take_over(w: WireClient) -> str:
-    w.send(_messages.GuiUpdateMessage(w.uuid_of(TAKE_OVER), {"value": True}))
+    w.send(_messages.GuiUpdateMessage(w.wait_uuid(TAKE_OVER), {"value": True}))
     wait_until(lambda: "/p/" in w.last.get("RunJavascriptMessage", {}).get("source", ""), what="the private address")
     return re.search(r'"(/p/[A-Za-z0-9_-]+)"', w.last["RunJavascriptMessage"]["source"]).group(1)
 

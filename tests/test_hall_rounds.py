@@ -116,7 +116,7 @@ def test_the_class_sees_only_the_count_until_the_round_is_revealed():
 
 
 def _answer(c: WireClient, label: str, value) -> None:
-    c.send(_messages.GuiUpdateMessage(c.uuid_of(label), {"value": value}))
+    c.send(_messages.GuiUpdateMessage(c.wait_uuid(label), {"value": value}))
 
 
 def _html_of(c: WireClient) -> list[str]:
@@ -140,7 +140,7 @@ def test_a_round_on_the_wire_from_the_lesson_to_the_reveal(tmp_path):
         wait_until(lambda: boss.uuid_of("Ask the class") and boss.uuid_of("lesson"), what="the Lessons tab")
         s = srv.lecture.session
         s.pause()
-        boss.send(_messages.GuiUpdateMessage(boss.uuid_of("Ask the class"), {"value": True}))  # step 1's question
+        boss.send(_messages.GuiUpdateMessage(boss.wait_uuid("Ask the class"), {"value": True}))  # step 1's question
         wait_until(lambda: a.uuid_of("your answer") and b.uuid_of("your answer"), what="the answer buttons")
         r = srv.rounds.current
         assert r is not None and r.question.kind == "choice" and r.question.source.startswith("Ch. 3")
@@ -159,15 +159,15 @@ def test_a_round_on_the_wire_from_the_lesson_to_the_reveal(tmp_path):
         # a tab that is not a watcher sends an answer with a watcher's button id: not taken
         solo = WireClient(srv.port, decode=True, path=f"/p/{srv.desk.issue_plain()}")
         wait_until(lambda: solo.uuid_of("playback"), what="a private tab")
-        solo.send(_messages.GuiUpdateMessage(a.uuid_of("your answer"), {"value": "B"}))
-        boss.send(_messages.GuiUpdateMessage(a.uuid_of("your answer"), {"value": "B"}))
+        solo.send(_messages.GuiUpdateMessage(a.wait_uuid("your answer"), {"value": "B"}))
+        boss.send(_messages.GuiUpdateMessage(a.wait_uuid("your answer"), {"value": "B"}))
         time.sleep(0.5)
         assert len(r.answers) == 2 and [c for _, c in r.counts()][:2] == [2, 0]
         # the lecturer sees count and distribution live; the class only the count
         wait_until(lambda: any("2 answers" in h and "100 %" in h for h in _html_of(boss)), what="the live results")
         assert not any("%" in h for h in _html_of(a))
         assert any("2 answers so far" in h for h in _html_of(a))
-        boss.send(_messages.GuiUpdateMessage(boss.uuid_of("round"), {"value": "Reveal and play"}))
+        boss.send(_messages.GuiUpdateMessage(boss.wait_uuid("round"), {"value": "Reveal and play"}))
         for c in (a, b, hostile):
             wait_until(lambda c=c: any("Answer: " in h and "100 %" in h for h in _html_of(c)), what="the reveal")
         assert s.playing  # the run plays out on every screen
@@ -178,7 +178,7 @@ def test_a_round_on_the_wire_from_the_lesson_to_the_reveal(tmp_path):
         boss.set_value("unit", "s")
         boss.set_value("right answer", "12.5")
         time.sleep(0.3)
-        boss.send(_messages.GuiUpdateMessage(boss.uuid_of("Open round"), {"value": True}))
+        boss.send(_messages.GuiUpdateMessage(boss.wait_uuid("Open round"), {"value": True}))
         wait_until(lambda: srv.rounds.current is not r, what="the number round")
         wait_until(lambda: a.uuid_of("your answer [s]"), what="the number box")
         a.set_value("your answer [s]", 11.0)
@@ -191,7 +191,7 @@ def test_a_round_on_the_wire_from_the_lesson_to_the_reveal(tmp_path):
                    what="a huge number refused by the box's range")
         # (the box kept the value in force, 0, and Answer sends what it shows)
         wait_until(lambda: len(srv.rounds.current.answers) == 2, what="the number answers")
-        boss.send(_messages.GuiUpdateMessage(boss.uuid_of("Download answers (CSV)"), {"value": True}))
+        boss.send(_messages.GuiUpdateMessage(boss.wait_uuid("Download answers (CSV)"), {"value": True}))
         wait_until(lambda: any(n.startswith("shoal-rounds-") and n.endswith(".csv") for n in boss.downloads),
                    what="the CSV download")
         rows = list(csv.reader(io.StringIO(srv.rounds.csv().decode())))

@@ -91,7 +91,7 @@ def test_take_over_on_the_wire_and_back_to_the_lecture():
         wait_until(lambda: s.k >= 9, what="the lecture playing with B")
         press(boss, "Pause")
         wait_until(lambda: not s.playing, what="paused")
-        w.send(_messages.GuiUpdateMessage(w.uuid_of(TAKE_OVER), {"value": True}))
+        w.send(_messages.GuiUpdateMessage(w.wait_uuid(TAKE_OVER), {"value": True}))
         wait_until(lambda: "RunJavascriptMessage" in w.last and "/p/" in w.last["RunJavascriptMessage"]["source"],
                    what="the page sent to its private address")
         path = re.search(r'"(/p/[A-Za-z0-9_-]+)"', w.last["RunJavascriptMessage"]["source"]).group(1)
@@ -122,7 +122,7 @@ def test_take_over_on_the_wire_and_back_to_the_lecture():
             other = WireClient(srv.port, decode=True, path=path)
             wait_until(lambda: other.saw("open in another tab"), what="the second tab refused")
             other.close()
-            mine.send(_messages.GuiUpdateMessage(mine.uuid_of(BACK), {"value": True}))
+            mine.send(_messages.GuiUpdateMessage(mine.wait_uuid(BACK), {"value": True}))
             wait_until(lambda: "RunJavascriptMessage" in mine.last
                        and mine.last["RunJavascriptMessage"]["source"] == routes.go_script("/"),
                        what="back to the class page")
@@ -145,10 +145,10 @@ def test_a_class_tab_that_presses_take_over_again_and_again_keeps_one_state():
     try:
         before = len(srv.desk)
         for _ in range(50):
-            w.send(_messages.GuiUpdateMessage(w.uuid_of(TAKE_OVER), {"value": True}))
+            w.send(_messages.GuiUpdateMessage(w.wait_uuid(TAKE_OVER), {"value": True}))
         wait_until(lambda: any("on its way" in body for _, body, _ in w.notifications()), what="a refusal")
         time.sleep(2.5)
-        w.send(_messages.GuiUpdateMessage(w.uuid_of(TAKE_OVER), {"value": True}))
+        w.send(_messages.GuiUpdateMessage(w.wait_uuid(TAKE_OVER), {"value": True}))
         wait_until(lambda: sum("/p/" in m.get("source", "") for m in [w.last.get("RunJavascriptMessage", {})]),
                    what="a take-over")
         time.sleep(0.5)

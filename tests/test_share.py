@@ -465,7 +465,7 @@ def test_a_tab_that_floods_share_gets_refusals_and_the_other_tabs_go_on():
         share = flood.uuid_of("Share")
         for _ in range(40):
             flood.send(m.GuiUpdateMessage(share, {"value": True}))
-        other.send(m.GuiUpdateMessage(other.uuid_of("playback"), {"value": "Pause"}))
+        other.send(m.GuiUpdateMessage(other.wait_uuid("playback"), {"value": "Pause"}))
         wait_until(lambda: sum(not s.playing for s in srv.sessions.values()) == 1, timeout=60, what="the other pause")
 
         def outcomes():

@@ -78,7 +78,7 @@ def test_a_bad_value_is_refused_by_name_and_the_control_shows_the_value_in_force
     session = next(iter(server.sessions.values()))
     scenario, sim = session.scenario, session.sim
     display = dict(vars(server.tabs[max(server.tabs)].display))  # how the arena is drawn (the Display boxes)
-    uuid = client.uuid_of(label)
+    uuid = client.wait_uuid(label)
     shown = client.value_of(uuid)
     before = len(client.notifications())
     client.set_value(label, value)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import socket
 import threading
+import time
 from typing import Any
 
 import msgspec
@@ -223,6 +224,16 @@ class WireClient:
         with self._lock:
             return next((m["uuid"] for m in self.gui if (m.get("props") or {}).get("label") == label), None)
 
+    def wait_uuid(self, label: str, timeout: float = 45.0) -> str:
+        """The id of the GUI element labelled ``label``, once it has arrived: a panel's elements
+        reach the page one message after another, so one that the test waited for does not mean
+        that a later one is there yet."""
+        end = time.monotonic() + timeout
+        while (uuid := self.uuid_of(label)) is None:
+            assert time.monotonic() < end and not self.closed.is_set(), f"no control labelled {label!r} arrived"
+            time.sleep(0.02)
+        return uuid
+
     def notifications(self) -> list[tuple[str, str, Any]]:
         """(title, body, colour) of every notification shown so far (decode=True)."""
         with self._lock:
@@ -256,9 +267,7 @@ class WireClient:
 
     def set_value(self, label: str, value: Any) -> None:
         """Send ``value`` for the control labelled ``label``, as the page does when it changes."""
-        uuid = self.uuid_of(label)
-        assert uuid is not None, f"no control labelled {label!r} arrived"
-        self.send(_messages.GuiUpdateMessage(uuid, {"value": value}))
+        self.send(_messages.GuiUpdateMessage(self.wait_uuid(label), {"value": value}))
 
     def upload(self, label: str, name: str, data: bytes, *, parts: int = 1, declared: int | None = None,
                send: int | None = None) -> str:
@@ -267,8 +276,7 @@ class WireClient:
         parts (default: all). Returns the transfer's id."""
         import uuid as _uuid
 
-        button = self.uuid_of(label)
-        assert button is not None, f"no upload button {label!r} arrived"
+        button = self.wait_uuid(label)
         tid = str(_uuid.uuid4())
         self.send(_messages.FileTransferStartUpload(
             source_component_uuid=button, transfer_uuid=tid, filename=name, mime_type="application/octet-stream",
