@@ -5,6 +5,15 @@ from hypothesis import settings
 settings.register_profile("shoal", deadline=None)
 settings.load_profile("shoal")
 
+import signal  # noqa: E402
+
+# A suite started in the background of a shell without job control (``.ci/run &``) inherits
+# SIGINT ignored, and so would every command the tests start: ``shoal serve`` and the plug-in
+# checks would then never see the Ctrl-C they are tested with. Catching it here gives the
+# children the default a terminal gives (exec resets a caught signal, not an ignored one).
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
 
 import pytest  # noqa: E402
 
