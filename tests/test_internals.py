@@ -31,7 +31,7 @@ INTERNALS = {
         ("GuiApi._gui_input_handle_from_uuid, GuiApi._handle_gui_updates", "app/input_guard.py"),
         ("ViserServer starts websockets.asyncio.server.serve(process_request=...)", "app/origin_guard.py"),
         ("GuiApi._websock_interface.get_message_buffer().sanctioned_dead_writes()",
-         "app/server.py:closed_tab_quiet (a tab closed mid-update)"),
+         "app/server.py:expect_late_writes (a tab closed mid-update)"),
     ],
     "pymunk": [
         ("Chipmunk's point and swept-disc query arithmetic", "engine/robots/queries.py repeats it to the bit "

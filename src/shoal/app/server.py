@@ -133,7 +133,7 @@ class ShoalServer:
         self._trim: threading.Timer | None = None  # the next give_back of the C heap (after a tab closed)
         self._stopping = threading.Event()
         self._configure()
-        self.viser.on_client_connect(self._connect)
+        self.viser.on_client_connect(self._connected)
         self.viser.on_client_disconnect(self._disconnect)
         self._thread = threading.Thread(target=self._run, name="shoal-ticker", daemon=True)
         self._thread.start()
@@ -213,6 +213,12 @@ class ShoalServer:
             self._trim = threading.Timer(TRIM_DELAY, _collect_and_give_back)
             self._trim.daemon = True
             self._trim.start()
+
+    def _connected(self, client: viser.ClientHandle) -> None:
+        """Every connection starts here: its late writes are expected (:func:`expect_late_writes`),
+        then the kind of server decides what the tab is (:meth:`_connect`)."""
+        expect_late_writes(client.gui)
+        self._connect(client)
 
     def _connect(self, client: viser.ClientHandle) -> None:
         if self._stopping.is_set():
@@ -294,8 +300,7 @@ class ShoalServer:
         plots_until = start + PLOT_SHARE * period
         for tab in tabs[turn:] + tabs[:turn]:
             try:
-                with closed_tab_quiet(tab.gui):
-                    tab.tick(start, plots=time.monotonic() < plots_until)
+                tab.tick(start, plots=time.monotonic() < plots_until)
             except Exception as err:  # one broken tab must not stop the others
                 if self._errors.get(tab) != repr(err):  # said once per tab and error, not 60 times a second
                     self._errors[tab] = repr(err)
@@ -324,15 +329,25 @@ class ShoalServer:
         self.viser.stop()
 
 
-def closed_tab_quiet(gui: Any) -> contextlib.AbstractContextManager[Any]:
-    """A tab's updates may go to a client that closed mid-update (before ``on_client_disconnect``
-    forgets it): viser drops them and would warn ("Queued a … on a closed connection"); this
-    scope of viser's own tells it those writes are expected (its ``sanctioned_dead_writes``,
-    through ``GuiApi._websock_interface``: tests/test_internals.py). Other warnings still show."""
+def expect_late_writes(gui: Any) -> None:
+    """A tab's writes race its close: the ticker, the tab's build, its callbacks and a lecture's
+    broadcast run on other threads than the one that sees the connection end, so some updates
+    go to a client that has just gone. Viser drops them, and would warn ("Queued a … on a closed
+    connection") for each tab that closes at the wrong moment. This enters viser's own scope for
+    such writes (``sanctioned_dead_writes`` of the connection's buffer, through
+    ``GuiApi._websock_interface``: tests/test_internals.py) for the connection's whole life; it
+    ends with the buffer. That a closed tab leaves nothing referenced is tested on its own
+    (tests/test_trust_memory.py)."""
     interface = getattr(gui, "_websock_interface", None)
     buffer = interface.get_message_buffer() if interface is not None else None
     scope = getattr(buffer, "sanctioned_dead_writes", None)
-    return scope() if scope is not None else contextlib.nullcontext()
+    if scope is not None and gui not in _LATE_WRITES:
+        entered = scope()
+        entered.__enter__()
+        _LATE_WRITES[gui] = entered  # (left when the tab's GUI is collected, with its connection)
+
+
+_LATE_WRITES: weakref.WeakKeyDictionary[Any, contextlib.AbstractContextManager[Any]] = weakref.WeakKeyDictionary()
 
 
 def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
