@@ -32,6 +32,8 @@ INTERNALS = {
         ("ViserServer starts websockets.asyncio.server.serve(process_request=...)", "app/origin_guard.py"),
         ("GuiApi._websock_interface.get_message_buffer().sanctioned_dead_writes()",
          "app/server.py:expect_late_writes (a tab closed mid-update)"),
+        ("a handle's _impl.props and _impl.removed, SceneNodeHandle._queue_update and _on_prop_assigned",
+         "app/view/node_update.py (an array sent without the setter's casts), app/panel/plot_stream.py"),
     ],
     "pymunk": [
         ("Chipmunk's point and swept-disc query arithmetic", "engine/robots/queries.py repeats it to the bit "
@@ -117,3 +119,20 @@ def _version(lib: str) -> str:
     from importlib.metadata import version
 
     return version(lib)
+
+
+def test_viser_scene_handle_internals():
+    import numpy as np
+    import viser
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        node = server.scene.add_point_cloud("/p", np.zeros((2, 3), np.float32), colors=(0, 0, 0), point_size=0.1)
+        impl = getattr(node, "_impl", None)
+        assert impl is not None and isinstance(getattr(getattr(impl, "props", None), "points", None), np.ndarray), (
+            f"viser {viser.__version__} moved a scene handle's _impl.props (app/view/node_update.py)")
+        assert getattr(impl, "removed", None) is False, f"viser {viser.__version__} moved _impl.removed"
+        for name in ("_queue_update", "_on_prop_assigned"):
+            assert callable(getattr(node, name, None)), f"viser {viser.__version__} moved SceneNodeHandle.{name}"
+    finally:
+        server.stop()

@@ -299,29 +299,41 @@ class PhaseText:
     """A :func:`phase_figure` as the JSON text plotly.js reads, its particle's points swapped in
     without plotly's validation: ``figure.to_json()`` costs about 10 ms for this figure, once a
     second in every tab playing a Chapter 3 swarm; the figure's other traces and its layout are
-    read once here and only the ``recent`` and ``now`` points change (the axes widen as
-    :func:`update_phase_points` widens them)."""
+    written once into a template (rewritten when :func:`update_phase_points` would widen the
+    axes), and only the ``recent`` and ``now`` points are written anew."""
+
+    _SLOTS = ("recent.x", "recent.y", "now.x", "now.y")
 
     def __init__(self, fig: go.Figure) -> None:
         self._doc = json.loads(fig.to_json())
         names = [t.get("name") for t in self._doc.get("data", ())]
         self._at = (names.index("recent"), names.index("now")) if {"recent", "now"} <= set(names) else None
+        self._template: str | None = None  # the document's JSON, each slot a quoted placeholder
+
+    def _slot(self, name: str) -> str:
+        return f"\x00phase:{name}\x00"
 
     def text(self, u: np.ndarray, a: np.ndarray) -> str | None:
         """The figure with these points (None when it has no such traces or there are none: rebuild it)."""
         if self._at is None or not len(u):
             return None
         u, a = np.asarray(u, float), np.asarray(a, float)
-        recent, now = (self._doc["data"][i] for i in self._at)
-        recent["x"], recent["y"] = _plain(u), _plain(a)
-        now["x"], now["y"] = _plain(u[-1:]), _plain(a[-1:])
         layout = self._doc.get("layout", {})
         for axis, values in ((layout.get("xaxis"), u), (layout.get("yaxis"), a)):
             if axis is not None and axis.get("range") is not None:
                 lim = max(abs(axis["range"][1]), 1.1 * float(np.nanmax(np.abs(values))))
                 if lim > axis["range"][1]:
                     axis["range"] = [-lim, lim]
-        return json.dumps(self._doc)
+                    self._template = None
+        if self._template is None:
+            recent, now = (self._doc["data"][i] for i in self._at)
+            recent["x"], recent["y"] = self._slot("recent.x"), self._slot("recent.y")
+            now["x"], now["y"] = self._slot("now.x"), self._slot("now.y")
+            self._template = json.dumps(self._doc)
+        text = self._template
+        for name, values in zip(self._SLOTS, (u, a, u[-1:], a[-1:])):
+            text = text.replace(json.dumps(self._slot(name)), json.dumps(_plain(values)), 1)
+        return text
 
 
 def _plain(v: np.ndarray) -> list[float | None]:

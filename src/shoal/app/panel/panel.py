@@ -162,6 +162,12 @@ class Panel:
         self._local = threading.local()  # per thread: programmatic .value fires callbacks inline
         self._taken: dict[int, float] = {}  # id(watched handle) → update time of the value last taken or set
         self._controls: list[tuple[Any, Any]] = []  # (spec, handle) in build order
+        # the controls each per-draw refresh visits, sorted out once as they are built (not every draw)
+        self._followers: list[tuple[Number, Any]] = []  # numbers that follow the selected robot
+        self._drawn_texts: list[tuple[Text, Any]] = []  # readouts of what was drawn (Text.on_snapshot)
+        self._computed_texts: list[tuple[Text, Any]] = []  # readouts of the scenario (Text.compute)
+        self._plots: list[tuple[Any, Any]] = []  # PlotSpec, Chart and Figure
+        self._scaled: dict[int, tuple[Any, float]] = {}  # id(figure handle) → (its figure, text scale) checked
         self._sent: dict[int, tuple] = {}  # uPlot (series, axes) last sent, by handle (see push_uplot)
         self.controls = 0  # a count of the user's control events (the tab holds the scene a moment after one)
         self.text_scale = services.display.text_scale if services.display is not None else 1.0  # plots' text
@@ -412,6 +418,14 @@ class Panel:
         if item.key:
             self.handles[item.key] = h
         self._controls.append((item, h))
+        if isinstance(item, Number) and item.follow and item.read is not None:
+            self._followers.append((item, h))
+        if isinstance(item, Text) and item.on_snapshot is not None:
+            self._drawn_texts.append((item, h))
+        if isinstance(item, Text) and item.compute is not None:
+            self._computed_texts.append((item, h))
+        if isinstance(item, (PlotSpec, Chart, Figure)):
+            self._plots.append((item, h))
         self._wire(item, h)
         return h
 
@@ -587,9 +601,8 @@ class Panel:
 
     def _follow(self) -> None:
         with self.quietly():
-            for item, h in self._controls:
-                if isinstance(item, Number) and item.follow and item.read is not None:
-                    self.set_quietly(h, item.read(self.session))
+            for item, h in self._followers:
+                self.set_quietly(h, item.read(self.session))  # type: ignore[misc]
 
     def _seed_changed(self) -> None:
         try:
@@ -771,9 +784,8 @@ class Panel:
 
     def refresh_readout(self) -> None:
         """Readouts that follow the scenario (derived numbers beside the controls)."""
-        for item, h in self._controls:
-            if isinstance(item, Text) and item.compute is not None:
-                h.content = item.compute(self.session)
+        for item, h in self._computed_texts:
+            h.content = item.compute(self.session)  # type: ignore[misc]
 
     def on_snapshot(self, snap: Snapshot) -> None:
         """After each scene redraw: the handles that follow the selected robot and the readouts of
@@ -781,25 +793,27 @@ class Panel:
         if self.removed:
             return
         self._follow()
-        for item, h in self._controls:
-            if isinstance(item, Text) and item.on_snapshot is not None:
-                text = item.on_snapshot(self.session, snap)
-                if h.content != text:
-                    h.content = text
+        for item, h in self._drawn_texts:
+            text = item.on_snapshot(self.session, snap)  # type: ignore[misc]
+            if h.content != text:
+                h.content = text
 
     def refresh_plots(self) -> None:
         """Redraw the live plots (the caller throttles this)."""
         if self.removed:
             return
-        for item, h in self._controls:
+        for item, h in self._plots:
             if isinstance(item, (PlotSpec, Chart)):
                 if item.visible is not None and not h.visible:
                     continue
                 self.push_uplot(h, self._frame(item))
             elif isinstance(item, Figure):
                 item.refresh(self, h)
-                if (fig := text_scaled(h.figure, self.text_scale)) is not h.figure:
-                    h.figure = fig
+                checked = self._scaled.get(id(h))  # (plotly's attributes are slow to read: once a figure and scale)
+                if checked is None or checked[0] is not h.figure or checked[1] != self.text_scale:
+                    if (fig := text_scaled(h.figure, self.text_scale)) is not h.figure:
+                        h.figure = fig
+                    self._scaled[id(h)] = (h.figure, self.text_scale)
 
     def _frame(self, item: PlotSpec | Chart) -> Frame:
         """What ``item`` shows now: the metrics up to the step shown (with swarm B's curve) or the chart."""

@@ -24,6 +24,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .camera import Viewport
+from .node_update import set_array
 from .shapes import lift, plane, ray_ground
 
 # Every build of a scene gets a root name never used before (and so do re-created nodes that
@@ -121,6 +122,13 @@ class Canvas:
         """World metres (…, d) → coordinates under the root frame (…, 3) float32."""
         return lift((plane(xy) - self.centre) * self.scale, z)
 
+    def _view_2d(self, xy: np.ndarray, z: float) -> np.ndarray:
+        """:meth:`to_view` of (P, 2) float points (the same numbers, without its reshaping)."""
+        out = np.empty((len(xy), 3), np.float32)
+        out[:, :2] = (xy - self.centre) * self.scale
+        out[:, 2] = z
+        return out
+
     def to_scene(self, xy: np.ndarray) -> np.ndarray:
         """World metres (…, d) → scene coordinates (…, 2), as the camera sees them."""
         return (plane(xy) - self.focus) * self.scale
@@ -137,8 +145,8 @@ class Canvas:
     def set_focus(self, target: np.ndarray) -> bool:
         """Put world point ``target`` in the middle of the screen; True if the view moved."""
         target = np.asarray(target, dtype=float)
-        if np.allclose(target, self.focus):
-            return False
+        if all(abs(t - f) <= 1e-8 + 1e-5 * abs(f) for t, f in zip(target.tolist(), self.focus.tolist())):
+            return False  # (numpy's allclose, on two plain floats: this runs every draw of every tab)
         self.focus = target.copy()
         off = (self.centre - self.focus) * self.scale
         self.nodes["root"].position = (float(off[0]), float(off[1]), 0.0)
@@ -149,12 +157,16 @@ class Canvas:
         """One point cloud: ``size`` in scene units, ``color`` one RGB or one per point."""
         xy = np.asarray(xy, dtype=float)
         xy = plane(xy.reshape(-1, xy.shape[-1]))
-        finite = np.all(np.isfinite(xy), axis=1)
         per_point = color if isinstance(color, np.ndarray) and color.ndim == 2 else None  # one RGB per point
-        xy = xy[finite]
-        pts = self.to_view(xy, z) if len(xy) else self.to_view(np.zeros((1, 2)), z)
-        if per_point is not None:
-            per_point = per_point[finite] if len(xy) else np.zeros((1, 3), np.uint8)
+        ok = np.isfinite(xy)
+        if not ok.all():  # (a robot gone, a best not yet known)
+            finite = ok.all(axis=1)
+            xy = xy[finite]
+            if per_point is not None:
+                per_point = per_point[finite]
+        pts = self._view_2d(xy, z) if len(xy) else self._view_2d(np.zeros((1, 2)), z)
+        if per_point is not None and not len(xy):
+            per_point = np.zeros((1, 3), np.uint8)
         colors = color if per_point is None else per_point
         self._put(key, pts, per_point, bool(len(xy)), lambda: self.scene.add_point_cloud(
             self.name(key), pts, colors=colors, point_size=size, point_shape=shape, precision="float32",
@@ -180,9 +192,9 @@ class Canvas:
             self.nodes[key] = create()
             self.shown_revision += 1
         else:
-            node.points = pts
+            set_array(node, "points", pts)
             if colors is not None:
-                node.colors = colors
+                set_array(node, "colors", colors)
         self.show(key, shown)
 
     def label(self, key: str, text: str, xy: np.ndarray | None, z: float = 0.0, **style: Any) -> None:

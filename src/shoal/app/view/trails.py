@@ -31,6 +31,7 @@ import numpy as np
 
 from ..session.history import Trails
 from .canvas import Canvas, Colour
+from .node_update import set_array
 
 BLOCK = 4  # stride segments (or dot columns) in one piece
 TRAIL_DOTS = 16  # dots a trail at most, in the light drawing …
@@ -82,10 +83,20 @@ class Pieces:
         canvas.group(self.key, False)
 
 
-def _closed(steps: np.ndarray, stride: int) -> list[int]:
+def _closed(steps: np.ndarray, stride: int) -> np.ndarray:
     """Columns j whose segment j → j + 1 joins two stride points (the frame shown ends the last one
     only if it is a stride point itself)."""
-    return [j for j in range(len(steps) - 1) if steps[j + 1] % stride == 0]
+    return np.flatnonzero(np.asarray(steps[1:]) % stride == 0)
+
+
+def _blocks(cols: np.ndarray, keys: np.ndarray) -> list[tuple[int, list[int]]]:
+    """``cols`` grouped by ``keys`` (non-decreasing, one a column): (key, its columns) in order, as
+    plain ints (this runs every draw of every tab)."""
+    if not len(cols):
+        return []
+    cut = (np.flatnonzero(keys[1:] != keys[:-1]) + 1).tolist()
+    c, k = cols.tolist(), keys.tolist()
+    return [(k[a], c[a:b]) for a, b in zip([0, *cut], [*cut, len(c)])]
 
 
 class TrailDrawing:
@@ -129,19 +140,24 @@ class TrailDrawing:
         self.lines.start(canvas, True)
         base = (trails.epoch, m, s)
 
-        def segments(cols: list[int]) -> Any:
+        def segments(cols: Any) -> Any:
             def build() -> np.ndarray:
                 j = np.asarray(cols)
-                segs = np.stack([p[:, j], p[:, j + 1]], axis=2)  # (M, S, 2, d)
-                return canvas.to_view(segs.reshape(-1, 2, segs.shape[-1]), z)
+                if p.shape[-1] < 2:
+                    segs = np.stack([p[:, j], p[:, j + 1]], axis=2)  # (M, S, 2, d)
+                    return canvas.to_view(segs.reshape(-1, 2, segs.shape[-1]), z)
+                out = np.empty((m, len(j), 2, 3), np.float32)  # (canvas.to_view's numbers, without the stack)
+                out[:, :, 0, :2] = (p[:, j, :2] - canvas.centre) * canvas.scale
+                out[:, :, 1, :2] = (p[:, j + 1, :2] - canvas.centre) * canvas.scale
+                out[..., 2] = z
+                return out.reshape(-1, 2, 3)
             return build
 
         want: dict[Hashable, tuple[Hashable, Any]] = {}
-        blocks: dict[int, list[int]] = {}
-        for j in _closed(steps, s):
-            blocks.setdefault(int(steps[j]) // (s * BLOCK), []).append(j)
-        for b, cols in blocks.items():
-            want[(*base, b)] = ((int(steps[cols[0]]), int(steps[cols[-1] + 1])), segments(cols))
+        closed = _closed(steps, s)
+        at = steps.tolist()
+        for b, cols in _blocks(closed, steps[closed] // (s * BLOCK)):
+            want[(*base, b)] = ((at[cols[0]], at[cols[-1] + 1]), segments(cols))
         # (when the frame shown is a stride point itself, the open piece repeats the last closed
         # segment: drawn twice it looks the same, and the node stays instead of going and coming back)
         want["open"] = ((*base, int(steps[last - 1]), int(steps[last])), segments([last - 1]))
@@ -151,7 +167,7 @@ class TrailDrawing:
                 canvas.name(key, fresh=True), pts, colors=colour, thickness=px, thickness_units="screen"))
 
         def update(node: Any, pts: np.ndarray) -> None:
-            node.points = pts
+            set_array(node, "points", pts)
 
         self.lines.keep(canvas, want, make, update)
 
@@ -165,18 +181,17 @@ class TrailDrawing:
         self.dots.start(canvas, True)
         base = (trails.epoch, m, s, e, dot)
 
-        def points(cols: list[int]) -> Any:
+        def points(cols: Any) -> Any:
             def build() -> np.ndarray:
                 return canvas.to_view(p[:, np.asarray(cols)].reshape(-1, p.shape[-1]), z)
             return build
 
         want: dict[Hashable, tuple[Hashable, Any]] = {}
-        blocks: dict[int, list[int]] = {}
-        for j in range(last):
-            if steps[j] % s == 0 and (int(steps[j]) // s) % e == 0:
-                blocks.setdefault(int(steps[j]) // (s * e * BLOCK), []).append(j)
-        for b, cols in blocks.items():
-            want[(*base, b)] = ((int(steps[cols[0]]), int(steps[cols[-1]])), points(cols))
+        head = steps[:last]
+        kept = np.flatnonzero((head % s == 0) & ((head // s) % e == 0))
+        at = steps.tolist()
+        for b, cols in _blocks(kept, head[kept] // (s * e * BLOCK)):
+            want[(*base, b)] = ((at[cols[0]], at[cols[-1]]), points(cols))
         want["open"] = ((*base, int(steps[last])), points([last]))
 
         def make(key: str, pts: np.ndarray) -> None:
@@ -185,7 +200,7 @@ class TrailDrawing:
                 precision="float32", point_shading="flat"))
 
         def update(node: Any, pts: np.ndarray) -> None:
-            node.points = pts
+            set_array(node, "points", pts)
 
         self.dots.keep(canvas, want, make, update)
 

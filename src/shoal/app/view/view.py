@@ -109,11 +109,13 @@ class KeepSwarmInView:
             return
         lo, hi = x.min(axis=0), x.max(axis=0)
         half = float(snap.scenario.arena.half_size)
+        (lo0, lo1), (hi0, hi1) = lo.tolist(), hi.tolist()  # (plain floats: this runs every draw of every tab)
 
         def within(c: np.ndarray) -> bool:
-            return bool(np.all(lo >= c - half) and np.all(hi <= c + half))
+            c0, c1 = float(c[0]), float(c[1])
+            return lo0 >= c0 - half and lo1 >= c1 - half and hi0 <= c0 + half and hi1 <= c1 + half
 
-        home, spread = canvas.centre, bool(np.any(hi - lo > 2 * half))
+        home, spread = canvas.centre, hi0 - lo0 > 2 * half or hi1 - lo1 > 2 * half
         if self.home_first:
             if within(home) or spread:
                 target = home  # in the arena, or too spread to frame (a diverging swarm): home view
