@@ -37,6 +37,23 @@ def _equal(page_data, handle) -> bool:
     return len(got) == len(want) and all(np.array_equal(g, w, equal_nan=True) for g, w in zip(got, want))
 
 
+def _page_holds_every_chart(tab, page) -> None:
+    """Every chart the page holds, drawn or not, comes to the server's data (a chart whose append
+    the page could not take is sent whole once the page asks: a message or two later)."""
+    for key, h in tab.panels.handles.items():
+        if type(h).__name__ == "GuiUplotHandle" and h.visible:
+            wait_until(lambda h=h: _equal(page.evaluate(HELD, h._impl.uuid), h), timeout=30,
+                       what=f"the page's {key} chart equal to the server's")
+
+
+MISS = """(uuid) => {
+  const P = window.__shoalPage, s = P.viewer().useGuiConfig, conf = s.get(uuid);
+  const data = conf.props.data.map((a) => a.slice(0, a.length - 3));  // a page that missed an append
+  s.set({[uuid]: {...conf, props: {...conf.props, data: data}}});
+  P.plot(P.plotSync, uuid, -1, 0, 0, 0, data.map(() => []), conf.props.scales);  // and the next one
+}"""
+
+
 def test_the_page_takes_appended_rows_and_draws_what_the_server_rendered(server, page, cid):
     tab = server.tabs[cid]
     stream = tab.panels.plot_stream
@@ -57,9 +74,20 @@ def test_the_page_takes_appended_rows_and_draws_what_the_server_rendered(server,
     tab.session.pause()
     wait_until(lambda: _equal(page.evaluate(DRAWN, uuid), speed), timeout=30,
                what="uPlot's data equal to the server's speed plot")
-    for key, h in tab.panels.handles.items():  # every chart the page holds, drawn or not
-        if type(h).__name__ == "GuiUplotHandle" and h.visible:
-            assert _equal(page.evaluate(HELD, h._impl.uuid), h), key
+    _page_holds_every_chart(tab, page)
     since = stream.keyframes - keyframes
     assert stream.appended > 10 * max(since, 1) // 2, (stream.appended, since, keyframes)
     assert len(speed.data[0]) > 100 and speed.data[0][-1] == pytest.approx(tab.session.clock())
+
+
+def test_a_chart_the_page_missed_comes_whole_though_the_tab_is_paused(server, page, cid):
+    """Two misses within the page's second between asks: the second is asked at the second's end,
+    and the server sends every chart whole at once, though no refresh comes."""
+    tab = server.tabs[cid]
+    tab.session.pause()
+    _page_holds_every_chart(tab, page)
+    charts = [h for h in tab.panels.handles.values() if type(h).__name__ == "GuiUplotHandle" and h.visible]
+    for h in charts[:2]:
+        page.evaluate(MISS, h._impl.uuid)
+    assert not _equal(page.evaluate(HELD, charts[1]._impl.uuid), charts[1])
+    _page_holds_every_chart(tab, page)

@@ -18,7 +18,9 @@ series, on every push), and a time plot's window is up to ``PlotSpec.history`` r
   then writes ``"appends …"`` into a hidden text control of this panel (:data:`SYNC_LABEL`).
   A page that cannot (another viser, a client without the script) never says so and keeps
   getting keyframes. An append whose base the page does not hold (a message it missed) makes
-  it write ``"resync …"``: that chart's next refresh is a keyframe;
+  it write ``"resync …"``: every chart is sent whole at once, as the server holds it (so a
+  tab paused just after a miss still ends with the page drawing what the server rendered), and
+  the appends that follow build on that;
 - viser never drops a script message on its way to a page, while a data update replaces the one
   still waiting for the same chart: so while more than :data:`MAX_BACKLOG` messages wait for a
   page (a slow or stalled client), refreshes are keyframes again, and what waits stays bounded.
@@ -29,6 +31,7 @@ A refresh of a playing plot then costs the page a few hundred bytes, whatever th
 from __future__ import annotations
 
 import math
+import threading
 from typing import Any, Callable
 
 import numpy as np
@@ -103,8 +106,8 @@ class PlotStream:
     def __init__(self, gui: Any, script: Script | None, backlog: Backlog | None = None) -> None:
         self.script, self.backlog = script, backlog
         self.appends = False  # the page said it applies appended rows
-        self._charts: set[str] = set()  # the charts pushed so far
-        self._resync: frozenset[str] = frozenset()  # charts whose next refresh is a keyframe (the page asked)
+        self._charts: dict[str, Any] = {}  # the charts pushed so far, by uuid
+        self._lock = threading.Lock()  # a push and a resync's keyframes, one at a time (ticker, viser's thread)
         self.appended = self.keyframes = 0  # refreshes sent each way (for the benchmarks and tests)
         self.sync: Any = None
         if script is not None:
@@ -114,19 +117,25 @@ class PlotStream:
 
     def heard(self, said: str) -> None:
         """The page's answer (viser's thread): ``appends N`` (it applies them), ``resync N`` (it
-        missed one: every chart's next refresh is a keyframe). Anything else is ignored."""
+        missed one: every chart is sent whole now). Anything else is ignored."""
         word = said.split(" ", 1)[0]
         if word == "appends":
             self.appends = True
         elif word == "resync":
-            self._resync = frozenset(self._charts)
+            with self._lock:
+                for handle in list(self._charts.values()):
+                    self._keyframe(handle, tuple(handle._impl.props.data), handle._impl.props.scales)
 
     def push(self, handle: Any, data: tuple[np.ndarray, ...], scales: dict[str, Any]) -> None:
         """Bring the page's chart ``handle`` to ``data`` and ``scales``, as cheaply as it can."""
+        with self._lock:
+            self._push(handle, data, scales)
+
+    def _push(self, handle: Any, data: tuple[np.ndarray, ...], scales: dict[str, Any]) -> None:
         uuid = handle._impl.uuid
-        self._charts.add(uuid)
+        self._charts[uuid] = handle
         props = handle._impl.props
-        if (self.appends and self.script is not None and uuid not in self._resync
+        if (self.appends and self.script is not None
                 and (self.backlog is None or self.backlog() <= MAX_BACKLOG)):
             found = delta(tuple(props.data), data)
             if found is not None:
@@ -137,8 +146,14 @@ class PlotStream:
                     props.scales = scales
                     self.appended += 1
                 return
-        if uuid in self._resync:
-            self._resync = self._resync - {uuid}
+        self._keyframe(handle, data, scales)
+
+    def _keyframe(self, handle: Any, data: tuple[np.ndarray, ...], scales: dict[str, Any]) -> None:
+        """The whole of ``data`` and ``scales`` through viser's own update (a removed chart: nothing)."""
+        uuid = handle._impl.uuid
+        if handle._impl.removed:
+            self._charts.pop(uuid, None)
+            return
         handle.data = data
         handle.scales = scales
         self.keyframes += 1

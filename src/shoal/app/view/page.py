@@ -202,6 +202,14 @@ PAGE_JS = """
     tell(v, "appends");
     P.plotSaid = P.plotSync;
   };
+  // A missed append: ask for the whole charts, at most once a second (a miss within that second
+  // is asked for at its end, never dropped: a paused tab would keep the stale chart)
+  P.plotAskTimer = null;
+  const askResync = (v) => {
+    if (P.plotAskTimer !== null) return;
+    const wait = Math.max(0, P.plotAsked + 1000 - Date.now());
+    P.plotAskTimer = setTimeout(() => { P.plotAskTimer = null; P.plotAsked = Date.now(); tell(v, "resync"); }, wait);
+  };
   // Rows for chart `uuid`, which holds n0 x values from x0 to x1: drop that many from the front,
   // append cols[i] to series i, take `scales`; after the other messages of this batch.
   P.plot = (sync, uuid, n0, x0, x1, drop, cols, scales) => queueMicrotask(() => {
@@ -210,7 +218,7 @@ PAGE_JS = """
     const data = conf.props.data, xs = data && data[0];
     const held = xs && data.length === cols.length && xs.length === n0 && xs[0] === x0 && xs[n0 - 1] === x1;
     if (!held) {
-      if (sync === P.plotSync && Date.now() - P.plotAsked > 1000) { P.plotAsked = Date.now(); tell(v, "resync"); }
+      if (sync === P.plotSync) askResync(v);
       return;
     }
     const out = data.map((a, i) => {
