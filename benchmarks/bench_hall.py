@@ -5,8 +5,9 @@ Run: python benchmarks/bench_hall.py [--tabs 8 16 24] [--workers 1 2] [--seconds
 For each number of workers, ``shoal hall`` (:class:`shoal.app.hall.supervisor.Hall`: the lecture,
 the workers, Debian's nginx) starts on a free port; a child process opens ``--tabs`` private
 tabs through nginx (``/p/<id>``: plain sessions of the preset, each playing at its
-``view.steps_per_second``), as raw-websocket clients that decode their frames and count the
-robots' point-cloud updates. Measured over the window, after ``--warmup`` seconds: robot
+``view.steps_per_second`` and set to run on at the end), as raw-websocket clients that decode their frames and count the
+robots' point-cloud updates, and say (as a real page's script does) that they take the plots'
+appended rows. Measured over the window, after ``--warmup`` seconds: robot
 updates/s a tab (lowest, median; a tab at full rate gets about its steps/s), KiB/s a tab, and
 the CPU of each process of the hall (% of one core: the workers together, the lecture, nginx)
 and of the clients. Tabs are spread by nginx (``least_conn``).
@@ -44,6 +45,10 @@ def run_clients(port: int, paths: list[str], ready: Any, go: Any, stop: Any, out
 
     clients = [WireClient(port, decode=True, path=p) for p in paths]
     wait_for(lambda: all(c.counts()[2] > 0 for c in clients), 300, "every tab's first robots")
+    for c in clients:  # say what a real page's script says: plots may come as appended rows
+        wait_for(lambda c=c: c.uuid_of("plot sync"), 60, "the tab's plot sync control")
+        c.take_plot_appends()
+        c.set_value("at the end", "run on")  # (the preset stops at step 600: 30 s; the window must not see it)
     ready.set()
     go.wait()
     me = psutil.Process()
