@@ -8,8 +8,6 @@ checked (lift it after this file passes with the new release: ``.ci/newest``).
 
 from __future__ import annotations
 
-import asyncio
-import inspect
 import time
 import tomllib
 from pathlib import Path
@@ -34,8 +32,6 @@ INTERNALS = {
         ("ViserServer starts websockets.asyncio.server.serve(process_request=...)", "app/origin_guard.py"),
         ("GuiApi._websock_interface.get_message_buffer().sanctioned_dead_writes()",
          "app/server.py:expect_late_writes (a tab closed mid-update)"),
-        ("AsyncMessageBuffer.message_event (an asyncio.Event) and .event_loop; push() sets the event "
-         "on the loop through call_soon_threadsafe", "app/server.py:wake_on_loop (the event woken on its loop only)"),
         ("a handle's _impl.props and _impl.removed, SceneNodeHandle._queue_update and _on_prop_assigned",
          "app/view/node_update.py (an array sent without the setter's casts), app/panel/plot_stream.py"),
     ],
@@ -105,12 +101,6 @@ def test_viser_client_gui_internals():
         buffer = interface.get_message_buffer()
         assert callable(getattr(buffer, "sanctioned_dead_writes", None)), (
             f"viser {viser.__version__} moved AsyncMessageBuffer.sanctioned_dead_writes (app/server.py)")
-        assert type(getattr(buffer, "message_event", None)) is asyncio.Event and isinstance(
-            getattr(buffer, "event_loop", None), asyncio.AbstractEventLoop), (
-            f"viser {viser.__version__} moved AsyncMessageBuffer.message_event or .event_loop (app/server.py)")
-        pushes = inspect.getsource(type(buffer).push) + inspect.getsource(type(buffer).atomic_end)
-        assert pushes.count("call_soon_threadsafe(self.message_event.set)") == 2, (
-            f"viser {viser.__version__} no longer wakes a buffer's consumer on its loop (app/server.py:wake_on_loop)")
         assert guard_uploads(gui, 10, 20, lambda *_: None)
     finally:
         if tab is not None:

@@ -7,7 +7,6 @@ and meet the ticking thread only through each session's lock.
 
 from __future__ import annotations
 
-import asyncio
 import contextlib
 import errno
 import gc
@@ -219,7 +218,6 @@ class ShoalServer:
         """Every connection starts here: its late writes are expected (:func:`expect_late_writes`),
         then the kind of server decides what the tab is (:meth:`_connect`)."""
         expect_late_writes(client.gui)
-        wake_on_loop(client.gui)
         self._connect(client)
 
     def _connect(self, client: viser.ClientHandle) -> None:
@@ -350,38 +348,6 @@ def expect_late_writes(gui: Any) -> None:
 
 
 _LATE_WRITES: weakref.WeakKeyDictionary[Any, contextlib.AbstractContextManager[Any]] = weakref.WeakKeyDictionary()
-
-
-class _LoopEvent(asyncio.Event):
-    """A connection buffer's message event, woken on its event loop only. Viser's buffer sets it
-    from the writing thread too (then once more through ``call_soon_threadsafe``), and an
-    ``asyncio.Event`` is not thread-safe: a set from the ticker's thread while the loop thread
-    adds or removes a waiter raised "deque mutated during iteration" in the middle of a tab's
-    update (once in minutes, 24 tabs a worker). Off the loop, a set does nothing here: the
-    buffer's own ``call_soon_threadsafe(set)`` (or ``atomic_end``'s) wakes the waiters."""
-
-    _shoal_loop: asyncio.AbstractEventLoop | None = None
-
-    def set(self) -> None:
-        try:
-            running = asyncio.get_running_loop()
-        except RuntimeError:
-            running = None
-        if self._shoal_loop is None or running is self._shoal_loop:
-            super().set()
-
-
-def wake_on_loop(gui: Any) -> None:
-    """Make the message event of ``gui``'s connection buffer a :class:`_LoopEvent` (the same object,
-    waiters kept; through ``GuiApi._websock_interface.get_message_buffer()``:
-    tests/test_internals.py)."""
-    interface = getattr(gui, "_websock_interface", None)
-    buffer = interface.get_message_buffer() if interface is not None else None
-    event = getattr(buffer, "message_event", None)
-    loop = getattr(buffer, "event_loop", None)
-    if type(event) is asyncio.Event and loop is not None:
-        event.__class__ = _LoopEvent  # (the same object, its waiters kept)
-        event._shoal_loop = loop  # type: ignore[attr-defined]
 
 
 def start_server(preset: str = "default", host: str = "127.0.0.1", port: int = 8080,
