@@ -122,13 +122,6 @@ class Canvas:
         """World metres (…, d) → coordinates under the root frame (…, 3) float32."""
         return lift((plane(xy) - self.centre) * self.scale, z)
 
-    def _view_2d(self, xy: np.ndarray, z: float) -> np.ndarray:
-        """:meth:`to_view` of (P, 2) float points (the same numbers, without its reshaping)."""
-        out = np.empty((len(xy), 3), np.float32)
-        out[:, :2] = (xy - self.centre) * self.scale
-        out[:, 2] = z
-        return out
-
     def to_scene(self, xy: np.ndarray) -> np.ndarray:
         """World metres (…, d) → scene coordinates (…, 2), as the camera sees them."""
         return (plane(xy) - self.focus) * self.scale
@@ -164,7 +157,7 @@ class Canvas:
             xy = xy[finite]
             if per_point is not None:
                 per_point = per_point[finite]
-        pts = self._view_2d(xy, z) if len(xy) else self._view_2d(np.zeros((1, 2)), z)
+        pts = lift(((xy if len(xy) else np.zeros((1, 2))) - self.centre) * self.scale, z)  # (xy is planar already)
         if per_point is not None and not len(xy):
             per_point = np.zeros((1, 3), np.uint8)
         colors = color if per_point is None else per_point
