@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from shoal.app.panel.plot_stream import append_call, delta, js_number, js_value
+from shoal.app.panel.plot_stream import RESYNC_SECONDS, append_call, delta, js_number, js_value
 
 from app_helpers import wire_tab
 from browser.browser_helpers import wait_until
@@ -122,6 +122,12 @@ def test_a_page_that_missed_an_append_asks_and_gets_the_whole_data(server):
         c.set_value("plot sync", "<script>nonsense")  # anything else changes nothing
         time.sleep(0.3)
         assert tab.panels.plot_stream.keyframes == sent
+        time.sleep(RESYNC_SECONDS)
+        for i in range(40):  # a hostile client asking again and again gets one answer, not 40
+            c.set_value("plot sync", f"resync {3 + i}")
+        time.sleep(0.3)
+        assert 0 < tab.panels.plot_stream.keyframes - sent <= 2 * (sent - before), (before, sent)
+        sent = tab.panels.plot_stream.keyframes
         tab.session.play()  # and the appends that follow build on what was sent
         appended = tab.panels.plot_stream.appended
         wait_until(lambda: tab.panels.plot_stream.appended > appended + 3, timeout=60, what="appends again")

@@ -32,11 +32,13 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from typing import Any, Callable
 
 import numpy as np
 
 SYNC_LABEL = "plot sync"  # the hidden control the page answers through
+RESYNC_SECONDS = 0.5  # a page asks at most once a second: the server answers at most once in this
 MAX_BACKLOG = 256  # messages waiting for the page beyond which a refresh is a keyframe (it coalesces)
 Script = Callable[[str], None]  # runs JavaScript in the tab's page
 Backlog = Callable[[], int]  # messages still waiting to reach the tab's page
@@ -108,6 +110,7 @@ class PlotStream:
         self.appends = False  # the page said it applies appended rows
         self._charts: dict[str, Any] = {}  # the charts pushed so far, by uuid
         self._lock = threading.Lock()  # a push and a resync's keyframes, one at a time (ticker, viser's thread)
+        self._resent = -math.inf  # when every chart was last sent whole on the page's asking
         self.appended = self.keyframes = 0  # refreshes sent each way (for the benchmarks and tests)
         self.sync: Any = None
         if script is not None:
@@ -122,6 +125,10 @@ class PlotStream:
         if word == "appends":
             self.appends = True
         elif word == "resync":
+            now = time.monotonic()
+            if now - self._resent < RESYNC_SECONDS:
+                return  # (faster than a page asks: a client flooding the server gets one answer)
+            self._resent = now
             with self._lock:
                 for handle in list(self._charts.values()):
                     self._keyframe(handle, tuple(handle._impl.props.data), handle._impl.props.scales)
