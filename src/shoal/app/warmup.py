@@ -28,15 +28,17 @@ from __future__ import annotations
 
 import atexit
 import os
-import subprocess
 import sys
 import threading
 import time
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from shoal.presets.build import build, kind_of
 from shoal.presets.io import list_presets, load
 from shoal.presets.models import Scenario
+
+if TYPE_CHECKING:  # (subprocess is imported when a child compiles: a short run never starts one)
+    import subprocess
 
 STEPS = 3  # of each preset: every kernel a tick calls, at the argument types the app and `shoal run` use
 ORDER = ("swarm", "fleet", "sonar", "slo")  # groups of scenes with kernels
@@ -199,6 +201,8 @@ class Warmup:
     def _compile_elsewhere(self, names: list[str]) -> bool:
         """Compile ``names``' kernels in a child process into the disk cache this process reads
         (its progress counted as it goes); False where it cannot (no cache to share, or it failed)."""
+        import subprocess
+
         from shoal.engine.core import compiled
 
         if compiled.uncached:  # (kernels compiled in memory: a child's work would not reach this process)

@@ -11,7 +11,6 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import tomli_w
 from pydantic import ValidationError
 
 from shoal.engine.core.plugins import load_plugins
@@ -233,6 +232,8 @@ def kept_fields(scenario: Scenario, section: str, **fields: Any) -> Scenario:
 
 
 def to_toml(scenario: Scenario) -> str:
+    import tomli_w  # (a run writes no TOML)
+
     return tomli_w.dumps(scenario.model_dump(mode="json", exclude_none=True))
 
 

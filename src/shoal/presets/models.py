@@ -5,7 +5,8 @@ such as ``controller.omega`` so the CLI and the UI can name the bad field. The c
 variants (laws, strategies, selections) and their rules come from the engine's registries.
 """
 
-from __future__ import annotations
+# (no ``from __future__ import annotations`` here: pydantic reads the fields' annotations as objects
+# instead of evaluating a string for each, a tenth of what building these models costs at import)
 
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Annotated, Any, ClassVar, Literal, TypeAlias, TypeVar
@@ -26,7 +27,6 @@ from shoal.engine.core.registry import Registry
 from shoal.engine.pso.laws import LAWS
 
 from .kinds import check_plugin_sections, check_scene, resolve
-from .marks import provenance
 
 # The registries of the later chapters' variants, by name: imported when a preset names one of
 # their entries (a Chapter 3 scene loads no fleet, sonar or SLO code to be validated).
@@ -258,7 +258,7 @@ class ObjectiveModel(_Model):
                     "absorb (docs/readings.md, \"Search-space bounds\")")] = None
 
     @model_validator(mode="after")
-    def _bounds(self) -> ObjectiveModel:
+    def _bounds(self) -> "ObjectiveModel":
         if self.bounds is not None and not self.bounds[0] < self.bounds[1]:
             raise ValueError(f"bounds: need lo < hi, got {list(self.bounds)}")
         if self.boundary is not None and self.bounds is None:
@@ -492,6 +492,8 @@ class Scenario(_Model):
     def marks(self) -> dict[str, Any]:
         """Where each value that shapes this scene's runs comes from: stated, read, fitted or
         ours, with its source (:func:`shoal.presets.marks.provenance`; None: unmarked)."""
+        from .marks import provenance  # (a run reads no marks)
+
         return provenance(self)
 
     @model_validator(mode="after")

@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import os
 import threading
-from concurrent.futures import Future, ThreadPoolExecutor
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
+
+if TYPE_CHECKING:  # (concurrent.futures is imported with the first pool: a one-run command never needs it)
+    from concurrent.futures import Future, ThreadPoolExecutor
 
 _lock = threading.Lock()
 _inside = threading.local()  # set in a pool's threads: a block there runs its own blocks serially
@@ -71,6 +73,8 @@ def blocks(runs: int, n: int | None = None) -> list[tuple[int, int]]:
 def _executor(n: int) -> ThreadPoolExecutor:
     """The process's pool of ``n`` threads (a new one after a fork or a change of count)."""
     global _pool
+    from concurrent.futures import ThreadPoolExecutor
+
     with _lock:
         pid = os.getpid()
         if _pool is None or _pool[0] != pid or _pool[1] != n:

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-import difflib
 from typing import Iterable
 
 
 def close(word: str, choices: Iterable[str], n: int = 2) -> list[str]:
     """The names of ``choices`` closest to ``word`` (at most ``n``, best first; none if none is close)."""
+    import difflib  # (only a mistyped name needs it)
+
     return difflib.get_close_matches(word, [c for c in choices if isinstance(c, str)], n=n, cutoff=0.6)
 
 
