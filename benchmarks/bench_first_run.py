@@ -10,6 +10,12 @@ A+ = 30 m/s², Δt = 0.1 s, 10 steps, writing its trajectories and metrics as CS
 header, as ``shoal run`` does), then ``python -m shoal run default --steps 10`` of each tree
 (its own ``PYTHONPATH``; the base exported with ``git archive``, ``page_server.tree_of``).
 The numba cache is the user's, as after any first use (one round is run and dropped first).
+Bytecode is cached as on any machine after a first use (``pip install`` compiles it; Python
+writes it at a first import): every child, the numpy script's too, writes and reads it under a
+``PYTHONPYCACHEPREFIX`` of its own in the temporary folder, filled by the dropped round, whatever
+``PYTHONDONTWRITEBYTECODE`` the shell has. Plug-ins load as a user's do (``SHOAL_PLUGINS`` as the
+shell has it: on by default), so the entry-point scan is counted. ``--no-bytecode`` measures with none cached instead
+(every module of each tree compiled at each start; site-packages keep the bytecode pip wrote).
 It prints the median and range of each wall time, the medians' difference to the numpy script,
 and, from ``python -X importtime``, how each tree's import time splits between packages. Nothing
 is asserted; the machine may be shared, so read the trees side by side.
@@ -85,10 +91,10 @@ def _shoal(pkg: Path, out: Path) -> list[str]:
     return [sys.executable, "-m", "shoal", "run", "default", "--steps", "10", "--out", str(out)]
 
 
-def import_split(pkg: Path, tmp: Path) -> tuple[float, dict[str, float], list[str]]:
+def import_split(pkg: Path, tmp: Path, pycache: Path | None) -> tuple[float, dict[str, float], list[str]]:
     """``python -X importtime`` of one ``shoal run``: total seconds, seconds by package (self
     times), and the shoal modules of the later chapters it imported."""
-    done = subprocess.run([sys.executable, "-X", "importtime", *_shoal(pkg, tmp / "it")[1:]], env=_env(pkg),
+    done = subprocess.run([sys.executable, "-X", "importtime", *_shoal(pkg, tmp / "it")[1:]], env=_env(pkg, pycache),
                           capture_output=True, text=True, timeout=600)
     rows = [m.groups() for m in re.finditer(r"import time:\s+(\d+) \|\s+\d+ \|( *)(\S+)", done.stderr)]
     split = dict.fromkeys(GROUPS + ("other",), 0.0)
@@ -100,17 +106,31 @@ def import_split(pkg: Path, tmp: Path) -> tuple[float, dict[str, float], list[st
     return sum(split.values()), split, later
 
 
-def _env(pkg: Path) -> dict[str, str]:
-    return {**os.environ, "PYTHONPATH": str(pkg), "SHOAL_PLUGINS": "off"}
+def _base_env(pycache: Path | None) -> dict[str, str]:
+    """The shell's environment with the bytecode choice (``pycache``: the prefix to cache it under,
+    None: none written)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONDONTWRITEBYTECODE", "PYTHONPYCACHEPREFIX")}
+    if pycache is None:
+        env["PYTHONDONTWRITEBYTECODE"] = "1"
+    else:
+        env["PYTHONPYCACHEPREFIX"] = str(pycache)
+    return env
+
+
+def _env(pkg: Path, pycache: Path | None) -> dict[str, str]:
+    return {**_base_env(pycache), "PYTHONPATH": str(pkg)}  # (plug-ins as the shell has them: on by default)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--base", default="main", help="the commit to compare with ('' for none)")
     ap.add_argument("--repeats", type=int, default=15)
+    ap.add_argument("--no-bytecode", action="store_true",
+                    help="cache no bytecode: each tree's modules compiled at every start")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
+        pycache = None if args.no_bytecode else tmp / "pycache"
         trees = {"this tree": tree_of(None, tmp / "this")}
         if args.base:
             (tmp / "base").mkdir()
@@ -119,15 +139,16 @@ def main() -> None:
         script.write_text(NUMPY_SCRIPT)
         times: dict[str, list[tuple[float, float]]] = {"numpy script": [], **{name: [] for name in trees}}
         for round_ in range(args.repeats + 1):  # round 0: the caches filled, dropped
-            got = {"numpy script": _timed([sys.executable, str(script), str(tmp / "np")], dict(os.environ))}
+            got = {"numpy script": _timed([sys.executable, str(script), str(tmp / "np")], _base_env(pycache))}
             for name, pkg in trees.items():
-                got[name] = _timed(_shoal(pkg, tmp / f"out-{round_}-{len(got)}"), _env(pkg))
+                got[name] = _timed(_shoal(pkg, tmp / f"out-{round_}-{len(got)}"), _env(pkg, pycache))
             if round_:
                 for name, t in got.items():
                     times[name].append(t)
         load = os.getloadavg()
         print(f"{args.repeats} rounds, load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} (uptime), "
-              f"{os.cpu_count()} cores\n")
+              f"{os.cpu_count()} cores, bytecode "
+              f"{'compiled at every start' if args.no_bytecode else 'cached (written by the dropped round)'}\n")
         for i, what in enumerate(("wall-clock", "CPU (user + system)")):
             base = statistics.median(t[i] for t in times["numpy script"])
             print(f"{what + ' s':<22} {'median':>8} {'min':>7} {'max':>7}  {'median − numpy':>15}")
@@ -139,7 +160,7 @@ def main() -> None:
         print("\nimport time by package (python -X importtime, self times, s):")
         print(f"{'':<12}" + "".join(f"{g:>9}" for g in (*GROUPS, "other", "total")))
         for name, pkg in trees.items():
-            total, split, later = import_split(pkg, tmp)
+            total, split, later = import_split(pkg, tmp, pycache)
             print(f"{name:<12}" + "".join(f"{split[g]:9.3f}" for g in (*GROUPS, "other")) + f"{total:9.3f}")
             print(f"{'':<12}later chapters' shoal modules imported: {len(later)}"
                   + (f" ({', '.join(later[:4])}, …)" if later else ""))
