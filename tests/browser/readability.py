@@ -2,7 +2,8 @@
 ``benchmarks/bench_readability.py`` share it.
 
 :data:`TEXT_JS` lists every visible text node of the page (in the window, not hidden, not
-covered: the element found at the middle of its box is its own element or inside it) with its
+covered: the element found at the middle of its box is its own element or inside it; for a text
+that lets pointer events through, as the labels over the arena do, the arena's canvas) with its
 computed font size and its WCAG 2.1 contrast against the background it is drawn on (the
 backgrounds of its element and its ancestors composited over white; a text over the arena's
 canvas without a background of its own is measured against the canvas pixels under it, read by
@@ -75,7 +76,11 @@ TEXT_JS = r"""
     const s = getComputedStyle(el);
     if (s.visibility !== "visible") continue;
     const hit = document.elementsFromPoint(x, y);
-    if (!hit.length || !(hit[0] === el || el.contains(hit[0]) || hit[0].contains(el))) {
+    if (s.pointerEvents === "none") {
+      // a text that lets pointer events through (a label over the arena) is never among the elements
+      // found at a point: it shows where the first element found is the arena's canvas
+      if (!hit.length || hit[0] !== arena) continue;
+    } else if (!hit.length || !(hit[0] === el || el.contains(hit[0]) || hit[0].contains(el))) {
       // covered or clipped, unless what lies on top lets pointer events through and el is below it
       if (!hit.includes(el) || !hit.slice(0, hit.indexOf(el)).every(
           (h) => getComputedStyle(h).pointerEvents === "none" || h.contains(el))) continue;

@@ -34,6 +34,7 @@ from ..panel.plots import Chart, Frame, PlotSpec
 from ..panel.view_row import LIGHT_NOTE, legend_html
 from ..session.session import Session
 from ..tab import TabApp
+from ..view.overlay import ClassLabels
 from ..view.view import View
 from .round_view import class_html
 from .rounds import Rounds
@@ -51,8 +52,8 @@ class Shown(Protocol):
 
 # Where the broadcast's parts sit in a watcher's panel; a watcher's own controls go between them
 # (viser orders the elements of a panel by ``order``, across the server's GUI and the client's).
-ORDER_TITLE, ORDER_STATUS, ORDER_OWN, ORDER_ROUND, ORDER_ANSWER, ORDER_LEGEND, ORDER_PLOTS = (
-    1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0)
+ORDER_TITLE, ORDER_STATUS, ORDER_OWN, ORDER_ROUND, ORDER_ANSWER, ORDER_LEGEND, ORDER_PLOTS, ORDER_LABELS = (
+    1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0)
 AWAY = "the lecturer's tab is not connected: the run waits for it"
 MAX_ROWS = 400  # of a plot sent to the class
 PLOT_HZ = 2.0  # the class's status line, round and plots
@@ -91,6 +92,10 @@ class Broadcast:
         self._round_shown = -1  # the rounds' revision on screen
         self.legend = gui.add_markdown("", order=ORDER_LEGEND)
         self.plots_folder = gui.add_folder("Plots", order=ORDER_PLOTS)
+        # the arena's labels, HTML over each watcher's canvas as over a tab's (sharp, dark on white)
+        self.labels = ClassLabels()
+        self.label_holder = gui.add_html(self.labels.html(), order=ORDER_LABELS)
+        self._labels_sent = self.labels.revision
         self._session: Session | None = None
         self.arena: View | None = None
         self._panel: Any = None  # the lecturer's Panel whose plots are mirrored
@@ -115,10 +120,12 @@ class Broadcast:
         if s.scene_revision != arena.built_revision:
             with self.server.atomic():
                 arena.rebuild(s.scene_revision)
+                self._send_labels()
         if now >= self._next_scene and s.revision != arena.drawn_revision:
             snap = s.shown_snapshot()
             with self.server.atomic():  # one window for every watcher
                 arena.draw(snap)
+                self._send_labels()
                 legend = legend_html(arena.legend())
                 if legend != self._legend:
                     self.legend.content = self._legend = legend
@@ -130,6 +137,12 @@ class Broadcast:
             self._refresh(s)
             self._show_round()
             self._next_plot = now + 1.0 / self.PLOT_HZ
+
+    def _send_labels(self) -> None:
+        """The labels' state to the class, when it changed (with the nodes that place them)."""
+        if self.labels.revision != self._labels_sent:
+            self.label_holder.content = self.labels.html()
+            self._labels_sent = self.labels.revision
 
     def _show_round(self) -> None:
         """The round's block: the question while it is open, the results once revealed."""
@@ -148,7 +161,7 @@ class Broadcast:
             with self.server.atomic():
                 self.arena.clear()
         self._session = session
-        self.arena = app_kind(session).view(self.server.scene, None)
+        self.arena = app_kind(session).view(self.server.scene, None, labels=self.labels)
         self._next_scene = 0.0
         self._plot_key = None
 
@@ -216,5 +229,5 @@ class Broadcast:
         with self.server.atomic():
             if self.arena is not None:
                 self.arena.clear()
-            for h in (self.title, self.status, self.round, self.legend, self.plots_folder):
+            for h in (self.title, self.status, self.round, self.legend, self.plots_folder, self.label_holder):
                 h.remove()
