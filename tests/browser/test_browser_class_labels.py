@@ -79,3 +79,33 @@ def test_the_class_sees_the_lecturers_labels_and_follows_them_to_another_kind():
         srv.stop()
 
 
+
+def test_serve_lecture_projector_opens_the_lecturers_tab_in_projector_mode():
+    """``shoal serve --lecture --projector``: the lecturer's tab (the one on the projector) opens
+    with every text twice its size, the arena's labels too. A class tab stays in the normal mode:
+    it is a student's own screen, and the broadcast's plots are sized once for every watcher."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    srv = start_lecture("default", port=0, projector=True)
+    projecting = "() => document.documentElement.classList.contains('shoal-projector')"
+    try:
+        with sync_api.sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=shutil.which("chromium"), args=ARGS)
+            try:
+                def open_page(path: str):
+                    page = arena_in_view(browser.new_context(viewport={"width": 1920, "height": 1080})).new_page()
+                    page.goto(srv.url.rstrip("/") + path)
+                    return page
+
+                boss = open_page(f"{routes.LECTURER_PATH}#key={srv.key}")
+                boss.get_by_role("button", name="Play", exact=True).first.wait_for(state="visible", timeout=120000)
+                wait_until(lambda: boss.evaluate(projecting), timeout=60, what="the lecturer's projector mode")
+                shown = wait_until(lambda: labels(boss), timeout=60, what="the lecturer's labels")
+                assert min(px for _, px in shown) >= 2 * MIN_PX - 0.05, shown
+                class_tab = open_page("/")
+                class_tab.get_by_role("button", name=TAKE_OVER, exact=True).wait_for(state="visible", timeout=120000)
+                shown = wait_until(lambda: labels(class_tab), timeout=60, what="the class's labels")
+                assert not class_tab.evaluate(projecting) and min(px for _, px in shown) >= MIN_PX - 0.05
+            finally:
+                browser.close()
+    finally:
+        srv.stop()

@@ -366,7 +366,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--experiment-workers", type=whole(1), default=1, metavar="W",
                    help="without --scheduler: local worker processes for the Sweep tab (default 1)")
     s.add_argument("--projector", action="store_true",
-                   help="every tab opens in projector mode (text twice its size; a browser's own choice wins)")
+                   help="every tab opens in projector mode (text twice its size; a browser's own choice wins; "
+                        "with --lecture: the lecturer's tab, a class tab stays normal)")
     s.add_argument("--lecture", action="store_true",
                    help="teach a class: prints the lecturer's address (with a secret key: it drives one run) and "
                         "the class's (every tab there watches that run, and may take it over or answer a round)")

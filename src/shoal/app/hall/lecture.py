@@ -65,11 +65,11 @@ class Lecture:
     lecturer's tab's, which a lesson or a preset may swap for one of another kind), where the
     lessons are, the preset menu (uploads included) and the display."""
 
-    def __init__(self, scenario: Scenario) -> None:
+    def __init__(self, scenario: Scenario, projector: bool = False) -> None:
         self._session = session_for(scenario)  # paused at step 0: the lecturer presses Play
         self.lessons = LessonProgress()
         self.menu = PresetMenu(tuple(app_presets()))
-        self.display = Display()
+        self.display = Display(projector=projector)  # (``serve --lecture --projector``: the lecturer's tab in it)
         self.lecturer: TabApp | None = None
         self.lecturer_client: int | None = None
 
@@ -98,7 +98,7 @@ class LectureServer(PrivateServer):
                  allow_origins: tuple[str, ...] = (), experiments: ExperimentService | None = None,
                  proxy_key: str | None = None, desk: Desk | None = None, projector: bool = False) -> None:
         self.key = key or routes.new_key()
-        self.lecture = Lecture(scenario)
+        self.lecture = Lecture(scenario, projector=projector)
         self.rounds = Rounds()
         self.class_panel: ClassPanel | None = None  # on the lecturer's tab
         self.max_watchers = max_watchers
