@@ -14,7 +14,7 @@ from shoal.app.view.projector import MIN_PX
 
 
 def held(markup: str) -> dict:
-    """The state a page reads from ``ClassLabels.html()``: the holder's attribute, parsed as a browser does."""
+    """The state a page reads from ``ClassLabels.holder_html()``: the holder's attribute, parsed as a browser does."""
     found: list[dict] = []
 
     class Reader(HTMLParser):
@@ -54,7 +54,7 @@ def test_class_labels_merge_changes_and_count_only_real_ones():
     c.put("/a/scale", "5 m", "center-left", 1.1, True)
     c.drop(["/a/source", "/a/gone"])
     assert list(c.state) == ["/a/scale"] and c.revision == 4
-    assert held(c.html()) == {"/a/scale": ["5 m", "center-left", label_px(1.1), True]}
+    assert held(c.holder_html()) == {"/a/scale": ["5 m", "center-left", label_px(1.1), True]}
 
 
 ANY_TEXT = st.text(st.characters(exclude_categories=()), max_size=60)  # lone surrogates too
@@ -64,7 +64,7 @@ ANY_TEXT = st.text(st.characters(exclude_categories=()), max_size=60)  # lone su
 def test_any_text_comes_back_to_the_page_as_the_same_text(name, text):
     c = ClassLabels()
     c.put(name, text, "top-left", 1.0, True)
-    markup = c.html()
+    markup = c.holder_html()
     markup.encode("utf-8")  # (what viser sends: a lone surrogate would not encode)
     assert held(markup) == {name: [text, "top-left", LABEL_PX, True]}
 
@@ -72,6 +72,6 @@ def test_any_text_comes_back_to_the_page_as_the_same_text(name, text):
 def test_a_hostile_text_stays_inside_the_holders_attribute():
     c = ClassLabels()
     c.put("/x", '"><script>alert(1)</script><div data-shoal-labels="{}">', "top-left", 1.0, True)
-    markup = c.html()
+    markup = c.holder_html()
     assert "<script>" not in markup and markup.count("<div") == 1
     assert held(markup)["/x"][0].startswith('"><script>')

@@ -118,7 +118,9 @@ MARKDOWN_FIELDS = {"Text": "text", "KindPanel": "export_note"}  # spec fields ho
 AUTHORED = {"notes_text": "reads the shipped notes/<kind>.md", "lessons/panel.py": "shows the shipped lesson files",
             "legend_html": "the layers' own glyphs and labels, HTML-escaped (the Share page shows it as HTML)",
             "hall/round_view.py": "a round as HTML, every text html.escape-d (test_hall_rounds.py: hostile texts)",
-            "status_text": "the lecturer's status line as the lecturer's panel made it (Panel.refresh_status, scanned)"}
+            "status_text": "the lecturer's status line as the lecturer's panel made it (Panel.refresh_status, scanned)",
+            "holder_html": "the arena labels' state as JSON in one attribute, html.escape-d (test_class_labels.py: "
+                           "hostile texts)"}
 NUMERIC_SPEC = re.compile(r"[<>=^]?[+\- ]?#?0?\d*[,_]?(\.\d+)?[bcdeEfFgGnoxX%]$")
 
 

@@ -94,7 +94,7 @@ class Broadcast:
         self.plots_folder = gui.add_folder("Plots", order=ORDER_PLOTS)
         # the arena's labels, HTML over each watcher's canvas as over a tab's (sharp, dark on white)
         self.labels = ClassLabels()
-        self.label_holder = gui.add_html(self.labels.html(), order=ORDER_LABELS)
+        self.label_holder = gui.add_html(self.labels.holder_html(), order=ORDER_LABELS)
         self._labels_sent = self.labels.revision
         self._session: Session | None = None
         self.arena: View | None = None
@@ -141,7 +141,7 @@ class Broadcast:
     def _send_labels(self) -> None:
         """The labels' state to the class, when it changed (with the nodes that place them)."""
         if self.labels.revision != self._labels_sent:
-            self.label_holder.content = self.labels.html()
+            self.label_holder.content = self.labels.holder_html()
             self._labels_sent = self.labels.revision
 
     def _show_round(self) -> None:

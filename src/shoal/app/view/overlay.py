@@ -11,7 +11,7 @@ page: a label's text, anchor and size, whether it shows, and when it goes.
 
 A lecture's class sees the broadcast's arena, drawn once on the server-wide scene for every
 watcher: :class:`ClassLabels` keeps the whole state of its labels in one element of the
-broadcast's panel (:meth:`ClassLabels.html`, ``[data-shoal-labels]``), which viser sends every
+broadcast's panel (:meth:`ClassLabels.holder_html`, ``[data-shoal-labels]``), which viser sends every
 watcher once serialised and gives a watcher that joins late, and the page follows it.
 """
 
@@ -163,7 +163,7 @@ class Labels:
 
 class ClassLabels:
     """The labels of the arena a lecture's class watches (a canvas' ``labels``, as :class:`Labels`):
-    their whole state, which :meth:`html` gives the broadcast's panel to show every watcher."""
+    their whole state, which :meth:`holder_html` gives the broadcast's panel to show every watcher."""
 
     def __init__(self) -> None:
         self.state: dict[str, list[Any]] = {}  # node name -> [text, anchor, px, shown]
@@ -184,7 +184,7 @@ class ClassLabels:
             if self.state.pop(name, None) is not None:
                 self.revision += 1
 
-    def html(self) -> str:
+    def holder_html(self) -> str:
         """An element that shows nothing and holds every label (the page's overlay follows it)."""
         data = html.escape(json.dumps(self.state, separators=(",", ":")), quote=True)
         return f'<div hidden {HOLDER}="{data}"></div>'
