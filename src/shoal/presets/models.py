@@ -6,7 +6,7 @@ variants (laws, strategies, selections) and their rules come from the engine's r
 """
 
 # (no ``from __future__ import annotations`` here: pydantic reads the fields' annotations as objects
-# instead of evaluating a string for each, a tenth of what building these models costs at import)
+# instead of evaluating a string for each, about 12 ms of the 80 that building these models took)
 
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Annotated, Any, ClassVar, Literal, TypeAlias, TypeVar
